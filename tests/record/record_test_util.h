@@ -1,0 +1,42 @@
+// Helpers shared by the recorder's tests: temporary folders and small recordings.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include <unistd.h>
+
+#include "traces/record/recorder.h"
+
+namespace raycell::testing {
+
+inline std::filesystem::path TempDir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("raycell_test_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+inline std::string ReadBytes(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// A small, quick recording of the built-in scene.
+inline RecordOptions SmallBuiltin(const std::filesystem::path& dir, int res = 48) {
+  RecordOptions o;
+  o.settings.width = o.settings.height = std::uint32_t(res);
+  o.out = (dir / "builtin.rct").string();
+  o.images_dir.clear();
+  o.progress = false;
+  return o;
+}
+
+inline std::string SharedData() { return RAYCELL_SHARED_DATA; }
+
+}  // namespace raycell::testing

@@ -1,0 +1,497 @@
+// Damaged trace files: truncated at many offsets, bytes flipped at many positions, and
+// well-formed frames with invalid content. Reading must either give the right data for the
+// frames it reports or throw an InputError naming the file and the frame (or the header or
+// index); frames before the damage stay readable; nothing crashes or hangs.
+#include <capnp/message.h>
+#include <capnp/serialize.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+#include <zstd.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <mutex>
+#include <optional>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "traces/check.h"
+#include "traces/trace.capnp.h"
+#include "traces/trace_reader.h"
+#include "traces/trace_writer.h"
+
+namespace raycell {
+namespace {
+
+// Ends the process if a test runs longer than its bound (a hang is a failure too).
+class Watchdog {
+ public:
+  explicit Watchdog(std::chrono::seconds bound)
+      : thread_([this, bound] {
+          std::unique_lock<std::mutex> lock(mutex_);
+          if (!done_.wait_for(lock, bound, [this] { return finished_; })) {
+            std::fprintf(stderr, "watchdog: test exceeded its time bound\n");
+            std::_Exit(2);
+          }
+        }) {}
+  ~Watchdog() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      finished_ = true;
+    }
+    done_.notify_all();
+    thread_.join();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable done_;
+  bool finished_ = false;
+  std::thread thread_;
+};
+
+std::string TempPath(const std::string& name) {
+  return testing::TempDir() + "raycell_corrupt_" + std::to_string(::getpid()) + "_" + name;
+}
+
+std::string ReadBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+void WriteBytes(const std::string& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), bytes.size());
+}
+
+bool Contains(const std::string& text, const std::string& what) {
+  return text.find(what) != std::string::npos;
+}
+
+TraceHeader MakeHeader() {
+  TraceHeader h;
+  h.producer = "raycell test";
+  h.scene = "corruption";
+  h.cells = {2, 2, 2};
+  h.footprints.assign(8, 4096);
+  h.settings.store_t = true;
+  return h;
+}
+
+// Valid random rays (parents earlier with visits, spawn inside them, 8 cells).
+RayBatch RandomFrame(std::mt19937_64& rng, std::size_t rays) {
+  RayBatch b(true);
+  for (std::size_t i = 0; i < rays; ++i) {
+    RayId parent = kNoParent;
+    std::uint32_t spawn = 0;
+    if (i > 0 && rng() % 4 != 0) {
+      parent = i - 1 - rng() % std::min<std::size_t>(i, 30);
+      const std::size_t n = b.ray(parent).visit_count;
+      if (n == 0) parent = kNoParent;
+      if (n > 0) spawn = static_cast<std::uint32_t>(rng() % n);
+    }
+    b.BeginRay(parent == kNoParent ? RayKind::kPrimary : RayKind::kShadow, parent, spawn,
+               rng() % 64, rng() % 64);
+    std::uint32_t cell = rng() % 8;
+    for (int v = 0, n = static_cast<int>(rng() % 4); v < n; ++v) {
+      b.AddVisit(cell, rng() % 300, static_cast<float>(v), static_cast<float>(v) + 0.5f);
+      cell = (cell + 1 + rng() % 7) % 8;
+    }
+  }
+  return b;
+}
+
+struct Reference {
+  std::string path;
+  std::string bytes;
+  std::vector<RayBatch> frames;
+  std::vector<FrameSummary> summaries;
+  std::uint64_t header_length = 0;
+};
+
+// Writes a 4-frame trace of `rays` rays per frame (one frame empty).
+Reference MakeReference(const std::string& name, std::size_t rays, std::size_t batch_rays) {
+  Reference ref;
+  ref.path = TempPath(name);
+  std::mt19937_64 rng(rays);
+  TraceWriterOptions options;
+  options.max_batch_rays = batch_rays;
+  TraceWriter w = TraceWriter::Create(ref.path, MakeHeader(), options);
+  for (int f = 0; f < 4; ++f) {
+    ref.frames.push_back(f == 2 ? RayBatch(true) : RandomFrame(rng, rays));
+    w.BeginFrame(20 + f);
+    w.Append(ref.frames.back());
+    ref.summaries.push_back(w.EndFrame());
+  }
+  w.Finish();
+  ref.bytes = ReadBytes(ref.path);
+  ref.header_length = ref.summaries[0].offset;
+  return ref;
+}
+
+bool NamesFileAndPart(const std::string& message, const std::string& path) {
+  return Contains(message, path + ": ") &&
+         (Contains(message, ": header: ") || Contains(message, ": frame ") ||
+          Contains(message, ": index: "));
+}
+
+// Opens a damaged copy whose damage starts at byte `damage`, checks the contract and
+// returns how many frames read correctly.
+// What the damaged files led to, to check that the tests reach every outcome.
+struct Outcomes {
+  std::size_t open_failed = 0, fallback = 0, frame_failed = 0, frame_ok = 0;
+};
+Outcomes outcomes;
+
+void ExpectOutcomes(bool frames_fail) {
+  std::printf("open failed %zu, index fallback %zu, frames failed %zu, frames read %zu\n",
+              outcomes.open_failed, outcomes.fallback, outcomes.frame_failed, outcomes.frame_ok);
+  EXPECT_GT(outcomes.open_failed, 0u);
+  EXPECT_GT(outcomes.fallback, 0u);
+  EXPECT_GT(outcomes.frame_ok, 0u);
+  EXPECT_EQ(outcomes.frame_failed > 0, frames_fail);
+  outcomes = {};
+}
+
+std::size_t CheckDamaged(const Reference& ref, const std::string& path, std::uint64_t damage) {
+  std::optional<TraceReader> reader;
+  try {
+    reader.emplace(TraceReader::Open(path));
+  } catch (const InputError& e) {
+    ++outcomes.open_failed;
+    EXPECT_TRUE(NamesFileAndPart(e.what(), path)) << e.what();
+    EXPECT_LT(damage, ref.header_length) << "open failed after the header: " << e.what();
+    return 0;
+  }
+  std::size_t good = 0;
+  outcomes.fallback += !reader->warning().empty();
+  for (std::size_t k = 0; k < reader->frames().size(); ++k) {
+    const bool before_damage = ref.summaries[k].offset + ref.summaries[k].length <= damage;
+    try {
+      const RayBatch frame = reader->LoadFrame(k);
+      EXPECT_EQ(reader->frames()[k].frame, ref.summaries[k].frame);
+      EXPECT_TRUE(frame == ref.frames[k]) << "frame " << k << " read wrong data";
+      ++good;
+      ++outcomes.frame_ok;
+    } catch (const InputError& e) {
+      ++outcomes.frame_failed;
+      EXPECT_TRUE(Contains(e.what(), path + ": frame ")) << e.what();
+      EXPECT_FALSE(before_damage) << "frame " << k << " before the damage: " << e.what();
+    }
+  }
+  for (std::size_t k = 0; k < ref.summaries.size(); ++k) {
+    const bool before_damage = ref.summaries[k].offset + ref.summaries[k].length <= damage;
+    if (before_damage && damage >= ref.header_length) {
+      EXPECT_LT(k, reader->frames().size()) << "frame " << k << " lost; " << reader->warning();
+    }
+  }
+  return good;
+}
+
+void TruncateAt(const Reference& ref, const std::string& path, std::uint64_t n) {
+  SCOPED_TRACE("truncated to " + std::to_string(n) + " of " + std::to_string(ref.bytes.size()));
+  WriteBytes(path, ref.bytes.substr(0, n));
+  const std::size_t good = CheckDamaged(ref, path, n);
+  if (n < ref.header_length) return;
+  std::size_t complete = 0;
+  for (const FrameSummary& s : ref.summaries) complete += s.offset + s.length <= n;
+  EXPECT_EQ(good, complete);
+}
+
+void FlipAt(const Reference& ref, const std::string& path, std::uint64_t pos, unsigned mask) {
+  SCOPED_TRACE("byte " + std::to_string(pos) + " xor " + std::to_string(mask));
+  std::string bytes = ref.bytes;
+  bytes[pos] = static_cast<char>(bytes[pos] ^ mask);
+  WriteBytes(path, bytes);
+  CheckDamaged(ref, path, pos);
+}
+
+TEST(TraceCorruptionTest, TruncatedAtEveryOffsetOfASmallFile) {
+  const Watchdog watchdog(std::chrono::seconds(300));
+  const Reference ref = MakeReference("small.rct", 40, 16);
+  ASSERT_LT(ref.bytes.size(), 20000u);
+  const std::string path = TempPath("small_cut.rct");
+  for (std::uint64_t n = 0; n <= ref.bytes.size(); ++n) TruncateAt(ref, path, n);
+  ExpectOutcomes(false);
+  WriteBytes(path, ref.bytes.substr(0, ref.summaries[3].offset + 10));
+  EXPECT_TRUE(Contains(TraceReader::Open(path).warning(),
+                       ": frame #3 (offset " + std::to_string(ref.summaries[3].offset) +
+                           "): truncated: the file ends"));
+  for (std::uint64_t n : {std::uint64_t{2}, ref.header_length - 1}) {
+    WriteBytes(path, ref.bytes.substr(0, n));
+    try {
+      TraceReader::Open(path);
+      ADD_FAILURE() << "opened a file cut inside its header";
+    } catch (const InputError& e) {
+      EXPECT_TRUE(Contains(e.what(), path + ": header: truncated")) << e.what();
+    }
+  }
+  std::remove(path.c_str());
+  std::remove(ref.path.c_str());
+}
+
+TEST(TraceCorruptionTest, FlippedAtEveryPositionOfASmallFile) {
+  const Watchdog watchdog(std::chrono::seconds(300));
+  const Reference ref = MakeReference("small_flip.rct", 40, 16);
+  const std::string path = TempPath("small_flipped.rct");
+  std::mt19937 rng(3);
+  for (std::uint64_t pos = 0; pos < ref.bytes.size(); ++pos) {
+    FlipAt(ref, path, pos, 1u << (pos % 8));
+    FlipAt(ref, path, pos, 1 + rng() % 255);
+  }
+  ExpectOutcomes(true);
+  std::remove(path.c_str());
+  std::remove(ref.path.c_str());
+}
+
+TEST(TraceCorruptionTest, DamageSpreadOverALargerFile) {
+  const Watchdog watchdog(std::chrono::seconds(300));
+  const Reference ref = MakeReference("large.rct", 6000, 1000);
+  const std::string path = TempPath("large_damaged.rct");
+  std::mt19937_64 rng(4);
+  for (int i = 0; i < 300; ++i) {
+    TruncateAt(ref, path, rng() % (ref.bytes.size() + 1));
+    FlipAt(ref, path, rng() % ref.bytes.size(), 1 + rng() % 255);
+  }
+  ExpectOutcomes(true);
+  std::remove(path.c_str());
+  std::remove(ref.path.c_str());
+}
+
+TEST(TraceCorruptionTest, DamagedIndexFallsBackToScanning) {
+  const Reference ref = MakeReference("index.rct", 100, 64);
+  const std::string path = TempPath("index_damaged.rct");
+  std::string bytes = ref.bytes;
+  bytes[bytes.size() - 40] ^= 0x10;  // inside the index message
+  WriteBytes(path, bytes);
+  const TraceReader reader = TraceReader::Open(path);
+  EXPECT_TRUE(Contains(reader.warning(), path + ": index: damaged: checksum mismatch"))
+      << reader.warning();
+  ASSERT_EQ(reader.frames().size(), 4u);
+  for (std::size_t k = 0; k < 4; ++k) EXPECT_EQ(reader.LoadFrame(k), ref.frames[k]);
+  std::remove(path.c_str());
+  std::remove(ref.path.c_str());
+}
+
+// ---- Well-formed frames with invalid content ----------------------------------------------
+
+// Batch columns as stored (already delta/zigzag coded).
+struct RawBatch {
+  std::int32_t frame = 5;
+  std::uint64_t first_id = 0;
+  std::vector<std::uint8_t> kinds;
+  std::vector<std::uint64_t> parents, spawns, xs, ys, counts, cells, samples;
+  bool drop_wide_y = false;  // leave pixelsY's escaped values out
+};
+
+void FillColumn(schema::Column::Builder out, const std::vector<std::uint64_t>& values,
+                bool bad_escape = false) {
+  std::vector<std::uint64_t> wide;
+  auto narrow = out.initNarrow(static_cast<unsigned>(values.size()));
+  for (unsigned i = 0; i < values.size(); ++i) {
+    narrow.set(i, values[i] < 255 ? static_cast<std::uint8_t>(values[i]) : 255);
+    if (values[i] >= 255 && !bad_escape) wide.push_back(values[i]);
+  }
+  auto w = out.initWide(static_cast<unsigned>(wide.size()));
+  for (unsigned i = 0; i < wide.size(); ++i) w.set(i, wide[i]);
+}
+
+std::string Flat(capnp::MallocMessageBuilder& message) {
+  const auto words = capnp::messageToFlatArray(message);
+  return std::string(words.asChars().begin(), words.asChars().size());
+}
+
+std::string BatchMessage(const RawBatch& b) {
+  capnp::MallocMessageBuilder message;
+  auto out = message.initRoot<schema::Record>().initBatch();
+  out.setFrame(b.frame);
+  out.setFirstId(b.first_id);
+  auto kinds = out.initKinds(static_cast<unsigned>(b.kinds.size()));
+  for (unsigned i = 0; i < b.kinds.size(); ++i) kinds.set(i, b.kinds[i]);
+  FillColumn(out.initParents(), b.parents);
+  FillColumn(out.initSpawns(), b.spawns);
+  FillColumn(out.initPixelsX(), b.xs);
+  FillColumn(out.initPixelsY(), b.ys, b.drop_wide_y);
+  FillColumn(out.initVisitCounts(), b.counts);
+  FillColumn(out.initCells(), b.cells);
+  FillColumn(out.initSamples(), b.samples);
+  out.initTEnter(static_cast<unsigned>(b.cells.size()));
+  out.initTExit(static_cast<unsigned>(b.cells.size()));
+  return Flat(message);
+}
+
+std::string FrameEndMessage(const FrameSummary& s) {
+  capnp::MallocMessageBuilder message;
+  auto out = message.initRoot<schema::Record>().initFrameEnd();
+  out.setFrame(s.frame);
+  out.setRays(s.rays);
+  out.setVisits(s.visits);
+  out.setSamples(s.samples);
+  auto kinds = out.initRaysByKind(4);
+  for (unsigned k = 0; k < 4; ++k) kinds.set(k, s.rays_by_kind[k]);
+  out.setChecksum(s.checksum);
+  return Flat(message);
+}
+
+std::string ZstdFrame(const std::string& content) {
+  ZSTD_CCtx* cctx = ZSTD_createCCtx();
+  ZSTD_CCtx_setParameter(cctx, ZSTD_c_checksumFlag, 1);
+  std::string out(ZSTD_compressBound(content.size()), '\0');
+  const std::size_t n =
+      ZSTD_compress2(cctx, out.data(), out.size(), content.data(), content.size());
+  ZSTD_freeCCtx(cctx);
+  RAYCELL_CHECK(!ZSTD_isError(n));
+  out.resize(n);
+  return out;
+}
+
+// A primary ray (cells 3 then 2, samples 5 and 6) and a shadow ray spawned at its second
+// visit (cell 2, samples 7), all at pixel (1, 1).
+RawBatch GoodBatch() {
+  RawBatch b;
+  b.kinds = {0, 3};
+  b.parents = {0, 1};
+  b.spawns = {0, 2};  // zigzag(+1)
+  b.xs = {2, 0};
+  b.ys = {2, 0};
+  b.counts = {2, 1};
+  b.cells = {3, 1, 2};  // 3, 3 + unzigzag(1) = 2; then 2
+  b.samples = {5, 6, 7};
+  return b;
+}
+
+FrameSummary GoodSummary() {
+  RayBatch rays(true);
+  rays.BeginRay(RayKind::kPrimary, kNoParent, 0, 1, 1);
+  rays.AddVisit(3, 5, 0, 0);
+  rays.AddVisit(2, 6, 0, 0);
+  rays.BeginRay(RayKind::kShadow, 0, 1, 1, 1);
+  rays.AddVisit(2, 7, 0, 0);
+  FrameAccumulator acc(5, true);
+  for (std::size_t i = 0; i < rays.size(); ++i) acc.AddRay(rays.ray(i));
+  return acc.Summary();
+}
+
+class InvalidContentTest : public testing::Test {
+ protected:
+  void SetUp() override { ref_ = MakeReference("content.rct", 10, 10); }
+  void TearDown() override {
+    std::remove(ref_.path.c_str());
+    std::remove(path_.c_str());
+  }
+
+  // Header of the reference file, then one crafted frame, no index.
+  TraceReader Read(const std::vector<RawBatch>& batches, const std::optional<FrameSummary>& end) {
+    std::string content;
+    for (const RawBatch& b : batches) content += BatchMessage(b);
+    if (end) content += FrameEndMessage(*end);
+    WriteBytes(path_, ref_.bytes.substr(0, ref_.header_length) + ZstdFrame(content));
+    return TraceReader::Open(path_);
+  }
+
+  void ExpectRejected(const std::vector<RawBatch>& batches, const std::string& reason,
+                      const std::optional<FrameSummary>& end = GoodSummary()) {
+    const TraceReader reader = Read(batches, end);
+    EXPECT_EQ(reader.frames().size(), 0u);
+    EXPECT_TRUE(Contains(reader.warning(), path_ + ": frame ")) << reader.warning();
+    EXPECT_TRUE(Contains(reader.warning(), reason)) << reader.warning();
+  }
+
+  Reference ref_;
+  std::string path_ = TempPath("crafted.rct");
+};
+
+TEST_F(InvalidContentTest, CraftedGoodFrameReads) {
+  const TraceReader reader = Read({GoodBatch()}, GoodSummary());
+  ASSERT_EQ(reader.frames().size(), 1u) << reader.warning();
+  const RayBatch frame = reader.LoadFrame(0);
+  EXPECT_EQ(frame.cells(), (std::vector<CellId>{3, 2, 2}));
+  EXPECT_EQ(frame.ray(1).parent, 0u);
+  EXPECT_EQ(frame.ray(1).spawn, 1u);
+}
+
+TEST_F(InvalidContentTest, ParentMustBeAnEarlierRay) {
+  RawBatch b = GoodBatch();
+  b.parents[1] = 2;
+  ExpectRejected(
+      {b}, "frame 5 (#0, offset " + std::to_string(ref_.header_length) + "): ray 1: bad parent");
+}
+
+TEST_F(InvalidContentTest, PrimaryRaysHaveNoParent) {
+  RawBatch b = GoodBatch();
+  b.kinds[1] = 0;
+  ExpectRejected({b}, "ray 1: primary ray with a parent");
+}
+
+TEST_F(InvalidContentTest, SpawnMustBeAVisitOfTheParent) {
+  RawBatch b = GoodBatch();
+  b.spawns[1] = 4;  // spawn 2 of a 2-visit parent
+  ExpectRejected({b}, "ray 1: spawn 2 >= visit count of parent 0");
+}
+
+TEST_F(InvalidContentTest, CellsMustBeInTheGrid) {
+  RawBatch b = GoodBatch();
+  b.cells[2] = 8;
+  ExpectRejected({b}, "ray 1: bad cell");
+  b = GoodBatch();
+  b.cells[1] = 300;  // a delta leaving the grid, through the escape list
+  ExpectRejected({b}, "ray 0: bad cell");
+}
+
+TEST_F(InvalidContentTest, VisitCountsMustMatchTheVisitColumns) {
+  RawBatch b = GoodBatch();
+  b.counts = {2, 2};
+  ExpectRejected({b}, "ray 1: too many visits");
+  b.counts = {2, 0};
+  ExpectRejected({b}, "visit counts do not add up");
+  b = GoodBatch();
+  b.samples.pop_back();
+  ExpectRejected({b}, "column samples has 2 values, expected 3");
+}
+
+TEST_F(InvalidContentTest, KindsAndEscapesMustBeValid) {
+  RawBatch b = GoodBatch();
+  b.kinds[1] = 7;
+  ExpectRejected({b}, "ray 1: bad kind");
+  b = GoodBatch();
+  b.ys = {300};
+  ExpectRejected({b}, "column pixelsY has 1 values, expected 2");
+  b.ys = {300, 0};
+  b.drop_wide_y = true;
+  ExpectRejected({b}, "column pixelsY: bad escape");
+}
+
+TEST_F(InvalidContentTest, BatchesMustContinueTheFrame) {
+  RawBatch b = GoodBatch();
+  b.first_id = 1;
+  ExpectRejected({b}, "batch starts at ray 1, expected 0");
+  RawBatch second = GoodBatch();
+  second.first_id = 2;
+  ExpectRejected(
+      {GoodBatch(), second},
+      "frameEnd says frame 5: 2 rays (1 primary, 0 reflection, 0 refraction, 1 shadow), 3 visits, "
+      "18 samples; decoded frame 5: 4 rays");
+  second.frame = 6;
+  ExpectRejected({GoodBatch(), second}, "batch of frame 6");
+}
+
+TEST_F(InvalidContentTest, FrameEndMustMatchTheRays) {
+  FrameSummary s = GoodSummary();
+  s.checksum ^= 1;
+  ExpectRejected({GoodBatch()}, "checksum mismatch: frameEnd says", s);
+  s = GoodSummary();
+  s.samples += 1;
+  ExpectRejected(
+      {GoodBatch()},
+      "3 visits, 19 samples; decoded frame 5: 2 rays (1 primary, 0 reflection, 0 refraction, "
+      "1 shadow), 3 visits, 18 samples",
+      s);
+  ExpectRejected({GoodBatch()}, "without a frameEnd record", std::nullopt);
+}
+
+}  // namespace
+}  // namespace raycell

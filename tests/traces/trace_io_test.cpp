@@ -1,0 +1,562 @@
+// Trace files written and read back: round trips, the index, the .tmp/rename protocol,
+// determinism, `capnp decode` compatibility, JSONL and info output, and the size of a
+// realistic trace (DESIGN.md §3: at most 0.3 bytes per visit at zstd level 3).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "traces/check.h"
+#include "traces/trace_inspect.h"
+#include "traces/trace_reader.h"
+#include "traces/trace_writer.h"
+
+namespace raycell {
+namespace {
+
+std::string TempPath(const std::string& name) {
+  return testing::TempDir() + "raycell_io_" + std::to_string(::getpid()) + "_" + name;
+}
+
+bool Exists(const std::string& path) { return std::ifstream(path).good(); }
+
+std::string ReadBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+TraceHeader MakeHeader(bool store_t, std::array<std::uint32_t, 3> cells = {3, 3, 3}) {
+  TraceHeader h;
+  h.producer = "raycell test";
+  h.scene = "builtin:smoke";
+  h.grids = {{"density", "fog", "builtin", 0.5, 1234}, {"surface", "surface", "a.vdb", 0.25, 77}};
+  h.box_min = {-1, -2, -3};
+  h.box_max = {4, 5, 6.5};
+  h.cells = cells;
+  for (std::uint32_t c = 0; c < h.cell_count(); ++c) h.footprints.push_back(1000 * c + 7);
+  h.footprint_mode = "sparse";
+  for (int f = 0; f < 4; ++f)
+    h.cameras.push_back({10 + f, {1, 2, 3.0 + f}, {0, 0, 0}, {0, 1, 0}, 40});
+  h.settings.store_t = store_t;
+  h.settings.width = 320;
+  h.settings.height = 200;
+  return h;
+}
+
+// Valid random rays: parents earlier (mostly close, sometimes far), spawns inside the
+// parent's visits, consecutive visits in different cells, some values big enough to need
+// escapes.
+RayBatch RandomFrame(std::mt19937_64& rng, std::size_t rays, bool store_t,
+                     std::uint32_t cell_count) {
+  RayBatch b(store_t);
+  std::uniform_real_distribution<float> t(0.f, 100.f);
+  for (std::size_t i = 0; i < rays; ++i) {
+    RayId parent = kNoParent;
+    std::uint32_t spawn = 0;
+    if (i > 0 && rng() % 5 != 0) {
+      parent = rng() % 10 == 0 ? rng() % i : i - 1 - rng() % std::min<std::size_t>(i, 40);
+      const std::size_t n = b.ray(parent).visit_count;
+      if (n == 0) parent = kNoParent;
+      if (n > 0) spawn = static_cast<std::uint32_t>(rng() % n);
+    }
+    const RayKind kind = parent == kNoParent ? RayKind::kPrimary : RayKind(1 + rng() % 3);
+    const std::uint32_t big = rng() % 50 == 0 ? 100000 : 0;
+    b.BeginRay(kind, parent, spawn, big + rng() % 320, rng() % 200);
+    std::uint32_t cell = rng() % cell_count;
+    for (int v = 0, n = static_cast<int>(rng() % 6); v < n; ++v) {
+      const std::uint32_t samples =
+          rng() % 20 == 0 ? static_cast<std::uint32_t>(rng()) : rng() % 200;
+      b.AddVisit(cell, samples, t(rng), t(rng));
+      cell = (cell + 1 + rng() % (cell_count - 1)) % cell_count;
+    }
+  }
+  return b;
+}
+
+struct Frame {
+  std::int32_t number;
+  RayBatch rays;
+};
+
+// Appends `rays` in random-size chunks whose ids continue across calls.
+void AppendInChunks(TraceWriter& w, const RayBatch& rays, std::mt19937_64& rng) {
+  std::size_t i = 0;
+  while (i < rays.size()) {
+    const std::size_t n = std::min<std::size_t>(rays.size() - i, 1 + rng() % 3000);
+    RayBatch chunk(rays.store_t());
+    chunk.set_first_id(i);
+    for (std::size_t k = i; k < i + n; ++k) {
+      const RayView r = rays.ray(k);
+      chunk.BeginRay(r.kind, r.parent, r.spawn, r.pixel_x, r.pixel_y);
+      for (std::size_t v = 0; v < r.visit_count; ++v) {
+        const Visit x = r.visit(v);
+        chunk.AddVisit(x.cell, x.samples, x.t_enter, x.t_exit);
+      }
+    }
+    w.Append(chunk);
+    i += n;
+  }
+}
+
+std::vector<FrameSummary> WriteFrames(TraceWriter& w, const std::vector<Frame>& frames,
+                                      std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<FrameSummary> summaries;
+  for (const Frame& f : frames) {
+    w.BeginFrame(f.number);
+    AppendInChunks(w, f.rays, rng);
+    summaries.push_back(w.EndFrame());
+  }
+  return summaries;
+}
+
+std::vector<FrameSummary> WriteTrace(const std::string& path, const TraceHeader& header,
+                                     const std::vector<Frame>& frames,
+                                     const TraceWriterOptions& options = {}) {
+  TraceWriter w = TraceWriter::Create(path, header, options);
+  std::vector<FrameSummary> summaries = WriteFrames(w, frames, 99);
+  w.Finish();
+  return summaries;
+}
+
+std::vector<Frame> RandomFrames(bool store_t, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<Frame> frames;
+  frames.push_back({10, RandomFrame(rng, 300, store_t, 27)});
+  frames.push_back({11, RandomFrame(rng, 9000, store_t, 27)});  // several batches
+  frames.push_back({12, RayBatch(store_t)});                    // empty
+  frames.push_back({13, RandomFrame(rng, 2500, store_t, 27)});
+  return frames;
+}
+
+void ExpectSummaryOf(const FrameSummary& s, const Frame& f) {
+  EXPECT_EQ(s.frame, f.number);
+  EXPECT_EQ(s.rays, f.rays.size());
+  EXPECT_EQ(s.visits, f.rays.visit_count());
+  std::uint64_t samples = 0;
+  for (std::uint32_t x : f.rays.samples()) samples += x;
+  EXPECT_EQ(s.samples, samples);
+}
+
+class RoundTripTest : public testing::TestWithParam<bool> {};
+
+TEST_P(RoundTripTest, WhatIsReadEqualsWhatWasWritten) {
+  const bool store_t = GetParam();
+  const std::string path = TempPath(store_t ? "rt_t.rct" : "rt.rct");
+  const TraceHeader header = MakeHeader(store_t);
+  const std::vector<Frame> frames = RandomFrames(store_t, 1);
+  TraceWriterOptions options;
+  options.max_batch_rays = 1000;
+  const std::vector<FrameSummary> written = WriteTrace(path, header, frames, options);
+
+  const TraceReader reader = TraceReader::Open(path);
+  EXPECT_EQ(reader.warning(), "");
+  EXPECT_EQ(reader.header(), header);
+  ASSERT_EQ(reader.frames().size(), frames.size());
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    SCOPED_TRACE(k);
+    const FrameSummary& s = reader.frames()[k];
+    EXPECT_EQ(s, written[k]);
+    EXPECT_EQ(s.offset, written[k].offset);
+    EXPECT_EQ(s.length, written[k].length);
+    ExpectSummaryOf(s, frames[k]);
+    const RayBatch loaded = reader.LoadFrame(k);
+    EXPECT_TRUE(loaded == frames[k].rays);
+    EXPECT_EQ(loaded.cells(), frames[k].rays.cells());
+    EXPECT_EQ(loaded.parents(), frames[k].rays.parents());
+    EXPECT_EQ(loaded.t_exits(), frames[k].rays.t_exits());
+  }
+  std::remove(path.c_str());
+}
+
+INSTANTIATE_TEST_SUITE_P(WithAndWithoutT, RoundTripTest, testing::Bool());
+
+TEST(TraceIoTest, ForEachBatchStreamsBatchesOfBoundedSize) {
+  const std::string path = TempPath("batches.rct");
+  const std::vector<Frame> frames = RandomFrames(false, 2);
+  TraceWriterOptions options;
+  options.max_batch_rays = 700;
+  options.max_batch_visits = 1500;
+  WriteTrace(path, MakeHeader(false), frames, options);
+  const TraceReader reader = TraceReader::Open(path);
+  RayBatch joined(false);
+  std::size_t batches = 0;
+  reader.ForEachBatch(1, [&](const RayBatch& b) {
+    EXPECT_EQ(b.first_id(), joined.size());
+    EXPECT_LE(b.size(), 700u);
+    EXPECT_LE(b.visit_count(), 1500u + 5);  // a batch ends once it reaches the limit
+    joined.AppendRebased(b);
+    ++batches;
+  });
+  EXPECT_GE(batches, 13u);
+  EXPECT_EQ(joined, frames[1].rays);
+  std::size_t empty_batches = 0;
+  reader.ForEachBatch(2, [&](const RayBatch&) { ++empty_batches; });
+  EXPECT_EQ(empty_batches, 0u);
+  std::remove(path.c_str());
+}
+
+TEST(TraceIoTest, OpensAFrameThroughTheIndexWithoutDecodingOthers) {
+  const std::string path = TempPath("direct.rct");
+  const std::vector<Frame> frames = RandomFrames(false, 3);
+  const std::vector<FrameSummary> written = WriteTrace(path, MakeHeader(false), frames);
+  // Wreck frame 11's bytes: frame 13 must still open through the index.
+  std::string bytes = ReadBytes(path);
+  for (std::uint64_t i = written[1].offset + 8; i < written[1].offset + written[1].length; ++i) {
+    bytes[i] = static_cast<char>(bytes[i] ^ 0x5A);
+  }
+  std::ofstream(path, std::ios::binary).write(bytes.data(), bytes.size());
+  const TraceReader reader = TraceReader::Open(path);
+  EXPECT_EQ(reader.warning(), "");
+  EXPECT_EQ(reader.LoadFrame(3), frames[3].rays);
+  EXPECT_EQ(reader.LoadFrame(0), frames[0].rays);
+  try {
+    reader.LoadFrame(1);
+    ADD_FAILURE() << "damaged frame read without error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ": frame 11 (#1, offset "), std::string::npos)
+        << e.what();
+  }
+  std::remove(path.c_str());
+}
+
+TEST(TraceIoTest, WritesToTmpAndRenamesOnFinish) {
+  const std::string path = TempPath("tmp.rct");
+  const std::vector<Frame> frames = RandomFrames(true, 4);
+  std::remove(path.c_str());
+  {
+    TraceWriter w = TraceWriter::Create(path, MakeHeader(true));
+    EXPECT_TRUE(Exists(path + ".tmp"));
+    WriteFrames(w, {frames[0], frames[1]}, 5);
+    EXPECT_FALSE(Exists(path));
+    w.Finish();
+    EXPECT_TRUE(Exists(path));
+    EXPECT_FALSE(Exists(path + ".tmp"));
+  }
+  EXPECT_EQ(TraceReader::Open(path).frames().size(), 2u);
+  std::remove(path.c_str());
+}
+
+TEST(TraceIoTest, InterruptedCaptureLeavesReadableTmp) {
+  const std::string path = TempPath("interrupted.rct");
+  const std::vector<Frame> frames = RandomFrames(false, 5);
+  std::mt19937_64 rng(6);
+  const RayBatch big = RandomFrame(rng, 200000, false, 27);
+  {
+    TraceWriter w = TraceWriter::Create(path, MakeHeader(false));
+    WriteFrames(w, {frames[0], frames[1]}, 5);
+    w.BeginFrame(99);
+    w.Append(big);  // the unfinished frame leaves a partial zstd frame behind
+  }                 // destroyed without Finish
+  EXPECT_FALSE(Exists(path));
+  const TraceReader reader = TraceReader::Open(path + ".tmp");
+  EXPECT_NE(reader.warning().find("index: missing"), std::string::npos) << reader.warning();
+  EXPECT_NE(reader.warning().find("kept 2 complete frame(s)"), std::string::npos)
+      << reader.warning();
+  EXPECT_NE(reader.warning().find("truncated"), std::string::npos) << reader.warning();
+  ASSERT_EQ(reader.frames().size(), 2u);
+  EXPECT_EQ(reader.LoadFrame(0), frames[0].rays);
+  EXPECT_EQ(reader.LoadFrame(1), frames[1].rays);
+  std::remove((path + ".tmp").c_str());
+}
+
+TEST(TraceIoTest, TmpWithOnlyFinishedFramesReadsWithWarning) {
+  const std::string path = TempPath("finished_only.rct");
+  const std::vector<Frame> frames = RandomFrames(false, 7);
+  {
+    TraceWriter w = TraceWriter::Create(path, MakeHeader(false));
+    WriteFrames(w, frames, 5);
+  }
+  const TraceReader reader = TraceReader::Open(path + ".tmp");
+  EXPECT_NE(reader.warning(), "");
+  ASSERT_EQ(reader.frames().size(), frames.size());
+  for (std::size_t k = 0; k < frames.size(); ++k) EXPECT_EQ(reader.LoadFrame(k), frames[k].rays);
+  std::remove((path + ".tmp").c_str());
+}
+
+TEST(TraceIoTest, SameDataGivesByteIdenticalFiles) {
+  const std::vector<Frame> frames = RandomFrames(true, 8);
+  const std::string a = TempPath("same_a.rct"), b = TempPath("same_b.rct");
+  WriteTrace(a, MakeHeader(true), frames);
+  WriteTrace(b, MakeHeader(true), frames);
+  const std::string bytes = ReadBytes(a);
+  EXPECT_GT(bytes.size(), 1000u);
+  EXPECT_TRUE(bytes == ReadBytes(b));
+  std::remove(a.c_str());
+  std::remove(b.c_str());
+}
+
+std::size_t CountOccurrences(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto i = text.find(what); i != std::string::npos; i = text.find(what, i + 1)) ++n;
+  return n;
+}
+
+TEST(TraceIoTest, ZstdAndCapnpDecodeTheWholeFile) {
+  if (std::system("command -v zstd >/dev/null 2>&1 && command -v capnp >/dev/null 2>&1") != 0) {
+    GTEST_SKIP() << "zstd or capnp not installed";
+  }
+  const std::string path = TempPath("decode.rct");
+  const std::vector<Frame> frames = RandomFrames(false, 9);
+  TraceWriterOptions options;
+  options.max_batch_rays = 1000;
+  WriteTrace(path, MakeHeader(false), frames, options);
+  std::size_t batches = 0;
+  const TraceReader reader = TraceReader::Open(path);
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    reader.ForEachBatch(k, [&](const RayBatch&) { ++batches; });
+  }
+  const std::string out = path + ".txt";
+  const std::string cmd = "zstd -qdc '" + path + "' > '" + path +
+                          ".bin' && capnp decode --short '" + RAYCELL_SOURCE_DIR +
+                          "/traces/trace.capnp' Record < '" + path + ".bin' > '" + out + "'";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const std::string text = ReadBytes(out);
+  // --short prints one message per line.
+  EXPECT_EQ(CountOccurrences(text, "\n"), 1 + batches + frames.size()) << text.substr(0, 300);
+  EXPECT_EQ(text.rfind("(header = (formatVersion = 1, producer = \"raycell test\"", 0), 0u);
+  EXPECT_EQ(CountOccurrences(text, "\n(batch = (frame = "), batches);
+  EXPECT_EQ(CountOccurrences(text, "\n(frameEnd = (frame = "), frames.size());
+  EXPECT_EQ(batches, 1u + 9u + 0u + 3u);
+  for (const std::string& f : {path, path + ".bin", out}) std::remove(f.c_str());
+}
+
+// A primary ray (id 0) with a reflection (1) and a shadow ray (2), and a second primary (3).
+RayBatch HandMadeFrame() {
+  RayBatch b(false);
+  b.BeginRay(RayKind::kPrimary, kNoParent, 0, 5, 7);
+  b.AddVisit(5, 12, 0, 0);
+  b.AddVisit(4, 30, 0, 0);
+  b.AddVisit(1, 2, 0, 0);
+  b.BeginRay(RayKind::kReflection, 0, 2, 5, 7);
+  b.AddVisit(1, 3, 0, 0);
+  b.BeginRay(RayKind::kShadow, 0, 1, 5, 7);
+  b.AddVisit(4, 300, 0, 0);
+  b.AddVisit(26, 0, 0, 0);
+  b.BeginRay(RayKind::kPrimary, kNoParent, 0, 70000, 8);
+  return b;
+}
+
+const char kHandMadeJsonl[] =
+    R"({"id":0,"parent":null,"spawn":null,"kind":"primary","pixel":[5,7],"cells":[5,4,1],"samples":[12,30,2]}
+{"id":1,"parent":0,"spawn":2,"kind":"reflection","pixel":[5,7],"cells":[1],"samples":[3]}
+{"id":2,"parent":0,"spawn":1,"kind":"shadow","pixel":[5,7],"cells":[4,26],"samples":[300,0]}
+{"id":3,"parent":null,"spawn":null,"kind":"primary","pixel":[70000,8],"cells":[],"samples":[]}
+)";
+
+TEST(TraceIoTest, JsonlOfAHandMadeFrameIsExact) {
+  const std::string path = TempPath("jsonl.rct");
+  WriteTrace(path, MakeHeader(false), {{150, HandMadeFrame()}});
+  const TraceReader reader = TraceReader::Open(path);
+  std::ostringstream all, one;
+  WriteJsonl(reader, std::nullopt, all);
+  WriteJsonl(reader, 0, one);
+  EXPECT_EQ(all.str(), kHandMadeJsonl);
+  EXPECT_EQ(one.str(), kHandMadeJsonl);
+  std::remove(path.c_str());
+}
+
+TEST(TraceIoTest, JsonlOfSeveralFramesStartsWithTheFrameNumber) {
+  const std::string path = TempPath("jsonl2.rct");
+  WriteTrace(path, MakeHeader(false), {{150, HandMadeFrame()}, {151, HandMadeFrame()}});
+  const TraceReader reader = TraceReader::Open(path);
+  std::ostringstream all, second;
+  WriteJsonl(reader, std::nullopt, all);
+  WriteJsonl(reader, 1, second);
+  EXPECT_EQ(second.str(), kHandMadeJsonl);
+  const std::string text = all.str();
+  EXPECT_EQ(CountOccurrences(text, "\n"), 8u);
+  EXPECT_EQ(text.rfind("{\"frame\":150,\"id\":0,\"parent\":null,", 0), 0u);
+  EXPECT_NE(
+      text.find("\n{\"frame\":151,\"id\":3,\"parent\":null,\"spawn\":null,\"kind\":\"primary\""),
+      std::string::npos);
+  std::remove(path.c_str());
+}
+
+TEST(TraceIoTest, PrintInfoShowsHeaderFramesAndTotals) {
+  const std::string path = TempPath("info.rct");
+  WriteTrace(path, MakeHeader(false), RandomFrames(false, 10));
+  const TraceReader reader = TraceReader::Open(path);
+  std::ostringstream out;
+  PrintInfo(reader, "info.rct", out);
+  const std::string text = out.str();
+  for (const char* want : {"format version: 1", "producer:       raycell test", "builtin:smoke",
+                           "density (fog, builtin", "3x3x3 = 27 cells", "sparse", "320x200",
+                           "shadow", "refraction", "total", "naive uncompressed", "ratio:"}) {
+    EXPECT_NE(text.find(want), std::string::npos) << want << "\n" << text;
+  }
+  for (const char* row :
+       {"\n      10 ", "\n      11 ", "\n      12 ", "\n      13 ", "\n   total "}) {
+    EXPECT_EQ(CountOccurrences(text, row), 1u) << row << "\n" << text;
+  }
+  std::remove(path.c_str());
+}
+
+TEST(TraceIoTest, FileWithoutFrames) {
+  const std::string path = TempPath("no_frames.rct");
+  WriteTrace(path, MakeHeader(true), {});
+  const TraceReader reader = TraceReader::Open(path);
+  EXPECT_EQ(reader.warning(), "");
+  EXPECT_EQ(reader.header(), MakeHeader(true));
+  EXPECT_TRUE(reader.frames().empty());
+  std::ostringstream out;
+  WriteJsonl(reader, std::nullopt, out);
+  EXPECT_EQ(out.str(), "");
+  std::remove(path.c_str());
+}
+
+TEST(TraceIoTest, ErrorsNameTheFile) {
+  const std::string path = TempPath("does_not_exist.rct");
+  try {
+    TraceReader::Open(path);
+    ADD_FAILURE();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(path + ": cannot open", 0), 0u) << e.what();
+  }
+  EXPECT_THROW(TraceWriter::Create(TempPath("no_such_dir/x.rct"), MakeHeader(false)), InputError);
+  const std::string ok = TempPath("errors.rct");
+  WriteTrace(ok, MakeHeader(false), RandomFrames(false, 11));
+  const TraceReader reader = TraceReader::Open(ok);
+  EXPECT_THROW(reader.LoadFrame(4), InputError);
+  std::remove(ok.c_str());
+}
+
+// ---- Size of a realistic trace -----------------------------------------------------------
+
+struct V3 {
+  double x, y, z;
+  V3 operator+(const V3& o) const { return {x + o.x, y + o.y, z + o.z}; }
+  V3 operator*(double s) const { return {x * s, y * s, z * s}; }
+};
+
+V3 Normalized(V3 v) { return v * (1 / std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z)); }
+
+// A synthetic capture shaped like vdb_render's: a 96-voxel cube split into 3x3x3 cells, one
+// primary ray per pixel of a 256x256 image marching with step 1 for a smoothly varying
+// number of samples (early termination), and at each primary sample a shadow ray towards a
+// directional light marching with step 3 to the box exit. Samples per visit are counted.
+class SyntheticScene {
+ public:
+  RayBatch Frame(int size, bool store_t) const {
+    RayBatch b(store_t);
+    for (int y = 0; y < size; ++y) {
+      for (int x = 0; x < size; ++x) PrimaryWithShadows(x, y, size, b);
+    }
+    return b;
+  }
+
+ private:
+  static constexpr double kN = 96, kCell = 32;
+
+  int CellOf(V3 p) const {
+    auto c = [](double v) { return std::clamp(static_cast<int>(v / kCell), 0, 2); };
+    return c(p.x) + 3 * (c(p.y) + 3 * c(p.z));
+  }
+  bool Inside(V3 p) const {
+    return p.x >= 0 && p.y >= 0 && p.z >= 0 && p.x < kN && p.y < kN && p.z < kN;
+  }
+
+  // Marches from p along d; appends visits and returns the visit index of each sample.
+  std::vector<std::uint32_t> March(V3 p, V3 d, double step, int max_samples, RayBatch& b,
+                                   std::vector<V3>* points) const {
+    std::vector<std::uint32_t> visit_of_sample;
+    int last = -1;
+    const std::size_t first = b.visit_count();
+    for (int i = 0; i < max_samples; ++i) {
+      const V3 q = p + d * (step * i);
+      if (!Inside(q)) break;
+      const int c = CellOf(q);
+      if (c != last) b.AddVisit(c, 0, static_cast<float>(step * i), static_cast<float>(step * i));
+      b.AddSamplesToLastVisit(1);
+      last = c;
+      visit_of_sample.push_back(static_cast<std::uint32_t>(b.visit_count() - first - 1));
+      if (points) points->push_back(q);
+    }
+    return visit_of_sample;
+  }
+
+  void PrimaryWithShadows(int x, int y, int size, RayBatch& b) const {
+    const V3 eye{kN * 0.5, kN * 0.55, -3 * kN};
+    const V3 target{kN * (0.02 + 0.96 * (x + 0.5) / size), kN * (0.02 + 0.96 * (y + 0.5) / size),
+                    0};
+    const V3 d = Normalized(target + eye * -1);
+    const V3 entry = eye + d * (-eye.z / d.z + 1e-6);
+    const int budget = static_cast<int>(62 + 18 * std::sin(x * 0.05) * std::cos(y * 0.037) +
+                                        8 * std::sin((x + y) * 0.11));
+    const RayId id = b.size();
+    b.BeginRay(RayKind::kPrimary, kNoParent, 0, x, y);
+    std::vector<V3> points;
+    const std::vector<std::uint32_t> spawn = March(entry, d, 1.0, budget, b, &points);
+    const V3 light = Normalized({0.35, 0.5, -1});
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      b.BeginRay(RayKind::kShadow, id, spawn[i], x, y);
+      March(points[i], light, 3.0, 1000, b, nullptr);
+    }
+  }
+};
+
+double BytesPerVisit(const std::string& path, const RayBatch& frame, const TraceHeader& header) {
+  TraceWriter w = TraceWriter::Create(path, header);
+  w.BeginFrame(0);
+  w.Append(frame);
+  const FrameSummary s = w.EndFrame();
+  w.Finish();
+  return static_cast<double>(s.length) / static_cast<double>(s.visits);
+}
+
+TEST(TraceIoTest, RealisticTraceTakesAtMost0_3BytesPerVisit) {
+  const std::string path = TempPath("size.rct");
+  const RayBatch frame = SyntheticScene().Frame(256, false);
+  std::uint64_t primary_visits = 0, shadows = 0, max_samples = 0;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    const RayView r = frame.ray(i);
+    if (r.is_primary()) primary_visits += r.visit_count;
+    shadows += !r.is_primary();
+    for (std::size_t v = 0; v < r.visit_count; ++v) {
+      max_samples = std::max<std::uint64_t>(max_samples, r.samples[v]);
+    }
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const double bpv = BytesPerVisit(path, frame, MakeHeader(false));
+  const auto t1 = std::chrono::steady_clock::now();
+  EXPECT_TRUE(TraceReader::Open(path).LoadFrame(0) == frame);
+  const auto t2 = std::chrono::steady_clock::now();
+  std::printf("write %.2f s, read and verify %.2f s\n",
+              std::chrono::duration<double>(t1 - t0).count(),
+              std::chrono::duration<double>(t2 - t1).count());
+  std::printf(
+      "synthetic frame: %zu rays (%.1f shadow rays per primary), %zu visits "
+      "(%.2f per primary, %.2f per shadow ray), samples <= %llu\n",
+      frame.size(), shadows / 65536.0, frame.visit_count(), primary_visits / 65536.0,
+      (frame.visit_count() - primary_visits) / static_cast<double>(shadows),
+      static_cast<unsigned long long>(max_samples));
+  std::printf("zstd level 3: %.4f bytes per visit\n", bpv);
+  EXPECT_LE(bpv, 0.3);
+
+  // For the record: the same rays with samples replaced by independent uniform 1..40 draws
+  // (no spatial coherence, so incompressible beyond their ~5.3 bits of entropy).
+  std::mt19937_64 rng(12);
+  RayBatch noisy(false);
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    const RayView r = frame.ray(i);
+    noisy.BeginRay(r.kind, r.parent, r.spawn, r.pixel_x, r.pixel_y);
+    for (std::size_t v = 0; v < r.visit_count; ++v)
+      noisy.AddVisit(r.cells[v], 1 + rng() % 40, 0, 0);
+  }
+  std::printf("same rays, uniform random samples 1..40: %.4f bytes per visit\n",
+              BytesPerVisit(path, noisy, MakeHeader(false)));
+  std::remove(path.c_str());
+}
+
+}  // namespace
+}  // namespace raycell

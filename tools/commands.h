@@ -1,0 +1,12 @@
+// The raycell subcommands. Each Add* registers its options on the app; the command runs from
+// the callback and reports bad input as InputError.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace raycell {
+
+void AddRecordCommand(CLI::App& app);
+void AddTraceCommand(CLI::App& app);
+
+}  // namespace raycell

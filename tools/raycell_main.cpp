@@ -1,0 +1,36 @@
+// raycell: capture volume ray tracing traces, cell by cell, and study ray schedules on them.
+#include <cstdio>
+#include <exception>
+#include <iostream>
+
+#include "tools/commands.h"
+#include "traces/check.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "raycell records what every ray of a volume ray tracer does, cell by cell, into\n"
+      "compressed per-frame traces, for people who design memory-coherent ray tracing\n"
+      "hardware and ray schedulers.\n\n"
+      "  raycell record                     record the built-in scene (capture.rct, images/)\n"
+      "  raycell record --scene smoke.vdb --cells 3x3x3 --frames 0..29 --orbit 360\n"
+      "  raycell trace info capture.rct     what a capture holds\n"
+      "  raycell trace cat capture.rct --frame 0 --format jsonl   rays as JSON Lines\n\n"
+      "Run `raycell COMMAND --help` for each command's options.",
+      "raycell"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "raycell 0.1.0");
+  raycell::AddRecordCommand(app);
+  raycell::AddTraceCommand(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const raycell::InputError& e) {
+    std::cerr << "raycell: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "raycell: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

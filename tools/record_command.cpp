@@ -1,0 +1,142 @@
+// raycell record: render a scene's frames and write their trace (and images).
+#include <csignal>
+#include <iostream>
+#include <memory>
+
+#include "tools/commands.h"
+#include "traces/check.h"
+#include "traces/record/cell_grid.h"
+#include "traces/record/recorder.h"
+
+namespace raycell {
+namespace {
+
+std::atomic<bool> g_cancel{false};
+
+extern "C" void OnSignal(int) { g_cancel.store(true); }
+
+Vec3d ParseVec(const std::string& text, const std::string& option) {
+  double v[3];
+  char tail;
+  if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &tail) != 3 ||
+      !std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) {
+    throw InputError(option + " '" + text + "': expected three finite numbers X,Y,Z");
+  }
+  return {v[0], v[1], v[2]};
+}
+
+struct RecordArgs {
+  RecordOptions opt;
+  std::string frames, cells = "2x2x2", res = "256x256", orbit, eye, target, up = "0,1,0";
+  std::vector<std::string> lights;
+  bool no_images = false, quiet = false;
+};
+
+// "--orbit D" turns by D degrees over the frames; "--orbit N:D" also records frames 0..N-1.
+void ApplyOrbit(RecordArgs& a) {
+  if (a.orbit.empty()) return;
+  const auto colon = a.orbit.find(':');
+  const std::string deg = colon == std::string::npos ? a.orbit : a.orbit.substr(colon + 1);
+  char* end = nullptr;
+  a.opt.camera.orbit_degrees = std::strtod(deg.c_str(), &end);
+  if (deg.empty() || *end || !std::isfinite(a.opt.camera.orbit_degrees)) {
+    throw InputError("--orbit '" + a.orbit + "': expected DEGREES or FRAMES:DEGREES");
+  }
+  if (colon != std::string::npos) {
+    if (!a.frames.empty()) throw InputError("--orbit FRAMES:DEGREES and --frames both set frames");
+    a.opt.frames = ParseFrameRange("0.." + std::to_string(std::stoi(a.orbit.substr(0, colon)) - 1));
+  }
+}
+
+void Run(RecordArgs& a) {
+  RecordOptions& o = a.opt;
+  if (!a.frames.empty()) o.frames = ParseFrameRange(a.frames);
+  ApplyOrbit(a);
+  if (IsSequencePattern(o.scene.source) && a.frames.empty()) {
+    throw InputError("--scene '" + o.scene.source + "' is a sequence pattern: give --frames A..B");
+  }
+  o.cells = ParseCellDims(a.cells);
+  const auto wh = ParseResolution(a.res);
+  o.settings.width = wh[0], o.settings.height = wh[1];
+  for (const auto& l : a.lights) o.scene.lights.push_back(ParseLight(l));
+  if (!a.eye.empty()) o.camera.eye = ParseVec(a.eye, "--eye");
+  if (!a.target.empty()) o.camera.target = ParseVec(a.target, "--target");
+  o.camera.up = ParseVec(a.up, "--up");
+  if (a.no_images) o.images_dir.clear();
+  o.progress = !a.quiet;
+  o.cancel = &g_cancel;
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  const RecordSummary s = Record(o, std::cerr);
+  if (s.interrupted) std::exit(130);
+  std::cerr << "recorded " << s.frames << " frame(s), " << s.rays << " rays, " << s.visits
+            << " visits in " << s.seconds << " s -> " << o.out
+            << (o.images_dir.empty() ? "" : ", images in " + o.images_dir + "/") << "\n";
+}
+
+}  // namespace
+
+void AddRecordCommand(CLI::App& app) {
+  auto args = std::make_shared<RecordArgs>();
+  RecordOptions& o = args->opt;
+  o.images_dir = "images";
+  CLI::App* cmd = app.add_subcommand(
+      "record",
+      "Render a scene and record every ray's path through the cells.\n"
+      "Writes one trace file (zstd frames of Cap'n Proto messages, see traces/trace.capnp)\n"
+      "and one PNG per frame. With no options it records frame 0 of the built-in scene\n"
+      "(fog, a mirror sphere and a glass icosahedron) at 256x256 in 2x2x2 cells.");
+  cmd->add_option("--scene", o.scene.source,
+                  "builtin, a .vdb file (fog volumes and level sets), or a printf pattern of "
+                  "one file per frame, e.g. fluid_data_%04d.vdb with --frames 150..155")
+      ->capture_default_str();
+  cmd->add_option("--frames", args->frames, "frame numbers A..B (inclusive), default 0");
+  cmd->add_option("--cells", args->cells, "cell grid NXxNYxNZ splitting the scene box")
+      ->capture_default_str();
+  cmd->add_option("--res", args->res, "image size WxH (the paper: 256x256)")->capture_default_str();
+  cmd->add_option("--spp", o.settings.spp, "samples (primary rays) per pixel")->capture_default_str();
+  cmd->add_option("--max-depth", o.settings.max_depth,
+                  "reflection/refraction generations; shadow rays are cast at every depth")
+      ->capture_default_str();
+  cmd->add_option("--step", o.settings.primary_step,
+                  "primary-ray step in voxels (vdb_render's -step)")->capture_default_str();
+  cmd->add_option("--shadow-step", o.settings.shadow_step,
+                  "shadow-ray step in voxels (vdb_render's -shadowstep)")->capture_default_str();
+  cmd->add_option("--cutoff", o.settings.cutoff,
+                  "early-termination threshold on transmittance, and the density below which a "
+                  "sample casts no shadow ray (vdb_render's -cutoff)")->capture_default_str();
+  cmd->add_option("--material", o.scene.materials,
+                  "per-grid material, repeatable. Fog: GRID:absorb=R,G,B:scatter=R,G,B:gain=G "
+                  "(per voxel, as vdb_render). Surface: GRID:color=R,G,B:reflect=F:"
+                  "transparency=F:ior=N");
+  cmd->add_option("--light", args->lights,
+                  "light, repeatable: dir:X,Y,Z[:R,G,B] (towards the light) or "
+                  "point:X,Y,Z[:R,G,B]; default the scene's own (files: vdb_render's "
+                  "dir:0.3,0.3,0:0.7,0.7,0.7)");
+  cmd->add_option("--eye", args->eye, "camera position X,Y,Z (default: frames the scene box)");
+  cmd->add_option("--target", args->target, "point the camera looks at (default: box centre)");
+  cmd->add_option("--up", args->up, "camera up vector")->capture_default_str();
+  cmd->add_option("--fov", o.camera.fov_deg, "vertical field of view, degrees")->capture_default_str();
+  cmd->add_option("--orbit", args->orbit,
+                  "camera path: DEGREES turned about the up axis over the frames, or "
+                  "FRAMES:DEGREES to also record frames 0..FRAMES-1 (e.g. 30:360)");
+  cmd->add_option("--keyframes", o.camera.keyframes_file,
+                  "camera path from a file of lines 'frame ex ey ez tx ty tz fov', "
+                  "interpolated linearly")->check(CLI::ExistingFile);
+  cmd->add_option("--footprint", o.scene.footprint_mode,
+                  "cell footprint: sparse (allocated leaves) or dense (voxels)")
+      ->capture_default_str();
+  cmd->add_option("--out", o.out, "trace file to write")->capture_default_str();
+  cmd->add_option("--images", o.images_dir, "folder for frame_NNNN.png")->capture_default_str();
+  cmd->add_flag("--no-images", args->no_images, "do not write images");
+  cmd->add_flag("--store-t", o.settings.store_t,
+                "also store each visit's t_enter/t_exit (larger traces)");
+  cmd->add_option("--zstd-level", o.settings.zstd_level, "zstd compression level 1..19")
+      ->capture_default_str();
+  cmd->add_option("--threads", o.threads, "rendering threads, 0 = all cores (the trace is the "
+                  "same byte for byte whatever this is)")->capture_default_str();
+  cmd->add_flag("--quiet", args->quiet, "no progress bar");
+  cmd->callback([args] { Run(*args); });
+}
+
+}  // namespace raycell

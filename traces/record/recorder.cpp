@@ -1,0 +1,176 @@
+#include "traces/record/recorder.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <memory>
+#include <sstream>
+
+#include "traces/check.h"
+#include "traces/progress.h"
+#include "traces/record/cell_grid.h"
+#include "traces/record/renderer.h"
+#include "traces/trace_writer.h"
+
+namespace raycell {
+namespace {
+
+int ParseInt(const std::string& s, const std::string& what) {
+  std::size_t used = 0;
+  int v = 0;
+  try {
+    v = std::stoi(s, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (s.empty() || used != s.size()) throw InputError(what + ": '" + s + "' is not an integer");
+  return v;
+}
+
+std::string Fmt(double v, int precision) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(precision) << v;
+  return s.str();
+}
+
+// The scene box over all frames (sequences may move) and, per cell, the largest footprint
+// of any frame (header.footprints; each frame also uses its own to decide emptiness).
+void ScanScene(const RecordOptions& o, const Scene* first, TraceHeader* h) {
+  const bool seq = IsSequencePattern(o.scene.source);
+  Vec3d lo = first->box_lo(), hi = first->box_hi();
+  for (std::size_t i = 1; seq && i < o.frames.size(); ++i) {
+    const auto s = Scene::Load(o.scene, o.frames[i]);
+    lo = {std::min(lo.x, s->box_lo().x), std::min(lo.y, s->box_lo().y), std::min(lo.z, s->box_lo().z)};
+    hi = {std::max(hi.x, s->box_hi().x), std::max(hi.y, s->box_hi().y), std::max(hi.z, s->box_hi().z)};
+  }
+  h->box_min = lo;
+  h->box_max = hi;
+  h->footprints = first->Footprints(lo, hi, o.cells, o.scene.footprint_mode);
+  for (std::size_t i = 1; seq && i < o.frames.size(); ++i) {
+    const auto fp = Scene::Load(o.scene, o.frames[i])->Footprints(lo, hi, o.cells, o.scene.footprint_mode);
+    for (std::size_t c = 0; c < fp.size(); ++c) h->footprints[c] = std::max(h->footprints[c], fp[c]);
+  }
+}
+
+std::string ImagePath(const std::string& dir, int frame) {
+  char name[64];
+  std::snprintf(name, sizeof name, "frame_%04d.png", frame);
+  return (std::filesystem::path(dir) / name).string();
+}
+
+}  // namespace
+
+std::vector<int> ParseFrameRange(const std::string& text) {
+  const std::string what = "--frames";
+  std::size_t sep = text.find("..");
+  std::size_t skip = 2;
+  if (sep == std::string::npos) {
+    sep = text.find('-', 1);
+    skip = 1;
+  }
+  const int a = ParseInt(sep == std::string::npos ? text : text.substr(0, sep), what);
+  const int b = sep == std::string::npos ? a : ParseInt(text.substr(sep + skip), what);
+  if (b < a) throw InputError(what + " '" + text + "': the range ends before it starts");
+  if (std::int64_t(b) - a >= 1000000) throw InputError(what + " '" + text + "': too many frames");
+  std::vector<int> frames;
+  for (int f = a; f <= b; ++f) frames.push_back(f);
+  return frames;
+}
+
+std::array<std::uint32_t, 2> ParseResolution(const std::string& text) {
+  const auto x = text.find_first_of("xX");
+  const std::string what = "--res '" + text + "'";
+  if (x == std::string::npos) throw InputError(what + ": expected WxH, e.g. 256x256");
+  const int w = ParseInt(text.substr(0, x), what), h = ParseInt(text.substr(x + 1), what);
+  if (w < 1 || h < 1 || w > 65536 || h > 65536) {
+    throw InputError(what + ": width and height must be in 1..65536");
+  }
+  return {std::uint32_t(w), std::uint32_t(h)};
+}
+
+void ValidateSettings(const RenderSettings& s) {
+  auto positive = [](double v, const char* name) {
+    if (!(std::isfinite(v) && v > 0)) {
+      throw InputError(std::string(name) + ": must be a positive finite number");
+    }
+  };
+  positive(s.primary_step, "--step");
+  positive(s.shadow_step, "--shadow-step");
+  if (!(s.cutoff >= 0 && s.cutoff < 1)) throw InputError("--cutoff: must be in [0, 1)");
+  if (s.width < 1 || s.height < 1) throw InputError("--res: width and height must be positive");
+  if (s.spp < 1 || s.spp > 4096) throw InputError("--spp: must be in 1..4096");
+  if (s.max_depth > 16) throw InputError("--max-depth: must be at most 16");
+  if (s.zstd_level < 1 || s.zstd_level > 19) throw InputError("--zstd-level: must be in 1..19");
+}
+
+RecordSummary Record(const RecordOptions& o, std::ostream& log) {
+  ValidateSettings(o.settings);
+  if (o.frames.empty()) throw InputError("--frames: no frames to record");
+  const auto t_start = std::chrono::steady_clock::now();
+  if (!o.images_dir.empty()) std::filesystem::create_directories(o.images_dir);
+  std::unique_ptr<Scene> scene = Scene::Load(o.scene, o.frames.front());
+
+  TraceHeader header;
+  header.producer = "raycell 0.1.0";
+  header.scene = o.scene.source;
+  header.grids = scene->grids();
+  header.cells = o.cells;
+  header.footprint_mode = o.scene.footprint_mode;
+  header.settings = o.settings;
+  ScanScene(o, scene.get(), &header);
+  const CellGrid cells = CellGrid::Create(header.box_min, header.box_max, o.cells);
+  header.cameras = MakeCameraPath(o.camera, o.frames, header.box_min, header.box_max);
+
+  TraceWriter writer = TraceWriter::Create(o.out, header);
+  Progress progress(o.progress);
+  RecordSummary sum;
+  const bool seq = IsSequencePattern(o.scene.source);
+  for (std::size_t i = 0; i < o.frames.size(); ++i) {
+    const int frame = o.frames[i];
+    if (seq && i > 0) scene = Scene::Load(o.scene, frame);
+    RenderJob job;
+    job.scene = scene.get();
+    job.cells = &cells;
+    job.footprints = seq ? scene->Footprints(header.box_min, header.box_max, o.cells,
+                                             o.scene.footprint_mode)
+                         : header.footprints;
+    job.camera = header.cameras[i];
+    job.settings = o.settings;
+    job.threads = o.threads;
+    job.cancel = o.cancel;
+    job.sink = [&](const RayBatch& b) { writer.Append(b); };
+    const std::string label = "frame " + std::to_string(frame) + " (" + std::to_string(i + 1) +
+                              "/" + std::to_string(o.frames.size()) + ")";
+    job.progress = [&](double f) { progress.Update((i + f) / o.frames.size(), label); };
+    const auto t0 = std::chrono::steady_clock::now();
+    Image image(o.settings.width, o.settings.height);
+    FrameStats st;
+    writer.BeginFrame(frame);
+    if (!RenderFrame(job, &image, &st)) {
+      progress.Done();
+      sum.interrupted = true;
+      log << "interrupted: the " << sum.frames << " finished frames are in " << writer.tmp_path()
+          << " (readable by `raycell trace`)\n";
+      break;
+    }
+    writer.EndFrame();
+    if (!o.images_dir.empty()) WritePng(image, ImagePath(o.images_dir, frame));
+    ++sum.frames;
+    sum.rays += st.rays, sum.visits += st.visits, sum.samples += st.samples;
+    sum.primary_missed += st.primary_missed;
+    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    progress.Done();
+    log << "frame " << frame << ": " << st.rays << " rays (" << st.rays_by_kind[0] << " primary, "
+        << st.rays_by_kind[1] << " reflection, " << st.rays_by_kind[2] << " refraction, "
+        << st.rays_by_kind[3] << " shadow), " << st.visits << " visits, " << st.samples
+        << " samples, " << Fmt(secs, 2) << " s\n";
+  }
+  if (!sum.interrupted) writer.Finish();
+  sum.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  return sum;
+}
+
+}  // namespace raycell

@@ -1,0 +1,45 @@
+// The recording renderer: front-to-back volume ray marching with OpenVDB (fog volumes lit by
+// shadow rays as in vdb_render; level-set surfaces with reflection, refraction and shadow
+// rays) that records every ray's visits to the non-empty cells. OpenVDB stays inside
+// renderer.cpp.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "traces/ray_batch.h"
+#include "traces/record/cell_grid.h"
+#include "traces/record/image.h"
+#include "traces/record/scene.h"
+#include "traces/trace_header.h"
+
+namespace raycell {
+
+struct FrameStats {
+  std::uint64_t rays = 0, visits = 0, samples = 0;
+  std::array<std::uint64_t, kRayKindCount> rays_by_kind{};
+  std::uint64_t primary_missed = 0;  // primary rays that met no non-empty cell (not recorded)
+};
+
+struct RenderJob {
+  const Scene* scene = nullptr;
+  const CellGrid* cells = nullptr;
+  std::vector<std::uint64_t> footprints;  // this frame's; 0 = empty cell, never visited
+  CameraKey camera;
+  RenderSettings settings;
+  int threads = 0;  // 0: all cores
+  // Receives the frame's rays in id order, one batch at a time, on the calling thread.
+  std::function<void(const RayBatch&)> sink;
+  // Called on the calling thread with the fraction of the frame done.
+  std::function<void(double)> progress;
+  const std::atomic<bool>* cancel = nullptr;  // stop early (the frame is then incomplete)
+};
+
+// Renders one frame into `image` (linear RGB) and streams its rays to job.sink. The rays
+// and the image are the same whatever the thread count. Returns false if cancelled.
+bool RenderFrame(const RenderJob& job, Image* image, FrameStats* stats);
+
+}  // namespace raycell

@@ -1,0 +1,384 @@
+// Scene loading, the built-in scene and cell footprints. One of the two translation units
+// that include OpenVDB (with renderer.cpp).
+#include <openvdb/io/File.h>
+#include <openvdb/tools/Composite.h>
+#include <openvdb/tools/LevelSetPlatonic.h>
+#include <openvdb/tools/LevelSetSphere.h>
+#include <openvdb/tools/LevelSetUtil.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <sstream>
+
+#include "traces/check.h"
+#include "traces/record/scene_vdb.h"
+#include "traces/record/vec3.h"
+
+namespace raycell {
+namespace {
+
+std::vector<std::string> Split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::string cur;
+  std::istringstream in(s);
+  while (std::getline(in, cur, sep)) out.push_back(cur);
+  if (!s.empty() && s.back() == sep) out.push_back("");
+  return out;
+}
+
+double ParseNumber(const std::string& text, const std::string& what) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(v)) {
+    throw InputError(what + ": '" + text + "' is not a finite number");
+  }
+  return v;
+}
+
+Vec3d ParseTriple(const std::string& text, const std::string& what) {
+  const auto parts = Split(text, ',');
+  if (parts.size() != 3) throw InputError(what + ": expected X,Y,Z, got '" + text + "'");
+  return {ParseNumber(parts[0], what), ParseNumber(parts[1], what), ParseNumber(parts[2], what)};
+}
+
+Rgb ParseRgb(const std::string& text, const std::string& what) {
+  // One number means grey.
+  if (text.find(',') == std::string::npos) {
+    const double v = ParseNumber(text, what);
+    return {v, v, v};
+  }
+  const Vec3d v = ParseTriple(text, what);
+  return {v.x, v.y, v.z};
+}
+
+void RequireNonNegative(const Rgb& c, const std::string& what) {
+  if (c.r < 0 || c.g < 0 || c.b < 0) throw InputError(what + ": must not be negative");
+}
+
+double ParseFraction(const std::string& text, const std::string& what) {
+  const double v = ParseNumber(text, what);
+  if (v < 0 || v > 1) throw InputError(what + ": must be in [0, 1], got " + text);
+  return v;
+}
+
+void ApplyFogKey(FogMaterial& m, const std::string& key, const std::string& value,
+                 const std::string& what) {
+  if (key == "absorb") {
+    m.absorption = ParseRgb(value, what);
+    RequireNonNegative(m.absorption, what);
+  } else if (key == "scatter") {
+    m.scattering = ParseRgb(value, what);
+    RequireNonNegative(m.scattering, what);
+  } else if (key == "gain") {
+    m.shadow_gain = ParseNumber(value, what);
+    if (m.shadow_gain < 0) throw InputError(what + ": must not be negative");
+  } else {
+    throw InputError(what + ": unknown fog material key (known: absorb, scatter, gain)");
+  }
+}
+
+void ApplySurfaceKey(SurfaceMaterial& m, const std::string& key, const std::string& value,
+                     const std::string& what) {
+  if (key == "color") {
+    m.color = ParseRgb(value, what);
+    RequireNonNegative(m.color, what);
+  } else if (key == "reflect") {
+    m.reflectivity = ParseFraction(value, what);
+  } else if (key == "transparency") {
+    m.transparency = ParseFraction(value, what);
+  } else if (key == "ior") {
+    m.ior = ParseNumber(value, what);
+    if (!(m.ior >= 1.0 && m.ior <= 10.0)) throw InputError(what + ": must be in [1, 10]");
+  } else {
+    throw InputError(what +
+                     ": unknown surface material key (known: color, reflect, transparency, ior)");
+  }
+}
+
+void ApplyMaterial(Scene::Impl& s, const std::string& text, const std::string& source) {
+  const auto fields = Split(text, ':');
+  const std::string& grid = fields[0];
+  const std::string what = "--material '" + text + "'";
+  if (fields.size() < 2) throw InputError(what + ": expected GRID:key=value[:key=value...]");
+  FogMaterial* fog = nullptr;
+  SurfaceMaterial* surface = nullptr;
+  for (auto& f : s.fogs)
+    if (f.grid->getName() == grid) fog = &f.material;
+  for (auto& f : s.surfaces)
+    if (f.grid->getName() == grid) surface = &f.material;
+  if (!fog && !surface) {
+    std::string names;
+    for (const auto& g : s.infos) names += (names.empty() ? "" : ", ") + g.name;
+    throw InputError(what + ": " + source + " has no grid '" + grid + "' (grids: " + names + ")");
+  }
+  for (std::size_t i = 1; i < fields.size(); ++i) {
+    const auto eq = fields[i].find('=');
+    if (eq == std::string::npos) throw InputError(what + ": '" + fields[i] + "' is not key=value");
+    const std::string key = fields[i].substr(0, eq), value = fields[i].substr(eq + 1);
+    const std::string kwhat = what + " key '" + key + "'";
+    fog ? ApplyFogKey(*fog, key, value, kwhat) : ApplySurfaceKey(*surface, key, value, kwhat);
+  }
+  if (surface && surface->reflectivity + surface->transparency > 1.0) {
+    throw InputError(what + ": reflect + transparency must not exceed 1");
+  }
+}
+
+openvdb::BBoxd WorldBox(const openvdb::FloatGrid& grid, openvdb::Vec3d ilo, openvdb::Vec3d ihi) {
+  openvdb::BBoxd box;
+  for (int c = 0; c < 8; ++c) {
+    const openvdb::Vec3d p((c & 1) ? ihi.x() : ilo.x(), (c & 2) ? ihi.y() : ilo.y(),
+                           (c & 4) ? ihi.z() : ilo.z());
+    box.expand(grid.indexToWorld(p));
+  }
+  return box;
+}
+
+openvdb::BBoxd PaddedActiveBox(const openvdb::FloatGrid& grid) {
+  const openvdb::CoordBBox b = grid.evalActiveVoxelBoundingBox();
+  return WorldBox(grid, b.min().asVec3d() - openvdb::Vec3d(1), b.max().asVec3d() + openvdb::Vec3d(1));
+}
+
+GridInfo MakeInfo(const openvdb::FloatGrid& grid, const std::string& role,
+                  const std::string& source) {
+  return GridInfo{grid.getName(), role, source, grid.voxelSize()[0], grid.tree().leafCount()};
+}
+
+void AddGrid(Scene::Impl& s, openvdb::FloatGrid::Ptr grid, const std::string& source) {
+  if (grid->empty() || grid->activeVoxelCount() == 0) return;
+  if (!grid->hasUniformVoxels() || !grid->transform().isLinear()) {
+    throw InputError(source + ": grid '" + grid->getName() +
+                     "' has non-uniform voxels or a non-linear transform; raycell needs "
+                     "uniform linear grids");
+  }
+  if (grid->getGridClass() == openvdb::GRID_LEVEL_SET) {
+    s.surfaces.push_back({grid, SurfaceMaterial{}});
+    s.infos.push_back(MakeInfo(*grid, "surface", source));
+  } else {
+    s.fogs.push_back({grid, FogMaterial{}});
+    s.infos.push_back(MakeInfo(*grid, "fog", source));
+  }
+}
+
+void InitOpenVdb() {
+  static std::once_flag once;
+  std::call_once(once, [] { openvdb::initialize(); });
+}
+
+void LoadFile(Scene::Impl& s, const std::string& path) {
+  openvdb::GridPtrVecPtr grids;
+  try {
+    openvdb::io::File file(path);
+    file.open();
+    grids = file.getGrids();
+    file.close();
+  } catch (const openvdb::Exception& e) {
+    throw InputError(path + ": cannot read as an OpenVDB file: " + e.what());
+  }
+  std::string others;
+  for (const auto& base : *grids) {
+    auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
+    if (grid) {
+      AddGrid(s, grid, path);
+    } else {
+      others += (others.empty() ? "" : ", ") + base->getName() + " (" + base->valueType() + ")";
+    }
+  }
+  if (s.fogs.empty() && s.surfaces.empty()) {
+    throw InputError(path + ": no non-empty float grid" +
+                     (others.empty() ? std::string() : " (found: " + others + ")") +
+                     "; raycell renders float fog volumes and level sets");
+  }
+}
+
+openvdb::FloatGrid::Ptr Named(openvdb::FloatGrid::Ptr g, const std::string& name) {
+  g->setName(name);
+  return g;
+}
+
+// The built-in scene, made with OpenVDB itself: a fog cloud of three blobs, a mirror sphere
+// and a glass icosahedron, lit by one directional light, so that reflection, refraction and
+// shadow rays all occur.
+void BuildBuiltin(Scene::Impl& s) {
+  using openvdb::Vec3f;
+  const float vs = 0.025f, band = 3.0f;
+  auto cloud = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(0.75f, Vec3f(0, 0, 0), vs, band);
+  auto blob2 = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(0.5f, Vec3f(0.6f, 0.35f, -0.2f), vs, band);
+  auto blob3 = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(0.45f, Vec3f(-0.55f, 0.25f, 0.25f), vs, band);
+  openvdb::tools::csgUnion(*cloud, *blob2);
+  openvdb::tools::csgUnion(*cloud, *blob3);
+  openvdb::tools::sdfToFogVolume(*cloud, 0.45f);  // density ramps up over 0.45 units
+  cloud->setName("cloud");
+  AddGrid(s, cloud, "builtin");
+  s.fogs.back().material = FogMaterial{{0.004, 0.006, 0.008}, {0.03, 0.03, 0.03}, 0.2};
+
+  AddGrid(s, Named(openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(0.5f, Vec3f(1.35f, -0.35f, 0.45f), vs, band), "mirror"), "builtin");
+  s.surfaces.back().material = SurfaceMaterial{{0.9, 0.9, 0.95}, 0.85, 0.0, 1.5};
+
+  auto glass = openvdb::tools::createLevelSetIcosahedron<openvdb::FloatGrid>(0.9f, Vec3f(-1.3f, -0.3f, 0.6f), vs, band);
+  AddGrid(s, Named(glass, "glass"), "builtin");
+  s.surfaces.back().material = SurfaceMaterial{{0.85, 1.0, 0.9}, 0.05, 0.85, 1.5};
+
+  s.lights.push_back(Light{Light::Type::kDirectional, {0.4, 0.8, 0.45}, {1.0, 0.95, 0.85}});
+  s.sky_top = {0.30, 0.42, 0.65};
+  s.sky_bottom = {0.06, 0.06, 0.08};
+}
+
+void ComputeBox(Scene::Impl& s) {
+  openvdb::BBoxd box;
+  for (const auto& f : s.fogs) box.expand(PaddedActiveBox(*f.grid));
+  for (const auto& f : s.surfaces) box.expand(PaddedActiveBox(*f.grid));
+  s.lo = box.min();
+  s.hi = box.max();
+}
+
+// Inclusive cell index range on one axis for the world interval [a, b].
+std::pair<int, int> CellRange(double a, double b, double lo, double hi, std::uint32_t n) {
+  const double size = (hi - lo) / n;
+  auto idx = [&](double x) {
+    return int(std::clamp(std::floor((x - lo) / size), 0.0, double(n - 1)));
+  };
+  return {idx(a), idx(b)};
+}
+
+template <typename Fn>
+void ForCellsOverlapping(const openvdb::BBoxd& b, Vec3d lo, Vec3d hi,
+                         std::array<std::uint32_t, 3> dims, Fn&& fn) {
+  if (b.max().x() < lo.x || b.min().x() > hi.x || b.max().y() < lo.y || b.min().y() > hi.y ||
+      b.max().z() < lo.z || b.min().z() > hi.z) {
+    return;
+  }
+  const auto [x0, x1] = CellRange(b.min().x(), b.max().x(), lo.x, hi.x, dims[0]);
+  const auto [y0, y1] = CellRange(b.min().y(), b.max().y(), lo.y, hi.y, dims[1]);
+  const auto [z0, z1] = CellRange(b.min().z(), b.max().z(), lo.z, hi.z, dims[2]);
+  for (int z = z0; z <= z1; ++z)
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) fn(std::uint32_t(x + dims[0] * (y + dims[1] * z)));
+}
+
+// Sparse footprint: every allocated leaf (and active tile) whose sampling region overlaps a
+// cell costs that cell the leaf's bytes. The region is the node's index box [origin,
+// origin + dim], where VolumeRayIntersector's spans put samples, padded by half a voxel
+// against rounding.
+void AddSparse(const openvdb::FloatGrid& grid, Vec3d lo, Vec3d hi,
+               std::array<std::uint32_t, 3> dims, std::vector<std::uint64_t>& fp) {
+  const openvdb::Vec3d pad(0.5);
+  for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf) {
+    const openvdb::Vec3d o = leaf->origin().asVec3d();
+    const auto box = WorldBox(grid, o - pad, o + openvdb::Vec3d(leaf->DIM) + pad);
+    const std::uint64_t bytes = leaf->memUsage();
+    ForCellsOverlapping(box, lo, hi, dims, [&](std::uint32_t c) { fp[c] += bytes; });
+  }
+  for (auto it = grid.cbeginValueOn(); it; ++it) {
+    if (!it.isTileValue()) continue;
+    openvdb::CoordBBox cb;
+    it.getBoundingBox(cb);
+    const auto box = WorldBox(grid, cb.min().asVec3d() - pad, cb.max().asVec3d() + openvdb::Vec3d(1) + pad);
+    ForCellsOverlapping(box, lo, hi, dims, [&](std::uint32_t c) { fp[c] += sizeof(float); });
+  }
+}
+
+// Dense footprint: voxels of the grid's active box inside the cell, 4 bytes each.
+void AddDense(const openvdb::FloatGrid& grid, Vec3d lo, Vec3d hi,
+              std::array<std::uint32_t, 3> dims, std::vector<std::uint64_t>& fp) {
+  const openvdb::BBoxd active = PaddedActiveBox(grid);
+  const double voxel = grid.voxelSize()[0];
+  const Vec3d size{(hi.x - lo.x) / dims[0], (hi.y - lo.y) / dims[1], (hi.z - lo.z) / dims[2]};
+  ForCellsOverlapping(active, lo, hi, dims, [&](std::uint32_t c) {
+    const std::uint32_t x = c % dims[0], y = (c / dims[0]) % dims[1], z = c / (dims[0] * dims[1]);
+    const double cl[3] = {lo.x + x * size.x, lo.y + y * size.y, lo.z + z * size.z};
+    const double ch[3] = {cl[0] + size.x, cl[1] + size.y, cl[2] + size.z};
+    double voxels = 1;
+    for (int a = 0; a < 3; ++a) {
+      const double ov = std::min(ch[a], active.max()[a]) - std::max(cl[a], active.min()[a]);
+      voxels *= std::max(0.0, std::ceil(ov / voxel));
+    }
+    fp[c] += std::uint64_t(voxels) * sizeof(float);
+  });
+}
+
+}  // namespace
+
+Light ParseLight(const std::string& text) {
+  const auto f = Split(text, ':');
+  const std::string what = "--light '" + text + "'";
+  if (f.size() < 2 || f.size() > 3 || (f[0] != "dir" && f[0] != "point")) {
+    throw InputError(what + ": expected dir:X,Y,Z[:R,G,B] or point:X,Y,Z[:R,G,B]");
+  }
+  Light l;
+  l.type = f[0] == "dir" ? Light::Type::kDirectional : Light::Type::kPoint;
+  l.v = ParseTriple(f[1], what);
+  if (l.type == Light::Type::kDirectional && !(Length(l.v) > 0)) {
+    throw InputError(what + ": direction must not be zero");
+  }
+  if (f.size() == 3) {
+    l.color = ParseRgb(f[2], what);
+    RequireNonNegative(l.color, what);
+  }
+  return l;
+}
+
+bool IsSequencePattern(const std::string& source) { return source.find('%') != std::string::npos; }
+
+std::string FrameFile(const std::string& source, int frame) {
+  if (!IsSequencePattern(source)) return source;
+  char buf[4096];
+  const int n = std::snprintf(buf, sizeof buf, source.c_str(), frame);
+  if (n < 0 || n >= int(sizeof buf)) throw InputError("--scene '" + source + "': bad pattern");
+  return buf;
+}
+
+Scene::Scene(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Scene::~Scene() = default;
+
+std::unique_ptr<Scene> Scene::Load(const SceneSpec& spec, int frame) {
+  InitOpenVdb();
+  auto s = std::make_unique<Impl>();
+  if (spec.source == "builtin") {
+    BuildBuiltin(*s);
+  } else {
+    LoadFile(*s, FrameFile(spec.source, frame));
+    s->lights.push_back(Light{});
+  }
+  for (const auto& m : spec.materials) ApplyMaterial(*s, m, spec.source);
+  if (!spec.lights.empty()) s->lights = spec.lights;
+  for (auto& l : s->lights) {
+    if (l.type == Light::Type::kDirectional) l.v = Normalize(l.v);
+  }
+  ComputeBox(*s);
+  return std::unique_ptr<Scene>(new Scene(std::move(s)));
+}
+
+const std::vector<GridInfo>& Scene::grids() const { return impl_->infos; }
+Vec3d Scene::box_lo() const { return {impl_->lo.x(), impl_->lo.y(), impl_->lo.z()}; }
+Vec3d Scene::box_hi() const { return {impl_->hi.x(), impl_->hi.y(), impl_->hi.z()}; }
+const std::vector<Light>& Scene::lights() const { return impl_->lights; }
+
+Rgb Scene::background(Vec3d d) const {
+  const double w = 0.5 * (d.y + 1.0);
+  const Rgb& a = impl_->sky_bottom;
+  const Rgb& b = impl_->sky_top;
+  return {a.r + (b.r - a.r) * w, a.g + (b.g - a.g) * w, a.b + (b.b - a.b) * w};
+}
+
+std::vector<std::uint64_t> Scene::Footprints(Vec3d lo, Vec3d hi, std::array<std::uint32_t, 3> dims,
+                                             const std::string& mode) const {
+  if (mode != "sparse" && mode != "dense") {
+    throw InputError("--footprint '" + mode + "': expected sparse or dense");
+  }
+  std::vector<std::uint64_t> fp(std::size_t(dims[0]) * dims[1] * dims[2], 0);
+  auto add = [&](const openvdb::FloatGrid& g) {
+    mode == "sparse" ? AddSparse(g, lo, hi, dims, fp) : AddDense(g, lo, hi, dims, fp);
+  };
+  for (const auto& f : impl_->fogs) add(*f.grid);
+  for (const auto& f : impl_->surfaces) add(*f.grid);
+  return fp;
+}
+
+}  // namespace raycell

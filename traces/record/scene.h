@@ -1,0 +1,79 @@
+// A scene to record: OpenVDB float grids (fog volumes and level-set surfaces) with their
+// materials, the lights and the background. OpenVDB types stay behind Scene::Impl, so this
+// header is cheap to include.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "traces/record/image.h"
+#include "traces/trace_header.h"
+
+namespace raycell {
+
+// Fog coefficients are per voxel of optical path, as in OpenVDB's vdb_render.
+struct FogMaterial {
+  Rgb absorption{0.1, 0.1, 0.1};
+  Rgb scattering{1.5, 1.5, 1.5};
+  double shadow_gain = 0.2;  // in-scattering along shadow rays, vdb_render's -gain
+};
+
+struct SurfaceMaterial {
+  Rgb color{0.8, 0.8, 0.8};
+  double reflectivity = 0;   // fraction of light mirrored
+  double transparency = 0;   // fraction of light refracted
+  double ior = 1.5;          // index of refraction
+};
+
+struct Light {
+  enum class Type { kDirectional, kPoint } type = Type::kDirectional;
+  Vec3d v{0.3, 0.3, 0};      // direction towards the light, or its position
+  Rgb color{0.7, 0.7, 0.7};  // vdb_render's default light
+};
+
+struct SceneSpec {
+  // "builtin", one .vdb file, or a printf pattern such as fluid_data_%04d.vdb (one file per
+  // frame number).
+  std::string source = "builtin";
+  // "GRID:key=value:key=value", e.g. "density:absorb=0.2:scatter=1,1,1" or
+  // "ball:color=1,0,0:reflect=0.5:transparent=0:ior=1.5" (see ParseMaterial).
+  std::vector<std::string> materials;
+  std::vector<Light> lights;  // empty: the scene's own lights
+  std::string footprint_mode = "sparse";  // or "dense"
+};
+
+// Parses "dir:X,Y,Z[:R,G,B]" or "point:X,Y,Z[:R,G,B]".
+Light ParseLight(const std::string& text);
+bool IsSequencePattern(const std::string& source);
+// The file of one frame: the pattern formatted with the frame number, or the file itself.
+std::string FrameFile(const std::string& source, int frame);
+
+class Scene {
+ public:
+  struct Impl;  // OpenVDB grids and materials, see scene_vdb.h
+  // Loads (or builds) the scene of one frame. Throws InputError for a missing file, a file
+  // with no float grid, an unknown material key, and so on.
+  static std::unique_ptr<Scene> Load(const SceneSpec& spec, int frame);
+  ~Scene();
+
+  const std::vector<GridInfo>& grids() const;
+  // World box that holds every sample with a non-zero value: the union of the grids' active
+  // voxel bounding boxes, padded by one voxel (the trilinear kernel's support).
+  Vec3d box_lo() const;
+  Vec3d box_hi() const;
+  const std::vector<Light>& lights() const;
+  Rgb background(Vec3d direction) const;
+  // Bytes per cell of the grid [lo, hi] split in dims; 0 marks an empty cell.
+  std::vector<std::uint64_t> Footprints(Vec3d lo, Vec3d hi, std::array<std::uint32_t, 3> dims,
+                                        const std::string& mode) const;
+  const Impl& impl() const { return *impl_; }
+
+ private:
+  explicit Scene(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace raycell

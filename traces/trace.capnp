@@ -1,0 +1,230 @@
+# raycell trace file schema, format version 1 (DESIGN.md §3 "The trace").
+#
+# A trace file (".rct") is a sequence of zstd frames:
+#   1. one zstd frame holding one Record message whose union is `header`;
+#   2. per captured frame, one zstd frame holding one or more Record messages whose union
+#      is `batch` (by default at most 65536 rays and about 2^20 visits each, so every message
+#      stays far below Cap'n Proto's 64 MiB traversal limit), then exactly one Record
+#      `frameEnd`; a frame without rays has only the `frameEnd`;
+#   3. a zstd skippable frame (magic 0x184D2A5B) holding the index: one Index message
+#      (unpacked, standard framing) followed by a 24-byte trailer:
+#        UInt64 LE  hash64 of the Index message bytes (see "Checksums" below)
+#        UInt64 LE  byte length of the Index message
+#        8 bytes    "RCTINDEX"
+#      The trailer ends the file, so a reader finds the index from the last 32 bytes.
+# Every message uses the standard (unpacked) Cap'n Proto stream framing, so
+#   zstd -dc FILE | capnp decode traces/trace.capnp Record
+# prints the whole file (zstd skips the index frame).
+#
+# Column encoding. Ray and visit columns are struct-of-arrays lists. Integer columns are a
+# `Column`: one byte per value, escaping big values into a UInt64 list. Signed deltas are
+# zigzag-coded first: zigzag(d) = (d << 1) ^ (d >> 63), so 0,-1,1,-2,2 -> 0,1,2,3,4.
+# Delta coding makes the columns mostly small repeating bytes that zstd compresses to
+# about a quarter of a byte per visit.
+#
+# Checksums. hash64 is raycell's 64-bit word hash (Hash64 in traces/trace_writer.h):
+#   h = seed; for each 64-bit word w: h = rotl64(h ^ (w * P2), 31) * P1;
+#   finally h ^= h >> 33; h *= P2; h ^= h >> 29; h *= P3; h ^= h >> 32
+# with P1 = 0x9E3779B185EBCA87, P2 = 0xC2B2AE3D27D4EB4F, P3 = 0x165667B19E3779F9 and
+# seed = 0x52435431 ("RCT1"). Byte strings are hashed as little-endian words, the last one
+# zero-padded, followed by one word holding the byte length.
+# A frame's checksum hashes its decoded logical content, ray by ray in id order: for each
+# ray the words kind, parent (0xFFFFFFFFFFFFFFFF for primary rays), spawn, pixel x,
+# pixel y, visit count, then per visit cell, samples and, when the header's
+# settings.storeT is set, (bits(tEnter) << 32 | bits(tExit)). It does not depend on how
+# the rays were split into batches.
+
+@0x9a71f44186422e45;
+
+using Cxx = import "/capnp/c++.capnp";
+$Cxx.namespace("raycell::schema");
+
+const formatVersion :UInt32 = 1;
+# The format version this schema describes; Header.formatVersion of files written with it.
+
+# Every message of the file has this root, so one `capnp decode` reads the whole file.
+struct Record {
+  union {
+    header @0 :Header;
+    # First message of the file, alone in the first zstd frame.
+    batch @1 :Batch;
+    # A run of consecutive rays of one frame.
+    frameEnd @2 :FrameEnd;
+    # Last message of each frame's zstd frame.
+  }
+}
+
+struct Vec3 {
+  x @0 :Float64;  # world units
+  y @1 :Float64;  # world units
+  z @2 :Float64;  # world units
+}
+
+struct Grid {
+  name @0 :Text;
+  # Grid name in its .vdb file ("density", "surface", ...).
+  role @1 :Text;
+  # "fog" (density volume) or "surface" (level set).
+  source @2 :Text;
+  # The file the grid came from, or "builtin".
+  voxelSize @3 :Float64;
+  # Edge length of one voxel, world units.
+  leafCount @4 :UInt64;
+  # Number of allocated leaf nodes of the grid.
+}
+
+struct Camera {
+  frame @0 :Int32;
+  # Frame number this camera renders (e.g. 150 for fluid_data_0150.vdb).
+  eye @1 :Vec3;
+  # Camera position, world space.
+  target @2 :Vec3;
+  # Point the camera looks at, world space.
+  up @3 :Vec3;
+  # Up vector, world space (not necessarily normalised).
+  fovDeg @4 :Float64;
+  # Vertical field of view, degrees.
+}
+
+struct Settings {
+  width @0 :UInt32;
+  # Image width, pixels.
+  height @1 :UInt32;
+  # Image height, pixels.
+  spp @2 :UInt32;
+  # Primary rays per pixel.
+  maxDepth @3 :UInt32;
+  # Maximum depth of secondary rays (a primary ray has depth 0).
+  primaryStep @4 :Float64;
+  # Volume sampling step of primary, reflection and refraction rays, in voxels of the
+  # finest fog grid (as vdb_render's --step).
+  shadowStep @5 :Float64;
+  # Volume sampling step of shadow rays, same unit.
+  cutoff @6 :Float64;
+  # Early-termination threshold on transmittance (unitless, 0..1).
+  storeT @7 :Bool;
+  # Batches carry Batch.tEnter/tExit (one Float32 per visit each).
+  zstdLevel @8 :UInt32;
+  # zstd compression level the file was written with.
+}
+
+struct Header {
+  formatVersion @0 :UInt32;
+  # File format version (see `formatVersion` above). Readers reject newer versions.
+  producer @1 :Text;
+  # Program and version that wrote the file, e.g. "raycell 0.1.0".
+  scene @2 :Text;
+  # The scene as given on the command line (--scene).
+  grids @3 :List(Grid);
+  # The OpenVDB grids of the scene.
+  boxMin @4 :Vec3;
+  # Minimum corner of the world-space scene box that the cells split.
+  boxMax @5 :Vec3;
+  # Maximum corner of that box.
+  cellsX @6 :UInt32;
+  # Number of cells along x (nx); cell = x + nx*(y + ny*z).
+  cellsY @7 :UInt32;
+  # Number of cells along y (ny).
+  cellsZ @8 :UInt32;
+  # Number of cells along z (nz).
+  footprints @9 :List(UInt64);
+  # Bytes a processor loads to work in each cell, indexed by cell; nx*ny*nz entries.
+  footprintMode @10 :Text;
+  # How footprints were computed: "sparse" (allocated leaves) or "dense" (all voxels).
+  cameras @11 :List(Camera);
+  # The camera of every frame, in frame order.
+  settings @12 :Settings;
+  # Renderer settings of the capture.
+}
+
+# One integer column: value i is narrow[i] when narrow[i] < 255; narrow[i] == 255 is an
+# escape and the value is the next unused entry of `wide`. Fixed width, so zstd sees
+# aligned repeating bytes.
+struct Column {
+  narrow @0 :List(UInt8);
+  # One byte per value; 0..254 literal, 255 = escape.
+  wide @1 :List(UInt64);
+  # Escaped values, in column order; one per 255 in `narrow`.
+}
+
+# A run of consecutive rays of one frame. Ray ids are frame-local and consecutive:
+# ray i of the batch has id firstId + i. Ray columns have one entry per ray, visit columns
+# one entry per visit (the visits of ray 0, then of ray 1, ...). "Previous ray" below is the
+# previous ray of the same batch; for the first ray of a batch it is a ray with spawn 0 and
+# pixel (0, 0).
+struct Batch {
+  frame @0 :Int32;
+  # Frame number (as in Camera.frame and FrameEnd.frame) these rays belong to.
+  firstId @1 :UInt64;
+  # Frame-local id of the first ray of the batch (the number of rays before it in the frame).
+  kinds @2 :List(UInt8);
+  # Per ray: 0 primary, 1 reflection, 2 refraction, 3 shadow. Its length is the ray count.
+  parents @3 :Column;
+  # Per ray: id - parentId (>= 1), or 0 for primary rays (which have no parent).
+  spawns @4 :Column;
+  # Per ray: zigzag(spawn - previous ray's spawn), where spawn is the index into the
+  # parent's visits of the visit that spawned the ray (0 for primary rays).
+  pixelsX @5 :Column;
+  # Per ray: zigzag(x - previous ray's x), x = image column of the pixel the ray feeds.
+  pixelsY @6 :Column;
+  # Per ray: zigzag(y - previous ray's y), y = image row of that pixel.
+  visitCounts @7 :Column;
+  # Per ray: number of visits (non-empty cells the ray passes through).
+  cells @8 :Column;
+  # Per visit: the first visit of each ray stores its cell id; every later visit stores
+  # zigzag(cell - previous visit's cell) within the same ray.
+  samples @9 :Column;
+  # Per visit: volume samples taken in the cell (the work done there).
+  tEnter @10 :List(Float32);
+  # Per visit, only when settings.storeT (else empty): ray parameter where the ray enters
+  # the cell, world units along its unit direction.
+  tExit @11 :List(Float32);
+  # Per visit, only when settings.storeT: ray parameter where it leaves the cell.
+}
+
+# Totals of one frame, written after its last batch (and repeated in the index).
+struct FrameEnd {
+  frame @0 :Int32;
+  # Frame number.
+  rays @1 :UInt64;
+  # Number of rays in the frame.
+  visits @2 :UInt64;
+  # Number of visits of all its rays.
+  samples @3 :UInt64;
+  # Sum of the samples of all its visits.
+  raysByKind @4 :List(UInt64);
+  # Rays per kind, indexed by kind (primary, reflection, refraction, shadow); 4 entries.
+  checksum @5 :UInt64;
+  # hash64 of the frame's decoded rays (see "Checksums" above).
+}
+
+# The index, in the skippable frame at the end of the file. Lets a reader open any frame
+# without decoding the others.
+struct Index {
+  formatVersion @0 :UInt32;
+  # Same as Header.formatVersion.
+  headerLength @1 :UInt64;
+  # Byte length of the header's zstd frame (which starts at offset 0).
+  frames @2 :List(IndexEntry);
+  # One entry per frame, in file order.
+}
+
+struct IndexEntry {
+  frame @0 :Int32;
+  # Frame number.
+  offset @1 :UInt64;
+  # Byte offset of the frame's zstd frame from the start of the file.
+  length @2 :UInt64;
+  # Byte length of that zstd frame (frames are contiguous: offset + length is the next
+  # frame's offset, or the index frame's offset for the last one).
+  rays @3 :UInt64;
+  # As FrameEnd.rays.
+  visits @4 :UInt64;
+  # As FrameEnd.visits.
+  samples @5 :UInt64;
+  # As FrameEnd.samples.
+  raysByKind @6 :List(UInt64);
+  # As FrameEnd.raysByKind.
+  checksum @7 :UInt64;
+  # As FrameEnd.checksum.
+}

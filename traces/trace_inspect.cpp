@@ -1,0 +1,194 @@
+#include "traces/trace_inspect.h"
+
+#include <charconv>
+#include <cstdint>
+#include <iomanip>
+#include <sstream>
+#include <vector>
+
+namespace raycell {
+namespace {
+
+// Naive uncompressed encoding the compression ratio is measured against.
+constexpr std::uint64_t kNaiveBytesPerRay = 24;
+constexpr std::uint64_t kNaiveBytesPerVisit = 16;
+constexpr std::size_t kMaxFootprintsShown = 32;
+
+std::string Vec(const Vec3d& v) {
+  std::ostringstream s;
+  s << "(" << v.x << ", " << v.y << ", " << v.z << ")";
+  return s.str();
+}
+
+void PrintGrids(const TraceHeader& h, std::ostream& out) {
+  out << "grids:          " << h.grids.size() << "\n";
+  for (const GridInfo& g : h.grids) {
+    out << "  " << g.name << " (" << g.role << ", " << g.source << ", voxel size " << g.voxel_size
+        << ", " << g.leaf_count << " leaves)\n";
+  }
+}
+
+void PrintFootprints(const TraceHeader& h, std::ostream& out) {
+  std::uint64_t total = 0;
+  for (std::uint64_t f : h.footprints) total += f;
+  out << "footprints:     " << h.footprint_mode << ", " << total << " bytes in all:";
+  for (std::size_t i = 0; i < h.footprints.size() && i < kMaxFootprintsShown; ++i) {
+    out << " " << h.footprints[i];
+  }
+  out << (h.footprints.size() > kMaxFootprintsShown ? " ...\n" : "\n");
+}
+
+void PrintSettings(const RenderSettings& s, std::ostream& out) {
+  out << "settings:       " << s.width << "x" << s.height << ", " << s.spp << " spp, max depth "
+      << s.max_depth << ", primary step " << s.primary_step << ", shadow step " << s.shadow_step
+      << ", cutoff " << s.cutoff << ", t " << (s.store_t ? "stored" : "not stored")
+      << ", zstd level " << s.zstd_level << "\n";
+}
+
+void PrintHeader(const TraceReader& reader, const std::string& path, std::ostream& out) {
+  const TraceHeader& h = reader.header();
+  out << "trace:          " << path << " (" << reader.file_size() << " bytes)\n"
+      << "format version: " << h.format_version << "\n"
+      << "producer:       " << h.producer << "\n"
+      << "scene:          " << h.scene << "\n";
+  PrintGrids(h, out);
+  out << "box:            " << Vec(h.box_min) << " - " << Vec(h.box_max) << "\n"
+      << "cell grid:      " << h.cells[0] << "x" << h.cells[1] << "x" << h.cells[2] << " = "
+      << h.cell_count() << " cells\n";
+  PrintFootprints(h, out);
+  out << "cameras:        " << h.cameras.size() << "\n";
+  PrintSettings(h.settings, out);
+  if (!reader.warning().empty()) out << "warning:        " << reader.warning() << "\n";
+}
+
+void PrintRow(const std::string& label, const FrameSummary& s, std::ostream& out) {
+  out << std::setw(8) << label;
+  for (std::uint64_t n : s.rays_by_kind) out << std::setw(12) << n;
+  out << std::setw(12) << s.rays << std::setw(13) << s.visits << std::setw(14) << s.samples
+      << std::setw(13) << s.length << std::setw(9) << std::fixed << std::setprecision(3)
+      << (s.visits ? static_cast<double>(s.length) / static_cast<double>(s.visits) : 0.0) << "\n";
+  out.unsetf(std::ios::floatfield);
+}
+
+FrameSummary Total(const std::vector<FrameSummary>& frames) {
+  FrameSummary t;
+  for (const FrameSummary& s : frames) {
+    t.rays += s.rays;
+    t.visits += s.visits;
+    t.samples += s.samples;
+    t.length += s.length;
+    for (int k = 0; k < kRayKindCount; ++k) t.rays_by_kind[k] += s.rays_by_kind[k];
+  }
+  return t;
+}
+
+void PrintTable(const TraceReader& reader, std::ostream& out) {
+  out << "\n" << std::setw(8) << "frame";
+  for (int k = 0; k < kRayKindCount; ++k) out << std::setw(12) << ToString(RayKind(k));
+  out << std::setw(12) << "rays" << std::setw(13) << "visits" << std::setw(14) << "samples"
+      << std::setw(13) << "bytes" << std::setw(9) << "B/visit"
+      << "\n";
+  for (const FrameSummary& s : reader.frames()) PrintRow(std::to_string(s.frame), s, out);
+  PrintRow("total", Total(reader.frames()), out);
+}
+
+void PrintRatio(const TraceReader& reader, std::ostream& out) {
+  const FrameSummary t = Total(reader.frames());
+  const std::uint64_t raw = t.rays * kNaiveBytesPerRay + t.visits * kNaiveBytesPerVisit;
+  out << "\nframes:         " << reader.frames().size() << "\n"
+      << "raw size:       " << raw << " bytes (naive uncompressed encoding: " << kNaiveBytesPerRay
+      << " B per ray + " << kNaiveBytesPerVisit << " B per visit)\n"
+      << "compressed:     " << t.length << " bytes in frames, " << reader.file_size()
+      << " bytes in the file\n"
+      << "ratio:          " << std::fixed << std::setprecision(1)
+      << (t.length ? static_cast<double>(raw) / static_cast<double>(t.length) : 0.0)
+      << "x (raw / compressed frames)\n";
+  out.unsetf(std::ios::floatfield);
+}
+
+// Appends JSON lines to a buffer with std::to_chars, flushing it to the stream in chunks.
+class JsonlBuffer {
+ public:
+  explicit JsonlBuffer(std::ostream& out) : out_(out) { buf_.reserve(kFlushAt + 4096); }
+  ~JsonlBuffer() { Flush(); }
+
+  void Ray(const RayView& r, const std::optional<std::int32_t>& frame) {
+    Put('{');
+    if (frame) Key("\"frame\":").Int(*frame).Put(',');
+    Key("\"id\":").Int(r.id);
+    if (r.is_primary()) {
+      Key(",\"parent\":null,\"spawn\":null");
+    } else {
+      Key(",\"parent\":").Int(r.parent).Key(",\"spawn\":").Int(r.spawn);
+    }
+    Key(",\"kind\":\"").Key(ToString(r.kind)).Key("\",\"pixel\":[").Int(r.pixel_x).Put(',');
+    Int(r.pixel_y).Key("],\"cells\":");
+    List(r.cells, r.visit_count).Key(",\"samples\":").List(r.samples, r.visit_count);
+    Key("}\n");
+    if (buf_.size() >= kFlushAt) Flush();
+  }
+
+  void Flush() {
+    out_.write(buf_.data(), static_cast<std::streamsize>(buf_.size()));
+    buf_.clear();
+  }
+
+ private:
+  static constexpr std::size_t kFlushAt = std::size_t{1} << 20;
+
+  JsonlBuffer& Put(char c) {
+    buf_.push_back(c);
+    return *this;
+  }
+  JsonlBuffer& Key(const char* s) {
+    buf_.append(s);
+    return *this;
+  }
+  template <typename T>
+  JsonlBuffer& Int(T v) {
+    char tmp[24];
+    const auto end = std::to_chars(tmp, tmp + sizeof tmp, v).ptr;
+    buf_.append(tmp, end);
+    return *this;
+  }
+  JsonlBuffer& List(const std::uint32_t* v, std::size_t n) {
+    Put('[');
+    for (std::size_t i = 0; i < n; ++i) {
+      if (i) Put(',');
+      Int(v[i]);
+    }
+    return Put(']');
+  }
+
+  std::ostream& out_;
+  std::string buf_;
+};
+
+void WriteFrame(const TraceReader& reader, std::size_t index, bool with_frame, JsonlBuffer& buf) {
+  std::optional<std::int32_t> frame;
+  if (with_frame) frame = reader.frames()[index].frame;
+  reader.ForEachBatch(index, [&](const RayBatch& b) {
+    for (std::size_t i = 0; i < b.size(); ++i) buf.Ray(b.ray(i), frame);
+  });
+}
+
+}  // namespace
+
+void PrintInfo(const TraceReader& reader, const std::string& path, std::ostream& out) {
+  PrintHeader(reader, path, out);
+  PrintTable(reader, out);
+  PrintRatio(reader, out);
+}
+
+void WriteJsonl(const TraceReader& reader, std::optional<std::size_t> frame_index,
+                std::ostream& out) {
+  JsonlBuffer buf(out);
+  if (frame_index) {
+    WriteFrame(reader, *frame_index, false, buf);
+    return;
+  }
+  const bool with_frame = reader.frames().size() > 1;
+  for (std::size_t i = 0; i < reader.frames().size(); ++i) WriteFrame(reader, i, with_frame, buf);
+}
+
+}  // namespace raycell

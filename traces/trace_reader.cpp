@@ -1,0 +1,765 @@
+#include "traces/trace_reader.h"
+
+#include <capnp/message.h>
+#include <capnp/serialize.h>
+#include <fcntl.h>
+#include <kj/exception.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <zstd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <optional>
+#include <stdexcept>
+#include <utility>
+
+#include "traces/check.h"
+#include "traces/trace.capnp.h"
+#include "traces/trace_writer.h"
+
+namespace raycell {
+namespace {
+
+// Bad bytes found while decoding; turned into an InputError naming the file and the part
+// of it (header, frame, index) by Guarded() below.
+class BadData : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+std::string Str(std::uint64_t v) { return std::to_string(v); }
+
+// Runs `body`, turning BadData and Cap'n Proto exceptions into an InputError that starts
+// with "<path>: <where()>: ".
+template <typename Where, typename Body>
+auto Guarded(const std::string& path, Where&& where, Body&& body) {
+  try {
+    return body();
+  } catch (const BadData& e) {
+    throw InputError(path + ": " + where() + ": " + e.what());
+  } catch (const kj::Exception& e) {
+    throw InputError(path + ": " + where() + ": malformed message: " + e.getDescription().cStr());
+  }
+}
+
+// ---- Input file --------------------------------------------------------------------------
+
+class FileIn {
+ public:
+  explicit FileIn(const std::string& path) {
+    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd_ < 0) throw InputError(path + ": cannot open: " + std::strerror(errno));
+    struct stat st;
+    if (::fstat(fd_, &st) != 0) throw InputError(path + ": cannot stat: " + std::strerror(errno));
+    size_ = static_cast<std::uint64_t>(st.st_size);
+  }
+  FileIn(const FileIn&) = delete;
+  FileIn& operator=(const FileIn&) = delete;
+  ~FileIn() { ::close(fd_); }
+
+  std::uint64_t size() const { return size_; }
+
+  // Reads exactly `n` bytes at `offset`; BadData when the file is shorter.
+  void ReadAt(std::uint64_t offset, void* dst, std::size_t n) const {
+    if (offset > size_ || n > size_ - offset) {
+      throw BadData("truncated: needs bytes " + Str(offset) + ".." + Str(offset + n) +
+                    " but the file has " + Str(size_));
+    }
+    auto* p = static_cast<char*>(dst);
+    while (n > 0) {
+      const ssize_t got = ::pread(fd_, p, n, static_cast<off_t>(offset));
+      if (got < 0 && errno == EINTR) continue;
+      if (got <= 0) throw BadData(std::string("read failed: ") + std::strerror(errno));
+      p += got;
+      offset += static_cast<std::uint64_t>(got);
+      n -= static_cast<std::size_t>(got);
+    }
+  }
+
+  std::uint32_t U32At(std::uint64_t offset) const {
+    unsigned char b[4];
+    ReadAt(offset, b, 4);
+    return std::uint32_t{b[0]} | std::uint32_t{b[1]} << 8 | std::uint32_t{b[2]} << 16 |
+           std::uint32_t{b[3]} << 24;
+  }
+
+ private:
+  int fd_ = -1;
+  std::uint64_t size_ = 0;
+};
+
+std::uint64_t LoadU64(const unsigned char* b) {
+  std::uint64_t v = 0;
+  for (int i = 7; i >= 0; --i) v = v << 8 | b[i];
+  return v;
+}
+
+// ---- One zstd frame, decompressed on demand ----------------------------------------------
+
+class ZstdFrameReader {
+ public:
+  ZstdFrameReader(const FileIn& file, std::uint64_t offset, std::uint64_t end)
+      : file_(file), start_(offset), next_(offset), end_(std::min(end, file.size())) {
+    if (file.U32At(offset) != ZSTD_MAGICNUMBER) {
+      throw BadData("no zstd frame starts at offset " + Str(offset));
+    }
+    dctx_ = ZSTD_createDCtx();
+    RAYCELL_CHECK(dctx_ != nullptr);
+    ZSTD_DCtx_setParameter(dctx_, ZSTD_d_windowLogMax, kTraceMaxWindowLog);
+    buffer_.resize(ZSTD_DStreamInSize());
+  }
+  ZstdFrameReader(const ZstdFrameReader&) = delete;
+  ZstdFrameReader& operator=(const ZstdFrameReader&) = delete;
+  ~ZstdFrameReader() { ZSTD_freeDCtx(dctx_); }
+
+  // Reads up to `n` bytes; fewer only when the zstd frame ends (its checksum then verified).
+  std::size_t Read(void* dst, std::size_t n) {
+    ZSTD_outBuffer out{dst, n, 0};
+    while (out.pos < out.size && !done_) Step(out);
+    return out.pos;
+  }
+  bool done() const { return done_; }
+  // Compressed bytes of the frame; valid once done().
+  std::uint64_t consumed() const { return next_ - (in_.size - in_.pos) - start_; }
+
+ private:
+  void Step(ZSTD_outBuffer& out) {
+    const std::size_t out_before = out.pos, in_before = in_.pos;
+    const std::size_t r = ZSTD_decompressStream(dctx_, &out, &in_);
+    if (ZSTD_isError(r)) throw BadData(std::string("zstd: ") + ZSTD_getErrorName(r));
+    if (r == 0) {
+      done_ = true;
+    } else if (in_.pos == in_.size && out.pos == out_before) {
+      Refill();
+    } else if (in_.pos == in_before && out.pos == out_before) {
+      throw BadData("zstd: no progress");
+    }
+  }
+
+  void Refill() {
+    const std::size_t n =
+        static_cast<std::size_t>(std::min<std::uint64_t>(buffer_.size(), end_ - next_));
+    if (n == 0 && end_ == file_.size()) {
+      throw BadData("truncated: the file ends at byte " + Str(end_) + " inside the zstd frame");
+    }
+    if (n == 0) throw BadData("the zstd frame runs past its end at byte " + Str(end_));
+    file_.ReadAt(next_, buffer_.data(), n);
+    next_ += n;
+    in_ = ZSTD_inBuffer{buffer_.data(), n, 0};
+  }
+
+  const FileIn& file_;
+  std::uint64_t start_, next_, end_;
+  ZSTD_DCtx* dctx_ = nullptr;
+  std::vector<char> buffer_;
+  ZSTD_inBuffer in_{nullptr, 0, 0};
+  bool done_ = false;
+};
+
+// ---- Messages ----------------------------------------------------------------------------
+
+constexpr std::size_t kMaxSegments = 512;
+
+capnp::ReaderOptions MessageOptions() {
+  capnp::ReaderOptions options;
+  options.traversalLimitInWords = kTraceMaxMessageBytes / sizeof(capnp::word);
+  options.nestingLimit = 16;
+  return options;
+}
+
+void ReadExactly(ZstdFrameReader& in, void* dst, std::size_t n, const char* what) {
+  if (in.Read(dst, n) != n) throw BadData(std::string("zstd frame ends inside ") + what);
+}
+
+// Reads one message in standard framing; returns false at the end of the zstd frame.
+bool ReadMessage(ZstdFrameReader& in, kj::Array<capnp::word>& words) {
+  std::uint32_t first[2];
+  const std::size_t got = in.Read(first, 4);
+  if (got == 0) return false;
+  if (got != 4) throw BadData("zstd frame ends inside a message's segment table");
+  const std::size_t segments = std::size_t{first[0]} + 1;
+  if (segments > kMaxSegments) throw BadData("message has " + Str(segments) + " segments");
+  const std::size_t table_words = segments / 2 + 1;
+  std::vector<std::uint32_t> table(table_words * 2);
+  table[0] = first[0];
+  ReadExactly(in, table.data() + 1, table.size() * 4 - 4, "a segment table");
+  std::uint64_t body_words = 0;
+  for (std::size_t s = 0; s < segments; ++s) body_words += table[1 + s];
+  if (body_words * 8 > kTraceMaxMessageBytes) {
+    throw BadData("message of " + Str(body_words * 8) + " bytes exceeds the limit");
+  }
+  words = kj::heapArray<capnp::word>(table_words + body_words);
+  kj::byte* bytes = words.asBytes().begin();
+  std::memcpy(bytes, table.data(), table_words * 8);
+  ReadExactly(in, bytes + table_words * 8, body_words * 8, "a message");
+  return true;
+}
+
+// ---- Header ------------------------------------------------------------------------------
+
+std::string ToStd(capnp::Text::Reader t) { return std::string(t.begin(), t.size()); }
+
+Vec3d ToVec3(schema::Vec3::Reader v) { return {v.getX(), v.getY(), v.getZ()}; }
+
+RenderSettings ToSettings(schema::Settings::Reader s) {
+  RenderSettings r;
+  r.width = s.getWidth();
+  r.height = s.getHeight();
+  r.spp = s.getSpp();
+  r.max_depth = s.getMaxDepth();
+  r.primary_step = s.getPrimaryStep();
+  r.shadow_step = s.getShadowStep();
+  r.cutoff = s.getCutoff();
+  r.store_t = s.getStoreT();
+  r.zstd_level = s.getZstdLevel();
+  return r;
+}
+
+GridInfo ToGrid(schema::Grid::Reader g) {
+  return {ToStd(g.getName()), ToStd(g.getRole()), ToStd(g.getSource()), g.getVoxelSize(),
+          g.getLeafCount()};
+}
+
+CameraKey ToCamera(schema::Camera::Reader c) {
+  CameraKey k;
+  k.frame = c.getFrame();
+  k.eye = ToVec3(c.getEye());
+  k.target = ToVec3(c.getTarget());
+  k.up = ToVec3(c.getUp());
+  k.fov_deg = c.getFovDeg();
+  return k;
+}
+
+void CheckHeader(const TraceHeader& h) {
+  if (h.format_version < 1 || h.format_version > kTraceFormatVersion) {
+    throw BadData("format version " + Str(h.format_version) + " is not supported (this reader " +
+                  "reads 1.." + Str(kTraceFormatVersion) + ")");
+  }
+  std::uint64_t cells = 1;
+  for (std::uint32_t n : h.cells) cells *= n <= (1u << 10) ? n : 0;
+  if (cells == 0 || cells > (std::uint64_t{1} << 30)) {
+    throw BadData("bad cell grid " + Str(h.cells[0]) + "x" + Str(h.cells[1]) + "x" +
+                  Str(h.cells[2]));
+  }
+  if (h.footprints.size() != cells) {
+    throw BadData(Str(h.footprints.size()) + " footprints for " + Str(cells) + " cells");
+  }
+}
+
+TraceHeader ToHeader(schema::Header::Reader r) {
+  TraceHeader h;
+  h.format_version = r.getFormatVersion();
+  h.producer = ToStd(r.getProducer());
+  h.scene = ToStd(r.getScene());
+  for (auto g : r.getGrids()) h.grids.push_back(ToGrid(g));
+  h.box_min = ToVec3(r.getBoxMin());
+  h.box_max = ToVec3(r.getBoxMax());
+  h.cells = {r.getCellsX(), r.getCellsY(), r.getCellsZ()};
+  for (std::uint64_t f : r.getFootprints()) h.footprints.push_back(f);
+  h.footprint_mode = ToStd(r.getFootprintMode());
+  for (auto c : r.getCameras()) h.cameras.push_back(ToCamera(c));
+  h.settings = ToSettings(r.getSettings());
+  CheckHeader(h);
+  return h;
+}
+
+// Decodes the header frame at offset 0; returns the header and sets `length`.
+TraceHeader ReadHeader(const FileIn& file, std::uint64_t& length) {
+  ZstdFrameReader in(file, 0, file.size());
+  kj::Array<capnp::word> words;
+  if (!ReadMessage(in, words)) throw BadData("empty header frame");
+  capnp::FlatArrayMessageReader message(words, MessageOptions());
+  const auto record = message.getRoot<schema::Record>();
+  if (record.which() != schema::Record::HEADER) throw BadData("first record is not a header");
+  TraceHeader header = ToHeader(record.getHeader());
+  char extra;
+  if (in.Read(&extra, 1) != 0) throw BadData("more than one message in the header frame");
+  length = in.consumed();
+  return header;
+}
+
+// ---- Batches -----------------------------------------------------------------------------
+
+// Reads a Column value by value, checking its length and escapes.
+class ColumnReader {
+ public:
+  ColumnReader(schema::Column::Reader c, std::size_t expected, const char* name)
+      : narrow_(c.getNarrow()), wide_(c.getWide()), name_(name) {
+    if (narrow_.size() != expected) {
+      throw BadData(std::string("column ") + name + " has " + Str(narrow_.size()) +
+                    " values, expected " + Str(expected));
+    }
+  }
+  std::uint64_t Next() {
+    const std::uint8_t b = narrow_[next_++];
+    if (b < 255) return b;
+    if (wide_next_ == wide_.size()) throw BadData(std::string("column ") + name_ + ": bad escape");
+    return wide_[wide_next_++];
+  }
+  void Finish() const {
+    if (wide_next_ != wide_.size())
+      throw BadData(std::string("column ") + name_ + ": extra values");
+  }
+
+ private:
+  capnp::List<std::uint8_t>::Reader narrow_;
+  capnp::List<std::uint64_t>::Reader wide_;
+  const char* name_;
+  unsigned next_ = 0, wide_next_ = 0;
+};
+
+// previous + unzigzag(code), which must fit a uint32.
+std::uint32_t ApplyDelta(std::uint64_t previous, std::uint64_t code, const char* what) {
+  if (code > (std::uint64_t{1} << 34)) throw BadData(std::string("bad ") + what + " delta");
+  const std::int64_t delta =
+      static_cast<std::int64_t>(code >> 1) ^ -static_cast<std::int64_t>(code & 1);
+  const std::int64_t v = static_cast<std::int64_t>(previous) + delta;
+  if (v < 0 || v > std::int64_t{0xFFFFFFFF}) throw BadData(std::string("bad ") + what + " delta");
+  return static_cast<std::uint32_t>(v);
+}
+
+struct BatchColumns {
+  capnp::List<std::uint8_t>::Reader kinds;
+  ColumnReader parents, spawns, xs, ys, counts, cells, samples;
+  capnp::List<float>::Reader t_enter, t_exit;
+  std::size_t visits;
+
+  BatchColumns(schema::Batch::Reader b, std::size_t visit_count)
+      : kinds(b.getKinds()),
+        parents(b.getParents(), kinds.size(), "parents"),
+        spawns(b.getSpawns(), kinds.size(), "spawns"),
+        xs(b.getPixelsX(), kinds.size(), "pixelsX"),
+        ys(b.getPixelsY(), kinds.size(), "pixelsY"),
+        counts(b.getVisitCounts(), kinds.size(), "visitCounts"),
+        cells(b.getCells(), visit_count, "cells"),
+        samples(b.getSamples(), visit_count, "samples"),
+        t_enter(b.getTEnter()),
+        t_exit(b.getTExit()),
+        visits(visit_count) {}
+
+  void Finish() const {
+    for (const ColumnReader* c : {&parents, &spawns, &xs, &ys, &counts, &cells, &samples}) {
+      c->Finish();
+    }
+  }
+};
+
+// Decodes the batches of one frame in order, validating them against each other and the
+// header, and accumulates the frame's summary.
+class FrameDecoder {
+ public:
+  FrameDecoder(const TraceHeader& header, std::int32_t frame, const FrameSummary* expected)
+      : header_(header), acc_(frame, header.settings.store_t), frame_(frame), expected_(expected) {}
+
+  void Decode(schema::Batch::Reader b, RayBatch& out) {
+    if (b.getFrame() != frame_) throw BadData("batch of frame " + Str(b.getFrame()));
+    if (b.getFirstId() != acc_.rays()) {
+      throw BadData("batch starts at ray " + Str(b.getFirstId()) + ", expected " +
+                    Str(acc_.rays()));
+    }
+    const std::size_t visits = b.getCells().getNarrow().size();
+    BatchColumns c(b, visits);
+    CheckTimes(c, visits);
+    out.Clear();
+    out.set_first_id(b.getFirstId());
+    out.Reserve(c.kinds.size(), visits);
+    prev_spawn_ = prev_x_ = prev_y_ = 0;
+    for (unsigned i = 0; i < c.kinds.size(); ++i) DecodeRay(c, i, out);
+    if (out.visit_count() != visits) throw BadData("visit counts do not add up to the visits");
+    c.Finish();
+    CheckAgainstExpected();
+  }
+
+  FrameSummary Summary() const { return acc_.Summary(); }
+
+ private:
+  void CheckTimes(const BatchColumns& c, std::size_t visits) const {
+    const std::size_t t = header_.settings.store_t ? visits : 0;
+    if (c.t_enter.size() != t || c.t_exit.size() != t) throw BadData("t columns have bad length");
+  }
+
+  void DecodeRay(BatchColumns& c, unsigned i, RayBatch& out) {
+    const RayId id = out.first_id() + i;
+    if (c.kinds[i] >= kRayKindCount) throw BadData("ray " + Str(id) + ": bad kind");
+    const auto kind = static_cast<RayKind>(c.kinds[i]);
+    const RayId parent = DecodeParent(c.parents.Next(), id, kind);
+    const std::uint32_t spawn = prev_spawn_ = ApplyDelta(prev_spawn_, c.spawns.Next(), "spawn");
+    prev_x_ = ApplyDelta(prev_x_, c.xs.Next(), "pixel x");
+    prev_y_ = ApplyDelta(prev_y_, c.ys.Next(), "pixel y");
+    const std::uint64_t count = c.counts.Next();
+    if (count > c.visits - out.visit_count()) throw BadData("ray " + Str(id) + ": too many visits");
+    CheckSpawn(id, parent, spawn);
+    out.BeginRay(kind, parent, spawn, prev_x_, prev_y_);
+    DecodeVisits(c, id, count, out);
+    Remember(id, static_cast<std::uint32_t>(count));
+    acc_.AddRay(out.ray(i));
+  }
+
+  RayId DecodeParent(std::uint64_t delta, RayId id, RayKind kind) const {
+    if (kind == RayKind::kPrimary) {
+      if (delta != 0) throw BadData("ray " + Str(id) + ": primary ray with a parent");
+      return kNoParent;
+    }
+    if (delta == 0 || delta > id) throw BadData("ray " + Str(id) + ": bad parent");
+    return id - delta;
+  }
+
+  void CheckSpawn(RayId id, RayId parent, std::uint32_t spawn) const {
+    if (parent == kNoParent) {
+      if (spawn != 0) throw BadData("ray " + Str(id) + ": primary ray with a spawn index");
+      return;
+    }
+    if (id - parent > kWindow) return;  // too far back to remember; not checked
+    if (spawn >= counts_[parent % kWindow]) {
+      throw BadData("ray " + Str(id) + ": spawn " + Str(spawn) + " >= visit count of parent " +
+                    Str(parent));
+    }
+  }
+
+  void DecodeVisits(BatchColumns& c, RayId id, std::uint64_t count, RayBatch& out) {
+    const bool t = header_.settings.store_t;
+    std::uint32_t cell = 0;
+    for (std::uint64_t v = 0; v < count; ++v) {
+      const std::uint64_t code = c.cells.Next();
+      if (v == 0 && code >= header_.cell_count()) throw BadData("ray " + Str(id) + ": bad cell");
+      cell = v == 0 ? static_cast<std::uint32_t>(code) : ApplyDelta(cell, code, "cell");
+      if (cell >= header_.cell_count()) throw BadData("ray " + Str(id) + ": bad cell");
+      const std::uint64_t samples = c.samples.Next();
+      if (samples > 0xFFFFFFFF) throw BadData("ray " + Str(id) + ": bad samples");
+      const std::size_t k = out.visit_count();
+      out.AddVisit(cell, static_cast<std::uint32_t>(samples), t ? c.t_enter[k] : 0.f,
+                   t ? c.t_exit[k] : 0.f);
+    }
+  }
+
+  void Remember(RayId id, std::uint32_t visit_count) {
+    if (id < kWindow) {
+      counts_.push_back(visit_count);
+    } else {
+      counts_[id % kWindow] = visit_count;
+    }
+  }
+
+  void CheckAgainstExpected() const {
+    if (!expected_) return;
+    if (acc_.rays() > expected_->rays || acc_.visits() > expected_->visits) {
+      throw BadData("more rays or visits than the index says");
+    }
+  }
+
+  static constexpr RayId kWindow = RayId{1} << 20;  // parents checked this far back
+
+  const TraceHeader& header_;
+  FrameAccumulator acc_;
+  std::int32_t frame_;
+  const FrameSummary* expected_;
+  std::uint32_t prev_spawn_ = 0, prev_x_ = 0, prev_y_ = 0;
+  std::vector<std::uint32_t> counts_;  // visit counts of the last kWindow rays
+};
+
+// ---- Frames ------------------------------------------------------------------------------
+
+// Where a frame is and what is known of it before reading it.
+struct FrameSlot {
+  std::size_t ordinal;           // position among the file's frames (0 = first)
+  std::uint64_t offset, end;     // bytes to read: the zstd frame starts at offset, ends <= end
+  const FrameSummary* expected;  // from the index or an earlier scan; null when scanning
+};
+
+FrameSummary ToSummary(schema::FrameEnd::Reader r) {
+  FrameSummary s;
+  s.frame = r.getFrame();
+  s.rays = r.getRays();
+  s.visits = r.getVisits();
+  s.samples = r.getSamples();
+  const auto kinds = r.getRaysByKind();
+  if (kinds.size() != kRayKindCount) throw BadData("frameEnd has bad raysByKind");
+  for (unsigned k = 0; k < kinds.size(); ++k) s.rays_by_kind[k] = kinds[k];
+  s.checksum = r.getChecksum();
+  return s;
+}
+
+std::string Hex(std::uint64_t v) {
+  char buf[19];
+  std::snprintf(buf, sizeof buf, "0x%016llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
+std::string Describe(const FrameSummary& s) {
+  std::string kinds;
+  for (int k = 0; k < kRayKindCount; ++k) {
+    kinds += (k ? ", " : "") + Str(s.rays_by_kind[k]) + " " + ToString(static_cast<RayKind>(k));
+  }
+  return "frame " + std::to_string(s.frame) + ": " + Str(s.rays) + " rays (" + kinds + "), " +
+         Str(s.visits) + " visits, " + Str(s.samples) + " samples";
+}
+
+void CheckSummary(const FrameSummary& stored, const FrameSummary& decoded, const char* source) {
+  if (stored.frame != decoded.frame || stored.rays != decoded.rays ||
+      stored.visits != decoded.visits || stored.samples != decoded.samples ||
+      stored.rays_by_kind != decoded.rays_by_kind) {
+    throw BadData(std::string(source) + " says " + Describe(stored) + "; decoded " +
+                  Describe(decoded));
+  }
+  if (stored.checksum != decoded.checksum) {
+    throw BadData(std::string("checksum mismatch: ") + source + " says " + Hex(stored.checksum) +
+                  ", decoded rays hash to " + Hex(decoded.checksum));
+  }
+}
+
+using BatchFn = std::function<void(const RayBatch&)>;
+
+class FrameReading {
+ public:
+  FrameReading(const FileIn& file, const TraceHeader& header, const FrameSlot& slot)
+      : in_(file, slot.offset, slot.end),
+        header_(header),
+        slot_(slot),
+        batch_(header.settings.store_t) {
+    if (slot.expected) number_ = slot.expected->frame;
+  }
+
+  FrameSummary Run(const BatchFn* fn) {
+    kj::Array<capnp::word> words;
+    while (ReadMessage(in_, words)) {
+      capnp::FlatArrayMessageReader message(words, MessageOptions());
+      const auto record = message.getRoot<schema::Record>();
+      if (record.which() == schema::Record::FRAME_END) return End(record.getFrameEnd());
+      if (record.which() != schema::Record::BATCH) throw BadData("unexpected record in a frame");
+      Batch(record.getBatch(), fn);
+    }
+    throw BadData("the zstd frame ends without a frameEnd record");
+  }
+
+  std::optional<std::int32_t> number() const { return number_; }
+
+ private:
+  FrameDecoder& Decoder(std::int32_t frame) {
+    if (!number_) number_ = frame;
+    if (!decoder_) decoder_.emplace(header_, *number_, slot_.expected);
+    return *decoder_;
+  }
+
+  void Batch(schema::Batch::Reader b, const BatchFn* fn) {
+    Decoder(b.getFrame()).Decode(b, batch_);
+    if (fn) (*fn)(batch_);
+  }
+
+  FrameSummary End(schema::FrameEnd::Reader r) {
+    const FrameSummary stored = ToSummary(r);
+    FrameSummary decoded = Decoder(stored.frame).Summary();
+    CheckSummary(stored, decoded, "frameEnd");
+    char extra;
+    if (in_.Read(&extra, 1) != 0) throw BadData("data after the frameEnd record");
+    decoded.offset = slot_.offset;
+    decoded.length = in_.consumed();
+    if (slot_.expected) CheckSummary(*slot_.expected, decoded, "the index");
+    if (slot_.expected && slot_.expected->length != decoded.length) {
+      throw BadData("the zstd frame is " + Str(decoded.length) + " bytes, the index says " +
+                    Str(slot_.expected->length));
+    }
+    return decoded;
+  }
+
+  ZstdFrameReader in_;
+  const TraceHeader& header_;
+  FrameSlot slot_;
+  std::optional<std::int32_t> number_;
+  std::optional<FrameDecoder> decoder_;
+  RayBatch batch_;
+};
+
+std::string FrameLabel(const FrameSlot& slot, std::optional<std::int32_t> number) {
+  const std::string where = "offset " + Str(slot.offset);
+  if (!number) return "frame #" + Str(slot.ordinal) + " (" + where + ")";
+  return "frame " + std::to_string(*number) + " (#" + Str(slot.ordinal) + ", " + where + ")";
+}
+
+// Reads and verifies one frame, calling `fn` (if any) with each batch.
+FrameSummary ReadFrame(const FileIn& file, const std::string& path, const TraceHeader& header,
+                       const FrameSlot& slot, const BatchFn* fn) {
+  std::optional<FrameReading> reading;
+  auto where = [&] { return FrameLabel(slot, reading ? reading->number() : std::nullopt); };
+  return Guarded(path, where, [&] {
+    reading.emplace(file, header, slot);
+    return reading->Run(fn);
+  });
+}
+
+// ---- Index -------------------------------------------------------------------------------
+
+class IndexLocation {
+ public:
+  // Finds the Index message from the trailer; BadData when missing or inconsistent.
+  IndexLocation(const FileIn& file, std::uint64_t header_length) {
+    const std::uint64_t size = file.size();
+    if (size < header_length + 8 + kTraceTrailerBytes) throw BadData(kMissing);
+    unsigned char trailer[kTraceTrailerBytes];
+    file.ReadAt(size - kTraceTrailerBytes, trailer, kTraceTrailerBytes);
+    if (std::memcmp(trailer + 16, kTraceIndexTag, 8) != 0) throw BadData(kMissing);
+    hash = LoadU64(trailer);
+    length = LoadU64(trailer + 8);
+    if (length % 8 != 0 || length > kTraceMaxMessageBytes ||
+        length > size - header_length - 8 - kTraceTrailerBytes) {
+      throw BadData("damaged: bad length " + Str(length));
+    }
+    frame_offset = size - kTraceTrailerBytes - length - 8;
+    if (file.U32At(frame_offset) != kTraceIndexMagic ||
+        file.U32At(frame_offset + 4) != length + kTraceTrailerBytes) {
+      throw BadData("damaged: bad skippable frame header at offset " + Str(frame_offset));
+    }
+  }
+
+  static constexpr const char* kMissing =
+      "missing: the file does not end with an index (interrupted capture or truncated file)";
+  std::uint64_t hash = 0, length = 0, frame_offset = 0;
+};
+
+FrameSummary ToSummary(schema::IndexEntry::Reader e) {
+  FrameSummary s;
+  s.frame = e.getFrame();
+  s.offset = e.getOffset();
+  s.length = e.getLength();
+  s.rays = e.getRays();
+  s.visits = e.getVisits();
+  s.samples = e.getSamples();
+  const auto kinds = e.getRaysByKind();
+  if (kinds.size() != kRayKindCount) throw BadData("damaged: bad raysByKind");
+  for (unsigned k = 0; k < kinds.size(); ++k) s.rays_by_kind[k] = kinds[k];
+  s.checksum = e.getChecksum();
+  return s;
+}
+
+std::vector<FrameSummary> ToSummaries(schema::Index::Reader index, std::uint64_t header_length,
+                                      std::uint64_t index_offset) {
+  if (index.getFormatVersion() != kTraceFormatVersion || index.getHeaderLength() != header_length) {
+    throw BadData("damaged: version or header length disagrees with the header");
+  }
+  std::vector<FrameSummary> frames;
+  std::uint64_t next = header_length;
+  for (auto entry : index.getFrames()) {
+    frames.push_back(ToSummary(entry));
+    const FrameSummary& s = frames.back();
+    if (s.offset != next || s.length == 0 || s.length > index_offset - next) {
+      throw BadData("damaged: entry " + Str(frames.size() - 1) + " has a bad byte range");
+    }
+    next += s.length;
+  }
+  if (next != index_offset) throw BadData("damaged: frames do not end where the index starts");
+  return frames;
+}
+
+std::vector<FrameSummary> ReadIndex(const FileIn& file, std::uint64_t header_length) {
+  const IndexLocation where(file, header_length);
+  auto words = kj::heapArray<capnp::word>(where.length / 8);
+  file.ReadAt(where.frame_offset + 8, words.begin(), where.length);
+  Hash64 hash;
+  hash.AddBytes(words.begin(), where.length);
+  if (hash.Finish() != where.hash) throw BadData("damaged: checksum mismatch");
+  capnp::FlatArrayMessageReader message(words, MessageOptions());
+  return ToSummaries(message.getRoot<schema::Index>(), header_length, where.frame_offset);
+}
+
+}  // namespace
+
+// ---- TraceReader -------------------------------------------------------------------------
+
+struct TraceReader::Impl {
+  std::string path;
+  FileIn file;
+  TraceHeader header;
+  std::uint64_t header_length = 0;
+  std::vector<FrameSummary> frames;
+  std::string warning;
+
+  explicit Impl(const std::string& p) : path(p), file(p) {}
+
+  void ReadHeaderFrame() {
+    header = Guarded(
+        path, [] { return std::string("header"); },
+        [&] { return ReadHeader(file, header_length); });
+  }
+
+  void ReadFrameList() {
+    try {
+      frames = Guarded(
+          path, [] { return std::string("index"); },
+          [&] { return ReadIndex(file, header_length); });
+    } catch (const InputError& e) {
+      std::string stop;
+      frames = Scan(stop);
+      warning = std::string(e.what()) + "; scanned the file instead and kept " +
+                Str(frames.size()) + " complete frame(s)" +
+                (stop.empty() ? "" : "; the scan stopped at " + stop);
+    }
+  }
+
+  // Reads frames one after the other from the header on, until the end, the index frame or
+  // the first damage (described in `stop`).
+  std::vector<FrameSummary> Scan(std::string& stop) const {
+    std::vector<FrameSummary> found;
+    std::uint64_t pos = header_length;
+    while (pos < file.size()) {
+      if (file.size() - pos < 4) {
+        stop = "offset " + Str(pos) + ": " + Str(file.size() - pos) + " stray bytes (truncated)";
+        break;
+      }
+      if ((file.U32At(pos) & ZSTD_MAGIC_SKIPPABLE_MASK) == ZSTD_MAGIC_SKIPPABLE_START) break;
+      try {
+        found.push_back(
+            ReadFrame(file, path, header, {found.size(), pos, file.size(), nullptr}, nullptr));
+      } catch (const InputError& e) {
+        stop = e.what();
+        break;
+      }
+      pos += found.back().length;
+    }
+    return found;
+  }
+
+  const FrameSummary& Frame(std::size_t i) const {
+    if (i >= frames.size()) {
+      throw InputError(path + ": no frame #" + Str(i) + " (the file has " + Str(frames.size()) +
+                       " readable frames)");
+    }
+    return frames[i];
+  }
+};
+
+TraceReader::TraceReader(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+TraceReader::TraceReader(TraceReader&&) noexcept = default;
+TraceReader& TraceReader::operator=(TraceReader&&) noexcept = default;
+TraceReader::~TraceReader() = default;
+
+TraceReader TraceReader::Open(const std::string& path) {
+  auto impl = std::make_unique<Impl>(path);
+  impl->ReadHeaderFrame();
+  impl->ReadFrameList();
+  return TraceReader(std::move(impl));
+}
+
+const std::string& TraceReader::path() const { return impl_->path; }
+const TraceHeader& TraceReader::header() const { return impl_->header; }
+const std::vector<FrameSummary>& TraceReader::frames() const { return impl_->frames; }
+const std::string& TraceReader::warning() const { return impl_->warning; }
+std::uint64_t TraceReader::file_size() const { return impl_->file.size(); }
+
+void TraceReader::ForEachBatch(std::size_t frame_index, const BatchFn& fn) const {
+  const FrameSummary& s = impl_->Frame(frame_index);
+  ReadFrame(impl_->file, impl_->path, impl_->header,
+            {frame_index, s.offset, s.offset + s.length, &s}, &fn);
+}
+
+RayBatch TraceReader::LoadFrame(std::size_t frame_index) const {
+  const FrameSummary& s = impl_->Frame(frame_index);
+  constexpr std::uint64_t kMaxReserve = std::uint64_t{1} << 24;
+  RayBatch all(impl_->header.settings.store_t);
+  all.Reserve(std::min(s.rays, kMaxReserve), std::min(s.visits, kMaxReserve));
+  ForEachBatch(frame_index, [&](const RayBatch& b) { all.AppendRebased(b); });
+  return all;
+}
+
+}  // namespace raycell

@@ -1,0 +1,62 @@
+// Reader of trace files (DESIGN.md §3; the format is documented in traces/trace.capnp).
+//
+// Open() decodes the header and the index at the end of the file; a frame is then read by
+// seeking to its offset, without decoding the others. When the index is missing (a .tmp
+// left by an interrupted capture, a truncated file) or damaged, Open() scans the zstd frames
+// from the start instead, keeps every complete, valid frame before the first damage and
+// says so in warning().
+//
+// Everything read is checked: zstd and frame checksums, message sizes against a fixed limit
+// and the file size, and the content (parent < id, spawn < the parent's visit count, cells
+// < cell count, visit counts consistent with the visit columns and with the frame's
+// summary). Every failure is an InputError whose message names the file and the frame (or
+// the header or index) and what was wrong, e.g.
+//   "out/a.rct: frame 150 (#3, offset 12345): zstd: Restored data doesn't match checksum".
+// Const methods read with pread and keep no shared state, so several threads may read
+// frames of one TraceReader at once.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "traces/ray_batch.h"
+#include "traces/trace_header.h"
+
+namespace raycell {
+
+class TraceReader {
+ public:
+  // Throws InputError when the file cannot be opened or its header is unreadable.
+  static TraceReader Open(const std::string& path);
+
+  TraceReader(TraceReader&&) noexcept;
+  TraceReader& operator=(TraceReader&&) noexcept;
+  ~TraceReader();
+
+  const std::string& path() const;
+  const TraceHeader& header() const;
+  // Summaries of the readable frames in file order, with their offset and length.
+  const std::vector<FrameSummary>& frames() const;
+  // Empty when the index was read; otherwise why it was not and what the scan recovered.
+  const std::string& warning() const;
+  std::uint64_t file_size() const;
+
+  // Calls `fn` with each batch of frame `frame_index` (an index into frames()) in ray order.
+  // Batch ray ids are frame-local; parents may point into earlier batches. Only one batch is
+  // held in memory. Damage may be detected after some batches were delivered (the zstd and
+  // frame checksums are checked at the end): an InputError means the frame is bad.
+  void ForEachBatch(std::size_t frame_index, const std::function<void(const RayBatch&)>& fn) const;
+  // The whole frame as one batch (first_id 0), returned only when fully verified.
+  RayBatch LoadFrame(std::size_t frame_index) const;
+
+ private:
+  struct Impl;
+  explicit TraceReader(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace raycell

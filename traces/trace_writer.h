@@ -1,0 +1,121 @@
+// Streaming writer of trace files (DESIGN.md §3; the format is documented in
+// traces/trace.capnp). Memory is bounded by one batch of rays plus zstd's window, never by
+// the capture. The file is written to `path + ".tmp"` and renamed to `path` by Finish();
+// each frame is flushed to the .tmp as a complete zstd frame at EndFrame(), so an
+// interrupted capture leaves a .tmp whose finished frames TraceReader can still read.
+//
+// Also here: the pieces of the format that writer and reader share (limits, magic numbers,
+// the 64-bit hash and the frame checksum).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "traces/ray_batch.h"
+#include "traces/trace_header.h"
+
+namespace raycell {
+
+// ---- Shared format constants -------------------------------------------------------------
+
+// Magic of the skippable zstd frame that holds the index.
+inline constexpr std::uint32_t kTraceIndexMagic = 0x184D2A5B;
+// Last 8 bytes of a complete trace file.
+inline constexpr char kTraceIndexTag[9] = "RCTINDEX";
+// Trailer after the index message: hash, message length, tag.
+inline constexpr std::size_t kTraceTrailerBytes = 24;
+// Largest Cap'n Proto message the reader accepts, and the writer ever writes.
+inline constexpr std::size_t kTraceMaxMessageBytes = std::size_t{64} << 20;
+// Highest zstd level the writer accepts (keeps the window within kTraceMaxWindowLog).
+inline constexpr int kTraceMaxZstdLevel = 19;
+inline constexpr int kTraceMaxWindowLog = 25;
+
+// ---- Hash (see "Checksums" in trace.capnp) -----------------------------------------------
+
+class Hash64 {
+ public:
+  void Add(std::uint64_t word) {
+    h_ ^= word * kP2;
+    h_ = ((h_ << 31) | (h_ >> 33)) * kP1;
+  }
+  // Adds `size` bytes (a whole number of words read little-endian, else zero-padded) and
+  // their length.
+  void AddBytes(const void* data, std::size_t size);
+  std::uint64_t Finish() const;
+
+  static constexpr std::uint64_t kP1 = 0x9E3779B185EBCA87ull;
+  static constexpr std::uint64_t kP2 = 0xC2B2AE3D27D4EB4Full;
+  static constexpr std::uint64_t kP3 = 0x165667B19E3779F9ull;
+  static constexpr std::uint64_t kSeed = 0x52435431ull;
+
+ private:
+  std::uint64_t h_ = kSeed;
+};
+
+// Running totals and checksum of one frame's rays, fed ray by ray in id order. Writer and
+// reader both use it, so the checksum does not depend on how rays were split into batches.
+class FrameAccumulator {
+ public:
+  FrameAccumulator(std::int32_t frame, bool store_t);
+  void AddRay(const RayView& ray);
+  // Totals so far; offset and length are left 0.
+  FrameSummary Summary() const;
+  std::uint64_t rays() const { return summary_.rays; }
+  std::uint64_t visits() const { return summary_.visits; }
+
+ private:
+  FrameSummary summary_;
+  bool store_t_;
+  Hash64 hash_;
+};
+
+// ---- Writer ------------------------------------------------------------------------------
+
+struct TraceWriterOptions {
+  // Rays per batch message. Every message stays far below Cap'n Proto's 64 MiB limit.
+  std::size_t max_batch_rays = 65536;
+  // A batch also ends once it holds this many visits.
+  std::size_t max_batch_visits = std::size_t{1} << 20;
+};
+
+class TraceWriter {
+ public:
+  // Opens `path + ".tmp"` and writes the header. The zstd level is
+  // header.settings.zstd_level (1..19); visits carry t when header.settings.store_t.
+  // Throws InputError naming the path when the file cannot be written.
+  static TraceWriter Create(const std::string& path, const TraceHeader& header,
+                            const TraceWriterOptions& options = {});
+  // As above with header.settings.zstd_level replaced by `zstd_level`.
+  static TraceWriter Create(const std::string& path, const TraceHeader& header, int zstd_level);
+
+  TraceWriter(TraceWriter&&) noexcept;
+  TraceWriter& operator=(TraceWriter&&) noexcept;
+  // Without Finish(), closes and leaves the .tmp file (holding every ended frame).
+  ~TraceWriter();
+
+  // Starts frame number `frame` (a camera's frame number, e.g. 150).
+  void BeginFrame(std::int32_t frame);
+  // Appends rays to the current frame. `rays.first_id()` must equal the number of rays
+  // appended to this frame so far (ids are frame-local and continue across calls); parents
+  // are frame-local ids smaller than the ray's own, cells are < header.cell_count().
+  // Violations are bugs of the caller and fail a RAYCELL_CHECK.
+  void Append(const RayBatch& rays);
+  // Writes the frame's last batch and its frameEnd record, completes its zstd frame and
+  // hands it to the OS. Returns its summary (with offset and length in the file).
+  FrameSummary EndFrame();
+  // Writes the index, fsyncs, closes and renames the .tmp file to `path`.
+  void Finish();
+
+  const std::string& path() const;
+  std::string tmp_path() const { return path() + ".tmp"; }
+  std::size_t frames_written() const;
+
+ private:
+  struct Impl;
+  explicit TraceWriter(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace raycell
