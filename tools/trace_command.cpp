@@ -1,7 +1,10 @@
 // raycell trace: inspect a capture (info) and hand its rays to other tools (cat).
+#include <chrono>
+#include <iomanip>
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <sstream>
 
 #include "tools/commands.h"
 #include "traces/check.h"
@@ -13,6 +16,7 @@ namespace {
 
 struct TraceArgs {
   std::string file;
+  bool cameras = false;
   std::optional<int> frame;
   std::string format = "jsonl";
 };
@@ -43,6 +47,40 @@ void RunCat(const TraceArgs& a) {
   std::cout.flush();
 }
 
+std::string Csv(const Vec3d& v) {
+  std::ostringstream s;
+  s << std::defaultfloat << std::setprecision(10) << v.x << "," << v.y << "," << v.z;
+  return s.str();
+}
+
+void PrintCameras(const TraceHeader& h, std::ostream& out) {
+  for (const CameraKey& c : h.cameras) {
+    out << "camera " << c.frame << " eye " << Csv(c.eye) << " target " << Csv(c.target)
+        << " fov " << std::defaultfloat << std::setprecision(10) << c.fov_deg << "\n";
+  }
+}
+
+// Reads and checks every frame (zstd and frame checksums, content), streaming, and reports
+// the read speed.
+void RunVerify(const TraceArgs& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const TraceReader r = OpenWithWarning(a.file);
+  std::uint64_t rays = 0, visits = 0;
+  for (std::size_t i = 0; i < r.frames().size(); ++i) {
+    std::uint64_t frame_visits = 0;
+    r.ForEachBatch(i, [&](const RayBatch& b) {
+      rays += b.size();
+      frame_visits += b.visit_count();
+    });
+    visits += frame_visits;
+    std::cout << "frame " << r.frames()[i].frame << ": ok, " << frame_visits << " visits\n";
+  }
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::cout << std::fixed << std::setprecision(3) << r.frames().size() << " frame(s), " << rays
+            << " rays, " << visits << " visits verified in " << s << " s ("
+            << std::setprecision(1) << visits / std::max(s, 1e-9) / 1e6 << " M visits/s)\n";
+}
+
 }  // namespace
 
 void AddTraceCommand(CLI::App& app) {
@@ -54,10 +92,20 @@ void AddTraceCommand(CLI::App& app) {
       "info", "Header, frames, rays by kind, visits, samples, bytes per visit and compression.");
   i->add_option("FILE", info->file, "trace file (.rct; an interrupted capture's .tmp reads too)")
       ->required();
+  i->add_flag("--cameras", info->cameras,
+              "also print each frame's camera as 'camera FRAME eye X,Y,Z target X,Y,Z fov F' "
+              "(e.g. to render the same views with vdb_render -translate/-lookat/-fov)");
   i->callback([info] {
     const TraceReader r = OpenWithWarning(info->file);
     PrintInfo(r, info->file, std::cout);
+    if (info->cameras) PrintCameras(r.header(), std::cout);
   });
+
+  auto verify = std::make_shared<TraceArgs>();
+  CLI::App* v = trace->add_subcommand(
+      "verify", "Read every frame, check checksums and content, and report the read speed.");
+  v->add_option("FILE", verify->file, "trace file")->required();
+  v->callback([verify] { RunVerify(*verify); });
 
   auto cat = std::make_shared<TraceArgs>();
   CLI::App* c = trace->add_subcommand(

@@ -1,5 +1,5 @@
-// Human- and tool-readable views of a trace file: a summary (`raycell info`) and one JSON
-// object per ray (`raycell dump`).
+// Human- and tool-readable views of a trace file: a summary (`raycell trace info`) and one JSON
+// object per ray (`raycell trace cat`).
 #pragma once
 
 #include <cstddef>

@@ -170,21 +170,22 @@ std::string CellSegment::ToString() const {
 CellDDA::CellDDA(const CellGrid& grid, const Vec3d& origin, const Vec3d& dir, double tmin,
                  double tmax, std::optional<CellId> start_cell)
     : grid_(grid) {
-  const std::string ray = "ray " + raycell::ToString(origin) + " + t*" + raycell::ToString(dir);
-  if (!IsFinite(origin) || !IsFinite(dir)) throw InputError(ray + ": must be finite");
-  if (dir.x == 0 && dir.y == 0 && dir.z == 0) throw InputError(ray + ": direction is zero");
-  if (std::isnan(tmin) || std::isnan(tmax)) throw InputError(ray + ": t range is NaN");
+  // Built only on error: this constructor runs once per traced ray.
+  auto ray = [&] { return "ray " + raycell::ToString(origin) + " + t*" + raycell::ToString(dir); };
+  if (!IsFinite(origin) || !IsFinite(dir)) throw InputError(ray() + ": must be finite");
+  if (dir.x == 0 && dir.y == 0 && dir.z == 0) throw InputError(ray() + ": direction is zero");
+  if (std::isnan(tmin) || std::isnan(tmax)) throw InputError(ray() + ": t range is NaN");
   InitAxes(origin, dir);
   if (start_cell) {
     if (*start_cell >= grid_.cell_count())
-      throw InputError(ray + ": start cell " + std::to_string(*start_cell) + " outside " +
+      throw InputError(ray() + ": start cell " + std::to_string(*start_cell) + " outside " +
                        grid_.ToString());
     InitForced(*start_cell, tmin, tmax);
   } else {
     InitFree(tmin, tmax);
   }
   if (!done_ && !(std::isfinite(t_) && std::isfinite(t_end_)))
-    throw InputError(ray + ": t range in the box [" + Num(t_) + ", " + Num(t_end_) +
+    throw InputError(ray() + ": t range in the box [" + Num(t_) + ", " + Num(t_end_) +
                      "] is unbounded (direction too small)");
   max_segments_ = grid_.dim(0) + grid_.dim(1) + grid_.dim(2) + 2;
 }
@@ -309,8 +310,11 @@ bool CellDDA::Next(CellSegment* segment) {
 
 void CellDDA::Advance() {
   for (int a = 0; a < 3; ++a) {
-    while (Near(a, t_next_[a], t_, t_u_)) {
+    // NextCrossing is +inf once the last interior plane is crossed, so each axis steps at
+    // most n-1 times over the whole ray.
+    while (t_next_[a] != kInf && Near(a, t_next_[a], t_, t_u_)) {
       idx_[a] += step_[a];
+      RAYCELL_CHECK(idx_[a] >= 0 && idx_[a] < grid_.dim(a));
       t_next_[a] = NextCrossing(a);
     }
   }
