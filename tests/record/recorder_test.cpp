@@ -6,6 +6,9 @@
 #include <openvdb/tools/LevelSetUtil.h>
 
 #include <sstream>
+#include <thread>
+
+#include "traces/check.h"
 
 #include "tests/record/record_test_util.h"
 #include "traces/record/cell_grid.h"
@@ -140,6 +143,65 @@ TEST(Recorder, EmptyCellsHaveFootprintZeroAndAreNeverVisited) {
   for (CellId c : rays.cells()) ++visits[c];
   for (int c = 1; c < 7; ++c) EXPECT_EQ(visits[c], 0u) << "cell " << c;
   EXPECT_GT(visits[0] + visits[7], 0u);
+}
+
+TEST(Recorder, BadScenesAreClearErrorsAndWriteNothing) {
+  openvdb::initialize();
+  const auto dir = TempDir("bad");
+  auto v = openvdb::Vec3SGrid::create();
+  v->setName("velocity");
+  v->tree().setValue(openvdb::Coord(1, 2, 3), openvdb::Vec3s(1, 0, 0));
+  const std::string vec_only = (dir / "vec.vdb").string();
+  openvdb::io::File(vec_only).write({v});
+  RecordOptions o = SmallBuiltin(dir, 16);
+  std::ostringstream log;
+  auto message = [&](const std::string& scene) {
+    o.scene.source = scene;
+    try {
+      Record(o, log);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message(vec_only).find("no non-empty float grid (found: velocity (vec3s))"),
+            std::string::npos) << message(vec_only);
+  const std::string missing = (dir / "missing.vdb").string();
+  EXPECT_NE(message(missing).find(missing), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(o.out));
+  EXPECT_FALSE(std::filesystem::exists(o.out + ".tmp"));
+}
+
+// Ctrl-C during a capture: the frames finished before it stay readable in OUT.tmp.
+TEST(Recorder, InterruptedCaptureLeavesItsFinishedFramesReadable) {
+  const auto dir = TempDir("interrupt");
+  RecordOptions o = SmallBuiltin(dir, 64);
+  o.frames = ParseFrameRange("0..59");
+  o.camera.orbit_degrees = 90;
+  std::atomic<bool> cancel{false};
+  o.cancel = &cancel;
+  RecordSummary sum;
+  std::ostringstream log;
+  std::thread capture([&] { sum = Record(o, log); });
+  const std::string tmp = o.out + ".tmp";
+  for (int i = 0; i < 3000 && !cancel; ++i) {  // at most 30 s
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    try {
+      if (TraceReader::Open(tmp).frames().size() >= 2) cancel = true;
+    } catch (const InputError&) {
+    }
+  }
+  capture.join();
+  ASSERT_TRUE(sum.interrupted) << "the capture finished before it could be interrupted";
+  EXPECT_FALSE(std::filesystem::exists(o.out));
+  const TraceReader r = TraceReader::Open(tmp);
+  EXPECT_FALSE(r.warning().empty());
+  ASSERT_GE(r.frames().size(), 2u);
+  EXPECT_EQ(r.frames().size(), sum.frames);
+  for (std::size_t i = 0; i < r.frames().size(); ++i) {
+    EXPECT_EQ(r.frames()[i].frame, int(i));
+    EXPECT_GT(r.LoadFrame(i).size(), 0u);
+  }
 }
 
 TEST(Recorder, RealSmokePlumeRecordsAndShowsInTheImage) {
