@@ -1,8 +1,6 @@
 // CellGrid and CellDDA (traces/record/cell_grid.h): hand-written adversarial rays with their
 // exact cell lists, and seeded random rays checked for the traversal's properties and
 // against a brute-force reference.
-#include "traces/record/cell_grid.h"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,6 +12,7 @@
 #include <vector>
 
 #include "traces/check.h"
+#include "traces/record/cell_grid.h"
 
 namespace raycell {
 namespace {
@@ -37,12 +36,12 @@ Cells CellsOf(const std::vector<CellSegment>& segs) {
 }
 
 std::vector<CellSegment> Trace(const CellGrid& g, Vec3d o, Vec3d d, double tmin = 0,
-                             double tmax = kInf, std::optional<CellId> start = std::nullopt) {
+                               double tmax = kInf, std::optional<CellId> start = std::nullopt) {
   return CollectSegments(CellDDA(g, o, d, tmin, tmax, start));
 }
 
 Cells TraceCells(const CellGrid& g, Vec3d o, Vec3d d, double tmin = 0, double tmax = kInf,
-               std::optional<CellId> start = std::nullopt) {
+                 std::optional<CellId> start = std::nullopt) {
   return CellsOf(Trace(g, o, d, tmin, tmax, start));
 }
 
@@ -72,8 +71,8 @@ TEST(CellGridTest, CreateValidates) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("along y"), std::string::npos) << e.what();
   }
-  EXPECT_NO_THROW(CellGrid::Create({1e6, 1e6, 1e6}, {1e6 + 1e-3, 1e6 + 1e-3, 1e6 + 1e-3},
-                                   {7, 7, 7}));
+  EXPECT_NO_THROW(
+      CellGrid::Create({1e6, 1e6, 1e6}, {1e6 + 1e-3, 1e6 + 1e-3, 1e6 + 1e-3}, {7, 7, 7}));
   EXPECT_NO_THROW(CellGrid::Create(lo, hi, {65536, 65535, 1}));
 }
 
@@ -211,8 +210,7 @@ TEST(CellDDATest, ParallelToEachAxis) {
   // Signed zeros and denormal components behave as parallel.
   const double tiny = std::numeric_limits<double>::denorm_min();
   for (Vec3d d : {Vec3d{1, -0.0, 0.0}, Vec3d{1, tiny, -tiny}, Vec3d{1, 1e-310, -0.0}}) {
-    EXPECT_EQ(Trace(g, {-1, 0.25, 0.75}, d),
-              (std::vector<CellSegment>{{4, 1, 1.5}, {5, 1.5, 2}}));
+    EXPECT_EQ(Trace(g, {-1, 0.25, 0.75}, d), (std::vector<CellSegment>{{4, 1, 1.5}, {5, 1.5, 2}}));
   }
   // Starting in a plane with a denormal component across it: the side the ray moves to.
   EXPECT_EQ(TraceCells(g, {-1, 0.5, 0.25}, {1, 0, 0}), (Cells{2, 3}));
@@ -240,9 +238,9 @@ TEST(CellDDATest, StartingOnBoundaries) {
 TEST(CellDDATest, MissingTouchingAndPointingAway) {
   const auto g = UnitGrid(2);
   EXPECT_EQ(TraceCells(g, {2, 0.5, 0.5}, {1, 0, 0}), Cells{});
-  EXPECT_EQ(TraceCells(g, {-1, 1, 0.5}, {1, -1, 0}), Cells{});   // touches the edge x=y=0
-  EXPECT_EQ(TraceCells(g, {-1, 1, 1}, {1, -1, -1}), Cells{});    // touches the corner 0
-  EXPECT_EQ(TraceCells(g, {-1, 2, 0.5}, {1, 0, 0}), Cells{});    // parallel, outside
+  EXPECT_EQ(TraceCells(g, {-1, 1, 0.5}, {1, -1, 0}), Cells{});         // touches the edge x=y=0
+  EXPECT_EQ(TraceCells(g, {-1, 1, 1}, {1, -1, -1}), Cells{});          // touches the corner 0
+  EXPECT_EQ(TraceCells(g, {-1, 2, 0.5}, {1, 0, 0}), Cells{});          // parallel, outside
   EXPECT_EQ(TraceCells(g, {-1, 0.5, 0.5}, {1, 0, 0}, 0, 1), Cells{});  // tmax at the entry
   EXPECT_EQ(CellDDA(g, {2, 0.5, 0.5}, {1, 0, 0}).done(), true);
 }
@@ -280,7 +278,8 @@ TEST(CellDDATest, ForcedStartCell) {
             (std::vector<CellSegment>{{2, 0, 0.25}, {3, 0.25, 0.75}}));
   EXPECT_EQ(TraceCells(g, {0.25, 1 + 1e-15, 0.25}, d), Cells{});
   // Starts at tmin, not at the box entry.
-  EXPECT_EQ(Trace(g, {0.25, 0.25, 0.25}, d, 0.5, 0.6, 1), (std::vector<CellSegment>{{1, 0.5, 0.6}}));
+  EXPECT_EQ(Trace(g, {0.25, 0.25, 0.25}, d, 0.5, 0.6, 1),
+            (std::vector<CellSegment>{{1, 0.5, 0.6}}));
   EXPECT_THROW(CellDDA(g, {0.25, 0.25, 0.25}, d, -kInf, kInf, 0), InputError);
   EXPECT_THROW(CellDDA(g, {0.25, 0.25, 0.25}, d, 0, kInf, 8), InputError);
 }
@@ -302,9 +301,11 @@ TEST(CellDDATest, InvalidRays) {
   // t overflows: the chord is unbounded unless the range is finite.
   const double tiny = std::numeric_limits<double>::denorm_min();
   EXPECT_THROW(CellDDA(g, {0.25, 0.25, 0.25}, {tiny, 0, 0}), InputError);
-  EXPECT_EQ(Trace(g, {0.25, 0.25, 0.25}, {tiny, 0, 0}, 0, 1), (std::vector<CellSegment>{{0, 0, 1}}));
+  EXPECT_EQ(Trace(g, {0.25, 0.25, 0.25}, {tiny, 0, 0}, 0, 1),
+            (std::vector<CellSegment>{{0, 0, 1}}));
   try {
     CellDDA(g, {0, 0, 0}, {0, 0, 0});
+    FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("direction is zero"), std::string::npos) << e.what();
   }
@@ -492,7 +493,9 @@ class RandomRays {
  public:
   explicit RandomRays(std::uint64_t seed) : rng_(seed) {}
 
-  double U(double a = 0, double b = 1) { return std::uniform_real_distribution<double>(a, b)(rng_); }
+  double U(double a = 0, double b = 1) {
+    return std::uniform_real_distribution<double>(a, b)(rng_);
+  }
   std::uint32_t Pick(std::uint32_t n) { return static_cast<std::uint32_t>(rng_() % n); }
 
   CellGrid Grid() {
@@ -574,11 +577,16 @@ class RandomRays {
   double Special() {
     const double s = Pick(2) ? 1.0 : -1.0;
     switch (Pick(5)) {
-      case 0: return 0.0;
-      case 1: return -0.0;
-      case 2: return s * std::numeric_limits<double>::denorm_min();
-      case 3: return s * 1e-310;
-      default: return s * 1e-30;
+      case 0:
+        return 0.0;
+      case 1:
+        return -0.0;
+      case 2:
+        return s * std::numeric_limits<double>::denorm_min();
+      case 3:
+        return s * 1e-310;
+      default:
+        return s * 1e-30;
     }
   }
 
@@ -640,8 +648,8 @@ TEST(CellDDARandomTest, PropertiesAndBruteForceReference) {
     const CellGrid g = rr.Grid();
     for (int i = 0; i < 60; ++i) CheckRandomRay(rr, g, rr.Make(g), &st);
   }
-  std::printf("rays %d (empty %d), compared with reference %d; forced %d (compared %d)\n",
-              st.rays, st.empty, st.compared, st.forced, st.forced_compared);
+  std::printf("rays %d (empty %d), compared with reference %d; forced %d (compared %d)\n", st.rays,
+              st.empty, st.compared, st.forced, st.forced_compared);
   EXPECT_EQ(st.failures, 0);
   EXPECT_GE(st.rays, 100000);
   EXPECT_GE(st.compared, st.rays / 4);  // the reference must not be skipped wholesale

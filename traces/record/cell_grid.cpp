@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "traces/check.h"
+#include "traces/record/vec3.h"
 
 namespace raycell {
 namespace {
@@ -29,10 +30,6 @@ std::string Num(double v) {
 
 std::array<double, 3> ToArray(const Vec3d& v) { return {v.x, v.y, v.z}; }
 
-bool IsFinite(const Vec3d& v) {
-  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
-
 // Replaces the bound *t (uncertainty *u) by v (uncertainty uv) when v is tighter (`tighter`
 // is greater<> for a lower bound, less<> for an upper one); on a tie keeps the larger
 // uncertainty.
@@ -50,8 +47,8 @@ const char* AxisName(int axis) { return axis == 0 ? "x" : axis == 1 ? "y" : "z";
 
 [[noreturn]] void BadDims(std::string_view text, const std::string& why) {
   throw InputError("invalid cell dimensions \"" + std::string(text) +
-                   "\": expected NXxNYxNZ with three positive integers, e.g. \"3x3x3\" (" +
-                   why + ")");
+                   "\": expected NXxNYxNZ with three positive integers, e.g. \"3x3x3\" (" + why +
+                   ")");
 }
 
 std::uint64_t ParseDim(std::string_view text, std::string_view part) {
@@ -68,9 +65,8 @@ std::uint64_t ParseDim(std::string_view text, std::string_view part) {
 void CheckCellCount(const std::array<std::uint64_t, 3>& d, const std::string& what) {
   const std::uint64_t max = std::numeric_limits<CellId>::max();
   if (d[0] > max || d[1] > max || d[0] * d[1] > max || d[0] * d[1] * d[2] > max)
-    throw InputError(what + ": cell count " + std::to_string(d[0]) + "*" +
-                     std::to_string(d[1]) + "*" + std::to_string(d[2]) + " exceeds " +
-                     std::to_string(max));
+    throw InputError(what + ": cell count " + std::to_string(d[0]) + "*" + std::to_string(d[1]) +
+                     "*" + std::to_string(d[2]) + " exceeds " + std::to_string(max));
 }
 
 }  // namespace
@@ -104,7 +100,11 @@ CellGrid CellGrid::Create(const Vec3d& lo, const Vec3d& hi, std::array<std::uint
   if (!IsFinite(lo) || !IsFinite(hi)) throw InputError(box + ": coordinates must be finite");
   CheckCellCount({dims[0], dims[1], dims[2]}, box);
   CellGrid g;
-  g.lo_ = lo, g.hi_ = hi, g.dims_ = dims, g.lo_a_ = ToArray(lo), g.hi_a_ = ToArray(hi);
+  g.lo_ = lo;
+  g.hi_ = hi;
+  g.dims_ = dims;
+  g.lo_a_ = ToArray(lo);
+  g.hi_a_ = ToArray(hi);
   for (int a = 0; a < 3; ++a) {
     const std::string axis = std::string(" along ") + AxisName(a);
     if (dims[a] == 0) throw InputError(box + ": cell count" + axis + " must be at least 1");
@@ -217,7 +217,8 @@ void CellDDA::Slab(int axis, double* entry, double* exit) const {
 }
 
 void CellDDA::InitFree(double tmin, double tmax) {
-  t_ = tmin, t_end_ = tmax, t_u_ = 0, end_u_ = 0;
+  t_ = tmin;
+  t_end_ = tmax;
   for (int a = 0; a < 3; ++a) {
     double entry, exit;
     Slab(a, &entry, &exit);
@@ -237,7 +238,8 @@ void CellDDA::InitForced(CellId start, double tmin, double tmax) {
     throw InputError("ray with forced start cell " + std::to_string(start) +
                      ": tmin must be finite, not " + Num(tmin));
   // Axes the ray is parallel to do not clip: the start cell says where the ray lies.
-  t_ = tmin, t_end_ = tmax, t_u_ = 0, end_u_ = 0;
+  t_ = tmin;
+  t_end_ = tmax;
   for (int a = 0; a < 3; ++a) {
     double entry, exit;
     Slab(a, &entry, &exit);
@@ -333,9 +335,9 @@ std::string CellDDA::ToString() const {
   std::ostringstream s;
   s << "CellDDA[" << grid_.ToString() << ", o " << raycell::ToString({o_[0], o_[1], o_[2]})
     << ", d " << raycell::ToString({d_[0], d_[1], d_[2]}) << ", cell (" << idx_[0] << ", "
-    << idx_[1] << ", " << idx_[2] << "), t " << Num(t_) << ", end " << Num(t_end_)
-    << ", next (" << Num(t_next_[0]) << ", " << Num(t_next_[1]) << ", " << Num(t_next_[2])
-    << "), segments " << emitted_ << (done_ ? ", done]" : "]");
+    << idx_[1] << ", " << idx_[2] << "), t " << Num(t_) << ", end " << Num(t_end_) << ", next ("
+    << Num(t_next_[0]) << ", " << Num(t_next_[1]) << ", " << Num(t_next_[2]) << "), segments "
+    << emitted_ << (done_ ? ", done]" : "]");
   return s.str();
 }
 

@@ -18,7 +18,9 @@
 // Semantics of the edge cases:
 //  - The box is closed. A ray lying in a face of the box (or along an edge) is inside it
 //    and visits the cells on the inner side. A ray lying in an interior cell plane visits
-//    the cells above the plane (the plane's owner).
+//    the cells above the plane (the plane's owner). A ray starting on a cell plane or on the
+//    box surface starts in the cell it moves into; a direction component of +-0 means
+//    parallel, any other one (even denormal) means moving to that side.
 //  - A ray whose chord through box ∩ [tmin, tmax] has length 0 (it only touches the box,
 //    points away from it, starts on its surface pointing out, or tmin >= tmax) yields no
 //    segment.
@@ -103,9 +105,7 @@ class CellGrid {
 struct CellSegment {
   CellId cell = 0;
   double t0 = 0, t1 = 0;
-  bool operator==(const CellSegment& o) const {
-    return cell == o.cell && t0 == o.t0 && t1 == o.t1;
-  }
+  bool operator==(const CellSegment& o) const { return cell == o.cell && t0 == o.t0 && t1 == o.t1; }
   // "{cell 3, t [0.25, 0.5]}".
   std::string ToString() const;
 };
