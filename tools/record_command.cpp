@@ -80,12 +80,19 @@ void AddRecordCommand(CLI::App& app) {
   auto args = std::make_shared<RecordArgs>();
   RecordOptions& o = args->opt;
   o.images_dir = "images";
-  CLI::App* cmd = app.add_subcommand(
-      "record",
-      "Render a scene and record every ray's path through the cells.\n"
+  CLI::App* cmd =
+      app.add_subcommand("record", "Render a scene and record every ray's path through the cells.");
+  cmd->footer(
       "Writes one trace file (zstd frames of Cap'n Proto messages, see traces/trace.capnp)\n"
       "and one PNG per frame. With no options it records frame 0 of the built-in scene\n"
-      "(fog, a mirror sphere and a glass icosahedron) at 256x256 in 2x2x2 cells.");
+      "(fog, a mirror sphere and a glass icosahedron) at 256x256 in 2x2x2 cells.\n"
+      "A ray's visits are the non-empty cells its path crosses, each with the volume samples\n"
+      "taken there; empty cells (footprint 0) are crossed without work and never recorded.\n"
+      "Ctrl-C stops the capture; the finished frames stay readable in OUT.tmp.\n\n"
+      "Examples:\n"
+      "  raycell record --scene ../shared/data/mj_smoke.vdb --cells 3x3x3 --orbit 30:360\n"
+      "  raycell record --scene 'fluid_data_%04d.vdb' --frames 150..155 --out fluid.rct\n"
+      "  raycell record --material cloud:absorb=0.01:scatter=0.05 --light point:0,3,0");
   cmd->add_option("--scene", o.scene.source,
                   "builtin, a .vdb file (fog volumes and level sets), or a printf pattern of "
                   "one file per frame, e.g. fluid_data_%04d.vdb with --frames 150..155")

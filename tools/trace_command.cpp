@@ -108,14 +108,14 @@ void AddTraceCommand(CLI::App& app) {
   v->callback([verify] { RunVerify(*verify); });
 
   auto cat = std::make_shared<TraceArgs>();
-  CLI::App* c = trace->add_subcommand(
-      "cat",
-      "Write rays as JSON Lines, one ray per line:\n"
+  CLI::App* c = trace->add_subcommand("cat", "Write rays as JSON Lines, one ray per line.");
+  c->footer(
+      "Each line:\n"
       "  {\"id\":7,\"parent\":3,\"spawn\":2,\"kind\":\"reflection\",\"pixel\":[x,y],"
       "\"cells\":[5,4,1],\"samples\":[12,30,2]}\n"
       "parent and spawn are null for primary rays; spawn indexes the parent's cells, and\n"
       "cells[0] is that cell. Ids are frame-local. Without --frame every frame is written and\n"
-      "each line starts with \"frame\":N. `raycell analyze --paths` reads this format.");
+      "each line starts with \"frame\":N. This is the format the Cell Tree analysis\n(`raycell analyze --paths`, issue 3) is specified to read.");
   c->add_option("FILE", cat->file, "trace file")->required();
   c->add_option("--frame", cat->frame, "frame number to write (default: all)");
   c->add_option("--format", cat->format, "output format")->capture_default_str();

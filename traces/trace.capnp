@@ -16,11 +16,47 @@
 #   zstd -dc FILE | capnp decode traces/trace.capnp Record
 # prints the whole file (zstd skips the index frame).
 #
-# Column encoding. Ray and visit columns are struct-of-arrays lists. Integer columns are a
+# Column encoding. Ray and visit data are struct-of-arrays lists. Integer columns are a
 # `Column`: one byte per value, escaping big values into a UInt64 list. Signed deltas are
 # zigzag-coded first: zigzag(d) = (d << 1) ^ (d >> 63), so 0,-1,1,-2,2 -> 0,1,2,3,4.
-# Delta coding makes the columns mostly small repeating bytes that zstd compresses to
-# about a quarter of a byte per visit.
+# Rays are coded against earlier rays of the same batch (never of another batch, so every
+# batch decodes on its own), so that runs of similar rays, such as the dozens of shadow rays
+# a primary ray casts from one pixel, become runs of equal bytes, which zstd stores in almost
+# nothing. For ray i of a batch (its id is firstId + i):
+#   previous ray         ray i-1 of the batch; none for ray 0.
+#   sibling              the previous ray, when it has the same parent as ray i (two primary
+#                        rays count as siblings: neither has a parent); else none.
+#   reference ray        for a primary ray, the last primary ray before it in the batch; for
+#                        any other ray, its sibling. May be none.
+#   last non-shadow ray  the last ray before ray i in the batch whose kind is not shadow; may
+#                        be none.
+# Ray heads. Each ray has one head byte:
+#   bits 0-1  kind: 0 primary, 1 reflection, 2 refraction, 3 shadow.
+#   bits 2-3  parent code: 0 = the parent is the last non-shadow ray; 1 = the parent is the
+#             previous ray's parent (the previous ray is not primary); 2 = id - parentId
+#             (>= 1) is the next value of `parents`; 3 is invalid. Primary rays have no
+#             parent and code 0.
+#   bits 4-5  spawn code: with p = the sibling's spawn (0 when there is no sibling), code
+#             0, 1 or 2 means spawn = p + code; 3 means the spawn is the next value of
+#             `spawns`. Primary rays have spawn 0 and code 0.
+#   bit 6     new path: set, the visit count and cells are the next values of primaryPaths
+#             (primary rays) or secondaryPaths (other rays); clear, they are those of the
+#             reference ray (which must exist).
+#   bit 7     new pixel: set, the next two values of `pixels` are zigzag(x - previous ray's x)
+#             and zigzag(y - previous ray's y), taking (0, 0) for the previous pixel of ray 0;
+#             clear, the pixel is the previous ray's ((0, 0) for ray 0).
+# The writer uses the lowest parent and spawn code that applies and clears bits 6 and 7
+# whenever it can. Heads are run-length coded: `heads` has one byte per run of consecutive
+# rays with equal heads and `headRuns` the run's length minus 1.
+# Samples. Visit v of a ray stores the residual zigzag(samples - the reference ray's
+# samples at visit v) when the reference ray exists and has more than v visits, else the
+# samples themselves. primarySamples (visits of primary rays) and secondarySamples (visits of
+# other rays) hold the residuals in ray and visit order, zero-run coded: a run of n >= 1
+# consecutive zero residuals is written as the digits of n in bijective base 2, least
+# significant first, digit 1 as the value 0 and digit 2 as the value 1; any other residual r
+# is written as r + 1. A run ends at the first value >= 2 or at the end of the column. For
+# example the residuals 0 0 0 5 0 are written 0 0 6 0 (3 = 1 + 1*2).
+# Limits. A batch holds at most 2^22 rays and 2^25 visits; a ray at most 2^20 visits.
 #
 # Checksums. hash64 is raycell's 64-bit word hash (Hash64 in traces/trace_writer.h):
 #   h = seed; for each 64-bit word w: h = rotl64(h ^ (w * P2), 31) * P1;
@@ -147,38 +183,43 @@ struct Column {
   # Escaped values, in column order; one per 255 in `narrow`.
 }
 
-# A run of consecutive rays of one frame. Ray ids are frame-local and consecutive:
-# ray i of the batch has id firstId + i. Ray columns have one entry per ray, visit columns
-# one entry per visit (the visits of ray 0, then of ray 1, ...). "Previous ray" below is the
-# previous ray of the same batch; for the first ray of a batch it is a ray with spawn 0 and
-# pixel (0, 0).
+# A run of consecutive rays of one frame, coded as described in "Column encoding" above.
+# Ray ids are frame-local and consecutive: ray i of the batch has id firstId + i.
 struct Batch {
   frame @0 :Int32;
   # Frame number (as in Camera.frame and FrameEnd.frame) these rays belong to.
   firstId @1 :UInt64;
   # Frame-local id of the first ray of the batch (the number of rays before it in the frame).
-  kinds @2 :List(UInt8);
-  # Per ray: 0 primary, 1 reflection, 2 refraction, 3 shadow. Its length is the ray count.
-  parents @3 :Column;
-  # Per ray: id - parentId (>= 1), or 0 for primary rays (which have no parent).
-  spawns @4 :Column;
-  # Per ray: zigzag(spawn - previous ray's spawn), where spawn is the index into the
-  # parent's visits of the visit that spawned the ray (0 for primary rays).
-  pixelsX @5 :Column;
-  # Per ray: zigzag(x - previous ray's x), x = image column of the pixel the ray feeds.
-  pixelsY @6 :Column;
-  # Per ray: zigzag(y - previous ray's y), y = image row of that pixel.
-  visitCounts @7 :Column;
-  # Per ray: number of visits (non-empty cells the ray passes through).
-  cells @8 :Column;
-  # Per visit: the first visit of each ray stores its cell id; every later visit stores
-  # zigzag(cell - previous visit's cell) within the same ray.
-  samples @9 :Column;
-  # Per visit: volume samples taken in the cell (the work done there).
-  tEnter @10 :List(Float32);
-  # Per visit, only when settings.storeT (else empty): ray parameter where the ray enters
-  # the cell, world units along its unit direction.
-  tExit @11 :List(Float32);
+  heads @2 :List(UInt8);
+  # One head byte per run of consecutive rays with equal heads (see "Ray heads").
+  headRuns @3 :Column;
+  # Per entry of `heads`: the number of rays of the run minus 1. The batch's ray count is
+  # the sum of the run lengths.
+  parents @4 :Column;
+  # Per ray with parent code 2, in ray order: id - parentId (>= 1).
+  spawns @5 :Column;
+  # Per ray with spawn code 3, in ray order: spawn, the index into the parent's visits of the
+  # visit that spawned the ray.
+  pixels @6 :Column;
+  # Per ray with the new-pixel bit, in ray order: zigzag(x - previous ray's x), then
+  # zigzag(y - previous ray's y); x is the image column and y the image row of the pixel the
+  # ray feeds.
+  primaryPaths @7 :Column;
+  # Per primary ray with the new-path bit, in ray order: its visit count (the number of
+  # non-empty cells it passes through), then per visit the first visit's cell id, and for
+  # every later visit zigzag(cell - previous visit's cell).
+  secondaryPaths @8 :Column;
+  # The same for the rays with the new-path bit that are not primary.
+  primarySamples @9 :Column;
+  # Zero-run coded residuals (see "Samples") of the visits of primary rays. Samples are the
+  # volume samples taken in a visit's cell (the work done there).
+  secondarySamples @10 :Column;
+  # The same for the visits of the other rays.
+  tEnter @11 :List(Float32);
+  # Per visit of the batch (the visits of ray 0, then of ray 1, ...), only when
+  # settings.storeT (else empty): ray parameter where the ray enters the cell, world units
+  # along its unit direction.
+  tExit @12 :List(Float32);
   # Per visit, only when settings.storeT: ray parameter where it leaves the cell.
 }
 

@@ -31,6 +31,22 @@ inline constexpr std::size_t kTraceMaxMessageBytes = std::size_t{64} << 20;
 // Highest zstd level the writer accepts (keeps the window within kTraceMaxWindowLog).
 inline constexpr int kTraceMaxZstdLevel = 19;
 inline constexpr int kTraceMaxWindowLog = 25;
+// Most rays and visits in one batch message, and visits of one ray (see "Limits" in
+// trace.capnp). They bound the reader's memory whatever the file says.
+inline constexpr std::size_t kTraceMaxBatchRays = std::size_t{1} << 22;
+inline constexpr std::size_t kTraceMaxBatchVisits = std::size_t{1} << 25;
+inline constexpr std::size_t kTraceMaxRayVisits = std::size_t{1} << 20;
+
+// Ray head byte (see "Ray heads" in trace.capnp).
+inline constexpr unsigned kHeadKindMask = 0x03;
+inline constexpr unsigned kHeadParentShift = 2;  // 2-bit parent code
+inline constexpr unsigned kHeadSpawnShift = 4;   // 2-bit spawn code
+inline constexpr unsigned kHeadNewPath = 0x40;
+inline constexpr unsigned kHeadNewPixel = 0x80;
+inline constexpr unsigned kParentIsLastNonShadow = 0;
+inline constexpr unsigned kParentOfPreviousRay = 1;
+inline constexpr unsigned kParentExplicit = 2;
+inline constexpr unsigned kSpawnExplicit = 3;
 
 // ---- Hash (see "Checksums" in trace.capnp) -----------------------------------------------
 
@@ -74,9 +90,11 @@ class FrameAccumulator {
 // ---- Writer ------------------------------------------------------------------------------
 
 struct TraceWriterOptions {
-  // Rays per batch message. Every message stays far below Cap'n Proto's 64 MiB limit.
+  // Rays per batch message (at most kTraceMaxBatchRays). Every message stays far below
+  // Cap'n Proto's 64 MiB limit.
   std::size_t max_batch_rays = 65536;
-  // A batch also ends once it holds this many visits.
+  // A batch also ends once it holds this many visits (at most kTraceMaxBatchVisits -
+  // kTraceMaxRayVisits).
   std::size_t max_batch_visits = std::size_t{1} << 20;
 };
 
@@ -99,7 +117,8 @@ class TraceWriter {
   void BeginFrame(std::int32_t frame);
   // Appends rays to the current frame. `rays.first_id()` must equal the number of rays
   // appended to this frame so far (ids are frame-local and continue across calls); parents
-  // are frame-local ids smaller than the ray's own, cells are < header.cell_count().
+  // are frame-local ids smaller than the ray's own, primary rays have spawn 0, a ray has at
+  // most kTraceMaxRayVisits visits, cells are < header.cell_count().
   // Violations are bugs of the caller and fail a RAYCELL_CHECK.
   void Append(const RayBatch& rays);
   // Writes the frame's last batch and its frameEnd record, completes its zstd frame and
