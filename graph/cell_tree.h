@@ -1,0 +1,115 @@
+// The Cell Tree of one frame (DESIGN.md §1 "Cell Tree", "Generation and bound").
+//
+// Nodes live in flat arrays indexed by NodeId. Node 0 (kRootNode) is the virtual root: it
+// has no cell, no parent and is never counted as work. Every other node is (parent, cell),
+// and a node is always created after its parent, so parent(n) < n.
+//
+// CellTreeBuilder builds the tree while rays stream in, batch by batch, in ray id order.
+// Its memory grows with the nodes, plus, to place spawned rays, one NodeId per visit of
+// every ray seen so far and 16 bytes per ray (see CellTreeBuilder). FromJsonl reads the
+// line-per-ray text format.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <iosfwd>
+#include <limits>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "traces/ray_batch.h"
+
+namespace raycell {
+
+using NodeId = std::uint32_t;
+inline constexpr NodeId kRootNode = 0;
+inline constexpr NodeId kNoNode = std::numeric_limits<NodeId>::max();
+inline constexpr CellId kNoCell = std::numeric_limits<CellId>::max();
+
+class CellTree {
+ public:
+  // Nodes including the root; node ids are 0 .. size()-1.
+  std::size_t size() const { return cell_.size(); }
+  // Nodes without the root.
+  std::size_t node_count() const { return cell_.size() - 1; }
+  // One more than the largest cell of any node (0 for an empty tree).
+  CellId cell_count() const { return cell_count_; }
+
+  CellId cell(NodeId n) const { return cell_[n]; }           // kNoCell for the root
+  NodeId parent(NodeId n) const { return parent_[n]; }       // kNoNode for the root
+  std::uint64_t enter(NodeId n) const { return enter_[n]; }  // rays entering from the parent
+  std::uint64_t samples(NodeId n) const { return samples_[n]; }
+  // Nodes on the path root..n (inclusive) whose cell is cell(n); 0 for the root.
+  std::uint32_t generation(NodeId n) const { return generation_[n]; }
+  // Children in creation order: first_child, then next_sibling until kNoNode.
+  NodeId first_child(NodeId n) const { return first_child_[n]; }
+  NodeId next_sibling(NodeId n) const { return next_sibling_[n]; }
+  bool is_leaf(NodeId n) const { return first_child_[n] == kNoNode; }
+  std::vector<NodeId> children(NodeId n) const;
+  // The child of `n` in `cell`, or kNoNode. Linear in the number of children.
+  NodeId FindChild(NodeId n, CellId cell) const;
+
+  // One line per node, depth-first, indented: "cell 3 gen 1 enter 2 samples 40".
+  std::string ToString() const;
+
+ private:
+  friend class CellTreeBuilder;
+  CellTree();
+  NodeId AddNode(NodeId parent, CellId cell);
+  void ComputeGenerations();
+
+  std::vector<CellId> cell_;
+  std::vector<NodeId> parent_;
+  std::vector<std::uint64_t> enter_, samples_;
+  std::vector<std::uint32_t> generation_;
+  std::vector<NodeId> first_child_, next_sibling_;
+  std::vector<NodeId> last_child_;  // for appending in creation order; cleared by Finish
+  CellId cell_count_ = 0;
+};
+
+// maxGen(c) for every cell c < tree.cell_count(): the largest generation of a node of c
+// (0 for a cell without nodes).
+std::vector<std::uint32_t> MaxGenerations(const CellTree& tree);
+// Sum over cells of maxGen: the fewest fetches of any schedule with a one-cell cache.
+std::uint64_t Bound(const CellTree& tree);
+
+// Streams rays into a Cell Tree. Rays must come in strictly increasing id order (frame-local
+// ids, as TraceReader::ForEachBatch delivers them); a parent must come before its children.
+//
+// To start a spawned ray at its parent's node of the spawn visit, the builder keeps the node
+// of every visit of every ray added so far: 4 bytes per visit plus 16 bytes per ray (id and
+// offset, looked up by binary search), until Finish(). Which rays will still get children is
+// not known from the stream, so nothing is discarded before the frame ends.
+class CellTreeBuilder {
+ public:
+  CellTreeBuilder();
+  // Throws InputError naming the ray id on malformed rays: ids not increasing, unknown
+  // parent, spawn index out of range, first cell not the parent's spawn cell, a cell
+  // repeated consecutively. The tree is unspecified after an error.
+  void AddBatch(const RayBatch& batch);
+  void AddRay(const RayView& ray);
+  // The tree, with generations computed. The builder is empty afterwards.
+  CellTree Finish();
+
+ private:
+  NodeId Child(NodeId parent, CellId cell);
+  NodeId StartNode(const RayView& ray);
+  NodeId ParentVisitNode(const RayView& ray) const;
+
+  CellTree tree_;
+  std::unordered_map<std::uint64_t, NodeId> child_index_;  // (parent << 32 | cell) -> child
+  std::vector<RayId> ray_ids_;                             // increasing
+  std::vector<std::uint64_t> ray_begin_;  // ray i's visit nodes start at visit_nodes_[this]
+  std::vector<NodeId> visit_nodes_;
+};
+
+// Reads one ray per line, e.g.
+//   {"id":7,"parent":3,"spawn":2,"kind":"reflection","pixel":[4,5],"cells":[5,4,1],
+//    "samples":[12,30,2]}
+// (on one line). parent and spawn are null for primary rays; an optional "frame" key is
+// ignored; keys may come in any order; blank lines are skipped. Any malformed line gives an
+// InputError "name:LINE: what was wrong".
+CellTree FromJsonl(std::istream& in, const std::string& name);
+
+}  // namespace raycell

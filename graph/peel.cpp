@@ -1,0 +1,150 @@
+#include "graph/peel.h"
+
+#include <algorithm>
+#include <functional>
+#include <set>
+#include <sstream>
+#include <utility>
+
+#include "traces/check.h"
+
+namespace raycell {
+
+const char* ToString(PeelKind kind) {
+  return kind == PeelKind::kCompletion ? "completion" : "split";
+}
+
+std::string PeelResult::ToString() const {
+  std::ostringstream s;
+  s << "schedule";
+  for (CellId c : schedule) s << " " << c;
+  s << " (" << schedule.size() << " entries, " << split_peels << " split peels)";
+  return s.str();
+}
+
+namespace {
+
+// The state of the tree being peeled, with the per-cell counts that make each step cheap.
+//
+// Cost. Every node becomes a leaf once and is removed once, each time with O(1) count
+// updates and O(1) updates of the two ordered sets (O(log cells) each). Each step removes at
+// least one node, so there are at most `nodes` steps, and choosing a cell is O(log cells).
+// top_[c] (maxGen of c over the remaining nodes) only decreases, by at most maxGen(c) in
+// total, and the sum of maxGen is at most `nodes`. Total: O(nodes log cells), O(nodes)
+// memory (the per-(cell, generation) counts have sum-of-maxGen <= nodes entries).
+class Peeler {
+ public:
+  explicit Peeler(const CellTree& tree) : t_(tree), cells_(tree.cell_count()) {
+    InitCounts();
+    for (NodeId n = 1; n < t_.size(); ++n) {
+      if (t_.is_leaf(n)) AddLeaf(n);
+    }
+    for (CellId c = 0; c < cells_; ++c) UpdateReady(c);
+  }
+
+  PeelResult Run() {
+    PeelResult out;
+    while (!by_leaves_.empty()) {
+      const bool completion = !ready_.empty();
+      const CellId c = completion ? *ready_.begin() : by_leaves_.begin()->second;
+      RemoveLeavesOf(c);
+      out.schedule.push_back(c);
+      out.kinds.push_back(completion ? PeelKind::kCompletion : PeelKind::kSplit);
+      out.split_peels += completion ? 0 : 1;
+    }
+    RAYCELL_CHECK(ready_.empty());
+    std::reverse(out.schedule.begin(), out.schedule.end());
+    std::reverse(out.kinds.begin(), out.kinds.end());
+    return out;
+  }
+
+ private:
+  // (-leaf count, cell) ordering: most leaves first, lowest cell on ties.
+  using LeafKey = std::pair<std::size_t, CellId>;
+  LeafKey Key(CellId c) const { return {~leaves_[c].size(), c}; }
+  std::size_t Slot(NodeId n) const { return base_[t_.cell(n)] + t_.generation(n) - 1; }
+
+  void InitCounts() {
+    top_ = MaxGenerations(t_);
+    base_.assign(cells_, 0);
+    std::size_t total = 0;
+    for (CellId c = 0; c < cells_; ++c) base_[c] = std::exchange(total, total + top_[c]);
+    count_.assign(total, 0);
+    leaf_count_.assign(total, 0);
+    children_.assign(t_.size(), 0);
+    for (NodeId n = 1; n < t_.size(); ++n) {
+      ++count_[Slot(n)];
+      if (t_.parent(n) != kRootNode) ++children_[t_.parent(n)];
+    }
+    non_leaf_top_.assign(cells_, 0);
+    for (CellId c = 0; c < cells_; ++c)
+      non_leaf_top_[c] = top_[c] ? count_[base_[c] + top_[c] - 1] : 0;
+    leaves_.resize(cells_);
+  }
+
+  void AddLeaf(NodeId n) {
+    const CellId c = t_.cell(n);
+    if (!leaves_[c].empty()) by_leaves_.erase(Key(c));
+    leaves_[c].push_back(n);
+    by_leaves_.insert(Key(c));
+    ++leaf_count_[Slot(n)];
+    if (t_.generation(n) == top_[c]) --non_leaf_top_[c];
+  }
+
+  void UpdateReady(CellId c) {
+    if (top_[c] > 0 && non_leaf_top_[c] == 0) {
+      ready_.insert(c);
+    } else {
+      ready_.erase(c);
+    }
+  }
+
+  // Removes the leaves of c present now. Their parents are of other cells (a child never
+  // has its parent's cell), so no leaf of c appears while they are removed.
+  void RemoveLeavesOf(CellId c) {
+    by_leaves_.erase(Key(c));
+    std::vector<NodeId> leaves = std::move(leaves_[c]);
+    leaves_[c].clear();
+    RAYCELL_CHECK(!leaves.empty());  // progress: every step removes a node
+    for (NodeId n : leaves) RemoveLeaf(n);
+    RAYCELL_CHECK(leaves_[c].empty());
+    LowerTop(c);
+    UpdateReady(c);
+  }
+
+  void RemoveLeaf(NodeId n) {
+    --count_[Slot(n)];
+    --leaf_count_[Slot(n)];
+    const NodeId p = t_.parent(n);
+    if (p == kRootNode || --children_[p] > 0) return;
+    AddLeaf(p);
+    UpdateReady(t_.cell(p));
+  }
+
+  // Moves top_[c] down past emptied generations and recounts its non-leaves there.
+  void LowerTop(CellId c) {
+    const std::uint32_t old_top = top_[c];
+    while (top_[c] > 0 && count_[base_[c] + top_[c] - 1] == 0) --top_[c];
+    if (top_[c] == old_top || top_[c] == 0) return;
+    const std::size_t slot = base_[c] + top_[c] - 1;
+    non_leaf_top_[c] = count_[slot] - leaf_count_[slot];
+  }
+
+  const CellTree& t_;
+  const CellId cells_;
+  std::vector<std::uint32_t> top_;           // per cell: maxGen over the remaining nodes
+  std::vector<std::size_t> base_;            // per cell: first slot of its generations
+  std::vector<std::size_t> count_;           // per (cell, gen): remaining nodes
+  std::vector<std::size_t> leaf_count_;      // per (cell, gen): remaining leaves
+  std::vector<std::size_t> non_leaf_top_;    // per cell: non-leaves at generation top_
+  std::vector<std::uint32_t> children_;      // per node: remaining children
+  std::vector<std::vector<NodeId>> leaves_;  // per cell: current leaves
+  std::set<CellId> ready_;
+  std::set<LeafKey> by_leaves_;  // cells with at least one leaf
+};
+
+}  // namespace
+
+PeelResult Peel(const CellTree& tree) { return Peeler(tree).Run(); }
+
+}  // namespace raycell

@@ -1,0 +1,48 @@
+#include "graph/schedule.h"
+
+#include <utility>
+
+#include "traces/check.h"
+
+namespace raycell {
+
+std::string ScheduleRun::ToString() const {
+  return std::string(feasible ? "feasible" : "infeasible") + ", " +
+         std::to_string(processed_nodes) + " nodes processed, " + std::to_string(useful_fetches) +
+         " useful fetches";
+}
+
+namespace {
+
+// ready[c]: unprocessed nodes of cell c whose parent is processed.
+void MakeReady(const CellTree& tree, NodeId parent, std::vector<std::vector<NodeId>>& ready) {
+  for (NodeId c = tree.first_child(parent); c != kNoNode; c = tree.next_sibling(c)) {
+    ready[tree.cell(c)].push_back(c);
+  }
+}
+
+}  // namespace
+
+// One pass per entry is enough: the nodes of cell c processed at an entry have no children
+// of cell c (a ray's consecutive visits are to different cells, so the builder never makes
+// a child with its parent's cell; checked below), so processing them makes no further node
+// of c ready within the same entry.
+ScheduleRun RunSchedule(const CellTree& tree, const std::vector<CellId>& schedule) {
+  std::vector<std::vector<NodeId>> ready(tree.cell_count());
+  MakeReady(tree, kRootNode, ready);
+  ScheduleRun run;
+  std::vector<NodeId> batch;
+  for (CellId c : schedule) {
+    if (c >= tree.cell_count() || ready[c].empty()) continue;
+    batch.clear();
+    std::swap(batch, ready[c]);
+    ++run.useful_fetches;
+    run.processed_nodes += batch.size();
+    for (NodeId n : batch) MakeReady(tree, n, ready);
+    RAYCELL_CHECK(ready[c].empty());
+  }
+  run.feasible = run.processed_nodes == tree.node_count();
+  return run;
+}
+
+}  // namespace raycell

@@ -1,0 +1,29 @@
+// Schedules and feasibility (DESIGN.md §1 "Schedule and feasibility"). Independent of
+// Peel: this is the checker Peel's output is tested against.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "graph/cell_tree.h"
+
+namespace raycell {
+
+struct ScheduleRun {
+  bool feasible = false;            // every node was processed
+  std::size_t processed_nodes = 0;  // without the root
+  std::size_t useful_fetches = 0;   // entries that processed at least one node
+  // "feasible, 7/7 nodes, 5 useful fetches".
+  std::string ToString() const;
+};
+
+// Runs `schedule` on `tree`: at each entry c, every unprocessed node of cell c whose parent
+// is processed (the root counts as processed) is processed. Cells >= tree.cell_count() are
+// allowed and process nothing. O(nodes + schedule length).
+ScheduleRun RunSchedule(const CellTree& tree, const std::vector<CellId>& schedule);
+inline bool IsFeasible(const CellTree& tree, const std::vector<CellId>& schedule) {
+  return RunSchedule(tree, schedule).feasible;
+}
+
+}  // namespace raycell

@@ -1,0 +1,239 @@
+#include "graph/cell_tree.h"
+
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+#include "traces/check.h"
+
+namespace raycell {
+namespace {
+
+constexpr CellId A = 0, B = 1, C = 2;
+
+struct TestRay {
+  RayId parent;
+  std::uint32_t spawn;
+  std::vector<CellId> cells;
+  std::vector<std::uint32_t> samples;  // empty: one sample per visit
+};
+
+RayBatch MakeBatch(const std::vector<TestRay>& rays, RayId first_id = 0) {
+  RayBatch b(false);
+  b.set_first_id(first_id);
+  for (const TestRay& r : rays) {
+    const RayKind kind = r.parent == kNoParent ? RayKind::kPrimary : RayKind::kReflection;
+    b.BeginRay(kind, r.parent, r.spawn, 0, 0);
+    for (std::size_t v = 0; v < r.cells.size(); ++v) {
+      b.AddVisit(r.cells[v], r.samples.empty() ? 1 : r.samples[v], 0.f, 0.f);
+    }
+  }
+  return b;
+}
+
+CellTree Build(const std::vector<TestRay>& rays) {
+  CellTreeBuilder builder;
+  builder.AddBatch(MakeBatch(rays));
+  return builder.Finish();
+}
+
+// Follows `path` of cells from the root; kNoNode when some step is missing.
+NodeId Find(const CellTree& t, const std::vector<CellId>& path) {
+  NodeId n = kRootNode;
+  for (CellId c : path) {
+    n = t.FindChild(n, c);
+    if (n == kNoNode) return kNoNode;
+  }
+  return n;
+}
+
+TEST(CellTreeTest, EmptyTree) {
+  const CellTree t = Build({});
+  EXPECT_EQ(t.node_count(), 0u);
+  EXPECT_EQ(t.cell_count(), 0u);
+  EXPECT_EQ(Bound(t), 0u);
+}
+
+// Paths A B and B A: root -> A -> B and root -> B -> A, all generation 1; bound 1 + 1 = 2.
+TEST(CellTreeTest, TwoCrossedPaths) {
+  const CellTree t = Build({{kNoParent, 0, {A, B}, {}}, {kNoParent, 0, {B, A}, {}}});
+  EXPECT_EQ(t.node_count(), 4u);
+  EXPECT_EQ(t.cell_count(), 2u);
+  for (NodeId n = 1; n < t.size(); ++n) EXPECT_EQ(t.generation(n), 1u);
+  EXPECT_EQ(MaxGenerations(t), (std::vector<std::uint32_t>{1, 1}));
+  EXPECT_EQ(Bound(t), 2u);
+  EXPECT_EQ(t.children(kRootNode), (std::vector<NodeId>{Find(t, {A}), Find(t, {B})}));
+}
+
+// Chain A B C A: generations 1 1 1 2, maxGen A = 2, B = C = 1, bound 4.
+TEST(CellTreeTest, ChainRevisitingACell) {
+  const CellTree t = Build({{kNoParent, 0, {A, B, C, A}, {}}});
+  ASSERT_EQ(t.node_count(), 4u);
+  EXPECT_EQ(t.generation(Find(t, {A})), 1u);
+  EXPECT_EQ(t.generation(Find(t, {A, B, C})), 1u);
+  EXPECT_EQ(t.generation(Find(t, {A, B, C, A})), 2u);
+  EXPECT_EQ(MaxGenerations(t), (std::vector<std::uint32_t>{2, 1, 1}));
+  EXPECT_EQ(Bound(t), 4u);
+}
+
+// Star: one primary ray per cell 0..9; ten children of the root, bound 10.
+TEST(CellTreeTest, Star) {
+  std::vector<TestRay> rays;
+  for (CellId c = 0; c < 10; ++c) rays.push_back({kNoParent, 0, {c}, {}});
+  const CellTree t = Build(rays);
+  EXPECT_EQ(t.node_count(), 10u);
+  EXPECT_EQ(t.children(kRootNode).size(), 10u);
+  EXPECT_EQ(Bound(t), 10u);
+}
+
+// Shared prefixes merge: A B C and A B A give root -> A -> B -> {C, A}; A enters twice.
+TEST(CellTreeTest, SharedPrefixesMergeAndCountEntries) {
+  const CellTree t =
+      Build({{kNoParent, 0, {A, B, C}, {1, 2, 3}}, {kNoParent, 0, {A, B, A}, {10, 20, 30}}});
+  EXPECT_EQ(t.node_count(), 4u);
+  EXPECT_EQ(t.enter(Find(t, {A})), 2u);
+  EXPECT_EQ(t.samples(Find(t, {A})), 11u);
+  EXPECT_EQ(t.enter(Find(t, {A, B})), 2u);
+  EXPECT_EQ(t.samples(Find(t, {A, B})), 22u);
+  EXPECT_EQ(t.samples(Find(t, {A, B, C})), 3u);
+  EXPECT_EQ(t.samples(Find(t, {A, B, A})), 30u);
+  EXPECT_EQ(t.generation(Find(t, {A, B, A})), 2u);
+}
+
+// Ray 0 (primary): A B C, samples 1 2 3.
+// Ray 1 (reflection, parent 0, spawn 1): B A, samples 10 20. It starts at ray 0's node
+//   A.B without entering it (enter stays at 1, samples 2 + 10), then enters A.B.A.
+// Ray 2 (primary): A B, samples 5 6: enters A and A.B again.
+// Ray 3 (shadow, parent 1, spawn 1): A, samples 7: works in A.B.A without entering it.
+// Nodes: A (enter 2, samples 6), A.B (enter 2, samples 18), A.B.C (1, 3), A.B.A (1, 27).
+TEST(CellTreeTest, SpawnedRaysStartAtTheirParentsSpawnVisitNode) {
+  const CellTree t = Build({{kNoParent, 0, {A, B, C}, {1, 2, 3}},
+                            {0, 1, {B, A}, {10, 20}},
+                            {kNoParent, 0, {A, B}, {5, 6}},
+                            {1, 1, {A}, {7}}});
+  ASSERT_EQ(t.node_count(), 4u);
+  EXPECT_EQ(t.enter(Find(t, {A})), 2u);
+  EXPECT_EQ(t.samples(Find(t, {A})), 6u);
+  EXPECT_EQ(t.enter(Find(t, {A, B})), 2u);
+  EXPECT_EQ(t.samples(Find(t, {A, B})), 18u);
+  EXPECT_EQ(t.enter(Find(t, {A, B, C})), 1u);
+  EXPECT_EQ(t.samples(Find(t, {A, B, C})), 3u);
+  EXPECT_EQ(t.enter(Find(t, {A, B, A})), 1u);
+  EXPECT_EQ(t.samples(Find(t, {A, B, A})), 27u);
+  EXPECT_EQ(t.generation(Find(t, {A, B, A})), 2u);
+  EXPECT_EQ(Bound(t), 4u);
+}
+
+// The same rays split over two batches, the parents in the first: the same tree.
+TEST(CellTreeTest, ParentsInEarlierBatches) {
+  CellTreeBuilder builder;
+  builder.AddBatch(MakeBatch({{kNoParent, 0, {A, B, C}, {1, 2, 3}}, {0, 1, {B, A}, {10, 20}}}));
+  builder.AddBatch(MakeBatch({{kNoParent, 0, {A, B}, {5, 6}}, {1, 1, {A}, {7}}}, 2));
+  const CellTree t = builder.Finish();
+  EXPECT_EQ(t.node_count(), 4u);
+  EXPECT_EQ(t.samples(Find(t, {A, B, A})), 27u);
+  EXPECT_EQ(t.enter(Find(t, {A, B})), 2u);
+}
+
+std::string BuildError(const std::vector<TestRay>& rays) {
+  try {
+    Build(rays);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(CellTreeTest, MalformedRaysNameTheRay) {
+  EXPECT_EQ(BuildError({{kNoParent, 0, {A}, {}}, {5, 0, {A}, {}}}), "ray 1: unknown parent 5");
+  EXPECT_EQ(BuildError({{kNoParent, 0, {A}, {}}, {0, 1, {A}, {}}}),
+            "ray 1: spawn 1 out of range: parent 0 has 1 visits");
+  EXPECT_EQ(BuildError({{kNoParent, 0, {A, B}, {}}, {0, 1, {A}, {}}}),
+            "ray 1: first cell 0 is not the cell 1 of parent 0's spawn visit 1");
+  EXPECT_EQ(BuildError({{kNoParent, 0, {A, B, B}, {}}}), "ray 0: cell 1 repeated at visit 2");
+}
+
+TEST(CellTreeTest, RayIdsMustIncrease) {
+  CellTreeBuilder builder;
+  builder.AddBatch(MakeBatch({{kNoParent, 0, {A}, {}}}, 5));
+  EXPECT_THROW(builder.AddBatch(MakeBatch({{kNoParent, 0, {A}, {}}}, 5)), InputError);
+}
+
+// ------------------------------------------------------------------------------ JSONL
+
+TEST(CellTreeJsonlTest, ReadsTheSpawnExample) {
+  std::istringstream in(
+      R"({"frame":0,"id":0,"parent":null,"spawn":null,"kind":"primary","pixel":[0,0],"cells":[0,1,2],"samples":[1,2,3]})"
+      "\n"
+      R"({"id":1,"parent":0,"spawn":1,"kind":"reflection","pixel":[0,0],"cells":[1,0],"samples":[10,20]})"
+      "\n\n"
+      R"( { "id" : 2 , "parent":null,"spawn":null,"kind":"primary","pixel":[1,0],"cells":[0,1],"samples":[5,6]} )"
+      "\n"
+      R"({"id":3,"parent":1,"spawn":1,"kind":"shadow","pixel":[0,0],"cells":[0],"samples":[7]})"
+      "\n");
+  const CellTree t = FromJsonl(in, "x.jsonl");
+  ASSERT_EQ(t.node_count(), 4u);
+  EXPECT_EQ(t.samples(Find(t, {A, B, A})), 27u);
+  EXPECT_EQ(t.enter(Find(t, {A, B})), 2u);
+  EXPECT_EQ(t.samples(Find(t, {A, B})), 18u);
+}
+
+std::string JsonlError(const std::string& second_line) {
+  std::istringstream in(
+      R"({"id":0,"parent":null,"spawn":null,"kind":"primary","pixel":[0,0],"cells":[0,1],"samples":[1,2]})"
+      "\n" +
+      second_line + "\n");
+  try {
+    FromJsonl(in, "r.jsonl");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+std::string Line(const std::string& fields) {
+  return R"({"id":1,"kind":"reflection","pixel":[0,0],)" + fields + "}";
+}
+
+TEST(CellTreeJsonlTest, MalformedLinesNameTheLine) {
+  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":1,"cells":[1],"samples":[1])")), "no error");
+  EXPECT_EQ(JsonlError(Line(R"("parent":9,"spawn":1,"cells":[1],"samples":[1])")),
+            "r.jsonl:2: \"parent\" must be less than \"id\"");
+  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":2,"cells":[1],"samples":[1])")),
+            "r.jsonl:2: ray 1: spawn 2 out of range: parent 0 has 2 visits");
+  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":1,"cells":[0],"samples":[1])")),
+            "r.jsonl:2: ray 1: first cell 0 is not the cell 1 of parent 0's spawn visit 1");
+  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":1,"cells":[1,1],"samples":[1,1])")),
+            "r.jsonl:2: ray 1: cell 1 repeated at visit 1");
+  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":1,"cells":[1],"samples":[1,2])")),
+            "r.jsonl:2: \"cells\" and \"samples\" differ in length");
+  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":null,"cells":[1],"samples":[1])")),
+            "r.jsonl:2: \"parent\" and \"spawn\" must both be null or both be set");
+  EXPECT_EQ(JsonlError(Line(R"("parent":0,"cells":[1],"samples":[1])")),
+            "r.jsonl:2: missing \"spawn\"");
+  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":1,"cells":[1],"samples":[1],"x":1)")),
+            "r.jsonl:2: unknown key \"x\"");
+  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":1,"cells":[1],"samples":"1")")),
+            "r.jsonl:2: \"samples\" has the wrong type");
+  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":1,"cells":[1],"samples":[-1])")),
+            "r.jsonl:2: column 87: expected a non-negative integer");
+  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":1,"cells":[1],"samples":[1])") + "x"),
+            "r.jsonl:2: column 90: unexpected text after the object");
+  EXPECT_EQ(JsonlError(R"({"id":1,"parent":null,"spawn":null,"kind":"bouncy"})"),
+            "r.jsonl:2: unknown kind \"bouncy\"");
+  EXPECT_EQ(JsonlError(R"({"id":0,"parent":null,"spawn":null,"kind":"primary","pixel":[0,0],)"
+                       R"("cells":[0],"samples":[1]})"),
+            "r.jsonl:2: ray 0: ids must increase; previous ray was 0");
+  EXPECT_EQ(JsonlError(R"({"id":1)"), "r.jsonl:2: column 8: expected '}'");
+}
+
+TEST(CellTreeTest, ToStringListsNodesDepthFirst) {
+  const CellTree t = Build({{kNoParent, 0, {A, B}, {3, 4}}});
+  EXPECT_EQ(t.ToString(),
+            "CellTree(2 nodes)\n"
+            "  cell 0 gen 1 enter 1 samples 3\n"
+            "    cell 1 gen 1 enter 1 samples 4\n");
+}
+
+}  // namespace
+}  // namespace raycell
