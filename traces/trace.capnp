@@ -26,8 +26,14 @@
 #   previous ray         ray i-1 of the batch; none for ray 0.
 #   sibling              the previous ray, when it has the same parent as ray i (two primary
 #                        rays count as siblings: neither has a parent); else none.
+#   group start          a ray that is not primary and has no sibling (the first of a run
+#                        of rays cast from one parent).
 #   reference ray        for a primary ray, the last primary ray before it in the batch; for
-#                        any other ray, its sibling. May be none.
+#                        a ray with a sibling that is not primary, its sibling; for a group
+#                        start whose parent is in the batch, the last group start before it
+#                        in the batch that has the same kind and whose parent is in the batch
+#                        and has the same kind as its parent (the corresponding ray of the
+#                        previous pixel, typically); else none.
 #   last non-shadow ray  the last ray before ray i in the batch whose kind is not shadow; may
 #                        be none.
 # Ray heads. Each ray has one head byte:

@@ -12,6 +12,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <iterator>
 #include <optional>
 #include <stdexcept>
 #include <utility>
@@ -283,26 +284,41 @@ TraceHeader ReadHeader(const FileIn& file, std::uint64_t& length) {
 
 // ---- Batches -----------------------------------------------------------------------------
 
-// Reads a Column value by value, checking its length and escapes.
+// Reads a Column value by value, checking its escapes and that it has as many values as
+// the decoding asks for.
 class ColumnReader {
  public:
+  ColumnReader(schema::Column::Reader c, const char* name)
+      : narrow_(c.getNarrow()), wide_(c.getWide()), name_(name) {}
+  // Also checks that the column has exactly `expected` values.
   ColumnReader(schema::Column::Reader c, std::size_t expected, const char* name)
-      : narrow_(c.getNarrow()), wide_(c.getWide()), name_(name) {
+      : ColumnReader(c, name) {
     if (narrow_.size() != expected) {
       throw BadData(std::string("column ") + name + " has " + Str(narrow_.size()) +
                     " values, expected " + Str(expected));
     }
   }
+  bool AtEnd() const { return next_ == narrow_.size(); }
   std::uint64_t Next() {
-    const std::uint8_t b = narrow_[next_++];
+    const std::uint64_t v = Peek();
+    wide_next_ += narrow_[next_] == 255;
+    ++next_;
+    return v;
+  }
+  // The next value, left unread.
+  std::uint64_t Peek() const {
+    if (AtEnd()) throw BadData(std::string("column ") + name_ + ": too few values");
+    const std::uint8_t b = narrow_[next_];
     if (b < 255) return b;
     if (wide_next_ == wide_.size()) throw BadData(std::string("column ") + name_ + ": bad escape");
-    return wide_[wide_next_++];
+    return wide_[wide_next_];
   }
   void Finish() const {
-    if (wide_next_ != wide_.size())
+    if (!AtEnd() || wide_next_ != wide_.size()) {
       throw BadData(std::string("column ") + name_ + ": extra values");
+    }
   }
+  const char* name() const { return name_; }
 
  private:
   capnp::List<std::uint8_t>::Reader narrow_;
@@ -311,39 +327,90 @@ class ColumnReader {
   unsigned next_ = 0, wide_next_ = 0;
 };
 
+// Reads a zero-run coded Column (see "Samples" in trace.capnp).
+class ZeroRunColumnReader {
+ public:
+  ZeroRunColumnReader(schema::Column::Reader c, const char* name) : column_(c, name) {}
+  std::uint64_t Next() {
+    if (zeros_ > 0) {
+      --zeros_;
+      return 0;
+    }
+    std::uint64_t v = column_.Next();
+    if (v >= 2) return v - 1;
+    // A run of zeros: bijective base-2 digits, least significant first, up to a value >= 2.
+    std::uint64_t run = 0;
+    for (int digit = 0;; ++digit) {
+      if (digit == 40) throw BadData(std::string("column ") + column_.name() + ": bad zero run");
+      run += (v + 1) << digit;
+      if (column_.AtEnd() || column_.Peek() >= 2) break;
+      v = column_.Next();
+    }
+    zeros_ = run - 1;
+    return 0;
+  }
+  void Finish() const {
+    if (zeros_ > 0) throw BadData(std::string("column ") + column_.name() + ": extra values");
+    column_.Finish();
+  }
+
+ private:
+  ColumnReader column_;
+  std::uint64_t zeros_ = 0;  // zeros of the current run not yet returned
+};
+
+std::int64_t UnZigZag(std::uint64_t code) {
+  return static_cast<std::int64_t>(code >> 1) ^ -static_cast<std::int64_t>(code & 1);
+}
+
 // previous + unzigzag(code), which must fit a uint32.
 std::uint32_t ApplyDelta(std::uint64_t previous, std::uint64_t code, const char* what) {
   if (code > (std::uint64_t{1} << 34)) throw BadData(std::string("bad ") + what + " delta");
-  const std::int64_t delta =
-      static_cast<std::int64_t>(code >> 1) ^ -static_cast<std::int64_t>(code & 1);
-  const std::int64_t v = static_cast<std::int64_t>(previous) + delta;
+  const std::int64_t v = static_cast<std::int64_t>(previous) + UnZigZag(code);
   if (v < 0 || v > std::int64_t{0xFFFFFFFF}) throw BadData(std::string("bad ") + what + " delta");
   return static_cast<std::uint32_t>(v);
 }
 
 struct BatchColumns {
-  capnp::List<std::uint8_t>::Reader kinds;
-  ColumnReader parents, spawns, xs, ys, counts, cells, samples;
+  capnp::List<std::uint8_t>::Reader heads;
+  ColumnReader head_runs, parents, spawns, pixels, primary_paths, secondary_paths;
+  ZeroRunColumnReader primary_samples, secondary_samples;
   capnp::List<float>::Reader t_enter, t_exit;
-  std::size_t visits;
 
-  BatchColumns(schema::Batch::Reader b, std::size_t visit_count)
-      : kinds(b.getKinds()),
-        parents(b.getParents(), kinds.size(), "parents"),
-        spawns(b.getSpawns(), kinds.size(), "spawns"),
-        xs(b.getPixelsX(), kinds.size(), "pixelsX"),
-        ys(b.getPixelsY(), kinds.size(), "pixelsY"),
-        counts(b.getVisitCounts(), kinds.size(), "visitCounts"),
-        cells(b.getCells(), visit_count, "cells"),
-        samples(b.getSamples(), visit_count, "samples"),
+  explicit BatchColumns(schema::Batch::Reader b)
+      : heads(b.getHeads()),
+        head_runs(b.getHeadRuns(), heads.size(), "headRuns"),
+        parents(b.getParents(), "parents"),
+        spawns(b.getSpawns(), "spawns"),
+        pixels(b.getPixels(), "pixels"),
+        primary_paths(b.getPrimaryPaths(), "primaryPaths"),
+        secondary_paths(b.getSecondaryPaths(), "secondaryPaths"),
+        primary_samples(b.getPrimarySamples(), "primarySamples"),
+        secondary_samples(b.getSecondarySamples(), "secondarySamples"),
         t_enter(b.getTEnter()),
-        t_exit(b.getTExit()),
-        visits(visit_count) {}
+        t_exit(b.getTExit()) {}
+
+  // The number of rays of the batch (the sum of the head runs), at most kTraceMaxBatchRays.
+  std::size_t RayCount(schema::Batch::Reader b) const {
+    ColumnReader runs(b.getHeadRuns(), "headRuns");
+    std::uint64_t rays = 0;
+    for (unsigned r = 0; r < heads.size(); ++r) {
+      const std::uint64_t run = runs.Next();
+      if (run >= kTraceMaxBatchRays || rays + run + 1 > kTraceMaxBatchRays) {
+        throw BadData("batch has more than " + Str(kTraceMaxBatchRays) + " rays");
+      }
+      rays += run + 1;
+    }
+    return static_cast<std::size_t>(rays);
+  }
 
   void Finish() const {
-    for (const ColumnReader* c : {&parents, &spawns, &xs, &ys, &counts, &cells, &samples}) {
+    for (const ColumnReader* c :
+         {&head_runs, &parents, &spawns, &pixels, &primary_paths, &secondary_paths}) {
       c->Finish();
     }
+    primary_samples.Finish();
+    secondary_samples.Finish();
   }
 };
 
@@ -360,51 +427,104 @@ class FrameDecoder {
       throw BadData("batch starts at ray " + Str(b.getFirstId()) + ", expected " +
                     Str(acc_.rays()));
     }
-    const std::size_t visits = b.getCells().getNarrow().size();
-    BatchColumns c(b, visits);
-    CheckTimes(c, visits);
+    BatchColumns c(b);
+    CheckTimeLengths(c);
+    const std::size_t rays = c.RayCount(b);
     out.Clear();
     out.set_first_id(b.getFirstId());
-    out.Reserve(c.kinds.size(), visits);
-    prev_spawn_ = prev_x_ = prev_y_ = 0;
-    for (unsigned i = 0; i < c.kinds.size(); ++i) DecodeRay(c, i, out);
-    if (out.visit_count() != visits) throw BadData("visit counts do not add up to the visits");
+    out.Reserve(rays, header_.settings.store_t ? c.t_enter.size() : 0);
+    last_primary_ = kNone;
+    for (auto& starts : group_start_) std::fill(std::begin(starts), std::end(starts), kNone);
+    last_non_shadow_ = kNoParent;
+    prev_x_ = prev_y_ = 0;
+    std::size_t i = 0;
+    for (unsigned r = 0; r < c.heads.size(); ++r) {
+      const std::uint8_t head = c.heads[r];
+      for (std::uint64_t n = c.head_runs.Next() + 1; n > 0; --n) DecodeRay(c, head, i++, out);
+    }
     c.Finish();
+    if (header_.settings.store_t && c.t_enter.size() != out.visit_count()) {
+      throw BadData("t columns have " + Str(c.t_enter.size()) + " values for " +
+                    Str(out.visit_count()) + " visits");
+    }
     CheckAgainstExpected();
   }
 
   FrameSummary Summary() const { return acc_.Summary(); }
 
  private:
-  void CheckTimes(const BatchColumns& c, std::size_t visits) const {
-    const std::size_t t = header_.settings.store_t ? visits : 0;
-    if (c.t_enter.size() != t || c.t_exit.size() != t) throw BadData("t columns have bad length");
+  static constexpr std::size_t kNone = ~std::size_t{0};
+
+  void CheckTimeLengths(const BatchColumns& c) const {
+    const bool t = header_.settings.store_t;
+    if (c.t_enter.size() != c.t_exit.size() || (!t && c.t_enter.size() != 0) ||
+        c.t_enter.size() > kTraceMaxBatchVisits) {
+      throw BadData("t columns have bad length");
+    }
   }
 
-  void DecodeRay(BatchColumns& c, unsigned i, RayBatch& out) {
+  void DecodeRay(BatchColumns& c, std::uint8_t head, std::size_t i, RayBatch& out) {
     const RayId id = out.first_id() + i;
-    if (c.kinds[i] >= kRayKindCount) throw BadData("ray " + Str(id) + ": bad kind");
-    const auto kind = static_cast<RayKind>(c.kinds[i]);
-    const RayId parent = DecodeParent(c.parents.Next(), id, kind);
-    const std::uint32_t spawn = prev_spawn_ = ApplyDelta(prev_spawn_, c.spawns.Next(), "spawn");
-    prev_x_ = ApplyDelta(prev_x_, c.xs.Next(), "pixel x");
-    prev_y_ = ApplyDelta(prev_y_, c.ys.Next(), "pixel y");
-    const std::uint64_t count = c.counts.Next();
-    if (count > c.visits - out.visit_count()) throw BadData("ray " + Str(id) + ": too many visits");
+    const auto kind = static_cast<RayKind>(head & kHeadKindMask);
+    const RayId parent = DecodeParent(c, head, id, kind, i, out);
+    const bool sibling = i > 0 && out.parents()[i - 1] == parent;
+    const std::uint32_t spawn = DecodeSpawn(c, head, id, sibling ? out.spawns()[i - 1] : 0);
     CheckSpawn(id, parent, spawn);
+    if (head & kHeadNewPixel) {
+      prev_x_ = ApplyDelta(prev_x_, c.pixels.Next(), "pixel x");
+      prev_y_ = ApplyDelta(prev_y_, c.pixels.Next(), "pixel y");
+    }
+    const bool primary = parent == kNoParent;
+    const std::size_t ref = ReferenceRay(out, kind, parent, i, sibling);
     out.BeginRay(kind, parent, spawn, prev_x_, prev_y_);
-    DecodeVisits(c, id, count, out);
+    DecodeVisits(c, head, id, primary, ref, out);
+    const std::size_t count = out.visit_end(i) - out.visit_begin(i);
     Remember(id, static_cast<std::uint32_t>(count));
     acc_.AddRay(out.ray(i));
+    if (primary) last_primary_ = i;
+    if (kind != RayKind::kShadow) last_non_shadow_ = id;
   }
 
-  RayId DecodeParent(std::uint64_t delta, RayId id, RayKind kind) const {
+  // Index of the reference ray of ray i (see "Column encoding" in trace.capnp), or kNone.
+  // Also records ray i as a group start.
+  std::size_t ReferenceRay(const RayBatch& out, RayKind kind, RayId parent, std::size_t i,
+                           bool sibling) {
+    if (parent == kNoParent) return last_primary_;
+    if (sibling) return i - 1;
+    if (parent < out.first_id()) return kNone;
+    const auto parent_kind = static_cast<int>(out.kinds()[parent - out.first_id()]);
+    return std::exchange(group_start_[static_cast<int>(kind)][parent_kind], i);
+  }
+
+  RayId DecodeParent(BatchColumns& c, std::uint8_t head, RayId id, RayKind kind, std::size_t i,
+                     const RayBatch& out) const {
+    const unsigned code = (head >> kHeadParentShift) & 3;
     if (kind == RayKind::kPrimary) {
-      if (delta != 0) throw BadData("ray " + Str(id) + ": primary ray with a parent");
+      if (code != kParentIsLastNonShadow) {
+        throw BadData("ray " + Str(id) + ": primary ray with a parent");
+      }
       return kNoParent;
     }
-    if (delta == 0 || delta > id) throw BadData("ray " + Str(id) + ": bad parent");
-    return id - delta;
+    RayId parent = kNoParent;
+    if (code == kParentIsLastNonShadow) {
+      parent = last_non_shadow_;
+    } else if (code == kParentOfPreviousRay) {
+      if (i > 0) parent = out.parents()[i - 1];
+    } else if (code == kParentExplicit) {
+      const std::uint64_t delta = c.parents.Next();
+      if (delta != 0 && delta <= id) parent = id - delta;
+    }
+    if (parent == kNoParent) throw BadData("ray " + Str(id) + ": bad parent");
+    return parent;
+  }
+
+  static std::uint32_t DecodeSpawn(BatchColumns& c, std::uint8_t head, RayId id,
+                                   std::uint32_t predicted) {
+    const unsigned code = (head >> kHeadSpawnShift) & 3;
+    const std::uint64_t spawn =
+        code == kSpawnExplicit ? c.spawns.Next() : std::uint64_t{predicted} + code;
+    if (spawn > 0xFFFFFFFF) throw BadData("ray " + Str(id) + ": bad spawn");
+    return static_cast<std::uint32_t>(spawn);
   }
 
   void CheckSpawn(RayId id, RayId parent, std::uint32_t spawn) const {
@@ -419,18 +539,44 @@ class FrameDecoder {
     }
   }
 
-  void DecodeVisits(BatchColumns& c, RayId id, std::uint64_t count, RayBatch& out) {
+  // Adds the visits of ray `id` (the last ray of `out`); `ref` is its reference ray.
+  void DecodeVisits(BatchColumns& c, std::uint8_t head, RayId id, bool primary, std::size_t ref,
+                    RayBatch& out) {
+    ColumnReader& paths = primary ? c.primary_paths : c.secondary_paths;
+    ZeroRunColumnReader& samples = primary ? c.primary_samples : c.secondary_samples;
+    const bool new_path = head & kHeadNewPath;
+    if (!new_path && ref == kNone) {
+      throw BadData("ray " + Str(id) + ": repeats the path of a reference ray it does not have");
+    }
+    const std::size_t ref_begin = ref == kNone ? 0 : out.visit_begin(ref);
+    const std::size_t ref_count = ref == kNone ? 0 : out.visit_end(ref) - ref_begin;
+    const std::uint64_t count = new_path ? paths.Next() : ref_count;
+    if (count > kTraceMaxRayVisits || count > kTraceMaxBatchVisits - out.visit_count()) {
+      throw BadData("ray " + Str(id) + ": too many visits");
+    }
     const bool t = header_.settings.store_t;
     std::uint32_t cell = 0;
     for (std::uint64_t v = 0; v < count; ++v) {
-      const std::uint64_t code = c.cells.Next();
-      if (v == 0 && code >= header_.cell_count()) throw BadData("ray " + Str(id) + ": bad cell");
-      cell = v == 0 ? static_cast<std::uint32_t>(code) : ApplyDelta(cell, code, "cell");
-      if (cell >= header_.cell_count()) throw BadData("ray " + Str(id) + ": bad cell");
-      const std::uint64_t samples = c.samples.Next();
-      if (samples > 0xFFFFFFFF) throw BadData("ray " + Str(id) + ": bad samples");
+      if (!new_path) {
+        cell = out.cells()[ref_begin + v];
+      } else if (v == 0) {
+        const std::uint64_t first = paths.Next();
+        if (first >= header_.cell_count()) throw BadData("ray " + Str(id) + ": bad cell");
+        cell = static_cast<std::uint32_t>(first);
+      } else {
+        cell = ApplyDelta(cell, paths.Next(), "cell");
+        if (cell >= header_.cell_count()) throw BadData("ray " + Str(id) + ": bad cell");
+      }
+      const std::uint64_t code = samples.Next();
+      std::uint64_t n = code;
+      if (v < ref_count) {
+        n = ApplyDelta(out.samples()[ref_begin + v], code, "samples");
+      } else if (code > 0xFFFFFFFF) {
+        throw BadData("ray " + Str(id) + ": bad samples");
+      }
       const std::size_t k = out.visit_count();
-      out.AddVisit(cell, static_cast<std::uint32_t>(samples), t ? c.t_enter[k] : 0.f,
+      if (t && k >= c.t_enter.size()) throw BadData("t columns have bad length");
+      out.AddVisit(cell, static_cast<std::uint32_t>(n), t ? c.t_enter[k] : 0.f,
                    t ? c.t_exit[k] : 0.f);
     }
   }
@@ -456,7 +602,11 @@ class FrameDecoder {
   FrameAccumulator acc_;
   std::int32_t frame_;
   const FrameSummary* expected_;
-  std::uint32_t prev_spawn_ = 0, prev_x_ = 0, prev_y_ = 0;
+  std::uint32_t prev_x_ = 0, prev_y_ = 0;  // pixel of the previous ray of the batch
+  std::size_t last_primary_ = kNone;       // index in the batch of the last primary ray
+  // Index in the batch of the last group start, by [kind][kind of its parent].
+  std::size_t group_start_[kRayKindCount][kRayKindCount];
+  RayId last_non_shadow_ = kNoParent;  // id of the last ray that is not a shadow ray
   std::vector<std::uint32_t> counts_;  // visit counts of the last kWindow rays
 };
 

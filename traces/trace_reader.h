@@ -8,9 +8,10 @@
 //
 // Everything read is checked: zstd and frame checksums, message sizes against a fixed limit
 // and the file size, and the content (parent < id, spawn < the parent's visit count, cells
-// < cell count, visit counts consistent with the visit columns and with the frame's
-// summary). Every failure is an InputError whose message names the file and the frame (or
-// the header or index) and what was wrong, e.g.
+// < cell count, every column holding exactly the values its rays use, rays and visits of a
+// batch within the format's limits, totals consistent with the frame's summary). Every
+// failure is an InputError whose message names the file and the frame (or the header or
+// index) and what was wrong, e.g.
 //   "out/a.rct: frame 150 (#3, offset 12345): zstd: Restored data doesn't match checksum".
 // Const methods read with pread and keep no shared state, so several threads may read
 // frames of one TraceReader at once.

@@ -5,11 +5,14 @@
 #include <fcntl.h>
 #include <kj/io.h>
 #include <unistd.h>
+#define ZSTD_STATIC_LINKING_ONLY  // ZSTD_getCParams
 #include <zstd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <iterator>
 #include <utility>
 #include <vector>
 
@@ -121,13 +124,19 @@ class FileOut {
 };
 
 // Compresses what Cap'n Proto writes into zstd frames of `out`, one frame per EndFrame().
+// Long-distance matching finds the repeats between the columns of consecutive batches; the
+// window stays the level's own (LDM alone would raise it to 128 MiB).
 class ZstdSink : public kj::OutputStream {
  public:
   ZstdSink(FileOut& out, int level) : out_(out), buffer_(ZSTD_CStreamOutSize()) {
     cctx_ = ZSTD_createCCtx();
     RAYCELL_CHECK(cctx_ != nullptr);
+    const unsigned window_log = ZSTD_getCParams(level, ZSTD_CONTENTSIZE_UNKNOWN, 0).windowLog;
+    RAYCELL_CHECK_LE(window_log, static_cast<unsigned>(kTraceMaxWindowLog));
     ZSTD_CCtx_setParameter(cctx_, ZSTD_c_compressionLevel, level);
     ZSTD_CCtx_setParameter(cctx_, ZSTD_c_checksumFlag, 1);
+    ZSTD_CCtx_setParameter(cctx_, ZSTD_c_enableLongDistanceMatching, 1);
+    ZSTD_CCtx_setParameter(cctx_, ZSTD_c_windowLog, static_cast<int>(window_log));
   }
   ZstdSink(const ZstdSink&) = delete;
   ZstdSink& operator=(const ZstdSink&) = delete;
@@ -169,7 +178,6 @@ std::int64_t Delta(std::uint64_t value, std::uint64_t previous) {
 // A Column being built: narrow bytes with 255 escaping into `wide`.
 class ColumnBuilder {
  public:
-  void Reserve(std::size_t n) { narrow_.reserve(n); }
   void Add(std::uint64_t v) {
     if (v < 255) {
       narrow_.push_back(static_cast<std::uint8_t>(v));
@@ -191,38 +199,156 @@ class ColumnBuilder {
   std::vector<std::uint64_t> wide_;
 };
 
-// The columns of one Batch message, encoded ray by ray.
-struct BatchColumns {
-  std::vector<std::uint8_t> kinds;
-  ColumnBuilder parents, spawns, xs, ys, counts, cells, samples;
-  std::uint64_t prev_spawn = 0, prev_x = 0, prev_y = 0;  // of the previous ray
+// A zero-run coded Column (see "Samples" in trace.capnp): a run of n zeros is written as
+// the digits of n in bijective base 2 (digit 1 -> 0, digit 2 -> 1, least significant
+// first), any other value v as v + 1.
+class ZeroRunColumnBuilder {
+ public:
+  void Add(std::uint64_t v) {
+    if (v == 0) {
+      ++zeros_;
+      return;
+    }
+    FlushZeros();
+    column_.Add(v + 1);
+  }
+  // Ends the column; call once, before Fill().
+  void Finish() { FlushZeros(); }
+  void Fill(schema::Column::Builder column) const { column_.Fill(column); }
+  std::size_t bytes() const { return column_.bytes(); }
 
-  explicit BatchColumns(const RayBatch& b) {
-    for (ColumnBuilder* c : {&parents, &spawns, &xs, &ys, &counts}) c->Reserve(b.size());
-    cells.Reserve(b.visit_count());
-    samples.Reserve(b.visit_count());
-    for (std::size_t i = 0; i < b.size(); ++i) AddRay(b.ray(i));
+ private:
+  void FlushZeros() {
+    // Odd n: digit 1, n -> (n - 1) / 2; even n: digit 2, n -> (n - 2) / 2 == (n - 1) / 2.
+    for (std::uint64_t n = zeros_; n > 0; n = (n - 1) / 2) column_.Add((n & 1) ? 0 : 1);
+    zeros_ = 0;
   }
 
-  void AddRay(const RayView& r) {
-    kinds.push_back(static_cast<std::uint8_t>(r.kind));
-    parents.Add(r.is_primary() ? 0 : r.id - r.parent);
-    spawns.Add(ZigZag(Delta(r.spawn, prev_spawn)));
-    xs.Add(ZigZag(Delta(r.pixel_x, prev_x)));
-    ys.Add(ZigZag(Delta(r.pixel_y, prev_y)));
-    prev_spawn = r.spawn;
-    prev_x = r.pixel_x;
-    prev_y = r.pixel_y;
-    counts.Add(r.visit_count);
+  ColumnBuilder column_;
+  std::uint64_t zeros_ = 0;
+};
+
+// Heads run-length coded: one byte per run of equal heads, and the run's length - 1.
+class HeadRunBuilder {
+ public:
+  void Add(std::uint8_t head) {
+    if (!heads_.empty() && heads_.back() == head) {
+      ++run_;
+      return;
+    }
+    Flush();
+    heads_.push_back(head);
+    run_ = 1;
+  }
+  void Finish() { Flush(); }
+  void Fill(schema::Batch::Builder out) const {
+    auto heads = out.initHeads(static_cast<unsigned>(heads_.size()));
+    for (unsigned i = 0; i < heads_.size(); ++i) heads.set(i, heads_[i]);
+    runs_.Fill(out.initHeadRuns());
+  }
+  std::size_t bytes() const { return heads_.size() + runs_.bytes(); }
+
+ private:
+  void Flush() {
+    if (run_ > 0) runs_.Add(run_ - 1);
+    run_ = 0;
+  }
+
+  std::vector<std::uint8_t> heads_;
+  ColumnBuilder runs_;
+  std::uint64_t run_ = 0;
+};
+
+bool SameCells(const RayView& a, const RayView& b) {
+  return a.visit_count == b.visit_count && std::equal(a.cells, a.cells + a.visit_count, b.cells);
+}
+
+// The columns of one Batch message, encoded ray by ray as trace.capnp's "Column encoding"
+// describes. Every prediction looks only at earlier rays of the same batch.
+struct BatchColumns {
+  HeadRunBuilder heads;
+  ColumnBuilder parents, spawns, pixels, primary_paths, secondary_paths;
+  ZeroRunColumnBuilder primary_samples, secondary_samples;
+  static constexpr std::size_t kNone = ~std::size_t{0};
+  std::size_t last_primary = kNone;  // index in the batch of the last primary ray
+  // Index of the last group start by [kind][kind of its parent].
+  std::size_t group_start[kRayKindCount][kRayKindCount];
+  RayId last_non_shadow = kNoParent;  // id of the last ray whose kind is not shadow
+
+  explicit BatchColumns(const RayBatch& b) {
+    for (auto& starts : group_start) std::fill(std::begin(starts), std::end(starts), kNone);
+    for (std::size_t i = 0; i < b.size(); ++i) AddRay(b, i);
+    heads.Finish();
+    primary_samples.Finish();
+    secondary_samples.Finish();
+  }
+
+  void AddRay(const RayBatch& b, std::size_t i) {
+    const RayView r = b.ray(i);
+    const bool has_prev = i > 0;
+    const RayView prev = has_prev ? b.ray(i - 1) : RayView{};
+    const bool sibling = has_prev && prev.parent == r.parent;
+    unsigned head = static_cast<unsigned>(r.kind);
+    head |= ParentCode(r, has_prev, prev) << kHeadParentShift;
+    head |= SpawnCode(r, sibling ? prev.spawn : 0) << kHeadSpawnShift;
+    const std::uint32_t px = has_prev ? prev.pixel_x : 0, py = has_prev ? prev.pixel_y : 0;
+    if (r.pixel_x != px || r.pixel_y != py) {
+      head |= kHeadNewPixel;
+      pixels.Add(ZigZag(Delta(r.pixel_x, px)));
+      pixels.Add(ZigZag(Delta(r.pixel_y, py)));
+    }
+    const std::size_t ref = ReferenceRay(b, r, i, sibling);
+    const RayView reference = ref != kNone ? b.ray(ref) : RayView{};
+    if (ref == kNone || !SameCells(r, reference)) {
+      head |= kHeadNewPath;
+      AddPath(r, r.is_primary() ? primary_paths : secondary_paths);
+    }
+    ZeroRunColumnBuilder& samples = r.is_primary() ? primary_samples : secondary_samples;
     for (std::size_t v = 0; v < r.visit_count; ++v) {
-      cells.Add(v == 0 ? r.cells[0] : ZigZag(Delta(r.cells[v], r.cells[v - 1])));
-      samples.Add(r.samples[v]);
+      samples.Add(ref != kNone && v < reference.visit_count
+                      ? ZigZag(Delta(r.samples[v], reference.samples[v]))
+                      : r.samples[v]);
+    }
+    heads.Add(static_cast<std::uint8_t>(head));
+    if (r.is_primary()) last_primary = i;
+    if (r.kind != RayKind::kShadow) last_non_shadow = r.id;
+  }
+
+  // Index of the reference ray of ray i (see "Column encoding" in trace.capnp), or kNone.
+  // Also records ray i as a group start.
+  std::size_t ReferenceRay(const RayBatch& b, const RayView& r, std::size_t i, bool sibling) {
+    if (r.is_primary()) return last_primary;
+    if (sibling) return i - 1;
+    if (r.parent < b.first_id()) return kNone;
+    const auto parent_kind = static_cast<int>(b.kinds()[r.parent - b.first_id()]);
+    std::size_t& start = group_start[static_cast<int>(r.kind)][parent_kind];
+    return std::exchange(start, i);
+  }
+
+  unsigned ParentCode(const RayView& r, bool has_prev, const RayView& prev) {
+    if (r.is_primary()) return kParentIsLastNonShadow;
+    if (r.parent == last_non_shadow) return kParentIsLastNonShadow;
+    if (has_prev && !prev.is_primary() && prev.parent == r.parent) return kParentOfPreviousRay;
+    parents.Add(r.id - r.parent);
+    return kParentExplicit;
+  }
+
+  unsigned SpawnCode(const RayView& r, std::uint32_t predicted) {
+    if (r.spawn >= predicted && r.spawn - predicted < kSpawnExplicit) return r.spawn - predicted;
+    spawns.Add(r.spawn);
+    return kSpawnExplicit;
+  }
+
+  static void AddPath(const RayView& r, ColumnBuilder& paths) {
+    paths.Add(r.visit_count);
+    for (std::size_t v = 0; v < r.visit_count; ++v) {
+      paths.Add(v == 0 ? r.cells[0] : ZigZag(Delta(r.cells[v], r.cells[v - 1])));
     }
   }
 
   std::size_t bytes() const {
-    std::size_t n = kinds.size();
-    for (const ColumnBuilder* c : {&parents, &spawns, &xs, &ys, &counts, &cells, &samples}) {
+    std::size_t n = heads.bytes() + primary_samples.bytes() + secondary_samples.bytes();
+    for (const ColumnBuilder* c : {&parents, &spawns, &pixels, &primary_paths, &secondary_paths}) {
       n += c->bytes();
     }
     return n;
@@ -237,15 +363,14 @@ void FillBatch(schema::Batch::Builder out, const RayBatch& b, const BatchColumns
                std::int32_t frame, bool store_t) {
   out.setFrame(frame);
   out.setFirstId(b.first_id());
-  auto kinds = out.initKinds(static_cast<unsigned>(c.kinds.size()));
-  for (unsigned i = 0; i < c.kinds.size(); ++i) kinds.set(i, c.kinds[i]);
+  c.heads.Fill(out);
   c.parents.Fill(out.initParents());
   c.spawns.Fill(out.initSpawns());
-  c.xs.Fill(out.initPixelsX());
-  c.ys.Fill(out.initPixelsY());
-  c.counts.Fill(out.initVisitCounts());
-  c.cells.Fill(out.initCells());
-  c.samples.Fill(out.initSamples());
+  c.pixels.Fill(out.initPixels());
+  c.primary_paths.Fill(out.initPrimaryPaths());
+  c.secondary_paths.Fill(out.initSecondaryPaths());
+  c.primary_samples.Fill(out.initPrimarySamples());
+  c.secondary_samples.Fill(out.initSecondarySamples());
   if (!store_t) return;
   FillFloats(out.initTEnter(static_cast<unsigned>(b.visit_count())), b.t_enters());
   FillFloats(out.initTExit(static_cast<unsigned>(b.visit_count())), b.t_exits());
@@ -425,6 +550,8 @@ struct TraceWriter::Impl {
 
   void CheckRay(const RayView& r) const {
     if (!r.is_primary()) RAYCELL_CHECK_LT(r.parent, r.id);
+    if (r.is_primary()) RAYCELL_CHECK_EQ(r.spawn, 0u);
+    RAYCELL_CHECK_LE(r.visit_count, kTraceMaxRayVisits);
     if (header.settings.store_t) RAYCELL_CHECK(r.t_enter != nullptr);
     for (std::size_t v = 0; v < r.visit_count; ++v) {
       RAYCELL_CHECK_LT(r.cells[v], header.cell_count());
@@ -456,6 +583,8 @@ TraceWriter TraceWriter::Create(const std::string& path, const TraceHeader& head
                      std::to_string(kTraceMaxZstdLevel));
   }
   RAYCELL_CHECK(options.max_batch_rays > 0 && options.max_batch_visits > 0);
+  RAYCELL_CHECK_LE(options.max_batch_rays, kTraceMaxBatchRays);
+  RAYCELL_CHECK_LE(options.max_batch_visits, kTraceMaxBatchVisits - kTraceMaxRayVisits);
   RAYCELL_CHECK_EQ(header.footprints.size(), std::size_t{header.cell_count()});
   auto impl = std::make_unique<Impl>(path, header, options);
   impl->WriteHeader();

@@ -257,6 +257,9 @@ TEST(TraceCorruptionTest, DamageSpreadOverALargerFile) {
     TruncateAt(ref, path, rng() % (ref.bytes.size() + 1));
     FlipAt(ref, path, rng() % ref.bytes.size(), 1 + rng() % 255);
   }
+  // The header is a small part of the file, which random positions may all miss.
+  TruncateAt(ref, path, rng() % ref.header_length);
+  FlipAt(ref, path, rng() % ref.header_length, 1 + rng() % 255);
   ExpectOutcomes(true);
   std::remove(path.c_str());
   std::remove(ref.path.c_str());
@@ -279,13 +282,15 @@ TEST(TraceCorruptionTest, DamagedIndexFallsBackToScanning) {
 
 // ---- Well-formed frames with invalid content ----------------------------------------------
 
-// Batch columns as stored (already delta/zigzag coded).
+// Batch columns as stored (already coded as trace.capnp's "Column encoding" says).
 struct RawBatch {
   std::int32_t frame = 5;
   std::uint64_t first_id = 0;
-  std::vector<std::uint8_t> kinds;
-  std::vector<std::uint64_t> parents, spawns, xs, ys, counts, cells, samples;
-  bool drop_wide_y = false;  // leave pixelsY's escaped values out
+  std::vector<std::uint8_t> heads;
+  std::vector<std::uint64_t> runs, parents, spawns, pixels, primary_paths, secondary_paths,
+      primary_samples, secondary_samples;
+  std::size_t t_values = 3;       // entries of tEnter and tExit
+  bool drop_wide_pixels = false;  // leave the pixels' escaped values out
 };
 
 void FillColumn(schema::Column::Builder out, const std::vector<std::uint64_t>& values,
@@ -310,17 +315,18 @@ std::string BatchMessage(const RawBatch& b) {
   auto out = message.initRoot<schema::Record>().initBatch();
   out.setFrame(b.frame);
   out.setFirstId(b.first_id);
-  auto kinds = out.initKinds(static_cast<unsigned>(b.kinds.size()));
-  for (unsigned i = 0; i < b.kinds.size(); ++i) kinds.set(i, b.kinds[i]);
+  auto heads = out.initHeads(static_cast<unsigned>(b.heads.size()));
+  for (unsigned i = 0; i < b.heads.size(); ++i) heads.set(i, b.heads[i]);
+  FillColumn(out.initHeadRuns(), b.runs);
   FillColumn(out.initParents(), b.parents);
   FillColumn(out.initSpawns(), b.spawns);
-  FillColumn(out.initPixelsX(), b.xs);
-  FillColumn(out.initPixelsY(), b.ys, b.drop_wide_y);
-  FillColumn(out.initVisitCounts(), b.counts);
-  FillColumn(out.initCells(), b.cells);
-  FillColumn(out.initSamples(), b.samples);
-  out.initTEnter(static_cast<unsigned>(b.cells.size()));
-  out.initTExit(static_cast<unsigned>(b.cells.size()));
+  FillColumn(out.initPixels(), b.pixels, b.drop_wide_pixels);
+  FillColumn(out.initPrimaryPaths(), b.primary_paths);
+  FillColumn(out.initSecondaryPaths(), b.secondary_paths);
+  FillColumn(out.initPrimarySamples(), b.primary_samples);
+  FillColumn(out.initSecondarySamples(), b.secondary_samples);
+  out.initTEnter(static_cast<unsigned>(b.t_values));
+  out.initTExit(static_cast<unsigned>(b.t_values));
   return Flat(message);
 }
 
@@ -349,18 +355,28 @@ std::string ZstdFrame(const std::string& content) {
   return out;
 }
 
+// Head bytes (see "Ray heads" in trace.capnp).
+constexpr std::uint8_t Head(RayKind kind, unsigned parent_code, unsigned spawn_code, bool new_path,
+                            bool new_pixel) {
+  return static_cast<std::uint8_t>(static_cast<unsigned>(kind) | parent_code << 2 |
+                                   spawn_code << 4 | (new_path ? 0x40 : 0) |
+                                   (new_pixel ? 0x80 : 0));
+}
+constexpr std::uint8_t kPrimaryHead = Head(RayKind::kPrimary, 0, 0, true, true);
+// Parent: the last non-shadow ray; spawn: 0 (no sibling) + 1; its own path; same pixel.
+constexpr std::uint8_t kShadowHead = Head(RayKind::kShadow, 0, 1, true, false);
+
 // A primary ray (cells 3 then 2, samples 5 and 6) and a shadow ray spawned at its second
 // visit (cell 2, samples 7), all at pixel (1, 1).
 RawBatch GoodBatch() {
   RawBatch b;
-  b.kinds = {0, 3};
-  b.parents = {0, 1};
-  b.spawns = {0, 2};  // zigzag(+1)
-  b.xs = {2, 0};
-  b.ys = {2, 0};
-  b.counts = {2, 1};
-  b.cells = {3, 1, 2};  // 3, 3 + unzigzag(1) = 2; then 2
-  b.samples = {5, 6, 7};
+  b.heads = {kPrimaryHead, kShadowHead};
+  b.runs = {0, 0};              // one ray each
+  b.pixels = {2, 2};            // zigzag(+1), zigzag(+1)
+  b.primary_paths = {2, 3, 1};  // 2 visits: cell 3, then 3 + unzigzag(1) = 2
+  b.secondary_paths = {1, 2};   // 1 visit: cell 2
+  b.primary_samples = {6, 7};   // 5 + 1, 6 + 1 (no reference ray: samples as they are)
+  b.secondary_samples = {8};    // 7 + 1
   return b;
 }
 
@@ -416,53 +432,112 @@ TEST_F(InvalidContentTest, CraftedGoodFrameReads) {
 
 TEST_F(InvalidContentTest, ParentMustBeAnEarlierRay) {
   RawBatch b = GoodBatch();
-  b.parents[1] = 2;
+  b.heads[1] = Head(RayKind::kShadow, 2, 1, true, false);  // parent given in `parents`
+  b.parents = {2};                                         // id - 2 < 0
   ExpectRejected(
       {b}, "frame 5 (#0, offset " + std::to_string(ref_.header_length) + "): ray 1: bad parent");
+  b.parents = {0};
+  ExpectRejected({b}, "ray 1: bad parent");
+  b.parents = {};
+  ExpectRejected({b}, "column parents: too few values");
+  b.parents = {1, 1};
+  ExpectRejected({b}, "column parents: extra values");
+  b = GoodBatch();
+  b.heads[1] = Head(RayKind::kShadow, 1, 1, true, false);  // the previous ray's parent: none
+  ExpectRejected({b}, "ray 1: bad parent");
+  b.heads[1] = Head(RayKind::kShadow, 3, 1, true, false);  // invalid code
+  ExpectRejected({b}, "ray 1: bad parent");
+  b = GoodBatch();
+  b.heads = {kShadowHead, kPrimaryHead};  // no non-shadow ray before ray 0
+  ExpectRejected({b}, "ray 0: bad parent");
 }
 
-TEST_F(InvalidContentTest, PrimaryRaysHaveNoParent) {
+TEST_F(InvalidContentTest, PrimaryRaysHaveNoParentAndNoSpawn) {
   RawBatch b = GoodBatch();
-  b.kinds[1] = 0;
-  ExpectRejected({b}, "ray 1: primary ray with a parent");
+  b.heads[0] = Head(RayKind::kPrimary, 2, 0, true, true);
+  b.parents = {1};
+  ExpectRejected({b}, "ray 0: primary ray with a parent");
+  b = GoodBatch();
+  b.heads[1] = Head(RayKind::kPrimary, 0, 1, true, false);
+  ExpectRejected({b}, "ray 1: primary ray with a spawn index");
 }
 
 TEST_F(InvalidContentTest, SpawnMustBeAVisitOfTheParent) {
   RawBatch b = GoodBatch();
-  b.spawns[1] = 4;  // spawn 2 of a 2-visit parent
+  b.heads[1] = Head(RayKind::kShadow, 0, 2, true, false);  // spawn 2 of a 2-visit parent
   ExpectRejected({b}, "ray 1: spawn 2 >= visit count of parent 0");
+  b.heads[1] = Head(RayKind::kShadow, 0, 3, true, false);  // spawn given in `spawns`
+  b.spawns = {7};
+  ExpectRejected({b}, "ray 1: spawn 7 >= visit count of parent 0");
+  b.spawns = {std::uint64_t{1} << 32};
+  ExpectRejected({b}, "ray 1: bad spawn");
+  b.spawns = {};
+  ExpectRejected({b}, "column spawns: too few values");
 }
 
 TEST_F(InvalidContentTest, CellsMustBeInTheGrid) {
   RawBatch b = GoodBatch();
-  b.cells[2] = 8;
+  b.secondary_paths = {1, 8};
   ExpectRejected({b}, "ray 1: bad cell");
   b = GoodBatch();
-  b.cells[1] = 300;  // a delta leaving the grid, through the escape list
+  b.primary_paths = {2, 3, 300};  // a delta leaving the grid, through the escape list
   ExpectRejected({b}, "ray 0: bad cell");
+  b.primary_paths = {2, 3, 7};  // 3 - 4 < 0
+  ExpectRejected({b}, "bad cell delta");
 }
 
-TEST_F(InvalidContentTest, VisitCountsMustMatchTheVisitColumns) {
+TEST_F(InvalidContentTest, PathsAndSamplesMustMatchTheRays) {
   RawBatch b = GoodBatch();
-  b.counts = {2, 2};
+  b.secondary_paths = {2, 2, 0};  // two visits, but one sample and one pair of t
+  ExpectRejected({b}, "column secondarySamples: too few values");
+  b.secondary_samples = {8, 8};
+  ExpectRejected({b}, "t columns have bad length");
+  b = GoodBatch();
+  b.secondary_paths = {0};  // no visits, leaving values unused
+  ExpectRejected({b}, "column secondarySamples: extra values");
+  b = GoodBatch();
+  b.primary_paths = {2, 3, 1, 5};
+  ExpectRejected({b}, "column primaryPaths: extra values");
+  b = GoodBatch();
+  b.t_values = 4;
+  ExpectRejected({b}, "t columns have 4 values for 3 visits");
+  b = GoodBatch();
+  b.secondary_paths = {kTraceMaxRayVisits + 1};
   ExpectRejected({b}, "ray 1: too many visits");
-  b.counts = {2, 0};
-  ExpectRejected({b}, "visit counts do not add up");
   b = GoodBatch();
-  b.samples.pop_back();
-  ExpectRejected({b}, "column samples has 2 values, expected 3");
+  b.heads[1] = Head(RayKind::kShadow, 0, 1, false, false);  // the path of a ray it lacks
+  b.secondary_paths = {};
+  ExpectRejected({b}, "ray 1: repeats the path of a reference ray it does not have");
 }
 
-TEST_F(InvalidContentTest, KindsAndEscapesMustBeValid) {
+TEST_F(InvalidContentTest, ZeroRunsMustFitTheVisits) {
   RawBatch b = GoodBatch();
-  b.kinds[1] = 7;
-  ExpectRejected({b}, "ray 1: bad kind");
+  b.secondary_samples = {0, 0};  // 3 zeros for 1 visit
+  ExpectRejected({b}, "column secondarySamples: extra values");
+  b.secondary_samples.assign(41, 1);  // a run of more than 2^40 zeros
+  ExpectRejected({b}, "column secondarySamples: bad zero run");
   b = GoodBatch();
-  b.ys = {300};
-  ExpectRejected({b}, "column pixelsY has 1 values, expected 2");
-  b.ys = {300, 0};
-  b.drop_wide_y = true;
-  ExpectRejected({b}, "column pixelsY: bad escape");
+  b.primary_samples = {1, 7};  // a run of 2 zeros, then one value too many
+  ExpectRejected({b}, "column primarySamples: extra values");
+  b.primary_samples = {1};  // two zeros: the samples 0 and 0, then the checksum disagrees
+  ExpectRejected({b},
+                 "decoded frame 5: 2 rays (1 primary, 0 reflection, 0 refraction, 1 shadow), "
+                 "3 visits, 7 samples");
+}
+
+TEST_F(InvalidContentTest, HeadsAndEscapesMustBeValid) {
+  RawBatch b = GoodBatch();
+  b.runs = {0};
+  ExpectRejected({b}, "column headRuns has 1 values, expected 2");
+  b.runs = {0, kTraceMaxBatchRays};
+  ExpectRejected({b}, "batch has more than 4194304 rays");
+  b = GoodBatch();
+  b.pixels = {300, 2};
+  b.drop_wide_pixels = true;
+  ExpectRejected({b}, "column pixels: bad escape");
+  b.pixels = {std::uint64_t{1} << 40, 2};
+  b.drop_wide_pixels = false;
+  ExpectRejected({b}, "bad pixel x delta");
 }
 
 TEST_F(InvalidContentTest, BatchesMustContinueTheFrame) {

@@ -1,14 +1,17 @@
 // Trace files written and read back: round trips, the index, the .tmp/rename protocol,
 // determinism, `capnp decode` compatibility, JSONL and info output, and the size of a
 // realistic trace (DESIGN.md §3: at most 0.3 bytes per visit at zstd level 3).
+#include <capnp/serialize.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
+#include <zstd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <random>
@@ -17,6 +20,7 @@
 #include <vector>
 
 #include "traces/check.h"
+#include "traces/trace.capnp.h"
 #include "traces/trace_inspect.h"
 #include "traces/trace_reader.h"
 #include "traces/trace_writer.h"
@@ -429,6 +433,115 @@ TEST(TraceIoTest, ErrorsNameTheFile) {
   const TraceReader reader = TraceReader::Open(ok);
   EXPECT_THROW(reader.LoadFrame(4), InputError);
   std::remove(ok.c_str());
+}
+
+// ---- The encoding of sibling rays --------------------------------------------------------
+
+// A primary ray (pixel (5, 7), cells 4, 5, 13) and the 50 shadow rays it casts, as a
+// renderer emits them: spawned at visits 0 (20 rays), 1 (20) and 2 (10), one path per spawn
+// visit, samples equal within a spawn group except for ray 30.
+RayBatch SiblingFrame() {
+  RayBatch b(false);
+  b.BeginRay(RayKind::kPrimary, kNoParent, 0, 5, 7);
+  b.AddVisit(4, 30, 0, 0);
+  b.AddVisit(5, 31, 0, 0);
+  b.AddVisit(13, 29, 0, 0);
+  for (int i = 1; i <= 50; ++i) {
+    const std::uint32_t spawn = i <= 20 ? 0 : i <= 40 ? 1 : 2;
+    b.BeginRay(RayKind::kShadow, 0, spawn, 5, 7);
+    if (spawn == 0) {
+      b.AddVisit(4, 6, 0, 0);
+      b.AddVisit(1, 3, 0, 0);
+    } else if (spawn == 1) {
+      b.AddVisit(5, i == 30 ? 10 : 9, 0, 0);
+    } else {
+      b.AddVisit(13, 2, 0, 0);
+      b.AddVisit(12, 2, 0, 0);
+    }
+  }
+  return b;
+}
+
+// The uncompressed messages of the frame at `offset`..`offset + length` of `path`.
+kj::Array<capnp::word> FrameMessages(const std::string& path, const FrameSummary& s) {
+  const std::string bytes = ReadBytes(path).substr(s.offset, s.length);
+  ZSTD_DCtx* dctx = ZSTD_createDCtx();
+  std::string out;
+  ZSTD_inBuffer in{bytes.data(), bytes.size(), 0};
+  std::vector<char> buffer(ZSTD_DStreamOutSize());
+  std::size_t left = 1;
+  while (left != 0 && in.pos < in.size) {
+    ZSTD_outBuffer o{buffer.data(), buffer.size(), 0};
+    left = ZSTD_decompressStream(dctx, &o, &in);
+    RAYCELL_CHECK(!ZSTD_isError(left));
+    out.append(buffer.data(), o.pos);
+  }
+  ZSTD_freeDCtx(dctx);
+  auto words = kj::heapArray<capnp::word>(out.size() / sizeof(capnp::word));
+  std::memcpy(words.begin(), out.data(), words.size() * sizeof(capnp::word));
+  return words;
+}
+
+std::vector<std::uint64_t> Values(schema::Column::Reader c) {
+  std::vector<std::uint64_t> v;
+  unsigned wide = 0;
+  for (std::uint8_t b : c.getNarrow()) v.push_back(b < 255 ? b : c.getWide()[wide++]);
+  return v;
+}
+
+constexpr std::uint8_t Head(RayKind kind, unsigned parent_code, unsigned spawn_code, bool new_path,
+                            bool new_pixel) {
+  return static_cast<std::uint8_t>(static_cast<unsigned>(kind) | parent_code << 2 |
+                                   spawn_code << 4 | (new_path ? 0x40 : 0) |
+                                   (new_pixel ? 0x80 : 0));
+}
+
+TEST(TraceIoTest, SiblingRaysEncodeToRunsOfEqualHeads) {
+  const std::string path = TempPath("siblings.rct");
+  const RayBatch frame = SiblingFrame();
+  const std::vector<FrameSummary> written =
+      WriteTrace(path, MakeHeader(false, {3, 3, 2}), {{0, frame}});
+  EXPECT_EQ(TraceReader::Open(path).LoadFrame(0), frame);
+
+  const kj::Array<capnp::word> words = FrameMessages(path, written[0]);
+  capnp::FlatArrayMessageReader message(words);
+  const auto record = message.getRoot<schema::Record>();
+  ASSERT_EQ(record.which(), schema::Record::BATCH);
+  const auto batch = record.getBatch();
+  // Every shadow ray's parent is the last non-shadow ray (parent code 0), so no parent is
+  // stored; a spawn is the previous sibling's (code 0) or one more (code 1); a sibling with
+  // the previous sibling's cells stores no path; only the primary ray stores a pixel.
+  const std::uint8_t same = Head(RayKind::kShadow, 0, 0, false, false);
+  const std::uint8_t next_spawn = Head(RayKind::kShadow, 0, 1, true, false);
+  std::vector<std::uint8_t> heads;
+  for (std::uint8_t h : batch.getHeads()) heads.push_back(h);
+  EXPECT_EQ(heads, (std::vector<std::uint8_t>{Head(RayKind::kPrimary, 0, 0, true, true),
+                                              Head(RayKind::kShadow, 0, 0, true, false), same,
+                                              next_spawn, same, next_spawn, same}));
+  EXPECT_EQ(Values(batch.getHeadRuns()), (std::vector<std::uint64_t>{0, 0, 18, 0, 18, 0, 8}));
+  EXPECT_TRUE(Values(batch.getParents()).empty());
+  EXPECT_TRUE(Values(batch.getSpawns()).empty());
+  EXPECT_EQ(Values(batch.getPixels()), (std::vector<std::uint64_t>{10, 14}));
+  // Count, first cell, zigzag deltas.
+  EXPECT_EQ(Values(batch.getPrimaryPaths()), (std::vector<std::uint64_t>{3, 4, 2, 16}));
+  EXPECT_EQ(Values(batch.getSecondaryPaths()),
+            (std::vector<std::uint64_t>{2, 4, 5, 1, 5, 2, 13, 1}));
+  // Samples: residuals against the previous sibling's samples at the same visit (the
+  // samples themselves without one), r > 0 stored as r + 1, runs of n zero residuals as n's
+  // digits in bijective base 2 (digit 1 -> 0, digit 2 -> 1), least significant first.
+  EXPECT_EQ(Values(batch.getPrimarySamples()), (std::vector<std::uint64_t>{31, 32, 30}));
+  EXPECT_EQ(Values(batch.getSecondarySamples()),
+            (std::vector<std::uint64_t>{
+                7,  4,           // ray 1: 6, 3
+                1,  1, 1, 0, 0,  // rays 2..20: 38 zeros = 2 + 2*2 + 2*4 + 1*8 + 1*16
+                7,               // ray 21: 9 against ray 20's 6 -> zigzag(3) = 6
+                1,  0, 0,        // rays 22..29: 8 zeros = 2 + 1*2 + 1*4
+                3,  2,           // rays 30 and 31: 10 (zigzag(1) = 2), 9 (zigzag(-1) = 1)
+                0,  1, 0,        // rays 32..40: 9 zeros = 1 + 2*2 + 1*4
+                14, 3,           // ray 41: 2 against 9 -> zigzag(-7) = 13; 2 (ray 40 has 1 visit)
+                1,  1, 0, 0,     // rays 42..50: 18 zeros = 2 + 2*2 + 1*4 + 1*8
+            }));
+  std::remove(path.c_str());
 }
 
 // ---- Size of a realistic trace -----------------------------------------------------------
