@@ -134,7 +134,11 @@ NodeId CellTreeBuilder::Child(NodeId parent, CellId cell) {
 NodeId CellTreeBuilder::ParentVisitNode(const RayView& ray) const {
   auto it = std::lower_bound(ray_ids_.begin(), ray_ids_.end(), ray.parent);
   if (it == ray_ids_.end() || *it != ray.parent) {
-    RayError(ray.id, "unknown parent " + std::to_string(ray.parent));
+    RayError(ray.id, "unknown parent " + std::to_string(ray.parent) +
+                         (ray.parent < last_id_ && !ray_ids_.empty() && ray.parent < ray_ids_[0]
+                              ? " (it is not in the current ray tree: rays must come one tree "
+                                "at a time, a primary ray followed by its descendants)"
+                              : ""));
   }
   const std::size_t i = static_cast<std::size_t>(it - ray_ids_.begin());
   const std::uint64_t begin = ray_begin_[i];
@@ -166,8 +170,15 @@ NodeId CellTreeBuilder::StartNode(const RayView& ray) {
 }
 
 void CellTreeBuilder::AddRay(const RayView& ray) {
-  if (!ray_ids_.empty() && ray.id <= ray_ids_.back()) {
-    RayError(ray.id, "ids must increase; previous ray was " + std::to_string(ray_ids_.back()));
+  if (any_ray_ && ray.id <= last_id_) {
+    RayError(ray.id, "ids must increase; previous ray was " + std::to_string(last_id_));
+  }
+  any_ray_ = true;
+  last_id_ = ray.id;
+  if (ray.is_primary()) {  // a new ray tree: no later ray can spawn from the previous ones
+    ray_ids_.clear();
+    ray_begin_.clear();
+    visit_nodes_.clear();
   }
   if (!ray.is_primary() && ray.visit_count == 0) ParentVisitNode(ray);  // validates only
   ray_ids_.push_back(ray.id);

@@ -77,10 +77,12 @@ std::uint64_t Bound(const CellTree& tree);
 // Streams rays into a Cell Tree. Rays must come in strictly increasing id order (frame-local
 // ids, as TraceReader::ForEachBatch delivers them); a parent must come before its children.
 //
-// To start a spawned ray at its parent's node of the spawn visit, the builder keeps the node
-// of every visit of every ray added so far: 4 bytes per visit plus 16 bytes per ray (id and
-// offset, looked up by binary search), until Finish(). Which rays will still get children is
-// not known from the stream, so nothing is discarded before the frame ends.
+// Rays come one ray tree at a time: a primary ray, then its descendants (the order in which
+// the recorder writes them, and `raycell trace cat` prints them). So a spawned ray's parent
+// is in the current tree, and to start it at its parent's node of the spawn visit the
+// builder keeps the node of every visit of the current tree only (4 bytes per visit plus
+// 16 bytes per ray, looked up by binary search): memory grows with the Cell Tree's nodes,
+// not with the frame's rays. A ray whose parent is in an earlier tree is an InputError.
 class CellTreeBuilder {
  public:
   CellTreeBuilder();
@@ -102,6 +104,8 @@ class CellTreeBuilder {
   std::vector<RayId> ray_ids_;                             // increasing
   std::vector<std::uint64_t> ray_begin_;  // ray i's visit nodes start at visit_nodes_[this]
   std::vector<NodeId> visit_nodes_;
+  RayId last_id_ = 0;
+  bool any_ray_ = false;
 };
 
 // Reads one ray per line, e.g.

@@ -103,14 +103,14 @@ TEST(CellTreeTest, SharedPrefixesMergeAndCountEntries) {
 // Ray 0 (primary): A B C, samples 1 2 3.
 // Ray 1 (reflection, parent 0, spawn 1): B A, samples 10 20. It starts at ray 0's node
 //   A.B without entering it (enter stays at 1, samples 2 + 10), then enters A.B.A.
-// Ray 2 (primary): A B, samples 5 6: enters A and A.B again.
-// Ray 3 (shadow, parent 1, spawn 1): A, samples 7: works in A.B.A without entering it.
+// Ray 2 (shadow, parent 1, spawn 1): A, samples 7: works in A.B.A without entering it.
+// Ray 3 (primary, a second ray tree): A B, samples 5 6: enters A and A.B again.
 // Nodes: A (enter 2, samples 6), A.B (enter 2, samples 18), A.B.C (1, 3), A.B.A (1, 27).
 TEST(CellTreeTest, SpawnedRaysStartAtTheirParentsSpawnVisitNode) {
   const CellTree t = Build({{kNoParent, 0, {A, B, C}, {1, 2, 3}},
                             {0, 1, {B, A}, {10, 20}},
-                            {kNoParent, 0, {A, B}, {5, 6}},
-                            {1, 1, {A}, {7}}});
+                            {1, 1, {A}, {7}},
+                            {kNoParent, 0, {A, B}, {5, 6}}});
   ASSERT_EQ(t.node_count(), 4u);
   EXPECT_EQ(t.enter(Find(t, {A})), 2u);
   EXPECT_EQ(t.samples(Find(t, {A})), 6u);
@@ -124,16 +124,17 @@ TEST(CellTreeTest, SpawnedRaysStartAtTheirParentsSpawnVisitNode) {
   EXPECT_EQ(Bound(t), 4u);
 }
 
-// The same rays split over two batches, the parents in the first: the same tree.
+// One ray tree split over two batches, the parents in the first: the same tree.
 TEST(CellTreeTest, ParentsInEarlierBatches) {
   CellTreeBuilder builder;
   builder.AddBatch(MakeBatch({{kNoParent, 0, {A, B, C}, {1, 2, 3}}, {0, 1, {B, A}, {10, 20}}}));
-  builder.AddBatch(MakeBatch({{kNoParent, 0, {A, B}, {5, 6}}, {1, 1, {A}, {7}}}, 2));
+  builder.AddBatch(MakeBatch({{1, 1, {A}, {7}}, {kNoParent, 0, {A, B}, {5, 6}}}, 2));
   const CellTree t = builder.Finish();
   EXPECT_EQ(t.node_count(), 4u);
   EXPECT_EQ(t.samples(Find(t, {A, B, A})), 27u);
   EXPECT_EQ(t.enter(Find(t, {A, B})), 2u);
 }
+
 
 std::string BuildError(const std::vector<TestRay>& rays) {
   try {
@@ -142,6 +143,14 @@ std::string BuildError(const std::vector<TestRay>& rays) {
     return e.what();
   }
   return "no error";
+}
+
+// Rays come one ray tree at a time; that is what bounds the builder's memory by the tree's
+// nodes. A parent in an earlier tree is an error that says so.
+TEST(CellTreeTest, ParentInAnEarlierRayTreeIsAnError) {
+  EXPECT_EQ(BuildError({{kNoParent, 0, {A, B}, {}}, {kNoParent, 0, {A}, {}}, {0, 1, {B}, {}}}),
+            "ray 2: unknown parent 0 (it is not in the current ray tree: rays must come one "
+            "tree at a time, a primary ray followed by its descendants)");
 }
 
 TEST(CellTreeTest, MalformedRaysNameTheRay) {
@@ -167,9 +176,9 @@ TEST(CellTreeJsonlTest, ReadsTheSpawnExample) {
       "\n"
       R"({"id":1,"parent":0,"spawn":1,"kind":"reflection","pixel":[0,0],"cells":[1,0],"samples":[10,20]})"
       "\n\n"
-      R"( { "id" : 2 , "parent":null,"spawn":null,"kind":"primary","pixel":[1,0],"cells":[0,1],"samples":[5,6]} )"
+      R"({"id":2,"parent":1,"spawn":1,"kind":"shadow","pixel":[0,0],"cells":[0],"samples":[7]})"
       "\n"
-      R"({"id":3,"parent":1,"spawn":1,"kind":"shadow","pixel":[0,0],"cells":[0],"samples":[7]})"
+      R"( { "id" : 3 , "parent":null,"spawn":null,"kind":"primary","pixel":[1,0],"cells":[0,1],"samples":[5,6]} )"
       "\n");
   const CellTree t = FromJsonl(in, "x.jsonl");
   ASSERT_EQ(t.node_count(), 4u);

@@ -195,9 +195,11 @@ CellTree RandomTree(std::mt19937& rng, CellId cells, int rays) {
   RayBatch b(false);
   std::uniform_int_distribution<CellId> cell(0, cells - 1);
   std::uniform_int_distribution<int> length(1, 6);
+  int tree_start = 0;  // rays come one ray tree at a time, as the recorder writes them
   for (int i = 0; i < rays; ++i) {
     const bool primary = i == 0 || rng() % 3 == 0;
-    const RayId parent = primary ? kNoParent : rng() % i;
+    if (primary) tree_start = i;
+    const RayId parent = primary ? kNoParent : tree_start + rng() % (i - tree_start);
     const std::size_t pv = primary ? 0 : b.visit_end(parent) - b.visit_begin(parent);
     const auto spawn = static_cast<std::uint32_t>(primary ? 0 : rng() % pv);
     CellId prev = primary ? cell(rng) : b.cells()[b.visit_begin(parent) + spawn];
