@@ -175,6 +175,7 @@ void CellTreeBuilder::AddRay(const RayView& ray) {
   }
   any_ray_ = true;
   last_id_ = ray.id;
+  ++tree_.rays_;
   if (ray.is_primary()) {  // a new ray tree: no later ray can spawn from the previous ones
     ray_ids_.clear();
     ray_begin_.clear();

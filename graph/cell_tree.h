@@ -35,6 +35,8 @@ class CellTree {
   std::size_t node_count() const { return cell_.size() - 1; }
   // One more than the largest cell of any node (0 for an empty tree).
   CellId cell_count() const { return cell_count_; }
+  // Rays the tree was built from (rays with no visit included).
+  std::uint64_t rays() const { return rays_; }
 
   CellId cell(NodeId n) const { return cell_[n]; }           // kNoCell for the root
   NodeId parent(NodeId n) const { return parent_[n]; }       // kNoNode for the root
@@ -66,6 +68,7 @@ class CellTree {
   std::vector<NodeId> first_child_, next_sibling_;
   std::vector<NodeId> last_child_;  // for appending in creation order; cleared by Finish
   CellId cell_count_ = 0;
+  std::uint64_t rays_ = 0;
 };
 
 // maxGen(c) for every cell c < tree.cell_count(): the largest generation of a node of c
@@ -93,6 +96,8 @@ class CellTreeBuilder {
   void AddRay(const RayView& ray);
   // The tree, with generations computed. The builder is empty afterwards.
   CellTree Finish();
+  // Nodes so far (without the root).
+  std::size_t node_count() const { return tree_.node_count(); }
 
  private:
   NodeId Child(NodeId parent, CellId cell);
