@@ -8,5 +8,6 @@ namespace raycell {
 
 void AddRecordCommand(CLI::App& app);
 void AddTraceCommand(CLI::App& app);
+void AddAnalyzeCommand(CLI::App& app);
 
 }  // namespace raycell

@@ -14,13 +14,15 @@ int main(int argc, char** argv) {
       "  raycell record                     record the built-in scene (capture.rct, images/)\n"
       "  raycell record --scene smoke.vdb --cells 3x3x3 --frames 0..29 --orbit 360\n"
       "  raycell trace info capture.rct     what a capture holds\n"
-      "  raycell trace cat capture.rct --frame 0 --format jsonl   rays as JSON Lines\n\n"
+      "  raycell trace cat capture.rct --frame 0 --format jsonl   rays as JSON Lines\n"
+      "  raycell analyze capture.rct --exact  Cell Tree, maxGen bound, Peel, optimum\n\n"
       "Run `raycell COMMAND --help` for each command's options.",
       "raycell"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "raycell 0.1.0");
   raycell::AddRecordCommand(app);
   raycell::AddTraceCommand(app);
+  raycell::AddAnalyzeCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -10,7 +10,7 @@ packages=(
   capnproto libcapnp-dev libzstd-dev zstd                            # the trace file
   libcli11-dev libpng-dev libboost-graph-dev libtomlplusplus-dev     # CLI, images, graphs, configs
   libgtest-dev libgmock-dev                                          # tests
-  python3 python3-matplotlib bc                                      # plots, benchmarks
+  python3 python3-matplotlib bc graphviz                             # plots, DOT, benchmarks
 )
 
 missing=()

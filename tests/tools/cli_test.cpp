@@ -1,0 +1,106 @@
+// The raycell command line end to end: record, trace cat, analyze; exit codes and messages
+// for bad input.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <unistd.h>
+
+namespace {
+
+struct Result {
+  int code;
+  std::string out;
+};
+
+// Runs `raycell ARGS` through the shell, stdout and stderr together.
+Result Raycell(const std::string& args) {
+  const std::string cmd = std::string(RAYCELL_BINARY) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buf;
+  for (std::size_t n; (n = fread(buf.data(), 1, buf.size(), p)) > 0;) out.append(buf.data(), n);
+  const int status = pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+std::filesystem::path Dir() {
+  const auto d = std::filesystem::temp_directory_path() / ("raycell_cli_" + std::to_string(getpid()));
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+// Two rays with paths A B and B A (cells 0 and 1): bound 2, Peel 3, optimum 3.
+TEST(Cli, AnalyzePathsOfTwoCrossingRays) {
+  const auto file = Dir() / "ab_ba.jsonl";
+  std::ofstream(file)
+      << R"({"id":0,"parent":null,"spawn":null,"kind":"primary","pixel":[0,0],"cells":[0,1],"samples":[1,1]})"
+      << "\n"
+      << R"({"id":1,"parent":null,"spawn":null,"kind":"primary","pixel":[1,0],"cells":[1,0],"samples":[1,1]})"
+      << "\n";
+  const Result r = Raycell("analyze --paths " + file.string() + " --exact --format json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("\"rays\":2,\"nodes\":4"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"bound\":2,\"peel_length\":3"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"optimum\":3,"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"peel_schedule\":["), std::string::npos) << r.out;
+}
+
+TEST(Cli, AnalyzeOfATraceEqualsAnalyzeOfItsJsonLines) {
+  const auto d = Dir();
+  const std::string trace = (d / "small.rct").string(), jsonl = (d / "small.jsonl").string();
+  ASSERT_EQ(Raycell("record --res 32x32 --cells 3x3x3 --no-images --quiet --out " + trace).code, 0);
+  ASSERT_EQ(Raycell("trace cat " + trace + " --frame 0 > " + jsonl).code, 0);
+  const Result a = Raycell("analyze " + trace + " --format csv --quiet");
+  const Result b = Raycell("analyze --paths " + jsonl + " --format csv");
+  ASSERT_EQ(a.code, 0) << a.out;
+  ASSERT_EQ(b.code, 0) << b.out;
+  // The same row but for the time taken (the column before the schedule).
+  auto strip = [](const std::string& s) {
+    const auto row = s.find('\n') + 1;
+    const auto schedule = s.rfind(',');
+    const auto seconds = s.rfind(',', schedule - 1);
+    return s.substr(row, seconds - row) + s.substr(schedule);
+  };
+  EXPECT_EQ(strip(a.out), strip(b.out)) << a.out << b.out;
+}
+
+TEST(Cli, DotOfAFrameRendersWithGraphviz) {
+  const auto d = Dir();
+  const std::string trace = (d / "dot.rct").string(), dot = (d / "tree.dot").string();
+  ASSERT_EQ(Raycell("record --res 24x24 --no-images --quiet --out " + trace).code, 0);
+  ASSERT_EQ(Raycell("analyze " + trace + " --dot " + dot + " --quiet").code, 0);
+  ASSERT_TRUE(std::filesystem::exists(dot));
+  if (std::system("command -v dot >/dev/null 2>&1") != 0) GTEST_SKIP() << "no `dot` (graphviz)";
+  EXPECT_EQ(std::system(("dot -Tsvg " + dot + " -o " + dot + ".svg").c_str()), 0);
+}
+
+TEST(Cli, BadInputGetsAClearMessageAndExitCode2) {
+  const auto d = Dir();
+  Result r = Raycell("analyze " + (d / "missing.rct").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("missing.rct"), std::string::npos) << r.out;
+  r = Raycell("analyze --paths " + (d / "missing.jsonl").string());
+  EXPECT_EQ(r.code, 2);
+  const auto bad = d / "bad.jsonl";
+  std::ofstream(bad) << R"({"id":0,"parent":7,"spawn":0,"kind":"shadow","pixel":[0,0],"cells":[1],"samples":[1]})"
+                     << "\n";
+  r = Raycell("analyze --paths " + bad.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("bad.jsonl:1:"), std::string::npos) << r.out;
+  r = Raycell("record --cells 2x2 --out " + (d / "x.rct").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("2x2"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(d / "x.rct"));
+  r = Raycell("analyze --format yaml --paths " + bad.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("yaml"), std::string::npos) << r.out;
+}
+
+}  // namespace

@@ -1,0 +1,241 @@
+// raycell analyze: each frame's Cell Tree: size, maxGen bound, Peel, the exact optimum.
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <sstream>
+
+#include "graph/analysis.h"
+#include "graph/links.h"
+#include "tools/commands.h"
+#include "traces/check.h"
+#include "traces/progress.h"
+#include "traces/trace_reader.h"
+
+namespace raycell {
+namespace {
+
+struct AnalyzeArgs {
+  std::string trace, paths, format = "table", dot;
+  std::optional<int> frame;
+  bool all = false, quiet = false;
+  AnalyzeOptions options;
+};
+
+std::string Fixed(double v, int digits) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(digits) << v;
+  return s.str();
+}
+
+std::string Schedule(const std::vector<CellId>& s, const char* sep) {
+  std::string out;
+  for (std::size_t i = 0; i < s.size(); ++i) out += (i ? sep : "") + std::to_string(s[i]);
+  return out;
+}
+
+std::string OptionalNumber(const std::optional<std::uint64_t>& v, const char* none) {
+  return v ? std::to_string(*v) : none;
+}
+
+std::string Gap(const FrameAnalysis& a) {
+  return a.optimum ? std::to_string(std::int64_t(a.peel_length()) - std::int64_t(*a.optimum))
+                   : "";
+}
+
+std::string JsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) continue;
+    out += c;
+  }
+  return out + "\"";
+}
+
+void PrintJson(const FrameAnalysis& a, std::ostream& out) {
+  out << "{\"frame\":" << a.frame << ",\"rays\":" << a.rays << ",\"nodes\":" << a.nodes
+      << ",\"rays_per_node\":" << Fixed(a.rays_per_node(), 3) << ",\"bound\":" << a.bound
+      << ",\"peel_length\":" << a.peel_length() << ",\"peel_schedule\":["
+      << Schedule(a.peel_schedule, ",") << "],\"splits\":" << a.splits
+      << ",\"peel_minus_bound\":" << a.peel_length() - a.bound
+      << ",\"optimum\":" << OptionalNumber(a.optimum, "null")
+      << ",\"optimum_status\":" << JsonString(a.optimum_status)
+      << ",\"seconds\":" << Fixed(a.seconds, 6) << "}\n";
+}
+
+const char* kCsvHeader =
+    "frame,rays,nodes,rays_per_node,bound,peel_length,splits,peel_minus_bound,optimum,"
+    "peel_minus_optimum,optimum_status,seconds,peel_schedule\n";
+
+void PrintCsv(const FrameAnalysis& a, std::ostream& out) {
+  out << a.frame << ',' << a.rays << ',' << a.nodes << ',' << Fixed(a.rays_per_node(), 3) << ','
+      << a.bound << ',' << a.peel_length() << ',' << a.splits << ',' << a.peel_length() - a.bound
+      << ',' << OptionalNumber(a.optimum, "") << ',' << Gap(a) << ",\"" << a.optimum_status
+      << "\"," << Fixed(a.seconds, 6) << ",\"" << Schedule(a.peel_schedule, " ") << "\"\n";
+}
+
+const char* kTableHeader =
+    "   frame         rays      nodes  rays/node    bound     peel   splits peel-bound"
+    "  optimum peel-opt     time\n";
+
+void PrintRow(const FrameAnalysis& a, std::ostream& out) {
+  char line[256];
+  std::snprintf(line, sizeof line, "%8d %12llu %10llu %10.1f %8llu %8llu %8llu %10llu %8s %8s %7.3fs\n",
+                a.frame, (unsigned long long)a.rays, (unsigned long long)a.nodes,
+                a.rays_per_node(), (unsigned long long)a.bound,
+                (unsigned long long)a.peel_length(), (unsigned long long)a.splits,
+                (unsigned long long)(a.peel_length() - a.bound),
+                OptionalNumber(a.optimum, "-").c_str(), a.optimum ? Gap(a).c_str() : "-",
+                a.seconds);
+  out << line;
+}
+
+class Printer {
+ public:
+  explicit Printer(const std::string& format) : format_(format) {
+    if (format != "table" && format != "json" && format != "csv") {
+      throw InputError("--format '" + format + "': expected table, json or csv");
+    }
+    if (format_ == "table") std::cout << kTableHeader;
+    if (format_ == "csv") std::cout << kCsvHeader;
+  }
+  void Print(const FrameAnalysis& a) {
+    if (format_ == "json") PrintJson(a, std::cout);
+    if (format_ == "csv") PrintCsv(a, std::cout);
+    if (format_ == "table") {
+      PrintRow(a, std::cout);
+      if (!a.optimum && a.optimum_status != "not computed") {
+        std::cout << "         optimum " << a.optimum_status << "\n";
+      }
+    }
+    std::cout.flush();
+  }
+
+ private:
+  std::string format_;
+};
+
+// The tree as Graphviz DOT, with the cache-saving links of its Peel schedule, written to a
+// temporary name and renamed when complete.
+void WriteDotFile(const std::string& path, const CellTree& tree, const FrameAnalysis& a) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp);
+    if (!out) throw InputError("--dot " + path + ": cannot open for writing");
+    WriteDot(out, tree, LinksOf(tree, a.peel_schedule));
+    if (!out.flush()) throw InputError("--dot " + path + ": write failed");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw InputError("--dot " + path + ": cannot rename " + tmp);
+  }
+}
+
+double SecondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void AnalyzePaths(const AnalyzeArgs& a, Printer& printer) {
+  std::ifstream in(a.paths);
+  if (!in) throw InputError(a.paths + ": cannot open");
+  const auto t0 = std::chrono::steady_clock::now();
+  const CellTree tree = FromJsonl(in, a.paths);
+  const double build = SecondsSince(t0);
+  FrameAnalysis r = AnalyzeTree(tree, a.options);
+  r.seconds += build;
+  printer.Print(r);
+  if (!a.dot.empty()) WriteDotFile(a.dot, tree, r);
+}
+
+std::vector<std::size_t> SelectFrames(const TraceReader& r, const AnalyzeArgs& a) {
+  std::vector<std::size_t> out;
+  for (std::size_t i = 0; i < r.frames().size(); ++i) {
+    if (!a.frame || r.frames()[i].frame == *a.frame) out.push_back(i);
+  }
+  if (a.frame && out.empty()) {
+    throw InputError(r.path() + ": no frame " + std::to_string(*a.frame));
+  }
+  return out;
+}
+
+void AnalyzeTrace(const AnalyzeArgs& a, Printer& printer) {
+  const TraceReader r = TraceReader::Open(a.trace);
+  if (!r.warning().empty()) std::cerr << "raycell: warning: " << r.warning() << "\n";
+  const std::vector<std::size_t> frames = SelectFrames(r, a);
+  if (!a.dot.empty() && frames.size() != 1) {
+    throw InputError("--dot writes one frame's tree: choose it with --frame N");
+  }
+  Progress progress(!a.quiet);
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    progress.Update(double(k) / frames.size(), "frame " + std::to_string(r.frames()[frames[k]].frame));
+    const auto t0 = std::chrono::steady_clock::now();
+    const CellTree tree = BuildFrameTree(r, frames[k]);
+    const double build = SecondsSince(t0);
+    FrameAnalysis fa = AnalyzeTree(tree, a.options);
+    fa.frame = r.frames()[frames[k]].frame;
+    fa.seconds += build;
+    progress.Done();
+    printer.Print(fa);
+    if (!a.dot.empty()) WriteDotFile(a.dot, tree, fa);
+  }
+}
+
+void Run(const AnalyzeArgs& a) {
+  if (a.trace.empty() == a.paths.empty()) {
+    throw InputError("give either a TRACE file or --paths FILE.jsonl");
+  }
+  if (a.frame && a.all) throw InputError("--frame and --all exclude each other");
+  if (!a.paths.empty() && (a.frame || a.all)) {
+    throw InputError("--frame/--all select frames of a TRACE, not of --paths");
+  }
+  Printer printer(a.format);
+  a.paths.empty() ? AnalyzeTrace(a, printer) : AnalyzePaths(a, printer);
+}
+
+}  // namespace
+
+void AddAnalyzeCommand(CLI::App& app) {
+  auto args = std::make_shared<AnalyzeArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "analyze", "Each frame's Cell Tree: size, maxGen bound, Peel schedule, exact optimum.");
+  cmd->footer(
+      "Per frame: rays, Cell Tree nodes, rays per node (the paper: about 100), the bound\n"
+      "sum over cells of maxGen (no schedule with a one-cell cache fetches fewer cells),\n"
+      "the Peel schedule's length and split peels, Peel minus bound and, with --exact on\n"
+      "small trees, the optimum and Peel minus optimum (past the search limits the optimum\n"
+      "is reported unknown, never guessed), and the time taken.\n"
+      "--format json prints one object per frame and line with the keys frame, rays,\n"
+      "nodes, rays_per_node, bound, peel_length, peel_schedule (cells in fetch order),\n"
+      "splits, peel_minus_bound, optimum (null when not computed or unknown),\n"
+      "optimum_status, seconds.\n\n"
+      "Examples:\n"
+      "  raycell analyze capture.rct\n"
+      "  raycell analyze capture.rct --frame 3 --exact --format json\n"
+      "  raycell trace cat capture.rct --frame 0 > rays.jsonl && raycell analyze --paths rays.jsonl");
+  cmd->add_option("TRACE", args->trace, "trace file written by `raycell record`");
+  cmd->add_option("--frame", args->frame, "analyse only this frame number");
+  cmd->add_flag("--all", args->all, "analyse every frame (the default)");
+  cmd->add_option("--paths", args->paths,
+                  "ray paths as JSON Lines (the format of `raycell trace cat`; one frame, rays "
+                  "one ray tree at a time) instead of a trace");
+  cmd->add_flag("--exact", args->options.exact,
+                "also compute the optimum by A* search (small trees)");
+  cmd->add_option("--max-states", args->options.max_states, "exact search: states to expand")
+      ->capture_default_str();
+  cmd->add_option("--max-seconds", args->options.max_seconds, "exact search: time per frame")
+      ->capture_default_str();
+  cmd->add_option("--max-nodes", args->options.max_nodes,
+                  "exact search: larger trees are not searched")->capture_default_str();
+  cmd->add_option("--format", args->format, "table, json or csv")->capture_default_str();
+  cmd->add_option("--dot", args->dot,
+                  "write the frame's Cell Tree as Graphviz DOT (one colour per cell; dashed "
+                  "edges: the cache-saving links of the Peel schedule). Render with "
+                  "`dot -Tsvg FILE > tree.svg` (Debian package graphviz)");
+  cmd->add_flag("--quiet", args->quiet, "no progress bar");
+  cmd->callback([args] { Run(*args); });
+}
+
+}  // namespace raycell
