@@ -123,11 +123,27 @@ void CellTreeBuilder::AddBatch(const RayBatch& batch) {
   for (std::size_t i = 0; i < batch.size(); ++i) AddRay(batch.ray(i));
 }
 
+// Children are found by walking the sibling list while a node has few of them (the common
+// case: a handful of cells follow any cell), and through a hash index once it has many.
 NodeId CellTreeBuilder::Child(NodeId parent, CellId cell) {
   const std::uint64_t key = (std::uint64_t{parent} << 32) | cell;
-  auto [it, inserted] = child_index_.try_emplace(key, kNoNode);
-  if (inserted) it->second = tree_.AddNode(parent, cell);
-  return it->second;
+  if (child_counts_[parent] <= kScanChildren) {
+    const NodeId found = tree_.FindChild(parent, cell);
+    if (found != kNoNode) return found;
+  } else {
+    const auto it = child_index_.find(key);
+    if (it != child_index_.end()) return it->second;
+  }
+  const NodeId n = tree_.AddNode(parent, cell);
+  child_counts_.push_back(0);
+  if (++child_counts_[parent] == kScanChildren + 1) {
+    for (NodeId c = tree_.first_child(parent); c != kNoNode; c = tree_.next_sibling(c)) {
+      child_index_.emplace((std::uint64_t{parent} << 32) | tree_.cell(c), c);
+    }
+  } else if (child_counts_[parent] > kScanChildren) {
+    child_index_.emplace(key, n);
+  }
+  return n;
 }
 
 // The parent's node of the spawn visit; the parent must be known and the spawn in range.

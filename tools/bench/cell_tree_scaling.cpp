@@ -18,7 +18,7 @@ namespace raycell {
 namespace {
 
 // Random ray trees (a primary ray and a few spawned rays), each ray a random walk over
-// `cells` cells, streamed to the builder in batches of 65536 rays, until the tree has at
+// `cells` cells, streamed to the builder in batches of 1024 ray trees, until the tree has at
 // least `target` nodes.
 std::pair<CellTree, double> Build(std::size_t target, CellId cells, std::mt19937_64& rng) {
   CellTreeBuilder builder;
@@ -42,7 +42,7 @@ std::pair<CellTree, double> Build(std::size_t target, CellId cells, std::mt19937
   for (std::size_t nodes = 0; nodes < target;) {
     batch.Clear();
     batch.set_first_id(next);
-    for (int i = 0; i < 65536; ++i) {
+    for (int i = 0; i < 1024; ++i) {
       const RayId p = add_ray(RayKind::kPrimary, kNoParent, 0, cell(rng));
       const std::size_t pv = batch.visit_end(p - batch.first_id()) - batch.visit_begin(p - batch.first_id());
       for (int k = children(rng); k > 0; --k) {
