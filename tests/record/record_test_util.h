@@ -10,6 +10,7 @@
 
 #include <unistd.h>
 
+#include "tests/test_util.h"
 #include "traces/record/recorder.h"
 
 namespace raycell::testing {
@@ -23,8 +24,7 @@ inline std::filesystem::path TempDir(const std::string& name) {
 }
 
 inline std::string ReadBytes(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
+  return raycell::testing::ReadBytes(p.string());
 }
 
 // A small, quick recording of the built-in scene.

@@ -20,6 +20,7 @@
 #include <thread>
 #include <vector>
 
+#include "tests/test_util.h"
 #include "traces/check.h"
 #include "traces/trace.capnp.h"
 #include "traces/trace_reader.h"
@@ -55,14 +56,9 @@ class Watchdog {
   std::thread thread_;
 };
 
-std::string TempPath(const std::string& name) {
-  return testing::TempDir() + "raycell_corrupt_" + std::to_string(::getpid()) + "_" + name;
-}
+std::string TempPath(const std::string& name) { return testing::TempPath("corrupt", name); }
 
-std::string ReadBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
+using testing::ReadBytes;
 
 void WriteBytes(const std::string& path, const std::string& bytes) {
   std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), bytes.size());
@@ -392,7 +388,7 @@ FrameSummary GoodSummary() {
   return acc.Summary();
 }
 
-class InvalidContentTest : public testing::Test {
+class InvalidContentTest : public ::testing::Test {
  protected:
   void SetUp() override { ref_ = MakeReference("content.rct", 10, 10); }
   void TearDown() override {

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/test_util.h"
 #include "traces/check.h"
 #include "traces/trace.capnp.h"
 #include "traces/trace_inspect.h"
@@ -28,16 +29,11 @@
 namespace raycell {
 namespace {
 
-std::string TempPath(const std::string& name) {
-  return testing::TempDir() + "raycell_io_" + std::to_string(::getpid()) + "_" + name;
-}
+std::string TempPath(const std::string& name) { return testing::TempPath("io", name); }
 
 bool Exists(const std::string& path) { return std::ifstream(path).good(); }
 
-std::string ReadBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
+using testing::ReadBytes;
 
 TraceHeader MakeHeader(bool store_t, std::array<std::uint32_t, 3> cells = {3, 3, 3}) {
   TraceHeader h;
@@ -152,7 +148,7 @@ void ExpectSummaryOf(const FrameSummary& s, const Frame& f) {
   EXPECT_EQ(s.samples, samples);
 }
 
-class RoundTripTest : public testing::TestWithParam<bool> {};
+class RoundTripTest : public ::testing::TestWithParam<bool> {};
 
 TEST_P(RoundTripTest, WhatIsReadEqualsWhatWasWritten) {
   const bool store_t = GetParam();
@@ -183,7 +179,7 @@ TEST_P(RoundTripTest, WhatIsReadEqualsWhatWasWritten) {
   std::remove(path.c_str());
 }
 
-INSTANTIATE_TEST_SUITE_P(WithAndWithoutT, RoundTripTest, testing::Bool());
+INSTANTIATE_TEST_SUITE_P(WithAndWithoutT, RoundTripTest, ::testing::Bool());
 
 TEST(TraceIoTest, ForEachBatchStreamsBatchesOfBoundedSize) {
   const std::string path = TempPath("batches.rct");
