@@ -82,6 +82,13 @@ void RayBatch::AppendRebased(const RayBatch& other) {
   }
 }
 
+void RayBatch::Rebase(RayId first_id) {
+  for (RayId& p : parent_) {
+    if (p != kNoParent && p >= first_id_) p = p - first_id_ + first_id;
+  }
+  first_id_ = first_id;
+}
+
 void RayBatch::Clear() {
   kind_.clear();
   parent_.clear();

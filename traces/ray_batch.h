@@ -79,6 +79,9 @@ class RayBatch {
   // Appends all rays of `other`, offsetting parent ids that point inside `other` so they
   // keep pointing at the same rays. `other`'s ids are relative to its first_id().
   void AppendRebased(const RayBatch& other);
+  // Renumbers the batch to start at `first_id`, shifting parent ids that point inside it
+  // (those >= first_id()) along; ids of parents before the batch are kept.
+  void Rebase(RayId first_id);
   void Clear();
   void Reserve(std::size_t rays, std::size_t visits);
 

@@ -160,3 +160,26 @@ TEST(RayBatchTest, ClearAndKindNames) {
 
 }  // namespace
 }  // namespace raycell
+
+namespace raycell {
+namespace {
+
+TEST(RayBatchRebase, ShiftsIdsAndInsideParentsOnly) {
+  RayBatch b(false);
+  b.set_first_id(10);
+  b.BeginRay(RayKind::kPrimary, kNoParent, 0, 0, 0);
+  b.AddVisit(1, 1, 0, 0);
+  b.BeginRay(RayKind::kShadow, 10, 0, 0, 0);  // parent inside the batch
+  b.AddVisit(1, 1, 0, 0);
+  b.BeginRay(RayKind::kShadow, 3, 0, 0, 0);  // parent before the batch
+  b.AddVisit(2, 1, 0, 0);
+  b.Rebase(100);
+  EXPECT_EQ(b.first_id(), 100u);
+  EXPECT_EQ(b.ray(0).id, 100u);
+  EXPECT_EQ(b.parents()[0], kNoParent);
+  EXPECT_EQ(b.parents()[1], 100u);
+  EXPECT_EQ(b.parents()[2], 3u);
+}
+
+}  // namespace
+}  // namespace raycell

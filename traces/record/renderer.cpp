@@ -25,6 +25,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <optional>
 
 #include "traces/check.h"
@@ -533,6 +534,19 @@ void Tally(const RayBatch& b, FrameStats* st) {
 
 }  // namespace
 
+namespace {
+
+// The rows of one band: traced in parallel, then numbered and handed on in row order.
+struct Band {
+  std::vector<RayBatch> rows;
+  std::vector<std::uint64_t> missed;
+  std::uint32_t count = 0;
+};
+
+}  // namespace
+
+// Bands of rows are traced in parallel while the previous band is handed to the sink on
+// another thread (encoding and compressing it), so neither waits for the other.
 bool RenderFrame(const RenderJob& job, Image* image, FrameStats* stats) {
   RAYCELL_CHECK(job.scene && job.cells && job.sink);
   RAYCELL_CHECK_EQ(job.footprints.size(), std::size_t(job.cells->cell_count()));
@@ -541,33 +555,44 @@ bool RenderFrame(const RenderJob& job, Image* image, FrameStats* stats) {
   FrameTracer tracer(job);
   tbb::enumerable_thread_specific<ThreadCtx> contexts([&] { return tracer.MakeContext(); });
   tbb::task_arena arena(job.threads > 0 ? job.threads : tbb::task_arena::automatic);
-  constexpr std::uint32_t kBand = 16;  // rows traced in parallel, then emitted in order
-  std::vector<RayBatch> rows(kBand, RayBatch(set.store_t));
-  std::vector<std::uint64_t> missed(kBand);
-  RayBatch out(set.store_t);
-  for (std::uint32_t y0 = 0; y0 < set.height; y0 += kBand) {
-    if (job.cancel && job.cancel->load()) return false;
-    const std::uint32_t n = std::min(kBand, set.height - y0);
+  constexpr std::uint32_t kBand = 16;
+  Band bands[2];
+  for (Band& b : bands) {
+    b.rows.assign(kBand, RayBatch(set.store_t));
+    b.missed.assign(kBand, 0);
+  }
+  std::future<void> writing;
+  bool cancelled = false;
+  for (std::uint32_t y0 = 0, k = 0; y0 < set.height; y0 += kBand, k ^= 1) {
+    if (job.cancel && job.cancel->load()) {
+      cancelled = true;
+      break;
+    }
+    Band& band = bands[k];
+    band.count = std::min(kBand, set.height - y0);
     arena.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, 1), [&](const auto& r) {
+      tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, band.count, 1), [&](const auto& r) {
         ThreadCtx& c = contexts.local();
         for (std::uint32_t i = r.begin(); i < r.end(); ++i) {
-          rows[i].Clear();
-          missed[i] = tracer.RenderRow(c, y0 + i, rows[i], *image);
+          band.rows[i].Clear();  // ids relative to the row until Rebase
+          band.rows[i].set_first_id(0);
+          band.missed[i] = tracer.RenderRow(c, y0 + i, band.rows[i], *image);
         }
       });
     });
-    out.Clear();
-    out.set_first_id(stats->rays);
-    for (std::uint32_t i = 0; i < n; ++i) {
-      out.AppendRebased(rows[i]);
-      stats->primary_missed += missed[i];
+    if (writing.valid()) writing.get();  // the other band is free again
+    for (std::uint32_t i = 0; i < band.count; ++i) {  // in row order: ids continue
+      band.rows[i].Rebase(stats->rays);
+      Tally(band.rows[i], stats);
+      stats->primary_missed += band.missed[i];
     }
-    Tally(out, stats);
-    job.sink(out);
-    if (job.progress) job.progress(double(y0 + n) / set.height);
+    writing = std::async(std::launch::async, [&job, &band] {
+      for (std::uint32_t i = 0; i < band.count; ++i) job.sink(band.rows[i]);
+    });
+    if (job.progress) job.progress(double(y0 + band.count) / set.height);
   }
-  return true;
+  if (writing.valid()) writing.get();
+  return !cancelled;
 }
 
 }  // namespace raycell

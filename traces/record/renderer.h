@@ -31,7 +31,8 @@ struct RenderJob {
   CameraKey camera;
   RenderSettings settings;
   int threads = 0;  // 0: all cores
-  // Receives the frame's rays in id order, one batch at a time, on the calling thread.
+  // Receives the frame's rays in id order, one batch at a time, from one thread at a time
+  // (not necessarily the calling one: it runs while the next rows are traced).
   std::function<void(const RayBatch&)> sink;
   // Called on the calling thread with the fraction of the frame done.
   std::function<void(double)> progress;
