@@ -1,0 +1,95 @@
+// The simulation loop (DESIGN.md §2): pops events in (time, priority, insertion order),
+// CHECKs that time never goes backwards, counts events, and runs a watchdog (ChampSim) that
+// stops with a dump of every component's state when nothing progresses.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <ostream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "engine/component.h"
+#include "engine/event_queue.h"
+#include "engine/time.h"
+
+namespace raycell {
+
+// Thrown by Simulator::Run when the watchdog fires. The message names the reason, the time,
+// the queue size and every component's Name(), HasWork() and DumpState().
+class SimulationStalled : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct SimulatorOptions {
+  // The watchdog fires after this many consecutive events with no NoteProgress() call.
+  // 0 disables this check (the empty-queue-with-work check always runs).
+  std::uint64_t watchdog_events = 10'000'000;
+};
+
+enum class RunStatus {
+  kQueueEmpty,    // every event was handled
+  kReachedUntil,  // the next event lies after `until`; now() == until
+  kStopped,       // a component called Stop()
+};
+const char* ToString(RunStatus status);
+inline std::ostream& operator<<(std::ostream& os, RunStatus s) { return os << ToString(s); }
+
+class Simulator {
+ public:
+  explicit Simulator(SimulatorOptions options = {},
+                     std::unique_ptr<EventQueue> queue = std::make_unique<BinaryHeapQueue>());
+  Simulator(const Simulator&) = delete;
+  Simulator& operator=(const Simulator&) = delete;
+
+  // Registers a component, which must outlive every Run(). Ids are 0, 1, 2, ...
+  ComponentId Add(Component& component);
+  std::size_t component_count() const { return components_.size(); }
+
+  // Delivers an event to `target` at now() + delay. Returns the event's seq.
+  std::uint64_t Schedule(ComponentId target, SimTime delay, std::uint32_t kind,
+                         std::uint64_t payload = 0, std::int32_t priority = 0);
+  // Delivers an event at absolute time `when`; CHECK-fails if when < now() (the past).
+  std::uint64_t ScheduleAt(ComponentId target, SimTime when, std::uint32_t kind,
+                           std::uint64_t payload = 0, std::int32_t priority = 0);
+
+  // Handles events up to and including time `until`. Throws SimulationStalled when the
+  // watchdog fires.
+  RunStatus Run(SimTime until = SimTime::Max());
+  // Ends the current Run() after the event being handled.
+  void Stop() { stop_requested_ = true; }
+  // Components call this when they complete real work (a sample, a fetch); it resets the
+  // watchdog.
+  void NoteProgress() { events_since_progress_ = 0; }
+  // Called with every event just before it is handled (traces, debugging); empty to clear.
+  void SetObserver(std::function<void(const Event&)> observer) { observer_ = std::move(observer); }
+
+  SimTime now() const { return now_; }
+  std::uint64_t events_handled() const { return events_handled_; }
+  std::uint64_t events_scheduled() const { return next_seq_; }
+  std::size_t pending() const { return queue_->Size(); }
+  const EventQueue& queue() const { return *queue_; }
+
+  // Every component's id, name, HasWork() and DumpState(), one block each.
+  std::string DumpComponents() const;
+
+ private:
+  void Dispatch(const Event& event);
+  void CheckQueueDryWithoutWork() const;
+  [[noreturn]] void Stall(const std::string& reason) const;
+
+  SimulatorOptions options_;
+  std::unique_ptr<EventQueue> queue_;
+  std::vector<Component*> components_;  // not owned
+  std::function<void(const Event&)> observer_;
+  SimTime now_;
+  std::uint64_t next_seq_ = 0;
+  std::uint64_t events_handled_ = 0;
+  std::uint64_t events_since_progress_ = 0;
+  bool stop_requested_ = false;
+};
+
+}  // namespace raycell
