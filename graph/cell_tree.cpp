@@ -16,6 +16,7 @@ CellTree::CellTree()
       parent_{kNoNode},
       enter_{0},
       samples_{0},
+      visits_{0},
       generation_{0},
       first_child_{kNoNode},
       next_sibling_{kNoNode},
@@ -41,6 +42,7 @@ NodeId CellTree::AddNode(NodeId parent, CellId cell) {
   parent_.push_back(parent);
   enter_.push_back(0);
   samples_.push_back(0);
+  visits_.push_back(0);
   first_child_.push_back(kNoNode);
   next_sibling_.push_back(kNoNode);
   last_child_.push_back(kNoNode);
@@ -212,6 +214,7 @@ void CellTreeBuilder::AddRay(const RayView& ray) {
       ++tree_.enter_[n];
     }
     tree_.samples_[n] += ray.samples[v];
+    ++tree_.visits_[n];
     visit_nodes_.push_back(n);
   }
 }

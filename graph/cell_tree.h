@@ -42,6 +42,8 @@ class CellTree {
   NodeId parent(NodeId n) const { return parent_[n]; }       // kNoNode for the root
   std::uint64_t enter(NodeId n) const { return enter_[n]; }  // rays entering from the parent
   std::uint64_t samples(NodeId n) const { return samples_[n]; }
+  // Ray visits (segments) worked in the node: its entering rays plus rays spawned in it.
+  std::uint64_t visits(NodeId n) const { return visits_[n]; }
   // Nodes on the path root..n (inclusive) whose cell is cell(n); 0 for the root.
   std::uint32_t generation(NodeId n) const { return generation_[n]; }
   // Children in creation order: first_child, then next_sibling until kNoNode.
@@ -63,7 +65,7 @@ class CellTree {
 
   std::vector<CellId> cell_;
   std::vector<NodeId> parent_;
-  std::vector<std::uint64_t> enter_, samples_;
+  std::vector<std::uint64_t> enter_, samples_, visits_;
   std::vector<std::uint32_t> generation_;
   std::vector<NodeId> first_child_, next_sibling_;
   std::vector<NodeId> last_child_;  // for appending in creation order; cleared by Finish

@@ -1,0 +1,13 @@
+#include "scheduling/peel_oracle.h"
+
+#include "graph/peel.h"
+#include "traces/check.h"
+
+namespace raycell {
+
+void PeelOracleScheduler::BeginFrame(const FrameInfo& frame) {
+  RAYCELL_CHECK(frame.current != nullptr);
+  follower_.Reset(Peel(*frame.current).schedule, frame.cells);
+}
+
+}  // namespace raycell

@@ -1,0 +1,24 @@
+// The Peel oracle: follows the Peel schedule of the frame's own Cell Tree (DESIGN.md §1
+// "Peel"), which a real machine cannot know before the frame is traced: an offline
+// reference for how well Cell Tree scheduling could do. Entries whose cell has no queued
+// work are skipped; when the schedule is used up, Max Work. With a one-cell cache the
+// schedule is feasible, so the Max Work fallback is then never needed.
+#pragma once
+
+#include "scheduling/scheduler.h"
+
+namespace raycell {
+
+class PeelOracleScheduler : public Scheduler {
+ public:
+  std::string Name() const override { return "peel"; }
+  // Computes Peel of frame.current, which must not be null.
+  void BeginFrame(const FrameInfo& frame) override;
+  std::optional<CellId> Next(const QueueView& queues) override { return follower_.Next(queues); }
+  const ScheduleFollower& follower() const { return follower_; }
+
+ private:
+  ScheduleFollower follower_;
+};
+
+}  // namespace raycell

@@ -1,0 +1,19 @@
+// Round Robin (a baseline, DESIGN.md §2): the next cell with queued work after the last one
+// chosen, cyclically; each frame starts the search at cell 0.
+#pragma once
+
+#include "scheduling/scheduler.h"
+
+namespace raycell {
+
+class RoundRobinScheduler : public Scheduler {
+ public:
+  std::string Name() const override { return "roundrobin"; }
+  void BeginFrame(const FrameInfo&) override { start_ = 0; }
+  std::optional<CellId> Next(const QueueView& queues) override;
+
+ private:
+  CellId start_ = 0;  // where the next search begins: one past the last choice
+};
+
+}  // namespace raycell

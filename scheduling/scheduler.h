@@ -1,0 +1,92 @@
+// Ray schedulers (DESIGN.md §1 "Max Work", "Cell Tree scheduling"; §2 "scheduler"): the
+// policy that picks which cell a processor fetches next. The replay model keeps per-cell ray
+// queues and asks its Scheduler whenever a processor needs a cell; policies plug in through
+// this small interface (CONVENTIONS.md, after ChampSim's replacement modules).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "graph/cell_tree.h"
+
+namespace raycell {
+
+// What a scheduler may see when asked for a cell: the rays waiting to enter each cell
+// (0 = no work) and the cell in the cache, if any. Does not own the counts.
+struct QueueView {
+  const std::uint64_t* queued_rays = nullptr;  // queued_rays[c] for c < cells
+  CellId cells = 0;
+  std::optional<CellId> loaded;
+
+  std::uint64_t queued(CellId c) const { return queued_rays[c]; }
+  bool has_work(CellId c) const { return c < cells && queued_rays[c] > 0; }
+  // True when no cell has queued work.
+  bool empty() const;
+  // A view of `queued` (which must outlive the view); cells = queued.size().
+  static QueueView Of(const std::vector<std::uint64_t>& queued,
+                      std::optional<CellId> loaded = std::nullopt);
+};
+
+// What a scheduler is told at the start of each frame.
+struct FrameInfo {
+  std::size_t frame_index = 0;
+  const CellTree* current = nullptr;   // this frame's tree (the Peel oracle needs it)
+  const CellTree* previous = nullptr;  // the previous frame's tree; null for frame 0
+  CellId cells = 0;                    // cells of the grid; every tree's cell_count() <= cells
+};
+
+// A scheduling policy. Per frame: BeginFrame once, then Next once per fetch.
+//
+// Next returns a cell with queued work, or nullopt iff no cell has any. A scheduler may keep
+// state between calls (a cursor into a schedule), so the caller must call Next again only
+// after it has processed the returned cell's queue (fetched it and worked its rays).
+class Scheduler {
+ public:
+  virtual ~Scheduler() = default;
+  // The name MakeScheduler knows it by: "maxwork", "roundrobin", ...
+  virtual std::string Name() const = 0;
+  virtual void BeginFrame(const FrameInfo& frame) = 0;
+  virtual std::optional<CellId> Next(const QueueView& queues) = 0;
+};
+
+// Max Work's choice: the cell with the most queued rays, lowest number on ties; nullopt when
+// no cell has work.
+std::optional<CellId> MostQueuedCell(const QueueView& queues);
+
+// Walks a fixed schedule with a cursor, skipping entries whose cell has no queued work (no
+// fetch); once the schedule is used up, Max Work. Shared by the Peel oracle and Cell Tree
+// scheduling.
+class ScheduleFollower {
+ public:
+  struct Stats {
+    std::size_t followed = 0;  // entries fetched
+    std::size_t skipped = 0;   // entries skipped, their cell having no work
+    std::size_t max_work = 0;  // fetches chosen by Max Work after the schedule
+    // "followed 5, skipped 2, max work 1".
+    std::string ToString() const;
+  };
+
+  // Starts over on `schedule`; every entry must be < cells.
+  void Reset(std::vector<CellId> schedule, CellId cells);
+  std::optional<CellId> Next(const QueueView& queues);
+  const std::vector<CellId>& schedule() const { return schedule_; }
+  std::size_t cursor() const { return cursor_; }
+  const Stats& stats() const { return stats_; }
+
+ private:
+  std::vector<CellId> schedule_;
+  std::size_t cursor_ = 0;
+  Stats stats_;
+};
+
+// The names MakeScheduler accepts: maxwork, roundrobin, random, peel, celltree.
+const std::vector<std::string>& SchedulerNames();
+// A new scheduler by name; `seed` is used by "random" only. An unknown name is an
+// InputError listing the valid names.
+std::unique_ptr<Scheduler> MakeScheduler(const std::string& name, std::uint64_t seed);
+
+}  // namespace raycell

@@ -1,0 +1,241 @@
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "graph/peel.h"
+#include "scheduling/cell_tree_scheduler.h"
+#include "scheduling/max_work.h"
+#include "scheduling/peel_oracle.h"
+#include "scheduling/random_scheduler.h"
+#include "scheduling/round_robin.h"
+#include "traces/check.h"
+
+namespace raycell {
+namespace {
+
+constexpr CellId A = 0, B = 1, C = 2;
+using Queues = std::vector<std::uint64_t>;
+using Schedule = std::vector<CellId>;
+
+std::optional<CellId> Ask(Scheduler& s, const Queues& q) { return s.Next(QueueView::Of(q)); }
+
+FrameInfo Frame(std::size_t index, CellId cells, const CellTree* current = nullptr,
+                const CellTree* previous = nullptr) {
+  return {index, current, previous, cells};
+}
+
+// Primary rays with the given paths, one sample per visit.
+CellTree FromPaths(const std::vector<Schedule>& paths) {
+  RayBatch b(false);
+  for (const Schedule& p : paths) {
+    b.BeginRay(RayKind::kPrimary, kNoParent, 0, 0, 0);
+    for (CellId c : p) b.AddVisit(c, 1, 0.f, 0.f);
+  }
+  CellTreeBuilder builder;
+  builder.AddBatch(b);
+  return builder.Finish();
+}
+
+// ------------------------------------------------------------------ QueueView, Max Work
+
+TEST(QueueViewTest, HasWorkAndEmpty) {
+  const Queues q = {0, 3, 0};
+  const QueueView v = QueueView::Of(q, B);
+  EXPECT_EQ(v.cells, 3u);
+  EXPECT_EQ(v.loaded, B);
+  EXPECT_FALSE(v.has_work(A));
+  EXPECT_TRUE(v.has_work(B));
+  EXPECT_FALSE(v.has_work(7));  // outside the grid
+  EXPECT_FALSE(v.empty());
+  EXPECT_TRUE(QueueView::Of(Queues{0, 0}).empty());
+  EXPECT_TRUE(QueueView::Of(Queues{}).empty());
+}
+
+TEST(MaxWorkTest, MostQueuedLowestOnTies) {
+  MaxWorkScheduler s;
+  s.BeginFrame(Frame(0, 4));
+  EXPECT_EQ(s.Name(), "maxwork");
+  EXPECT_EQ(Ask(s, {1, 5, 2, 5}), 1u);
+  EXPECT_EQ(Ask(s, {1, 5, 2, 6}), 3u);
+  EXPECT_EQ(Ask(s, {4, 4, 4, 4}), 0u);
+  EXPECT_EQ(Ask(s, {0, 0, 0, 1}), 3u);
+  EXPECT_EQ(Ask(s, {0, 0, 0, 0}), std::nullopt);
+  EXPECT_EQ(Ask(s, {}), std::nullopt);
+}
+
+// ------------------------------------------------------------------ Round Robin
+
+TEST(RoundRobinTest, NextCellWithWorkAfterTheLastAndWraps) {
+  RoundRobinScheduler s;
+  s.BeginFrame(Frame(0, 5));
+  EXPECT_EQ(s.Name(), "roundrobin");
+  EXPECT_EQ(Ask(s, {0, 2, 0, 1, 1}), 1u);  // starts the search at 0
+  EXPECT_EQ(Ask(s, {0, 0, 0, 1, 1}), 3u);
+  EXPECT_EQ(Ask(s, {9, 0, 0, 1, 1}), 4u);  // after 3, not the fullest
+  EXPECT_EQ(Ask(s, {9, 0, 0, 1, 0}), 0u);  // wraps
+  EXPECT_EQ(Ask(s, {0, 0, 0, 1, 0}), 3u);
+  EXPECT_EQ(Ask(s, {0, 0, 0, 1, 0}), 3u);  // the only cell with work, again
+  EXPECT_EQ(Ask(s, {0, 0, 0, 0, 0}), std::nullopt);
+}
+
+TEST(RoundRobinTest, EachFrameStartsAtCellZero) {
+  RoundRobinScheduler s;
+  s.BeginFrame(Frame(0, 3));
+  EXPECT_EQ(Ask(s, {1, 1, 1}), 0u);
+  EXPECT_EQ(Ask(s, {0, 1, 1}), 1u);
+  s.BeginFrame(Frame(1, 3));
+  EXPECT_EQ(Ask(s, {1, 1, 1}), 0u);
+}
+
+// ------------------------------------------------------------------ Random
+
+TEST(RandomTest, SplitMixAndXoshiroMatchTheReferenceCode) {
+  // splitmix64 from seed 0, and xoshiro256** from state {1, 2, 3, 4}: the first two outputs
+  // worked out by hand from the reference code (rotl(2 * 5, 7) * 9 = 11520, then s[1] = 0).
+  EXPECT_EQ(SplitMix64(0).Next(), 0xe220a8397b1dcdafULL);
+  Xoshiro256 x(1, 2, 3, 4);
+  EXPECT_EQ(x.Next(), 11520u);
+  EXPECT_EQ(x.Next(), 0u);
+}
+
+TEST(RandomTest, BelowStaysInRangeAndCoversIt) {
+  Xoshiro256 x(42);
+  std::vector<int> hits(7, 0);
+  for (int i = 0; i < 7000; ++i) {
+    const std::uint64_t r = x.Below(7);
+    ASSERT_LT(r, 7u);
+    ++hits[r];
+  }
+  for (int h : hits) EXPECT_GT(h, 800);  // 1000 expected; far from 800 by ~6 sigma
+  EXPECT_EQ(x.Below(1), 0u);
+}
+
+std::vector<CellId> Draws(RandomScheduler& s, std::size_t frame, const Queues& q, int n) {
+  s.BeginFrame(Frame(frame, static_cast<CellId>(q.size())));
+  std::vector<CellId> out;
+  for (int i = 0; i < n; ++i) out.push_back(*Ask(s, q));
+  return out;
+}
+
+TEST(RandomTest, OnlyCellsWithWorkAllOfThem) {
+  RandomScheduler s(7);
+  EXPECT_EQ(s.Name(), "random");
+  const Queues q = {0, 3, 0, 1, 0, 0, 8, 0};
+  const std::vector<CellId> d = Draws(s, 0, q, 300);
+  EXPECT_EQ(std::set<CellId>(d.begin(), d.end()), (std::set<CellId>{1, 3, 6}));
+  EXPECT_EQ(Ask(s, {0, 0, 0}), std::nullopt);
+  EXPECT_EQ(Ask(s, {0, 0, 2}), 2u);
+}
+
+TEST(RandomTest, DeterministicPerSeedAndFrameDifferentAcrossFrames) {
+  const Queues q(16, 1);
+  RandomScheduler a(123), b(123), other_seed(124);
+  const std::vector<CellId> frame3 = Draws(a, 3, q, 20);
+  EXPECT_EQ(Draws(a, 0, q, 20), Draws(b, 0, q, 20));
+  EXPECT_EQ(Draws(b, 3, q, 20), frame3);  // a frame replays alone, whatever came before
+  EXPECT_NE(Draws(a, 4, q, 20), frame3);
+  EXPECT_NE(Draws(other_seed, 3, q, 20), frame3);
+  EXPECT_NE(RandomScheduler::FrameSeed(1, 0), RandomScheduler::FrameSeed(0, 1));
+}
+
+TEST(RandomTest, ChoicesArePinned) {
+  // Pins the stream: the same on every compiler and standard library. If this changes,
+  // recorded Random baselines stop being reproducible.
+  RandomScheduler s(2002);
+  EXPECT_EQ(Draws(s, 5, Queues(10, 1), 8), (std::vector<CellId>{3, 7, 6, 8, 2, 4, 4, 0}));
+}
+
+// ------------------------------------------------------------------ Peel oracle, Cell Tree
+
+// Paths A B, A B, C A: Peel gives C A B (DESIGN.md §1: B is ready and peeled first, then both
+// A nodes, then C).
+class FollowTest : public ::testing::Test {
+ protected:
+  const CellTree tree_ = FromPaths({{A, B}, {A, B}, {C, A}});
+  void SetUp() override { ASSERT_EQ(Peel(tree_).schedule, (Schedule{C, A, B})); }
+};
+
+TEST_F(FollowTest, PeelOracleFollowsTheScheduleThenMaxWork) {
+  PeelOracleScheduler s;
+  EXPECT_EQ(s.Name(), "peel");
+  s.BeginFrame(Frame(0, 3, &tree_));
+  EXPECT_EQ(Ask(s, {2, 0, 1}), C);  // not Max Work's A
+  EXPECT_EQ(Ask(s, {3, 0, 0}), A);
+  EXPECT_EQ(Ask(s, {0, 2, 0}), B);
+  EXPECT_EQ(s.follower().cursor(), 3u);
+  EXPECT_EQ(Ask(s, {1, 5, 5}), B);  // used up: Max Work
+  EXPECT_EQ(Ask(s, {0, 0, 0}), std::nullopt);
+  EXPECT_EQ(s.follower().stats().ToString(), "followed 3, skipped 0, max work 1");
+}
+
+TEST_F(FollowTest, PeelOracleSkipsEntriesWithoutWork) {
+  PeelOracleScheduler s;
+  s.BeginFrame(Frame(0, 3, &tree_));
+  EXPECT_EQ(Ask(s, {2, 0, 0}), A);  // C skipped
+  EXPECT_EQ(Ask(s, {0, 0, 4}), C);  // B skipped, used up: Max Work
+  EXPECT_EQ(s.follower().stats().ToString(), "followed 1, skipped 2, max work 1");
+  s.BeginFrame(Frame(1, 3, &tree_));  // starts over
+  EXPECT_EQ(Ask(s, {1, 1, 1}), C);
+}
+
+TEST_F(FollowTest, CellTreeFrameZeroIsMaxWork) {
+  CellTreeScheduler s;
+  EXPECT_EQ(s.Name(), "celltree");
+  s.BeginFrame(Frame(0, 3, &tree_, nullptr));  // the current tree is not looked at
+  EXPECT_EQ(Ask(s, {2, 0, 1}), A);
+  EXPECT_EQ(Ask(s, {0, 2, 1}), B);
+  EXPECT_EQ(Ask(s, {0, 0, 1}), C);
+  EXPECT_EQ(s.follower().stats().max_work, 3u);
+}
+
+TEST_F(FollowTest, CellTreeFollowsThePreviousFramesPeel) {
+  const CellTree current = FromPaths({{B}});  // Peel: B; ignored
+  CellTreeScheduler s;
+  s.BeginFrame(Frame(1, 3, &current, &tree_));
+  EXPECT_EQ(s.follower().schedule(), (Schedule{C, A, B}));
+  EXPECT_EQ(Ask(s, {2, 0, 1}), C);
+  EXPECT_EQ(Ask(s, {0, 7, 0}), B);  // A skipped
+  EXPECT_EQ(Ask(s, {1, 0, 2}), C);  // used up: Max Work
+  EXPECT_EQ(Ask(s, {0, 0, 0}), std::nullopt);
+  s.BeginFrame(Frame(2, 3, &tree_, nullptr));
+  EXPECT_EQ(Ask(s, {2, 0, 1}), A);  // no previous tree: Max Work
+}
+
+TEST(PeelOracleDeathTest, NeedsTheCurrentTree) {
+  PeelOracleScheduler s;
+  EXPECT_DEATH(s.BeginFrame(Frame(0, 3)), "current");
+}
+
+TEST(CellTreeDeathTest, TreeCellsMustBeInTheGrid) {
+  const CellTree t = FromPaths({{A, C}});
+  CellTreeScheduler s;
+  EXPECT_DEATH(s.BeginFrame(Frame(1, 2, nullptr, &t)), "CHECK failed");
+}
+
+// ------------------------------------------------------------------ factory
+
+TEST(MakeSchedulerTest, EveryNameRoundTrips) {
+  for (const std::string& name : SchedulerNames()) {
+    const std::unique_ptr<Scheduler> s = MakeScheduler(name, 1);
+    ASSERT_NE(s, nullptr);
+    EXPECT_EQ(s->Name(), name);
+  }
+  EXPECT_EQ(SchedulerNames().size(), 5u);
+  EXPECT_NE(dynamic_cast<RandomScheduler*>(MakeScheduler("random", 99).get()), nullptr);
+  EXPECT_EQ(dynamic_cast<RandomScheduler&>(*MakeScheduler("random", 99)).seed(), 99u);
+}
+
+TEST(MakeSchedulerTest, UnknownNameListsTheValidOnes) {
+  try {
+    MakeScheduler("MaxWork", 0);
+    FAIL() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(),
+                 "unknown scheduler 'MaxWork' (expected one of: maxwork, roundrobin, random, "
+                 "peel, celltree)");
+  }
+  EXPECT_THROW(MakeScheduler("", 0), InputError);
+}
+
+}  // namespace
+}  // namespace raycell
