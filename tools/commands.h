@@ -9,5 +9,6 @@ namespace raycell {
 void AddRecordCommand(CLI::App& app);
 void AddTraceCommand(CLI::App& app);
 void AddAnalyzeCommand(CLI::App& app);
+void AddReplayCommand(CLI::App& app);
 
 }  // namespace raycell

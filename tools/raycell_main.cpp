@@ -15,7 +15,8 @@ int main(int argc, char** argv) {
       "  raycell record --scene smoke.vdb --cells 3x3x3 --frames 0..29 --orbit 360\n"
       "  raycell trace info capture.rct     what a capture holds\n"
       "  raycell trace cat capture.rct --frame 0 --format jsonl   rays as JSON Lines\n"
-      "  raycell analyze capture.rct --exact  Cell Tree, maxGen bound, Peel, optimum\n\n"
+      "  raycell analyze capture.rct --exact  Cell Tree, maxGen bound, Peel, optimum\n"
+      "  raycell replay capture.rct --scheduler maxwork   fetches and time on the GI-Cube model\n\n"
       "Run `raycell COMMAND --help` for each command's options.",
       "raycell"};
   app.require_subcommand(1);
@@ -23,6 +24,7 @@ int main(int argc, char** argv) {
   raycell::AddRecordCommand(app);
   raycell::AddTraceCommand(app);
   raycell::AddAnalyzeCommand(app);
+  raycell::AddReplayCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,75 @@
+#include "replay/driver.h"
+
+#include <memory>
+
+#include "engine/checked.h"
+#include "graph/analysis.h"
+#include "scheduling/scheduler.h"
+#include "traces/check.h"
+
+namespace raycell {
+namespace {
+
+void Accumulate(const ReplayResult& f, ReplayResult* t) {
+  if (t->levels.empty()) t->levels.assign(f.levels.size(), {});
+  for (std::size_t i = 0; i < f.levels.size(); ++i) {
+    t->levels[i].name = f.levels[i].name;
+    CheckedIncrement(t->levels[i].fetches, f.levels[i].fetches);
+    CheckedIncrement(t->levels[i].bytes, f.levels[i].bytes);
+  }
+  CheckedIncrement(t->fetches, f.fetches);
+  if (f.bound) t->bound = CheckedAdd(t->bound.value_or(0), *f.bound);
+  t->time = t->time + f.time;
+  t->work = t->work + f.work;
+  t->stall = t->stall + f.stall;
+  t->idle = t->idle + f.idle;
+  t->peak_queued_rays = std::max(t->peak_queued_rays, f.peak_queued_rays);
+  t->peak_queued_bytes = std::max(t->peak_queued_bytes, f.peak_queued_bytes);
+  CheckedIncrement(t->rays, f.rays);
+  CheckedIncrement(t->segments, f.segments);
+  CheckedIncrement(t->samples, f.samples);
+  CheckedIncrement(t->events, f.events);
+}
+
+WorkGraph MakeWork(const ReplayConfig& config, const RayBatch& rays, const CellTree& tree,
+                   CellId cells) {
+  return config.granularity == ReplayConfig::Granularity::kRay ? RaySegmentWork(rays, cells)
+                                                               : NodeWork(tree, cells);
+}
+
+}  // namespace
+
+TraceReplay ReplayTrace(const TraceReader& reader, const std::vector<std::size_t>& frame_indices,
+                        const ReplayConfig& config, const std::function<void(double)>& progress) {
+  const TraceHeader& h = reader.header();
+  const CellId cells = h.cell_count();
+  std::unique_ptr<Scheduler> scheduler = MakeScheduler(config.scheduler, config.seed);
+  TraceReplay out;
+  std::unique_ptr<CellTree> previous;
+  std::size_t previous_index = SIZE_MAX;
+  for (std::size_t k = 0; k < frame_indices.size(); ++k) {
+    const std::size_t i = frame_indices[k];
+    if (i > 0 && previous_index != i - 1) {  // Cell Tree scheduling needs frame i-1's tree
+      previous = std::make_unique<CellTree>(BuildFrameTree(reader, i - 1));
+    }
+    const RayBatch rays = reader.LoadFrame(i);
+    CellTreeBuilder builder;
+    builder.AddBatch(rays);
+    auto tree = std::make_unique<CellTree>(builder.Finish());
+    FrameInfo info{i, tree.get(), i > 0 ? previous.get() : nullptr, cells};
+    scheduler->BeginFrame(info);
+    ReplayResult r = ReplayFrame(MakeWork(config, rays, *tree, cells), h.footprints, config,
+                                 *scheduler, Bound(*tree));
+    r.frame = reader.frames()[i].frame;
+    Accumulate(r, &out.total);
+    out.frames.push_back(std::move(r));
+    previous = std::move(tree);
+    previous_index = i;
+    if (progress) progress(double(k + 1) / frame_indices.size());
+  }
+  const double capacity = double(out.total.time.picoseconds()) * config.processors.count;
+  out.total.utilisation = capacity > 0 ? double(out.total.work.picoseconds()) / capacity : 0.0;
+  return out;
+}
+
+}  // namespace raycell

@@ -1,0 +1,212 @@
+#include "replay/replayer.h"
+
+#include <deque>
+#include <sstream>
+
+#include "engine/checked.h"
+#include "engine/simulator.h"
+#include "traces/check.h"
+
+namespace raycell {
+namespace {
+
+enum EventKind : std::uint32_t { kIdle = 0, kFetched = 1, kUnitDone = 2 };
+
+std::uint64_t Pack(std::uint32_t processor, UnitId unit) {
+  return (std::uint64_t{processor} << 32) | unit;
+}
+
+struct ProcessorState {
+  std::optional<CellId> cell;   // locked and loaded while working
+  std::deque<UnitId> worklist;  // units of `cell` to work in this fetch
+  bool waiting = false;         // idle, no cell had work
+  SimTime work, stall;
+};
+
+// The board: queues, processors and memory as one component; the processors' requests,
+// fetch completions and unit completions are its events.
+class Board : public Component {
+ public:
+  Board(const WorkGraph& w, const std::vector<std::uint64_t>& footprints,
+        const ReplayConfig& config, Scheduler& scheduler)
+      : w_(w),
+        config_(config),
+        scheduler_(scheduler),
+        memory_(config, footprints),
+        queues_(w.cells),
+        queued_rays_(w.cells, 0),
+        view_(w.cells, 0),
+        locked_(w.cells, false),
+        processors_(config.processors.count) {
+    for (UnitId u : w.roots) Enqueue(u);
+  }
+
+  void Start(Simulator& sim) {
+    for (std::uint32_t p = 0; p < processors_.size(); ++p) {
+      sim.Schedule(id_, SimTime::Zero(), kIdle, Pack(p, 0));
+    }
+  }
+  void set_id(ComponentId id) { id_ = id; }
+
+  void Handle(const Event& e, Simulator& sim) override {
+    const auto p = std::uint32_t(e.payload >> 32);
+    if (e.kind == kIdle) OnIdle(p, sim);
+    if (e.kind == kFetched) OnFetched(p, sim);
+    if (e.kind == kUnitDone) OnUnitDone(p, UnitId(e.payload & 0xffffffffu), sim);
+  }
+  std::string Name() const override { return "board"; }
+  bool HasWork() const override { return done_ < w_.size(); }
+  std::string DumpState() const override {
+    std::ostringstream s;
+    s << done_ << " of " << w_.size() << " units done; queued rays per cell:";
+    for (std::uint64_t q : queued_rays_) s << ' ' << q;
+    return s.str();
+  }
+
+  ReplayResult Result(SimTime end) const;
+
+ private:
+  void Enqueue(UnitId u) {
+    const CellId c = w_.cell[u];
+    queues_[c].push_back(u);
+    queued_rays_[c] += w_.queued_rays[u];
+    queued_total_ += w_.queued_rays[u];
+    peak_queued_ = std::max(peak_queued_, queued_total_);
+  }
+
+  void OnIdle(std::uint32_t p, Simulator& sim) {
+    for (CellId c = 0; c < w_.cells; ++c) view_[c] = locked_[c] ? 0 : queued_rays_[c];
+    // A cell whose queue holds only in-place units (0 rays) still has work: count them.
+    for (CellId c = 0; c < w_.cells; ++c) {
+      if (!locked_[c] && view_[c] == 0 && !queues_[c].empty()) view_[c] = 1;
+    }
+    const std::optional<CellId> c = scheduler_.Next(QueueView::Of(view_, processors_[p].cell));
+    if (!c) {
+      processors_[p].waiting = true;  // woken when work is released
+      return;
+    }
+    RAYCELL_CHECK(!queues_[*c].empty() && !locked_[*c]);
+    locked_[*c] = true;
+    processors_[p].cell = *c;
+    const SimTime ready = memory_.Fetch(p, *c, sim.now());
+    processors_[p].stall = processors_[p].stall + (ready - sim.now());
+    sim.ScheduleAt(id_, ready, kFetched, Pack(p, 0));
+  }
+
+  void TakeQueue(ProcessorState& ps) {
+    auto& q = queues_[*ps.cell];
+    for (UnitId u : q) {
+      ps.worklist.push_back(u);
+      queued_rays_[*ps.cell] -= w_.queued_rays[u];
+      queued_total_ -= w_.queued_rays[u];
+    }
+    q.clear();
+  }
+
+  void OnFetched(std::uint32_t p, Simulator& sim) {
+    TakeQueue(processors_[p]);
+    StartNext(p, sim);
+  }
+
+  void StartNext(std::uint32_t p, Simulator& sim) {
+    ProcessorState& ps = processors_[p];
+    if (ps.worklist.empty()) TakeQueue(ps);  // units that arrived while the cell was loaded
+    if (ps.worklist.empty()) {
+      locked_[*ps.cell] = false;
+      sim.Schedule(id_, SimTime::Zero(), kIdle, Pack(p, 0));
+      return;
+    }
+    const UnitId u = ps.worklist.front();
+    ps.worklist.pop_front();
+    const SimTime dt = config_.processors.time_per_sample * w_.samples[u];
+    ps.work = ps.work + dt;
+    sim.Schedule(id_, dt, kUnitDone, Pack(p, u));
+  }
+
+  void OnUnitDone(std::uint32_t p, UnitId u, Simulator& sim) {
+    sim.NoteProgress();
+    ++done_;
+    CheckedIncrement(rays_, w_.rays_started[u]);
+    CheckedIncrement(segments_, w_.segments[u]);
+    CheckedIncrement(samples_, w_.samples[u]);
+    bool released = false;
+    for (UnitId i = w_.succ_begin[u]; i < w_.succ_begin[u + 1]; ++i) {
+      const UnitId s = w_.succ[i];
+      if (w_.cell[s] == w_.cell[u]) {
+        processors_[p].worklist.push_back(s);  // spawned in the loaded cell: worked now
+      } else {
+        Enqueue(s);
+        released = true;
+      }
+    }
+    if (released) WakeWaiting(sim);
+    StartNext(p, sim);
+  }
+
+  void WakeWaiting(Simulator& sim) {
+    for (std::uint32_t q = 0; q < processors_.size(); ++q) {
+      if (!processors_[q].waiting) continue;
+      processors_[q].waiting = false;
+      sim.Schedule(id_, SimTime::Zero(), kIdle, Pack(q, 0));
+    }
+  }
+
+  const WorkGraph& w_;
+  const ReplayConfig& config_;
+  Scheduler& scheduler_;
+  MemoryHierarchy memory_;
+  std::vector<std::vector<UnitId>> queues_;
+  std::vector<std::uint64_t> queued_rays_, view_;
+  std::vector<bool> locked_;
+  std::vector<ProcessorState> processors_;
+  ComponentId id_ = 0;
+  std::uint64_t done_ = 0, queued_total_ = 0, peak_queued_ = 0;
+  std::uint64_t rays_ = 0, segments_ = 0, samples_ = 0;
+};
+
+ReplayResult Board::Result(SimTime end) const {
+  RAYCELL_CHECK_EQ(done_, std::uint64_t(w_.size()));
+  ReplayResult r;
+  r.levels = memory_.stats();
+  r.fetches = r.levels[0].fetches;
+  r.time = end;
+  for (const ProcessorState& ps : processors_) {
+    r.work = r.work + ps.work;
+    r.stall = r.stall + ps.stall;
+    r.idle = r.idle + (end - ps.work - ps.stall);
+  }
+  const double capacity = double(end.picoseconds()) * double(processors_.size());
+  r.utilisation = capacity > 0 ? double(r.work.picoseconds()) / capacity : 0.0;
+  r.peak_queued_rays = peak_queued_;
+  r.peak_queued_bytes = CheckedMul(peak_queued_, config_.processors.queue_record_bytes);
+  r.rays = rays_, r.segments = segments_, r.samples = samples_;
+  return r;
+}
+
+}  // namespace
+
+bool BoundHolds(const ReplayConfig& config) {
+  const LevelConfig& l0 = config.levels.front();
+  return config.processors.count == 1 && l0.capacity_unit == LevelConfig::CapacityUnit::kCells &&
+         l0.capacity == 1;
+}
+
+ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
+                         const ReplayConfig& config, Scheduler& scheduler, std::uint64_t bound) {
+  RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
+  if (config.processors.prefetch) {
+    throw InputError("processors.prefetch = true: prefetching the next scheduled cell is not "
+                     "modelled by this replay yet; set it to false");
+  }
+  Board board(work, footprints, config, scheduler);
+  Simulator sim;
+  board.set_id(sim.Add(board));
+  board.Start(sim);
+  sim.Run();
+  ReplayResult r = board.Result(sim.now());
+  if (BoundHolds(config)) r.bound = bound;
+  r.events = sim.events_handled();
+  return r;
+}
+
+}  // namespace raycell

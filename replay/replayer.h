@@ -1,0 +1,41 @@
+// The GI-Cube replay of one frame (DESIGN.md §2) on the discrete-event engine: block
+// processors ask the scheduler for a cell, fetch it through the memory levels, and work
+// every unit queued there (ray segments or Cell Tree nodes, see work.h); finished units
+// release their successors into the per-cell queues.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "engine/time.h"
+#include "replay/config.h"
+#include "replay/memory.h"
+#include "replay/work.h"
+#include "scheduling/scheduler.h"
+
+namespace raycell {
+
+struct ReplayResult {
+  std::int32_t frame = 0;
+  std::vector<LevelStats> levels;      // fetches and bytes into each level
+  std::uint64_t fetches = 0;           // into the processors' caches (levels[0].fetches)
+  std::optional<std::uint64_t> bound;  // maxGen bound, where it holds (1 processor, 1 cell)
+  SimTime time;                        // until the last unit is done
+  SimTime work, stall, idle;           // summed over processors; each processor's add up
+                                       // to `time`
+  double utilisation = 0;              // work / (time * processors)
+  std::uint64_t peak_queued_rays = 0, peak_queued_bytes = 0;
+  std::uint64_t rays = 0, segments = 0, samples = 0;  // processed; equal the trace's
+  std::uint64_t events = 0;                           // engine events handled
+};
+
+// Replays one frame. `bound` is the frame's maxGen bound (reported only where it holds).
+// The scheduler must have had BeginFrame for this frame.
+ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
+                         const ReplayConfig& config, Scheduler& scheduler, std::uint64_t bound);
+
+// Whether the maxGen bound holds for `config`: one processor whose cache holds one cell.
+bool BoundHolds(const ReplayConfig& config);
+
+}  // namespace raycell

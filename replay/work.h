@@ -1,0 +1,43 @@
+// A frame's work as the replay schedules it (DESIGN.md §2 "granularity"): units, each done in
+// one cell, that become ready when their predecessor is done.
+//  - Per ray segment (exact): one unit per visit of every ray. A visit's successors are the
+//    ray's next visit and the first visits of the rays spawned at it.
+//  - Per Cell Tree node (aggregated): one unit per node, its successors its children.
+// A successor in the same cell as its unit (a spawned ray's first visit) is worked in the
+// same fetch, never queued (DESIGN.md §1 "Max Work").
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "graph/cell_tree.h"
+#include "traces/ray_batch.h"
+
+namespace raycell {
+
+using UnitId = std::uint32_t;
+
+struct WorkGraph {
+  CellId cells = 0;                         // of the grid
+  std::vector<CellId> cell;                 // per unit
+  std::vector<std::uint64_t> samples;       // volume samples worked in the unit
+  std::vector<std::uint64_t> queued_rays;   // rays it stands for in a queue (0: in place)
+  std::vector<std::uint64_t> segments;      // ray visits it covers
+  std::vector<std::uint64_t> rays_started;  // rays whose first visit it holds
+  std::vector<UnitId> succ_begin;           // successors of u: succ[succ_begin[u] ..
+  std::vector<UnitId> succ;                 //   succ_begin[u + 1])
+  std::vector<UnitId> roots;                // ready when the frame starts
+
+  std::size_t size() const { return cell.size(); }
+  std::uint64_t total_samples() const;
+  std::uint64_t total_segments() const;
+  std::uint64_t total_rays() const;
+};
+
+// Per ray segment: `frame` holds a whole frame (first_id 0), as TraceReader::LoadFrame
+// returns it. Rays without visits do no work and are not counted.
+WorkGraph RaySegmentWork(const RayBatch& frame, CellId cells);
+// Per Cell Tree node.
+WorkGraph NodeWork(const CellTree& tree, CellId cells);
+
+}  // namespace raycell

@@ -1,0 +1,183 @@
+// The replay model: conservation, fetch counts against hand-worked frames and the Peel
+// bounds, the two granularities, determinism and timing sanity.
+#include "replay/replayer.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "graph/peel.h"
+#include "replay/config.h"
+#include "replay/work.h"
+#include "scheduling/scheduler.h"
+
+namespace raycell {
+namespace {
+
+constexpr CellId A = 0, B = 1, C = 2;
+
+struct TestRay {
+  RayId parent;  // kNoParent for primary rays
+  std::uint32_t spawn;
+  std::vector<CellId> cells;
+};
+
+RayBatch Frame(const std::vector<TestRay>& rays) {
+  RayBatch b(false);
+  for (const TestRay& r : rays) {
+    b.BeginRay(r.parent == kNoParent ? RayKind::kPrimary : RayKind::kShadow, r.parent, r.spawn, 0,
+               0);
+    for (CellId c : r.cells) b.AddVisit(c, 3, 0, 0);
+  }
+  return b;
+}
+
+CellTree TreeOf(const RayBatch& rays) {
+  CellTreeBuilder builder;
+  builder.AddBatch(rays);
+  return builder.Finish();
+}
+
+struct Outcome {
+  ReplayResult result;
+  std::uint64_t bound, peel;
+};
+
+Outcome Replay(const RayBatch& rays, const std::string& scheduler, ReplayConfig config,
+           const CellTree* previous = nullptr, CellId cells = 3) {
+  config.scheduler = scheduler;
+  const CellTree tree = TreeOf(rays);
+  auto s = MakeScheduler(scheduler, config.seed);
+  s->BeginFrame(FrameInfo{previous ? 1u : 0u, &tree, previous, cells});
+  const WorkGraph w = config.granularity == ReplayConfig::Granularity::kRay
+                          ? RaySegmentWork(rays, cells)
+                          : NodeWork(tree, cells);
+  const std::vector<std::uint64_t> footprints(cells, 4096);
+  return {ReplayFrame(w, footprints, config, *s, Bound(tree)), Bound(tree),
+          Peel(tree).schedule.size()};
+}
+
+// Rays A B, A B and C A. Max Work: A has 2 queued rays (fetch A), then B has 2 (fetch B),
+// then C (fetch C), then the third ray's A again: 4 fetches. The Peel oracle follows
+// C A B: C sends its ray to A, A works all three, B: 3 fetches, the bound.
+TEST(Replay, HandWorkedFetchCounts) {
+  const RayBatch f =
+      Frame({{kNoParent, 0, {A, B}}, {kNoParent, 0, {A, B}}, {kNoParent, 0, {C, A}}});
+  const ReplayConfig config = DefaultConfig();
+  EXPECT_EQ(Replay(f, "maxwork", config).result.fetches, 4u);
+  const Outcome oracle = Replay(f, "peel", config);
+  EXPECT_EQ(oracle.result.fetches, 3u);
+  EXPECT_EQ(oracle.bound, 3u);
+  ASSERT_TRUE(oracle.result.bound.has_value());
+  EXPECT_EQ(*oracle.result.bound, 3u);
+  // Cell Tree scheduling of the same rays with this frame's tree as the previous one's.
+  const CellTree previous = TreeOf(f);
+  EXPECT_EQ(Replay(f, "celltree", config, &previous).result.fetches, 3u);
+  EXPECT_EQ(Replay(f, "celltree", config).result.fetches, 4u);  // frame 0: Max Work
+}
+
+// A spawned ray is worked in its parent's cell in the same fetch, never queued there.
+TEST(Replay, SpawnedRaysAreWorkedInPlace) {
+  // Ray 0: A B; ray 1 spawned at its visit 1 (B) goes B C; ray 2 spawned at ray 0's visit 0
+  // (A) goes A C. Max Work: A (ray 0 and ray 2 start; queues: B 1, C 1) -> B (ray 1 spawns
+  // in B, worked, queued at C: C 2) -> C: 3 fetches.
+  const RayBatch f = Frame({{kNoParent, 0, {A, B}}, {0, 1, {B, C}}, {0, 0, {A, C}}});
+  for (auto g : {ReplayConfig::Granularity::kRay, ReplayConfig::Granularity::kNode}) {
+    ReplayConfig config = DefaultConfig();
+    config.granularity = g;
+    const Outcome r = Replay(f, "maxwork", config);
+    EXPECT_EQ(r.result.fetches, 3u);
+    EXPECT_EQ(r.result.rays, 3u);
+    EXPECT_EQ(r.result.segments, 6u);
+    EXPECT_EQ(r.result.samples, 18u);
+  }
+}
+
+RayBatch RandomFrame(std::mt19937& rng, CellId cells) {
+  RayBatch b(false);
+  std::uniform_int_distribution<CellId> cell(0, cells - 1);
+  const int rays = 2 + int(rng() % 40);
+  int tree_start = 0;
+  for (int i = 0; i < rays; ++i) {
+    const bool primary = i == 0 || rng() % 3 == 0;
+    if (primary) tree_start = i;
+    const RayId parent = primary ? kNoParent : tree_start + rng() % (i - tree_start);
+    const std::uint32_t spawn =
+        primary ? 0 : std::uint32_t(rng() % (b.visit_end(parent) - b.visit_begin(parent)));
+    CellId prev = primary ? cell(rng) : b.cells()[b.visit_begin(parent) + spawn];
+    b.BeginRay(primary ? RayKind::kPrimary : RayKind::kReflection, parent, spawn, 0, 0);
+    b.AddVisit(prev, std::uint32_t(rng() % 20), 0, 0);
+    for (int v = int(rng() % 5); v > 0; --v) {
+      CellId next;
+      do next = cell(rng);
+      while (next == prev);
+      b.AddVisit(prev = next, std::uint32_t(rng() % 20), 0, 0);
+    }
+  }
+  return b;
+}
+
+std::uint64_t TotalSamples(const RayBatch& b) {
+  std::uint64_t s = 0;
+  for (auto x : b.samples()) s += x;
+  return s;
+}
+
+// Every scheduler and granularity processes exactly the trace's rays, segments and
+// samples; with a one-cell cache the Peel oracle fetches between the bound and Peel's
+// length; both granularities give the same fetches (and, with one processor, the same time);
+// replays are deterministic.
+TEST(Replay, ConservationBoundsGranularityAndDeterminismOnRandomFrames) {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 400; ++trial) {
+    const CellId cells = 2 + rng() % 5;
+    const RayBatch f = RandomFrame(rng, cells);
+    const CellTree previous = TreeOf(RandomFrame(rng, cells));
+    for (const char* s : {"maxwork", "roundrobin", "random", "peel", "celltree"}) {
+      SCOPED_TRACE(std::string(s) + " trial " + std::to_string(trial));
+      ReplayConfig ray = DefaultConfig(), node = DefaultConfig();
+      node.granularity = ReplayConfig::Granularity::kNode;
+      const Outcome a = Replay(f, s, ray, &previous, cells), b = Replay(f, s, node, &previous, cells);
+      for (const Outcome* r : {&a, &b}) {
+        EXPECT_EQ(r->result.rays, f.size());
+        EXPECT_EQ(r->result.segments, f.visit_count());
+        EXPECT_EQ(r->result.samples, TotalSamples(f));
+        EXPECT_GE(r->result.fetches, r->bound);
+      }
+      EXPECT_EQ(a.result.fetches, b.result.fetches);
+      EXPECT_EQ(a.result.time, b.result.time);
+      if (std::string(s) == "peel") {
+        EXPECT_LE(a.result.fetches, a.peel);
+      }
+      const Outcome again = Replay(f, s, ray, &previous, cells);
+      EXPECT_EQ(again.result.time, a.result.time);
+      EXPECT_EQ(again.result.stall, a.result.stall);
+      if (::testing::Test::HasFailure()) return;
+    }
+  }
+}
+
+TEST(Replay, TimingSanity) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 100; ++trial) {
+    const RayBatch f = RandomFrame(rng, 4);
+    ReplayConfig slow = DefaultConfig(), fast = DefaultConfig(), inf = DefaultConfig();
+    for (LevelConfig& l : fast.levels) l.bandwidth_below = ParseBandwidth("100GB/s", "test");
+    for (LevelConfig& l : inf.levels) {
+      l.bandwidth_below = ParseBandwidth("inf", "test");
+      l.latency_below = SimTime::Zero();
+    }
+    const Outcome a = Replay(f, "peel", slow, nullptr, 4), b = Replay(f, "peel", fast, nullptr, 4),
+              c = Replay(f, "peel", inf, nullptr, 4);
+    EXPECT_EQ(c.result.stall, SimTime::Zero());
+    EXPECT_LE(b.result.stall, a.result.stall);
+    EXPECT_LE(b.result.time, a.result.time);
+    EXPECT_EQ(a.result.work, b.result.work);  // the same schedule does the same work
+    EXPECT_EQ(a.result.fetches, b.result.fetches);
+    // Work + stall + idle add up to time for the one processor.
+    EXPECT_EQ(a.result.work + a.result.stall + a.result.idle, a.result.time);
+  }
+}
+
+}  // namespace
+}  // namespace raycell

@@ -1,0 +1,206 @@
+// raycell replay: a trace through the GI-Cube memory model under a ray scheduler.
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "engine/stats.h"
+#include "replay/config.h"
+#include "replay/driver.h"
+#include "tools/commands.h"
+#include "traces/check.h"
+#include "traces/progress.h"
+#include "traces/record/recorder.h"
+#include "traces/trace_reader.h"
+
+namespace raycell {
+namespace {
+
+struct ReplayArgs {
+  std::string trace, config, scheduler, granularity, frames, format = "table", out;
+  std::vector<std::string> sets;
+  bool print_config = false, quiet = false;
+};
+
+std::string Ms(SimTime t) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", double(t.picoseconds()) * 1e-9);
+  return buf;
+}
+
+std::string Number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4f", v);
+  return buf;
+}
+
+std::string Bound(const ReplayResult& r, const char* none) {
+  return r.bound ? std::to_string(*r.bound) : none;
+}
+
+void Json(const ReplayResult& r, bool with_frame, std::ostream& out) {
+  out << "{";
+  if (with_frame) out << "\"frame\":" << r.frame << ",";
+  out << "\"fetches\":" << r.fetches << ",\"bound\":" << Bound(r, "null")
+      << ",\"time_ps\":" << r.time.picoseconds() << ",\"work_ps\":" << r.work.picoseconds()
+      << ",\"stall_ps\":" << r.stall.picoseconds() << ",\"idle_ps\":" << r.idle.picoseconds()
+      << ",\"utilisation\":" << Number(r.utilisation) << ",\"peak_queued_rays\":"
+      << r.peak_queued_rays << ",\"peak_queued_bytes\":" << r.peak_queued_bytes
+      << ",\"rays\":" << r.rays << ",\"segments\":" << r.segments << ",\"samples\":" << r.samples
+      << ",\"levels\":[";
+  for (std::size_t i = 0; i < r.levels.size(); ++i) {
+    out << (i ? "," : "") << "{\"name\":" << JsonQuote(r.levels[i].name)
+        << ",\"fetches\":" << r.levels[i].fetches << ",\"bytes\":" << r.levels[i].bytes << "}";
+  }
+  out << "]}";
+}
+
+void PrintJson(const TraceReplay& t, std::ostream& out) {
+  out << "{\"frames\":[";
+  for (std::size_t i = 0; i < t.frames.size(); ++i) {
+    out << (i ? ",\n" : "\n");
+    Json(t.frames[i], true, out);
+  }
+  out << "\n],\n\"total\":";
+  Json(t.total, false, out);
+  out << "}\n";
+}
+
+void CsvRow(const std::string& frame, const ReplayResult& r, std::ostream& out) {
+  out << frame << ',' << r.fetches << ',' << Bound(r, "") << ',' << r.time.picoseconds() << ','
+      << r.work.picoseconds() << ',' << r.stall.picoseconds() << ',' << r.idle.picoseconds()
+      << ',' << Number(r.utilisation) << ',' << r.peak_queued_rays << ',' << r.peak_queued_bytes
+      << ',' << r.rays << ',' << r.segments << ',' << r.samples;
+  for (const LevelStats& l : r.levels) out << ',' << l.fetches << ',' << l.bytes;
+  out << '\n';
+}
+
+void PrintCsv(const TraceReplay& t, std::ostream& out) {
+  out << "frame,fetches,bound,time_ps,work_ps,stall_ps,idle_ps,utilisation,peak_queued_rays,"
+         "peak_queued_bytes,rays,segments,samples";
+  for (const LevelStats& l : t.total.levels) {
+    out << ',' << CsvField(l.name + "_fetches") << ',' << CsvField(l.name + "_bytes");
+  }
+  out << '\n';
+  for (const ReplayResult& r : t.frames) CsvRow(std::to_string(r.frame), r, out);
+  CsvRow("total", t.total, out);
+}
+
+void TableRow(const std::string& frame, const ReplayResult& r, std::ostream& out) {
+  char line[512];
+  std::snprintf(line, sizeof line, "%8s %9llu %7s %12s %12s %12s %12s %6.1f%% %10llu %12llu\n",
+                frame.c_str(), (unsigned long long)r.fetches, Bound(r, "-").c_str(),
+                Ms(r.time).c_str(), Ms(r.work).c_str(), Ms(r.stall).c_str(), Ms(r.idle).c_str(),
+                100 * r.utilisation, (unsigned long long)r.peak_queued_rays,
+                (unsigned long long)r.segments);
+  out << line;
+}
+
+void PrintTable(const TraceReplay& t, std::ostream& out) {
+  out << "   frame   fetches   bound      time ms      work ms     stall ms      idle ms   util"
+         " peak rays     segments\n";
+  for (const ReplayResult& r : t.frames) TableRow(std::to_string(r.frame), r, out);
+  TableRow("total", t.total, out);
+  out << "bytes fetched per level:";
+  for (const LevelStats& l : t.total.levels) out << " " << l.name << " " << l.bytes;
+  out << "\n";
+}
+
+ReplayConfig MakeConfig(const ReplayArgs& a) {
+  ReplayConfig c = a.config.empty() ? DefaultConfig() : LoadConfig(a.config);
+  if (!a.scheduler.empty()) ApplyOverride(c, "scheduler", a.scheduler);
+  if (!a.granularity.empty()) ApplyOverride(c, "granularity", a.granularity);
+  for (const std::string& s : a.sets) {
+    const auto eq = s.find('=');
+    if (eq == std::string::npos) throw InputError("--set '" + s + "': expected KEY=VALUE");
+    ApplyOverride(c, s.substr(0, eq), s.substr(eq + 1));
+  }
+  ValidateConfig(c, "the configuration");
+  return c;
+}
+
+std::vector<std::size_t> SelectFrames(const TraceReader& r, const std::string& range) {
+  std::vector<std::size_t> out;
+  const std::vector<int> wanted = range.empty() ? std::vector<int>{} : ParseFrameRange(range);
+  for (std::size_t i = 0; i < r.frames().size(); ++i) {
+    const int f = r.frames()[i].frame;
+    if (range.empty() || (f >= wanted.front() && f <= wanted.back())) out.push_back(i);
+  }
+  if (out.empty()) throw InputError(r.path() + ": no frame in --frames " + range);
+  return out;
+}
+
+void Write(const std::string& path, const std::string& text) {
+  if (path.empty()) {
+    std::cout << text;
+    return;
+  }
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp);
+    if (!(f << text) || !f.flush()) throw InputError("--out " + path + ": cannot write");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw InputError("--out " + path + ": rename failed");
+}
+
+void Run(const ReplayArgs& a) {
+  const ReplayConfig config = MakeConfig(a);
+  if (a.print_config) {
+    std::cout << ToToml(config);
+    return;
+  }
+  if (a.trace.empty()) throw InputError("give a TRACE file to replay (or --print-config)");
+  if (a.format != "table" && a.format != "json" && a.format != "csv") {
+    throw InputError("--format '" + a.format + "': expected table, json or csv");
+  }
+  const TraceReader reader = TraceReader::Open(a.trace);
+  if (!reader.warning().empty()) std::cerr << "raycell: warning: " << reader.warning() << "\n";
+  Progress progress(!a.quiet);
+  const TraceReplay t = ReplayTrace(reader, SelectFrames(reader, a.frames), config,
+                                    [&](double f) { progress.Update(f, "replaying"); });
+  progress.Done();
+  std::ostringstream out;
+  a.format == "json" ? PrintJson(t, out) : a.format == "csv" ? PrintCsv(t, out) : PrintTable(t, out);
+  Write(a.out, out.str());
+}
+
+}  // namespace
+
+void AddReplayCommand(CLI::App& app) {
+  auto args = std::make_shared<ReplayArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "replay", "Replay a trace through the GI-Cube memory model under a ray scheduler.");
+  cmd->footer(
+      "Block processors ask the scheduler for a cell, fetch it through the memory levels\n"
+      "(latency + footprint / bandwidth per level), and work every ray queued there;\n"
+      "rays move on to the queue of their next cell, spawned rays are worked in place.\n"
+      "Reported per frame and in total: fetches into the processors' caches (and bytes per\n"
+      "level), the maxGen bound where it holds (one processor with a one-cell cache),\n"
+      "simulated time split into work, fetch stall and idle, utilisation, peak queued rays,\n"
+      "and the rays, segments and samples processed (equal to the trace's).\n\n"
+      "Defaults (see --print-config):\n" +
+      DefaultsHelp() +
+      "\nExamples:\n"
+      "  raycell replay capture.rct --scheduler maxwork\n"
+      "  raycell replay capture.rct --granularity node --format json --out r.json\n"
+      "  raycell replay capture.rct --set processors.count=2 --set level.cache.capacity=2\n"
+      "  raycell replay --print-config > gicube.toml");
+  cmd->add_option("TRACE", args->trace, "trace file written by `raycell record`");
+  cmd->add_option("--config", args->config, "TOML configuration (unknown keys are errors)");
+  cmd->add_option("--scheduler", args->scheduler,
+                  "maxwork, roundrobin, random, peel (oracle: this frame's Peel schedule) or "
+                  "celltree (the paper: the previous frame's Peel schedule)");
+  cmd->add_option("--granularity", args->granularity,
+                  "ray (per ray segment, exact) or node (per Cell Tree node, aggregated)");
+  cmd->add_option("--set", args->sets, "override a configuration key, KEY=VALUE (repeatable), "
+                  "e.g. processors.count=2");
+  cmd->add_option("--frames", args->frames, "frame numbers A..B (default: all)");
+  cmd->add_option("--format", args->format, "table, json or csv")->capture_default_str();
+  cmd->add_option("--out", args->out, "write the results to FILE instead of standard output");
+  cmd->add_flag("--print-config", args->print_config, "print the full configuration and exit");
+  cmd->add_flag("--quiet", args->quiet, "no progress bar");
+  cmd->callback([args] { Run(*args); });
+}
+
+}  // namespace raycell
