@@ -29,6 +29,8 @@ void Accumulate(const ReplayResult& f, ReplayResult* t) {
   CheckedIncrement(t->segments, f.segments);
   CheckedIncrement(t->samples, f.samples);
   CheckedIncrement(t->events, f.events);
+  t->passes = std::max(t->passes, f.passes);
+  t->min_converged = t->min_converged && f.min_converged;
 }
 
 WorkGraph MakeWork(const ReplayConfig& config, const RayBatch& rays, const CellTree& tree,
@@ -56,10 +58,9 @@ TraceReplay ReplayTrace(const TraceReader& reader, const std::vector<std::size_t
     CellTreeBuilder builder;
     builder.AddBatch(rays);
     auto tree = std::make_unique<CellTree>(builder.Finish());
-    FrameInfo info{i, tree.get(), i > 0 ? previous.get() : nullptr, cells};
-    scheduler->BeginFrame(info);
+    const FrameInfo info{i, tree.get(), i > 0 ? previous.get() : nullptr, cells};
     ReplayResult r = ReplayFrame(MakeWork(config, rays, *tree, cells), h.footprints, config,
-                                 *scheduler, Bound(*tree));
+                                 *scheduler, info, Bound(*tree));
     r.frame = reader.frames()[i].frame;
     Accumulate(r, &out.total);
     out.frames.push_back(std::move(r));

@@ -14,26 +14,43 @@
 
 namespace raycell {
 
-// One level's contents, with LRU or FIFO replacement. Capacity in cells or bytes; a cell
-// larger than the whole capacity passes through without being kept.
+// One level's contents, with LRU, FIFO or Belady's MIN replacement. Capacity in cells or
+// bytes; a cell larger than the whole capacity passes through without being kept.
+//
+// MIN evicts the cell whose next request lies farthest in the future (never requested again
+// first; lowest cell number on ties). It needs this store's future requests: `future`, the
+// requests a previous run of the same frame made (see ReplayFrame). Every Lookup is recorded
+// in requests(), and diverged() tells whether they strayed from `future`.
 class CellStore {
  public:
-  CellStore(const LevelConfig& level, const std::vector<std::uint64_t>* footprints);
+  CellStore(const LevelConfig& level, const std::vector<std::uint64_t>* footprints,
+            std::vector<CellId> future = {});
   // True if `cell` is held; a hit refreshes it under LRU.
   bool Lookup(CellId cell);
   // Keeps `cell`, evicting the least recently used (LRU) or oldest (FIFO) cells to make room.
   void Insert(CellId cell);
   bool Contains(CellId cell) const { return stamp_[cell] != 0; }
   std::uint64_t used() const { return used_; }
+  const std::vector<CellId>& requests() const { return requests_; }
+  bool diverged() const { return diverged_; }
 
  private:
   std::uint64_t Size(CellId cell) const;
   void EvictOne();
+  CellId MinVictim() const;
+  // Position in future_ of the next request of `cell` at or after pos_; SIZE_MAX if none.
+  std::size_t NextUse(CellId cell) const;
+
 
   LevelConfig level_;
   const std::vector<std::uint64_t>* footprints_;
   std::vector<std::uint64_t> stamp_;  // 0: absent; else last use (LRU) or arrival (FIFO)
   std::uint64_t clock_ = 0, used_ = 0;
+  std::vector<CellId> future_;
+  std::vector<std::vector<std::size_t>> uses_;  // per cell: its positions in future_
+  std::size_t pos_ = 0;
+  std::vector<CellId> requests_;
+  bool diverged_ = false;
 };
 
 struct LevelStats {
@@ -44,8 +61,15 @@ struct LevelStats {
 
 class MemoryHierarchy {
  public:
-  // InputError for a replacement policy the replay cannot run.
-  MemoryHierarchy(const ReplayConfig& config, const std::vector<std::uint64_t>& footprints);
+  // Requests per level and copy (processor for level 0, else one), as requests() returns.
+  using Requests = std::vector<std::vector<std::vector<CellId>>>;
+  // `futures`: for levels with MIN replacement, the requests of a previous run; empty on the
+  // first run, when MIN levels run LRU to learn them.
+  MemoryHierarchy(const ReplayConfig& config, const std::vector<std::uint64_t>& footprints,
+                  const Requests& futures = {});
+  Requests requests() const;
+  // True when a MIN level's requests strayed from its future (run again with requests()).
+  bool diverged() const;
   // Brings `cell` into processor p's cache, asked at `now`; returns when it is there (now on
   // a hit). Deterministic: the same calls give the same times.
   SimTime Fetch(std::uint32_t processor, CellId cell, SimTime now);

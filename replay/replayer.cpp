@@ -28,11 +28,12 @@ struct ProcessorState {
 class Board : public Component {
  public:
   Board(const WorkGraph& w, const std::vector<std::uint64_t>& footprints,
-        const ReplayConfig& config, Scheduler& scheduler)
+        const ReplayConfig& config, Scheduler& scheduler,
+        const MemoryHierarchy::Requests& futures)
       : w_(w),
         config_(config),
         scheduler_(scheduler),
-        memory_(config, footprints),
+        memory_(config, footprints, futures),
         queues_(w.cells),
         queued_rays_(w.cells, 0),
         view_(w.cells, 0),
@@ -64,6 +65,7 @@ class Board : public Component {
   }
 
   ReplayResult Result(SimTime end) const;
+  const MemoryHierarchy& memory() const { return memory_; }
 
  private:
   void Enqueue(UnitId u) {
@@ -191,22 +193,46 @@ bool BoundHolds(const ReplayConfig& config) {
          l0.capacity == 1;
 }
 
+namespace {
+
+bool UsesMin(const ReplayConfig& config) {
+  for (const LevelConfig& l : config.levels) {
+    if (l.replacement == LevelConfig::Replacement::kMin) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
-                         const ReplayConfig& config, Scheduler& scheduler, std::uint64_t bound) {
+                         const ReplayConfig& config, Scheduler& scheduler,
+                         const FrameInfo& frame, std::uint64_t bound) {
   RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
   if (config.processors.prefetch) {
     throw InputError("processors.prefetch = true: prefetching the next scheduled cell is not "
                      "modelled by this replay yet; set it to false");
   }
-  Board board(work, footprints, config, scheduler);
-  Simulator sim;
-  board.set_id(sim.Add(board));
-  board.Start(sim);
-  sim.Run();
-  ReplayResult r = board.Result(sim.now());
-  if (BoundHolds(config)) r.bound = bound;
-  r.events = sim.events_handled();
-  return r;
+  const bool min = UsesMin(config);
+  const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
+  MemoryHierarchy::Requests futures;
+  for (std::uint32_t pass = 1;; ++pass) {
+    scheduler.BeginFrame(frame);
+    Board board(work, footprints, config, scheduler, futures);
+    Simulator sim;
+    board.set_id(sim.Add(board));
+    board.Start(sim);
+    sim.Run();
+    const bool converged = pass > 1 && !board.memory().diverged();
+    if (!min || converged || pass == max_passes) {
+      ReplayResult r = board.Result(sim.now());
+      if (BoundHolds(config)) r.bound = bound;
+      r.events = sim.events_handled();
+      r.passes = pass;
+      r.min_converged = !min || converged;
+      return r;
+    }
+    futures = board.memory().requests();
+  }
 }
 
 }  // namespace raycell

@@ -28,12 +28,22 @@ struct ReplayResult {
   std::uint64_t peak_queued_rays = 0, peak_queued_bytes = 0;
   std::uint64_t rays = 0, segments = 0, samples = 0;  // processed; equal the trace's
   std::uint64_t events = 0;                           // engine events handled
+  // Runs of the frame: 1, or more with MIN replacement (see ReplayFrame).
+  std::uint32_t passes = 1;
+  bool min_converged = true;  // MIN's last run made exactly the requests it was told
 };
 
-// Replays one frame. `bound` is the frame's maxGen bound (reported only where it holds).
-// The scheduler must have had BeginFrame for this frame.
+// Replays one frame; calls scheduler.BeginFrame(frame) itself. `bound` is the frame's maxGen
+// bound (reported only where it holds).
+//
+// Belady's MIN needs each level's future requests. A level with MIN first runs LRU to learn
+// them; the frame is then replayed with MIN on those requests, again on the requests that run
+// made, until a run makes exactly the requests it was given (at most levels + 1 runs;
+// min_converged says whether it got there). With one processor the order of cell requests
+// does not depend on the caches, so MIN on the processors' caches is exact after one rerun.
 ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
-                         const ReplayConfig& config, Scheduler& scheduler, std::uint64_t bound);
+                         const ReplayConfig& config, Scheduler& scheduler,
+                         const FrameInfo& frame, std::uint64_t bound);
 
 // Whether the maxGen bound holds for `config`: one processor whose cache holds one cell.
 bool BoundHolds(const ReplayConfig& config);

@@ -48,12 +48,12 @@ Outcome Replay(const RayBatch& rays, const std::string& scheduler, ReplayConfig 
   config.scheduler = scheduler;
   const CellTree tree = TreeOf(rays);
   auto s = MakeScheduler(scheduler, config.seed);
-  s->BeginFrame(FrameInfo{previous ? 1u : 0u, &tree, previous, cells});
+  const FrameInfo info{previous ? 1u : 0u, &tree, previous, cells};
   const WorkGraph w = config.granularity == ReplayConfig::Granularity::kRay
                           ? RaySegmentWork(rays, cells)
                           : NodeWork(tree, cells);
   const std::vector<std::uint64_t> footprints(cells, 4096);
-  return {ReplayFrame(w, footprints, config, *s, Bound(tree)), Bound(tree),
+  return {ReplayFrame(w, footprints, config, *s, info, Bound(tree)), Bound(tree),
           Peel(tree).schedule.size()};
 }
 
@@ -176,6 +176,38 @@ TEST(Replay, TimingSanity) {
     EXPECT_EQ(a.result.fetches, b.result.fetches);
     // Work + stall + idle add up to time for the one processor.
     EXPECT_EQ(a.result.work + a.result.stall + a.result.idle, a.result.time);
+  }
+}
+
+}  // namespace
+}  // namespace raycell
+
+namespace raycell {
+namespace {
+
+// Belady's MIN on the processor's cache: with one processor the request sequence does not
+// depend on the cache, so MIN (exact after one rerun) never fetches more than LRU or FIFO.
+TEST(Replay, MinNeverFetchesMoreThanLruOrFifo) {
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 200; ++trial) {
+    const CellId cells = 3 + rng() % 4;
+    const RayBatch f = RandomFrame(rng, cells);
+    std::uint64_t fetches[3];
+    int k = 0;
+    for (auto policy : {LevelConfig::Replacement::kLru, LevelConfig::Replacement::kFifo,
+                        LevelConfig::Replacement::kMin}) {
+      ReplayConfig config = DefaultConfig();
+      config.levels[0].capacity = 2;
+      config.levels[0].replacement = policy;
+      const Outcome r = Replay(f, "maxwork", config, nullptr, cells);
+      if (policy == LevelConfig::Replacement::kMin) {
+        EXPECT_TRUE(r.result.min_converged);
+        EXPECT_EQ(r.result.passes, 2u);
+      }
+      fetches[k++] = r.result.fetches;
+    }
+    EXPECT_LE(fetches[2], fetches[0]) << "trial " << trial;
+    EXPECT_LE(fetches[2], fetches[1]) << "trial " << trial;
   }
 }
 
