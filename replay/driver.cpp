@@ -33,11 +33,6 @@ void Accumulate(const ReplayResult& f, ReplayResult* t) {
   t->min_converged = t->min_converged && f.min_converged;
 }
 
-WorkGraph MakeWork(const ReplayConfig& config, const RayBatch& rays, const CellTree& tree,
-                   CellId cells) {
-  return config.granularity == ReplayConfig::Granularity::kRay ? RaySegmentWork(rays, cells)
-                                                               : NodeWork(tree, cells);
-}
 
 }  // namespace
 
@@ -54,13 +49,22 @@ TraceReplay ReplayTrace(const TraceReader& reader, const std::vector<std::size_t
     if (i > 0 && previous_index != i - 1) {  // Cell Tree scheduling needs frame i-1's tree
       previous = std::make_unique<CellTree>(BuildFrameTree(reader, i - 1));
     }
-    const RayBatch rays = reader.LoadFrame(i);
-    CellTreeBuilder builder;
-    builder.AddBatch(rays);
-    auto tree = std::make_unique<CellTree>(builder.Finish());
+    // Per node, the tree is all the replay needs: stream the frame into it. Per ray segment,
+    // the frame's rays are held in memory for the replay.
+    const bool per_ray = config.granularity == ReplayConfig::Granularity::kRay;
+    const RayBatch rays = per_ray ? reader.LoadFrame(i) : RayBatch(false);
+    std::unique_ptr<CellTree> tree;
+    if (per_ray) {
+      CellTreeBuilder builder;
+      builder.AddBatch(rays);
+      tree = std::make_unique<CellTree>(builder.Finish());
+    } else {
+      tree = std::make_unique<CellTree>(BuildFrameTree(reader, i));
+    }
     const FrameInfo info{i, tree.get(), i > 0 ? previous.get() : nullptr, cells};
-    ReplayResult r = ReplayFrame(MakeWork(config, rays, *tree, cells), h.footprints, config,
-                                 *scheduler, info, Bound(*tree));
+    const WorkGraph work = per_ray ? RaySegmentWork(rays, cells) : NodeWork(*tree, cells);
+    ReplayResult r =
+        ReplayFrame(work, h.footprints, config, *scheduler, info, Bound(*tree));
     r.frame = reader.frames()[i].frame;
     Accumulate(r, &out.total);
     out.frames.push_back(std::move(r));
