@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   raycell::AddTraceCommand(app);
   raycell::AddAnalyzeCommand(app);
   raycell::AddReplayCommand(app);
+  raycell::AddSweepCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

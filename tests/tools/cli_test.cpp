@@ -4,6 +4,7 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -11,6 +12,8 @@
 #include <string>
 
 #include <unistd.h>
+
+#include "tests/test_util.h"
 
 namespace {
 
@@ -79,6 +82,25 @@ TEST(Cli, DotOfAFrameRendersWithGraphviz) {
   ASSERT_TRUE(std::filesystem::exists(dot));
   if (std::system("command -v dot >/dev/null 2>&1") != 0) GTEST_SKIP() << "no `dot` (graphviz)";
   EXPECT_EQ(std::system(("dot -Tsvg " + dot + " -o " + dot + ".svg").c_str()), 0);
+}
+
+TEST(Cli, ReplayAndSweepAreDeterministicWhateverTheJobs) {
+  const auto d = Dir();
+  const std::string trace = (d / "sweep.rct").string();
+  ASSERT_EQ(Raycell("record --res 24x24 --orbit 3:90 --no-images --quiet --out " + trace).code, 0);
+  const Result a = Raycell("replay " + trace + " --format json --quiet");
+  const Result b = Raycell("replay " + trace + " --format json --quiet");
+  ASSERT_EQ(a.code, 0) << a.out;
+  EXPECT_EQ(a.out, b.out);
+  EXPECT_NE(a.out.find("\"frames\":["), std::string::npos) << a.out;
+  EXPECT_NE(a.out.find("\"total\":{\"fetches\":"), std::string::npos) << a.out;
+  const std::string vary = " --vary scheduler=maxwork,celltree,peel --vary processors.count=1,2";
+  const std::string one = (d / "one.csv").string(), two = (d / "two.csv").string();
+  ASSERT_EQ(Raycell("sweep " + trace + vary + " --jobs 1 --quiet --out " + one).code, 0);
+  ASSERT_EQ(Raycell("sweep " + trace + vary + " --jobs 2 --quiet --out " + two).code, 0);
+  const std::string rows = raycell::testing::ReadBytes(one);
+  EXPECT_EQ(rows, raycell::testing::ReadBytes(two));
+  EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), 2 + 6);  // comment, header, 6 rows
 }
 
 TEST(Cli, BadInputGetsAClearMessageAndExitCode2) {

@@ -1,0 +1,132 @@
+// raycell sweep: one replay per combination of varied configuration keys, one CSV row each
+// (replay/sweep.h), and `raycell sweep merge` to join the files of sharded runs.
+#include <algorithm>
+#include <iostream>
+#include <memory>
+#include <thread>
+
+#include "replay/config.h"
+#include "replay/sweep.h"
+#include "tools/commands.h"
+#include "traces/check.h"
+#include "traces/progress.h"
+#include "traces/record/recorder.h"
+#include "traces/trace_reader.h"
+
+namespace raycell {
+namespace {
+
+struct SweepArgs {
+  std::string trace, config, frames, shard, out;
+  std::vector<std::string> varies;
+  unsigned jobs = std::max(1u, std::thread::hardware_concurrency());
+  bool quiet = false;
+  std::string merge_out;
+  std::vector<std::string> merge_shards;
+};
+
+std::vector<std::size_t> SelectFrames(const TraceReader& r, const std::string& range) {
+  std::vector<std::size_t> out;
+  const std::vector<int> wanted = range.empty() ? std::vector<int>{} : ParseFrameRange(range);
+  for (std::size_t i = 0; i < r.frames().size(); ++i) {
+    const int f = r.frames()[i].frame;
+    if (range.empty() || (f >= wanted.front() && f <= wanted.back())) out.push_back(i);
+  }
+  if (out.empty()) throw InputError(r.path() + ": no frame in --frames " + range);
+  return out;
+}
+
+SweepSpec MakeSpec(const SweepArgs& a) {
+  SweepSpec spec;
+  spec.trace = a.trace;
+  spec.config = a.config;
+  spec.base = a.config.empty() ? DefaultConfig() : LoadConfig(a.config);
+  for (const std::string& v : a.varies) spec.varies.push_back(Vary::Parse(v));
+  spec.frames = a.frames;
+  if (!a.shard.empty()) spec.shard = Shard::Parse(a.shard);
+  ValidateVaries(spec.base, spec.varies);  // before the trace is even opened
+  return spec;
+}
+
+void Run(const SweepArgs& a) {
+  if (a.trace.empty()) throw InputError("give a TRACE file to sweep");
+  if (a.out.empty()) throw InputError("give --out FILE.csv");
+  if (a.jobs < 1) throw InputError("--jobs must be at least 1");
+  SweepSpec spec = MakeSpec(a);
+  const TraceReader reader = TraceReader::Open(a.trace);
+  if (!reader.warning().empty()) std::cerr << "raycell: warning: " << reader.warning() << "\n";
+  spec.frame_indices = SelectFrames(reader, a.frames);
+  Progress progress(!a.quiet);
+  SweepOptions options;
+  options.jobs = a.jobs;
+  options.progress = [&](double f) { progress.Update(f, "sweeping"); };
+  const SweepOutcome outcome = RunSweep(reader, spec, a.out, options);
+  progress.Done();
+  if (!a.quiet && outcome.resumed > 0) {
+    std::cerr << "raycell: resumed " << outcome.resumed << " rows from " << a.out
+              << ".partial, ran " << outcome.ran << "\n";
+  }
+}
+
+constexpr char kFooter[] =
+    "Every combination of the --vary values is one replay of the selected frames and one CSV\n"
+    "row. Combinations are numbered from 0, row-major over the --vary options in the order\n"
+    "given (the last one varies fastest); every combination is checked against the\n"
+    "configuration before any replay runs.\n\n"
+    "The file starts with a comment line naming the sweep (trace, config and its hash, varies,\n"
+    "frames, combination count, shard), then the header\n"
+    "  index,<varied keys>,fetches,bound,time_ps,work_ps,stall_ps,idle_ps,utilisation,\n"
+    "  peak_queued_rays,peak_queued_bytes,rays,segments,samples\n"
+    "with totals over the frames (bound empty where it does not hold). Rows come in index\n"
+    "order and the file is byte-identical whatever --jobs is.\n\n"
+    "Interrupting: rows are appended to OUT.partial as they complete, in order; OUT.partial\n"
+    "becomes OUT when all are done. After Ctrl-C (or a crash) rerun the same command: it\n"
+    "keeps the rows in OUT.partial and runs the rest. A .partial of a different sweep is an\n"
+    "error, never reused; delete it to start again.\n\n"
+    "Sharding: --shard I/N (0-based, 0 <= I < N) runs the combinations with index % N == I;\n"
+    "`raycell sweep merge OUT SHARD...` joins the N files into the file an unsharded run\n"
+    "writes, byte for byte, after checking they are shards of one sweep covering every\n"
+    "combination exactly once.\n\n"
+    "Examples:\n"
+    "  raycell sweep capture.rct --vary scheduler=maxwork,celltree,peel \\\n"
+    "      --vary processors.count=1,2 --jobs 2 --out sweep.csv\n"
+    "  raycell sweep capture.rct --config gicube.toml \\\n"
+    "      --vary \"level.cache.capacity=1 cell,2 cells,64MiB\" --out cache.csv\n"
+    "  raycell sweep capture.rct --vary scheduler=maxwork,peel --shard 0/2 --out s0.csv\n"
+    "  raycell sweep capture.rct --vary scheduler=maxwork,peel --shard 1/2 --out s1.csv\n"
+    "  raycell sweep merge sweep.csv s0.csv s1.csv";
+
+void AddMerge(CLI::App* cmd, const std::shared_ptr<SweepArgs>& args) {
+  CLI::App* merge = cmd->add_subcommand(
+      "merge", "Join the files of `raycell sweep --shard I/N` runs into the unsharded file.");
+  merge->add_option("OUT", args->merge_out, "merged CSV file to write")->required();
+  merge->add_option("SHARDS", args->merge_shards, "the shard files, each shard once")->required();
+  merge->callback([args] { MergeSweepShards(args->merge_out, args->merge_shards); });
+}
+
+}  // namespace
+
+void AddSweepCommand(CLI::App& app) {
+  auto args = std::make_shared<SweepArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "sweep", "Replay a trace once per combination of varied configuration keys, into a CSV.");
+  cmd->footer(kFooter);
+  cmd->require_subcommand(0, 1);
+  cmd->add_option("TRACE", args->trace, "trace file written by `raycell record`");
+  cmd->add_option("--config", args->config, "TOML configuration (default: the GI-Cube defaults)");
+  cmd->add_option("--vary", args->varies,
+                  "KEY=V1,V2,... a configuration key and its values (repeatable), e.g. "
+                  "processors.count=1,2,4; keys as `raycell replay --set` takes them");
+  cmd->add_option("--frames", args->frames, "frame numbers A..B (default: all)");
+  cmd->add_option("--jobs", args->jobs, "worker threads (default: the hardware threads)");
+  cmd->add_option("--shard", args->shard, "I/N: run only combinations with index % N == I");
+  cmd->add_option("--out", args->out, "CSV file to write (OUT.partial while running)");
+  cmd->add_flag("--quiet", args->quiet, "no progress bar or resume message");
+  AddMerge(cmd, args);
+  cmd->callback([cmd, args] {
+    if (cmd->got_subcommand("merge")) return;
+    Run(*args);
+  });
+}
+
+}  // namespace raycell
