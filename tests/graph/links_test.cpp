@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/graph/test_trees.h"
+
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -17,21 +19,12 @@
 namespace raycell {
 namespace {
 
+using testing::FromPaths;
+using testing::RandomTree;
+
 constexpr CellId A = 0, B = 1, C = 2, D = 3, E = 4, F = 5;
 using Schedule = std::vector<CellId>;
 using Links = std::vector<Link>;
-
-// Primary rays with the given paths, one sample per visit.
-CellTree FromPaths(const std::vector<Schedule>& paths) {
-  RayBatch b(false);
-  for (const Schedule& p : paths) {
-    b.BeginRay(RayKind::kPrimary, kNoParent, 0, 0, 0);
-    for (CellId c : p) b.AddVisit(c, 1, 0.f, 0.f);
-  }
-  CellTreeBuilder builder;
-  builder.AddBatch(b);
-  return builder.Finish();
-}
 
 // The node reached from the root along `path`.
 NodeId At(const CellTree& t, const Schedule& path) {
@@ -81,34 +74,6 @@ bool Realisable(const CellTree& t, const Links& links, bool greedy) {
 }
 
 // ------------------------------------------------------------------- random trees
-
-// Random rays over `cells` cells: primary rays and rays spawned at a random visit of an
-// earlier ray of the same ray tree, paths of 1..max_length visits without consecutive repeats.
-CellTree RandomTree(std::mt19937& rng, CellId cells, int rays, int max_length) {
-  RayBatch b(false);
-  std::uniform_int_distribution<CellId> cell(0, cells - 1);
-  std::uniform_int_distribution<int> length(1, max_length);
-  int tree_start = 0;  // rays come one ray tree at a time, as the recorder writes them
-  for (int i = 0; i < rays; ++i) {
-    const bool primary = i == 0 || rng() % 3 == 0;
-    if (primary) tree_start = i;
-    const RayId parent = primary ? kNoParent : tree_start + rng() % (i - tree_start);
-    const std::size_t pv = primary ? 0 : b.visit_end(parent) - b.visit_begin(parent);
-    const auto spawn = static_cast<std::uint32_t>(primary ? 0 : rng() % pv);
-    CellId prev = primary ? cell(rng) : b.cells()[b.visit_begin(parent) + spawn];
-    b.BeginRay(primary ? RayKind::kPrimary : RayKind::kShadow, parent, spawn, 0, 0);
-    b.AddVisit(prev, 1, 0.f, 0.f);
-    for (int v = length(rng); v > 1; --v) {
-      CellId next;
-      do next = cell(rng);
-      while (next == prev);
-      b.AddVisit(prev = next, 1, 0.f, 0.f);
-    }
-  }
-  CellTreeBuilder builder;
-  builder.AddBatch(b);
-  return builder.Finish();
-}
 
 // `count` seeded random trees with at most `max_nodes` nodes.
 template <typename Fn>

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/graph/test_trees.h"
+
 #include <algorithm>
 #include <random>
 
@@ -10,21 +12,12 @@
 namespace raycell {
 namespace {
 
+using testing::FromPaths;
+using testing::RandomTree;
+
 constexpr CellId A = 0, B = 1, C = 2;
 using Schedule = std::vector<CellId>;
 constexpr PeelKind kC = PeelKind::kCompletion, kS = PeelKind::kSplit;
-
-// Primary rays with the given paths, one sample per visit.
-CellTree FromPaths(const std::vector<Schedule>& paths) {
-  RayBatch b(false);
-  for (const Schedule& p : paths) {
-    b.BeginRay(RayKind::kPrimary, kNoParent, 0, 0, 0);
-    for (CellId c : p) b.AddVisit(c, 1, 0.f, 0.f);
-  }
-  CellTreeBuilder builder;
-  builder.AddBatch(b);
-  return builder.Finish();
-}
 
 // An independent, naive run of a schedule: at each entry, scan every node.
 struct NaiveRun {
@@ -188,34 +181,6 @@ TEST(ScheduleTest, UnknownCellsProcessNothing) {
 }
 
 // ------------------------------------------------------------------------ properties
-
-// Random rays over `cells` cells: primary rays and rays spawned at a random visit of an
-// earlier ray, paths of 1..6 visits without consecutive repeats.
-CellTree RandomTree(std::mt19937& rng, CellId cells, int rays) {
-  RayBatch b(false);
-  std::uniform_int_distribution<CellId> cell(0, cells - 1);
-  std::uniform_int_distribution<int> length(1, 6);
-  int tree_start = 0;  // rays come one ray tree at a time, as the recorder writes them
-  for (int i = 0; i < rays; ++i) {
-    const bool primary = i == 0 || rng() % 3 == 0;
-    if (primary) tree_start = i;
-    const RayId parent = primary ? kNoParent : tree_start + rng() % (i - tree_start);
-    const std::size_t pv = primary ? 0 : b.visit_end(parent) - b.visit_begin(parent);
-    const auto spawn = static_cast<std::uint32_t>(primary ? 0 : rng() % pv);
-    CellId prev = primary ? cell(rng) : b.cells()[b.visit_begin(parent) + spawn];
-    b.BeginRay(primary ? RayKind::kPrimary : RayKind::kShadow, parent, spawn, 0, 0);
-    b.AddVisit(prev, 1, 0.f, 0.f);
-    for (int v = length(rng); v > 1; --v) {
-      CellId next;
-      do next = cell(rng);
-      while (next == prev);
-      b.AddVisit(prev = next, 1, 0.f, 0.f);
-    }
-  }
-  CellTreeBuilder builder;
-  builder.AddBatch(b);
-  return builder.Finish();
-}
 
 template <typename Fn>
 void ForRandomTrees(int count, Fn fn) {

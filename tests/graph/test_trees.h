@@ -1,0 +1,52 @@
+// Cell Trees for the tests: from given paths, and random ones.
+#pragma once
+
+#include <random>
+#include <vector>
+
+#include "graph/cell_tree.h"
+
+namespace raycell::testing {
+
+// Primary rays with the given paths, one sample per visit.
+inline CellTree FromPaths(const std::vector<std::vector<CellId>>& paths) {
+  RayBatch b(false);
+  for (const auto& p : paths) {
+    b.BeginRay(RayKind::kPrimary, kNoParent, 0, 0, 0);
+    for (CellId c : p) b.AddVisit(c, 1, 0.f, 0.f);
+  }
+  CellTreeBuilder builder;
+  builder.AddBatch(b);
+  return builder.Finish();
+}
+
+// Random rays over `cells` cells: primary rays and rays spawned at a random visit of an
+// earlier ray of the same ray tree (rays come one ray tree at a time, as the recorder writes
+// them), paths of 1..max_length visits without consecutive repeats, one sample per visit.
+inline CellTree RandomTree(std::mt19937& rng, CellId cells, int rays, int max_length = 6) {
+  RayBatch b(false);
+  std::uniform_int_distribution<CellId> cell(0, cells - 1);
+  std::uniform_int_distribution<int> length(1, max_length);
+  int tree_start = 0;
+  for (int i = 0; i < rays; ++i) {
+    const bool primary = i == 0 || rng() % 3 == 0;
+    if (primary) tree_start = i;
+    const RayId parent = primary ? kNoParent : tree_start + rng() % (i - tree_start);
+    const std::size_t pv = primary ? 0 : b.visit_end(parent) - b.visit_begin(parent);
+    const auto spawn = static_cast<std::uint32_t>(primary ? 0 : rng() % pv);
+    CellId prev = primary ? cell(rng) : b.cells()[b.visit_begin(parent) + spawn];
+    b.BeginRay(primary ? RayKind::kPrimary : RayKind::kShadow, parent, spawn, 0, 0);
+    b.AddVisit(prev, 1, 0.f, 0.f);
+    for (int v = length(rng); v > 1; --v) {
+      CellId next;
+      do next = cell(rng);
+      while (next == prev);
+      b.AddVisit(prev = next, 1, 0.f, 0.f);
+    }
+  }
+  CellTreeBuilder builder;
+  builder.AddBatch(b);
+  return builder.Finish();
+}
+
+}  // namespace raycell::testing
