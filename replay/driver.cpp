@@ -29,6 +29,8 @@ void Accumulate(const ReplayResult& f, ReplayResult* t) {
   CheckedIncrement(t->segments, f.segments);
   CheckedIncrement(t->samples, f.samples);
   CheckedIncrement(t->events, f.events);
+  CheckedIncrement(t->prefetches, f.prefetches);
+  CheckedIncrement(t->prefetch_hits, f.prefetch_hits);
   t->passes = std::max(t->passes, f.passes);
   t->min_converged = t->min_converged && f.min_converged;
 }

@@ -20,16 +20,22 @@ std::size_t CellStore::NextUse(CellId cell) const {
   return it == u.end() ? SIZE_MAX : *it;
 }
 
-CellId CellStore::MinVictim() const {
-  CellId victim = 0;
+std::optional<CellId> CellStore::MinVictim(std::optional<CellId> pinned) const {
+  std::optional<CellId> victim;
   std::size_t farthest = 0;
-  bool found = false;
   for (CellId c = 0; c < stamp_.size(); ++c) {
-    if (stamp_[c] == 0) continue;
+    if (stamp_[c] == 0 || c == pinned) continue;
     const std::size_t next = NextUse(c);
-    if (!found || next > farthest) victim = c, farthest = next, found = true;
+    if (!victim || next > farthest) victim = c, farthest = next;
   }
-  RAYCELL_CHECK(found);
+  return victim;
+}
+
+std::optional<CellId> CellStore::OldestVictim(std::optional<CellId> pinned) const {
+  std::optional<CellId> victim;
+  for (CellId c = 0; c < stamp_.size(); ++c) {
+    if (stamp_[c] != 0 && c != pinned && (!victim || stamp_[c] < stamp_[*victim])) victim = c;
+  }
   return victim;
 }
 
@@ -53,26 +59,31 @@ bool CellStore::Lookup(CellId cell) {
   return true;
 }
 
-void CellStore::EvictOne() {
-  CellId victim = 0;
-  if (level_.replacement == LevelConfig::Replacement::kMin) {
-    victim = MinVictim();
-  } else {
-    std::uint64_t oldest = 0;
-    for (CellId c = 0; c < stamp_.size(); ++c) {
-      if (stamp_[c] != 0 && (oldest == 0 || stamp_[c] < oldest)) victim = c, oldest = stamp_[c];
-    }
-    RAYCELL_CHECK(oldest != 0);
-  }
-  stamp_[victim] = 0;
-  used_ -= Size(victim);
+bool CellStore::EvictOne(std::optional<CellId> pinned) {
+  const std::optional<CellId> victim = level_.replacement == LevelConfig::Replacement::kMin
+                                           ? MinVictim(pinned)
+                                           : OldestVictim(pinned);
+  if (!victim) return false;
+  stamp_[*victim] = 0;
+  used_ -= Size(*victim);
+  return true;
 }
 
-void CellStore::Insert(CellId cell) {
-  if (stamp_[cell] != 0 || Size(cell) > level_.capacity) return;
-  while (used_ + Size(cell) > level_.capacity) EvictOne();
+bool CellStore::Fits(CellId cell, std::optional<CellId> pinned) const {
+  const std::uint64_t keep = pinned && stamp_[*pinned] != 0 ? Size(*pinned) : 0;
+  return stamp_[cell] != 0 || keep + Size(cell) <= level_.capacity;
+}
+
+bool CellStore::Insert(CellId cell, std::optional<CellId> pinned) {
+  if (stamp_[cell] != 0) return true;
+  if (!Fits(cell, pinned)) return false;
+  while (used_ + Size(cell) > level_.capacity) {
+    const bool evicted = EvictOne(pinned);
+    RAYCELL_CHECK(evicted);
+  }
   stamp_[cell] = ++clock_;
   used_ += Size(cell);
+  return true;
 }
 
 MemoryHierarchy::MemoryHierarchy(const ReplayConfig& config,
@@ -93,6 +104,8 @@ MemoryHierarchy::MemoryHierarchy(const ReplayConfig& config,
     link_free_.emplace_back(copies, SimTime::Zero());
     stats_.push_back({levels_[i].name, 0, 0});
   }
+  arrival_.assign(config.processors.count, std::vector<SimTime>(footprints.size()));
+  prefetched_.assign(config.processors.count, std::vector<bool>(footprints.size(), false));
 }
 
 MemoryHierarchy::Requests MemoryHierarchy::requests() const {
@@ -120,21 +133,43 @@ SimTime& MemoryHierarchy::LinkFree(std::size_t level, std::uint32_t processor) {
   return link_free_[level][level == 0 ? processor : 0];
 }
 
-SimTime MemoryHierarchy::Fetch(std::uint32_t processor, CellId cell, SimTime now) {
-  std::size_t from = 0;  // the nearest level holding the cell; levels_.size() = host
-  while (from < levels_.size() && !Store(from, processor).Lookup(cell)) ++from;
-  SimTime t = now;
+SimTime MemoryHierarchy::Transfer(std::uint32_t processor, CellId cell, std::size_t from,
+                                  SimTime t, std::optional<CellId> pinned) {
   for (std::size_t i = from; i-- > 0;) {  // down through every level above `from`
     SimTime& free = LinkFree(i, processor);
     const SimTime start = std::max(t, free);
     t = start + levels_[i].latency_below +
         levels_[i].bandwidth_below.TransferTime(footprints_[cell]);
     free = t;
-    Store(i, processor).Insert(cell);
+    Store(i, processor).Insert(cell, i == 0 ? pinned : std::nullopt);
     CheckedIncrement(stats_[i].fetches);
     CheckedIncrement(stats_[i].bytes, footprints_[cell]);
   }
   return t;
+}
+
+SimTime MemoryHierarchy::Fetch(std::uint32_t processor, CellId cell, SimTime now) {
+  std::size_t from = 0;  // the nearest level holding the cell; levels_.size() = host
+  while (from < levels_.size() && !Store(from, processor).Lookup(cell)) ++from;
+  if (from == 0) {
+    if (prefetched_[processor][cell]) CheckedIncrement(prefetch_hits_);
+    prefetched_[processor][cell] = false;
+    return std::max(now, arrival_[processor][cell]);
+  }
+  prefetched_[processor][cell] = false;
+  return Transfer(processor, cell, from, now, std::nullopt);
+}
+
+bool MemoryHierarchy::Prefetch(std::uint32_t processor, CellId cell, SimTime now,
+                               CellId working) {
+  CellStore& cache = Store(0, processor);
+  if (cache.Contains(cell) || !cache.Fits(cell, working)) return false;
+  std::size_t from = 1;
+  while (from < levels_.size() && !Store(from, processor).Lookup(cell)) ++from;
+  arrival_[processor][cell] = Transfer(processor, cell, from, now, working);
+  prefetched_[processor][cell] = true;
+  CheckedIncrement(prefetches_);
+  return true;
 }
 
 }  // namespace raycell

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,8 +28,11 @@ class CellStore {
             std::vector<CellId> future = {});
   // True if `cell` is held; a hit refreshes it under LRU.
   bool Lookup(CellId cell);
-  // Keeps `cell`, evicting the least recently used (LRU) or oldest (FIFO) cells to make room.
-  void Insert(CellId cell);
+  // Keeps `cell`, evicting the least recently used (LRU) or oldest (FIFO) cells to make room,
+  // never `pinned` (the cell a processor is working). False if it cannot be kept.
+  bool Insert(CellId cell, std::optional<CellId> pinned = std::nullopt);
+  // Whether Insert(cell, pinned) would keep the cell.
+  bool Fits(CellId cell, std::optional<CellId> pinned) const;
   bool Contains(CellId cell) const { return stamp_[cell] != 0; }
   std::uint64_t used() const { return used_; }
   const std::vector<CellId>& requests() const { return requests_; }
@@ -36,8 +40,9 @@ class CellStore {
 
  private:
   std::uint64_t Size(CellId cell) const;
-  void EvictOne();
-  CellId MinVictim() const;
+  bool EvictOne(std::optional<CellId> pinned);
+  std::optional<CellId> MinVictim(std::optional<CellId> pinned) const;
+  std::optional<CellId> OldestVictim(std::optional<CellId> pinned) const;
   // Position in future_ of the next request of `cell` at or after pos_; SIZE_MAX if none.
   std::size_t NextUse(CellId cell) const;
 
@@ -73,10 +78,21 @@ class MemoryHierarchy {
   // Brings `cell` into processor p's cache, asked at `now`; returns when it is there (now on
   // a hit). Deterministic: the same calls give the same times.
   SimTime Fetch(std::uint32_t processor, CellId cell, SimTime now);
+  // Starts bringing `cell` into processor p's cache at `now` while the processor works
+  // `working` (which stays): double buffering. A later Fetch of the cell waits only for what
+  // is left of the transfer. Returns false, doing nothing, if the cell is already there or
+  // the cache has no room beside `working`.
+  bool Prefetch(std::uint32_t processor, CellId cell, SimTime now, CellId working);
   const std::vector<LevelStats>& stats() const { return stats_; }
+  std::uint64_t prefetches() const { return prefetches_; }
+  std::uint64_t prefetch_hits() const { return prefetch_hits_; }
 
  private:
   CellStore& Store(std::size_t level, std::uint32_t processor);
+  // Moves `cell` down from level `from` (levels_.size(): host) into p's cache, starting at
+  // `t`; returns when it arrives.
+  SimTime Transfer(std::uint32_t processor, CellId cell, std::size_t from, SimTime t,
+                   std::optional<CellId> pinned);
   SimTime& LinkFree(std::size_t level, std::uint32_t processor);
 
   std::vector<LevelConfig> levels_;
@@ -84,6 +100,9 @@ class MemoryHierarchy {
   std::vector<std::vector<CellStore>> stores_;   // [level][processor, or 0 when shared]
   std::vector<std::vector<SimTime>> link_free_;  // the link below each level, likewise
   std::vector<LevelStats> stats_;
+  std::vector<std::vector<SimTime>> arrival_;  // [processor][cell]: when a prefetch lands
+  std::vector<std::vector<bool>> prefetched_;  // [processor][cell]: not yet used
+  std::uint64_t prefetches_ = 0, prefetch_hits_ = 0;
 };
 
 }  // namespace raycell

@@ -76,13 +76,14 @@ class Board : public Component {
     peak_queued_ = std::max(peak_queued_, queued_total_);
   }
 
-  void OnIdle(std::uint32_t p, Simulator& sim) {
+  // The queues a scheduler may choose from: cells being worked are not available.
+  QueueView View(std::uint32_t p) {
     for (CellId c = 0; c < w_.cells; ++c) view_[c] = locked_[c] ? 0 : queued_rays_[c];
-    // A cell whose queue holds only in-place units (0 rays) still has work: count them.
-    for (CellId c = 0; c < w_.cells; ++c) {
-      if (!locked_[c] && view_[c] == 0 && !queues_[c].empty()) view_[c] = 1;
-    }
-    const std::optional<CellId> c = scheduler_.Next(QueueView::Of(view_, processors_[p].cell));
+    return QueueView::Of(view_, processors_[p].cell);
+  }
+
+  void OnIdle(std::uint32_t p, Simulator& sim) {
+    const std::optional<CellId> c = scheduler_.Next(View(p));
     if (!c) {
       processors_[p].waiting = true;  // woken when work is released
       return;
@@ -107,6 +108,10 @@ class Board : public Component {
 
   void OnFetched(std::uint32_t p, Simulator& sim) {
     TakeQueue(processors_[p]);
+    if (config_.processors.prefetch) {  // double buffering: the predicted next cell
+      const std::optional<CellId> next = scheduler_.Peek(View(p));
+      if (next) memory_.Prefetch(p, *next, sim.now(), *processors_[p].cell);
+    }
     StartNext(p, sim);
   }
 
@@ -182,6 +187,8 @@ ReplayResult Board::Result(SimTime end) const {
   r.peak_queued_rays = peak_queued_;
   r.peak_queued_bytes = CheckedMul(peak_queued_, config_.processors.queue_record_bytes);
   r.rays = rays_, r.segments = segments_, r.samples = samples_;
+  r.prefetches = memory_.prefetches();
+  r.prefetch_hits = memory_.prefetch_hits();
   return r;
 }
 
@@ -208,9 +215,12 @@ ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>
                          const ReplayConfig& config, Scheduler& scheduler,
                          const FrameInfo& frame, std::uint64_t bound) {
   RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
-  if (config.processors.prefetch) {
-    throw InputError("processors.prefetch = true: prefetching the next scheduled cell is not "
-                     "modelled by this replay yet; set it to false");
+  const LevelConfig& cache = config.levels.front();
+  if (config.processors.prefetch && cache.capacity_unit == LevelConfig::CapacityUnit::kCells &&
+      cache.capacity < 2) {
+    throw InputError("processors.prefetch = true needs a cache that holds two cells (double "
+                     "buffering), but level '" + cache.name + "' holds " +
+                     FormatCapacity(cache));
   }
   const bool min = UsesMin(config);
   const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;

@@ -28,6 +28,8 @@ struct ReplayResult {
   std::uint64_t peak_queued_rays = 0, peak_queued_bytes = 0;
   std::uint64_t rays = 0, segments = 0, samples = 0;  // processed; equal the trace's
   std::uint64_t events = 0;                           // engine events handled
+  std::uint64_t prefetches = 0;      // cells prefetched while another was worked
+  std::uint64_t prefetch_hits = 0;   // of them, fetched next from the cache
   // Runs of the frame: 1, or more with MIN replacement (see ReplayFrame).
   std::uint32_t passes = 1;
   bool min_converged = true;  // MIN's last run made exactly the requests it was told

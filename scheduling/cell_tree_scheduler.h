@@ -14,6 +14,9 @@ class CellTreeScheduler : public Scheduler {
   // Computes Peel of frame.previous; a null previous (frame 0) means Max Work all frame.
   void BeginFrame(const FrameInfo& frame) override;
   std::optional<CellId> Next(const QueueView& queues) override { return follower_.Next(queues); }
+  std::optional<CellId> Peek(const QueueView& queues) const override {
+    return follower_.Peek(queues);
+  }
   const ScheduleFollower& follower() const { return follower_; }
 
  private:

@@ -15,6 +15,9 @@ class PeelOracleScheduler : public Scheduler {
   // Computes Peel of frame.current, which must not be null.
   void BeginFrame(const FrameInfo& frame) override;
   std::optional<CellId> Next(const QueueView& queues) override { return follower_.Next(queues); }
+  std::optional<CellId> Peek(const QueueView& queues) const override {
+    return follower_.Peek(queues);
+  }
   const ScheduleFollower& follower() const { return follower_; }
 
  private:

@@ -42,6 +42,8 @@ class RandomScheduler : public Scheduler {
   std::string Name() const override { return "random"; }
   void BeginFrame(const FrameInfo& frame) override;
   std::optional<CellId> Next(const QueueView& queues) override;
+  // A random choice cannot be foretold without drawing it: no prediction, no prefetch.
+  std::optional<CellId> Peek(const QueueView&) const override { return std::nullopt; }
   std::uint64_t seed() const { return seed_; }
   // The generator seed of one frame: distinct frames get unrelated streams.
   static std::uint64_t FrameSeed(std::uint64_t seed, std::size_t frame_index);

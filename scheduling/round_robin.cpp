@@ -2,15 +2,18 @@
 
 namespace raycell {
 
-std::optional<CellId> RoundRobinScheduler::Next(const QueueView& queues) {
+std::optional<CellId> RoundRobinScheduler::Peek(const QueueView& queues) const {
   for (CellId i = 0; i < queues.cells; ++i) {
     const CellId c = static_cast<CellId>((std::uint64_t{start_} + i) % queues.cells);
-    if (queues.has_work(c)) {
-      start_ = static_cast<CellId>((std::uint64_t{c} + 1) % queues.cells);
-      return c;
-    }
+    if (queues.has_work(c)) return c;
   }
   return std::nullopt;
+}
+
+std::optional<CellId> RoundRobinScheduler::Next(const QueueView& queues) {
+  const std::optional<CellId> c = Peek(queues);
+  if (c) start_ = static_cast<CellId>((std::uint64_t{*c} + 1) % queues.cells);
+  return c;
 }
 
 }  // namespace raycell

@@ -11,6 +11,7 @@ class RoundRobinScheduler : public Scheduler {
   std::string Name() const override { return "roundrobin"; }
   void BeginFrame(const FrameInfo&) override { start_ = 0; }
   std::optional<CellId> Next(const QueueView& queues) override;
+  std::optional<CellId> Peek(const QueueView& queues) const override;
 
  private:
   CellId start_ = 0;  // where the next search begins: one past the last choice

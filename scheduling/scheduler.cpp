@@ -40,6 +40,17 @@ void ScheduleFollower::Reset(std::vector<CellId> schedule, CellId cells) {
   stats_ = {};
 }
 
+std::optional<CellId> Scheduler::Peek(const QueueView& queues) const {
+  return MostQueuedCell(queues);
+}
+
+std::optional<CellId> ScheduleFollower::Peek(const QueueView& queues) const {
+  for (std::size_t i = cursor_; i < schedule_.size(); ++i) {
+    if (queues.has_work(schedule_[i])) return schedule_[i];
+  }
+  return MostQueuedCell(queues);
+}
+
 std::optional<CellId> ScheduleFollower::Next(const QueueView& queues) {
   while (cursor_ < schedule_.size()) {
     const CellId c = schedule_[cursor_++];

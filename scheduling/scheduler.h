@@ -51,6 +51,10 @@ class Scheduler {
   virtual std::string Name() const = 0;
   virtual void BeginFrame(const FrameInfo& frame) = 0;
   virtual std::optional<CellId> Next(const QueueView& queues) = 0;
+  // What Next would choose for these queues, without choosing it (no state changes): the
+  // cell a processor prefetches while it works the current one. nullopt: no prediction.
+  // Default: Max Work's choice.
+  virtual std::optional<CellId> Peek(const QueueView& queues) const;
 };
 
 // Max Work's choice: the cell with the most queued rays, lowest number on ties; nullopt when
@@ -73,6 +77,8 @@ class ScheduleFollower {
   // Starts over on `schedule`; every entry must be < cells.
   void Reset(std::vector<CellId> schedule, CellId cells);
   std::optional<CellId> Next(const QueueView& queues);
+  // Next's choice without moving the cursor or counting.
+  std::optional<CellId> Peek(const QueueView& queues) const;
   const std::vector<CellId>& schedule() const { return schedule_; }
   std::size_t cursor() const { return cursor_; }
   const Stats& stats() const { return stats_; }

@@ -48,7 +48,8 @@ void Json(const ReplayResult& r, bool with_frame, std::ostream& out) {
       << ",\"utilisation\":" << Number(r.utilisation) << ",\"peak_queued_rays\":"
       << r.peak_queued_rays << ",\"peak_queued_bytes\":" << r.peak_queued_bytes
       << ",\"rays\":" << r.rays << ",\"segments\":" << r.segments << ",\"samples\":" << r.samples
-      << ",\"levels\":[";
+      << ",\"prefetches\":" << r.prefetches << ",\"prefetch_hits\":" << r.prefetch_hits
+      << ",\"min_converged\":" << (r.min_converged ? "true" : "false") << ",\"levels\":[";
   for (std::size_t i = 0; i < r.levels.size(); ++i) {
     out << (i ? "," : "") << "{\"name\":" << JsonQuote(r.levels[i].name)
         << ",\"fetches\":" << r.levels[i].fetches << ",\"bytes\":" << r.levels[i].bytes << "}";

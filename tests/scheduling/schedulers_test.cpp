@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <random>
 #include <set>
 
 #include "graph/peel.h"
@@ -235,6 +236,26 @@ TEST(MakeSchedulerTest, UnknownNameListsTheValidOnes) {
                  "peel, celltree)");
   }
   EXPECT_THROW(MakeScheduler("", 0), InputError);
+}
+
+// Peek foretells Next without changing anything, for every scheduler that predicts (all but
+// Random, which has no prediction).
+TEST(SchedulerPeek, ForetellsNextAndChangesNothing) {
+  const CellTree tree = FromPaths({{A, B, C}, {C, A}, {B, C}});
+  std::mt19937 rng(3);
+  for (const char* name : {"maxwork", "roundrobin", "peel", "celltree"}) {
+    auto s = MakeScheduler(name, 1);
+    s->BeginFrame(Frame(1, 3, &tree, &tree));
+    for (int step = 0; step < 20; ++step) {
+      Queues q{rng() % 3, rng() % 3, rng() % 3};
+      const auto first = s->Peek(QueueView::Of(q));
+      EXPECT_EQ(s->Peek(QueueView::Of(q)), first) << name;
+      EXPECT_EQ(s->Next(QueueView::Of(q)), first) << name << " step " << step;
+    }
+  }
+  auto random = MakeScheduler("random", 1);
+  random->BeginFrame(Frame(0, 3));
+  EXPECT_EQ(random->Peek(QueueView::Of(Queues{1, 1, 1})), std::nullopt);
 }
 
 }  // namespace
