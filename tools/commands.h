@@ -10,6 +10,7 @@ void AddRecordCommand(CLI::App& app);
 void AddTraceCommand(CLI::App& app);
 void AddAnalyzeCommand(CLI::App& app);
 void AddReplayCommand(CLI::App& app);
+void AddStudyCommand(CLI::App& app);
 void AddSweepCommand(CLI::App& app);
 
 }  // namespace raycell

@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
       "raycell records what every ray of a volume ray tracer does, cell by cell, into\n"
       "compressed per-frame traces, for people who design memory-coherent ray tracing\n"
       "hardware and ray schedulers.\n\n"
+      "  raycell study                      the main job: record, analyse, replay, report\n"
       "  raycell record                     record the built-in scene (capture.rct, images/)\n"
       "  raycell record --scene smoke.vdb --cells 3x3x3 --frames 0..29 --orbit 360\n"
       "  raycell trace info capture.rct     what a capture holds\n"
@@ -21,6 +22,7 @@ int main(int argc, char** argv) {
       "raycell"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "raycell 0.1.0");
+  raycell::AddStudyCommand(app);
   raycell::AddRecordCommand(app);
   raycell::AddTraceCommand(app);
   raycell::AddAnalyzeCommand(app);

@@ -103,6 +103,26 @@ TEST(Cli, ReplayAndSweepAreDeterministicWhateverTheJobs) {
   EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), 2 + 6);  // comment, header, 6 rows
 }
 
+TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
+  const auto out = Dir() / "study";
+  const Result r = Raycell("study --res 24x24 --frames 3 --cells 2x2x2,1x2x1 --quiet --out " +
+                          out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("report: " + (out / "report.md").string()), std::string::npos) << r.out;
+  for (const char* cells : {"2x2x2", "1x2x1"}) {
+    for (const std::string f : {"fetches_", "cell_trees_"}) {
+      EXPECT_TRUE(std::filesystem::exists(out / (f + cells + ".csv"))) << f << cells;
+      EXPECT_GT(std::filesystem::file_size(out / (f + cells + ".png")), 1000u) << f << cells;
+    }
+    EXPECT_TRUE(std::filesystem::exists(out / ("images_" + std::string(cells)) / "frame_0002.png"));
+  }
+  const std::string report = raycell::testing::ReadBytes((out / "report.md").string());
+  EXPECT_NE(report.find("| fetches, Cell Tree scheduling |"), std::string::npos);
+  EXPECT_NE(report.find("![fetches per frame](fetches_2x2x2.png)"), std::string::npos);
+  const std::string fetches = raycell::testing::ReadBytes((out / "fetches_2x2x2.csv").string());
+  EXPECT_EQ(std::count(fetches.begin(), fetches.end(), '\n'), 4);  // header + 3 frames
+}
+
 TEST(Cli, BadInputGetsAClearMessageAndExitCode2) {
   const auto d = Dir();
   Result r = Raycell("analyze " + (d / "missing.rct").string());
