@@ -233,6 +233,7 @@ class FrameTracer {
       }
       c.rec.FlushTo(out, x, y);
       sum *= 1.0 / set_.spp;
+      RAYCELL_CHECK(std::isfinite(sum.x()) && std::isfinite(sum.y()) && std::isfinite(sum.z()));
       img.at(x, y) = {sum.x(), sum.y(), sum.z()};
     }
     return missed;
@@ -316,22 +317,32 @@ class FrameTracer {
     s.resize(n);
   }
 
-  // Extinction and scattering of the fog at world t (coefficients times density, per voxel
-  // of the grid, scaled to a step of `step` world units); returns the largest density.
-  double FogAt(ThreadCtx& c, std::uint32_t depth, double t, double step, V3* sigma_t,
-               V3* sigma_s) const {
+  // The optical depth of one step of `step` world units at world t (coefficients are per
+  // voxel of each grid, as in vdb_render) and the single-scattering albedo there; returns the
+  // largest density. Densities below 0 (or NaN) count as 0, so depth is never negative and
+  // transmittance never grows along a ray; an infinite depth is fine (the step is opaque).
+  double FogAt(ThreadCtx& c, std::uint32_t depth, double t, double step, V3* tau,
+               V3* albedo) const {
     double max_density = 0;
-    *sigma_t = V3(0.0), *sigma_s = V3(0.0);
+    V3 extinction(0.0), scattering(0.0);  // density-weighted coefficients per world unit
     for (std::size_t i = 0; i < c.fogs.size(); ++i) {
-      const double dens = c.fogs[i].Sample(c.fog_rays[depth][i], t);
+      const double dens = Density(c.fogs[i].Sample(c.fog_rays[depth][i], t));
       max_density = std::max(max_density, dens);
       const FogMaterial& m = s_.fogs[i].material;
-      const double k = dens * step * c.fogs[i].inv_vs;
-      *sigma_t += (ToV3(m.absorption) + ToV3(m.scattering)) * k;
-      *sigma_s += ToV3(m.scattering) * k;
+      const double k = dens * c.fogs[i].inv_vs;
+      extinction += (ToV3(m.absorption) + ToV3(m.scattering)) * k;
+      scattering += ToV3(m.scattering) * k;
+    }
+    *tau = extinction * step;
+    for (int ch = 0; ch < 3; ++ch) {  // a ratio of coefficients: finite whatever the density
+      (*albedo)[ch] = extinction[ch] > 0 && std::isfinite(extinction[ch])
+                          ? scattering[ch] / extinction[ch]
+                          : 0.0;
     }
     return max_density;
   }
+
+  static double Density(double sampled) { return sampled > 0 ? sampled : 0.0; }
 
   // Front-to-back fog integration over [ta, tb]; every lit sample casts shadow rays.
   // Returns the parameter of early termination, if it happened.
@@ -343,11 +354,10 @@ class FrameTracer {
       for (double k = std::ceil(span.t0 / step); k * step <= span.t1; k += 1) {
         const double t = k * step;
         const std::uint32_t visit = c.paths[depth].AddSampleInOrder(t);
-        V3 sigma_t, sigma_s;
-        if (FogAt(c, depth, t, step, &sigma_t, &sigma_s) < set_.cutoff) continue;
-        const V3 dT = Exp(-sigma_t);
-        const V3 albedo(sigma_s.x() / sigma_t.x(), sigma_s.y() / sigma_t.y(),
-                        sigma_s.z() / sigma_t.z());
+        V3 tau, albedo;
+        const double density = FogAt(c, depth, t, step, &tau, &albedo);
+        if (density < set_.cutoff || density == 0) continue;
+        const V3 dT = Exp(-tau);
         const V3 pos = o + d * t;
         const CellId cell = c.paths[depth].cell(visit);
         for (const Light& l : s_.lights) {
@@ -396,7 +406,7 @@ class FrameTracer {
         V3 tau(0.0);
         double max_density = 0;
         for (std::size_t i = 0; i < c.fogs.size(); ++i) {
-          const double dens = c.fogs[i].Sample(c.fog_rays[depth][i], t);
+          const double dens = Density(c.fogs[i].Sample(c.fog_rays[depth][i], t));
           max_density = std::max(max_density, dens);
           const FogMaterial& m = s_.fogs[i].material;
           const double voxel_t = t * c.fogs[i].inv_vs;

@@ -150,8 +150,24 @@ GridInfo MakeInfo(const openvdb::FloatGrid& grid, const std::string& role,
   return GridInfo{grid.getName(), role, source, grid.voxelSize()[0], grid.tree().leafCount()};
 }
 
+// NaN or infinite values would poison every sample near them: refuse the grid.
+void CheckFinite(const openvdb::FloatGrid& grid, const std::string& source) {
+  for (auto it = grid.cbeginValueOn(); it; ++it) {
+    if (!std::isfinite(*it)) {
+      const openvdb::Coord ijk = it.getCoord();
+      throw InputError(source + ": grid '" + grid.getName() + "' holds a non-finite value (" +
+                       std::to_string(*it) + ") at voxel " + std::to_string(ijk.x()) + "," +
+                       std::to_string(ijk.y()) + "," + std::to_string(ijk.z()));
+    }
+  }
+  if (!std::isfinite(grid.background())) {
+    throw InputError(source + ": grid '" + grid.getName() + "' has a non-finite background");
+  }
+}
+
 void AddGrid(Scene::Impl& s, openvdb::FloatGrid::Ptr grid, const std::string& source) {
   if (grid->empty() || grid->activeVoxelCount() == 0) return;
+  CheckFinite(*grid, source);
   if (!grid->hasUniformVoxels() || !grid->transform().isLinear()) {
     throw InputError(source + ": grid '" + grid->getName() +
                      "' has non-uniform voxels or a non-linear transform; raycell needs "
