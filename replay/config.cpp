@@ -28,7 +28,9 @@ struct KeyDoc {
 constexpr KeyDoc kKeyDocs[] = {
     {"scheduler", "cell scheduler: maxwork | roundrobin | random | peel | celltree"},
     {"seed", "seed of the random scheduler"},
-    {"granularity", "ray: per ray segment (exact) | node: per Cell Tree node (aggregated, fast)"},
+    {"granularity",
+     "ray: per ray segment (exact) | node: per Cell Tree node (aggregated, fast) | auto: node "
+     "with one processor (where it is exact), ray otherwise"},
     {"processors.count", "number of block processors, 1..1024"},
     {"processors.time_per_sample", "time a block processor takes per sample"},
     {"processors.queue_record_bytes", "bytes per queued ray (an integer or a size, \"32B\")"},
@@ -46,7 +48,7 @@ const std::map<std::string, std::string>& DefaultSources() {
   static const std::map<std::string, std::string> sources = {
       {"scheduler", "the paper's Cell Tree scheduler"},
       {"seed", "any fixed value keeps a replay deterministic"},
-      {"granularity", "exact per-segment replay"},
+      {"granularity", "exact and as fast as possible"},
       {"processors.count", "one block processor, the paper's case"},
       {"processors.time_per_sample",
        "one sample per cycle of a 100 MHz pipeline, the Cube-5/GI-Cube design point"},
@@ -123,7 +125,8 @@ std::string ParseScheduler(std::string_view text, const std::string& what) {
 ReplayConfig::Granularity ParseGranularity(std::string_view text, const std::string& what) {
   if (text == "ray") return ReplayConfig::Granularity::kRay;
   if (text == "node") return ReplayConfig::Granularity::kNode;
-  Fail(what, "unknown granularity '" + std::string(text) + "' (expected ray or node)");
+  if (text == "auto") return ReplayConfig::Granularity::kAuto;
+  Fail(what, "unknown granularity '" + std::string(text) + "' (expected ray, node or auto)");
 }
 
 LevelConfig::Replacement ParseReplacement(std::string_view text, const std::string& what) {
@@ -485,7 +488,7 @@ std::string_view ToString(LevelConfig::Replacement r) {
 }
 
 std::string_view ToString(ReplayConfig::Granularity g) {
-  return g == ReplayConfig::Granularity::kRay ? "ray" : "node";
+  return g == ReplayConfig::Granularity::kRay ? "ray" : g == ReplayConfig::Granularity::kNode ? "node" : "auto";
 }
 
 std::string_view ToString(LevelConfig::CapacityUnit u) {
@@ -693,6 +696,16 @@ std::string DefaultsHelp() {
     out += line + "  (" + SourceOf(k) + ")\n";
   }
   return out;
+}
+
+}  // namespace raycell
+
+namespace raycell {
+
+ReplayConfig::Granularity EffectiveGranularity(const ReplayConfig& config) {
+  if (config.granularity != ReplayConfig::Granularity::kAuto) return config.granularity;
+  return config.processors.count == 1 ? ReplayConfig::Granularity::kNode
+                                      : ReplayConfig::Granularity::kRay;
 }
 
 }  // namespace raycell

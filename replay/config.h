@@ -64,7 +64,8 @@ struct ProcessorConfig {
 };
 
 struct ReplayConfig {
-  enum class Granularity { kRay, kNode };
+  // kAuto: per node where that is exact (one processor), per ray segment otherwise.
+  enum class Granularity { kRay, kNode, kAuto };
 
   // Nearest (on-chip cache) to farthest; the level below the last is host memory, unlimited.
   // Defaults (DefaultConfig()):
@@ -79,8 +80,9 @@ struct ReplayConfig {
   std::string scheduler = "celltree";
   // Default 1: seeds the random scheduler; any fixed value keeps replays deterministic.
   std::uint64_t seed = 1;
-  // Default kRay: per ray segment, exact. kNode aggregates per Cell Tree node (fast).
-  Granularity granularity = Granularity::kRay;
+  // Default kAuto: per Cell Tree node (fast) where it gives exactly what per ray segment
+  // gives, i.e. with one processor; per ray segment otherwise.
+  Granularity granularity = Granularity::kAuto;
 };
 
 // The valid scheduler names.
@@ -97,6 +99,8 @@ bool operator!=(const ReplayConfig& a, const ReplayConfig& b);
 // "lru" | "fifo" | "min"; "ray" | "node"; "bytes" | "cells".
 std::string_view ToString(LevelConfig::Replacement r);
 std::string_view ToString(ReplayConfig::Granularity g);
+// The granularity a replay of `config` runs at: kAuto resolved.
+ReplayConfig::Granularity EffectiveGranularity(const ReplayConfig& config);
 std::string_view ToString(LevelConfig::CapacityUnit u);
 
 // A level's capacity as written in files and overrides: "1 cell", "4 cells" or "256MiB".

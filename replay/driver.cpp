@@ -53,7 +53,7 @@ TraceReplay ReplayTrace(const TraceReader& reader, const std::vector<std::size_t
     }
     // Per node, the tree is all the replay needs: stream the frame into it. Per ray segment,
     // the frame's rays are held in memory for the replay.
-    const bool per_ray = config.granularity == ReplayConfig::Granularity::kRay;
+    const bool per_ray = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay;
     const RayBatch rays = per_ray ? reader.LoadFrame(i) : RayBatch(false);
     std::unique_ptr<CellTree> tree;
     if (per_ray) {

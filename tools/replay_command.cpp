@@ -193,7 +193,8 @@ void AddReplayCommand(CLI::App& app) {
                   "maxwork, roundrobin, random, peel (oracle: this frame's Peel schedule) or "
                   "celltree (the paper: the previous frame's Peel schedule)");
   cmd->add_option("--granularity", args->granularity,
-                  "ray (per ray segment, exact) or node (per Cell Tree node, aggregated)");
+                  "ray (per ray segment, exact), node (per Cell Tree node, aggregated) or auto (node "
+                  "with one processor, where it is exact; ray otherwise)");
   cmd->add_option("--set", args->sets, "override a configuration key, KEY=VALUE (repeatable), "
                   "e.g. processors.count=2");
   cmd->add_option("--frames", args->frames, "frame numbers A..B (default: all)");

@@ -55,7 +55,7 @@ TEST(DefaultConfig, ModelsTheGiCubeBoard) {
   EXPECT_FALSE(c.processors.prefetch);
   EXPECT_EQ(c.scheduler, "celltree");
   EXPECT_EQ(c.seed, 1u);
-  EXPECT_EQ(c.granularity, ReplayConfig::Granularity::kRay);
+  EXPECT_EQ(c.granularity, ReplayConfig::Granularity::kAuto);
   EXPECT_NO_THROW(ValidateConfig(c, "defaults"));
 }
 
@@ -228,7 +228,7 @@ TEST(LoadConfig, BadUnitsAndValuesNameFileAndLine) {
             "replay.toml:1:13: scheduler: unknown scheduler 'fastest' (expected maxwork, "
             "roundrobin, random, peel or celltree)");
   EXPECT_EQ(LoadError("granularity = \"cell\"\n"),
-            "replay.toml:1:15: granularity: unknown granularity 'cell' (expected ray or node)");
+            "replay.toml:1:15: granularity: unknown granularity 'cell' (expected ray, node or auto)");
   EXPECT_EQ(LoadError("[[level]]\nname = \"cache\"\nreplacement = \"mru\"\n"),
             "replay.toml:3:15: level 'cache' replacement: unknown replacement 'mru' (expected "
             "lru, fifo or min)");
