@@ -88,7 +88,7 @@ def granularity_rows(trace):
     node = replay(trace, "node")
     return [{"knob": "replay granularity", "value": g, "seconds": r[0], "time_ratio": r[0] / ray[0],
              "error": abs(r[2] - ray[2]) / ray[2], "error_kind": "simulated time, relative",
-             "fetch_change": (r[1] - ray[1]) / ray[1], "default": g == "ray"}
+             "fetch_change": (r[1] - ray[1]) / ray[1], "default": g == "node"}
             for g, r in (("ray", ray), ("node", node))]
 
 
