@@ -38,10 +38,46 @@ void Accumulate(const ReplayResult& f, ReplayResult* t) {
 
 }  // namespace
 
+namespace {
+
+// A frame's rays (sampled) and its Cell Tree.
+struct Frame {
+  RayBatch rays{false};
+  std::unique_ptr<CellTree> tree;
+};
+
+Frame LoadFrame(const TraceReader& reader, std::size_t i, bool need_rays, std::uint32_t k) {
+  Frame f;
+  if (!need_rays && k == 1) {  // per node the tree is all the replay needs: stream it
+    f.tree = std::make_unique<CellTree>(BuildFrameTree(reader, i));
+    return f;
+  }
+  f.rays = SampleRayTrees(reader.LoadFrame(i), k);
+  CellTreeBuilder builder;
+  builder.AddBatch(f.rays);
+  f.tree = std::make_unique<CellTree>(builder.Finish());
+  return f;
+}
+
+void ScaleBack(ReplayResult& r, std::uint32_t k, std::uint32_t processors) {
+  if (k == 1) return;
+  const SimTime extra = r.work * (k - 1);
+  r.rays = CheckedMul(r.rays, k);
+  r.segments = CheckedMul(r.segments, k);
+  r.samples = CheckedMul(r.samples, k);
+  r.work = r.work * k;
+  r.time = r.time + SimTime::Picoseconds(extra.picoseconds() / processors);
+}
+
+}  // namespace
+
 TraceReplay ReplayTrace(const TraceReader& reader, const std::vector<std::size_t>& frame_indices,
-                        const ReplayConfig& config, const std::function<void(double)>& progress) {
+                        const ReplayConfig& config, const std::function<void(double)>& progress,
+                        std::uint32_t sample_every) {
+  if (sample_every < 1) throw InputError("sampling: 1 in k ray trees needs k >= 1");
   const TraceHeader& h = reader.header();
   const CellId cells = h.cell_count();
+  const bool per_ray = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay;
   std::unique_ptr<Scheduler> scheduler = MakeScheduler(config.scheduler, config.seed);
   TraceReplay out;
   std::unique_ptr<CellTree> previous;
@@ -49,28 +85,17 @@ TraceReplay ReplayTrace(const TraceReader& reader, const std::vector<std::size_t
   for (std::size_t k = 0; k < frame_indices.size(); ++k) {
     const std::size_t i = frame_indices[k];
     if (i > 0 && previous_index != i - 1) {  // Cell Tree scheduling needs frame i-1's tree
-      previous = std::make_unique<CellTree>(BuildFrameTree(reader, i - 1));
+      previous = LoadFrame(reader, i - 1, false, sample_every).tree;
     }
-    // Per node, the tree is all the replay needs: stream the frame into it. Per ray segment,
-    // the frame's rays are held in memory for the replay.
-    const bool per_ray = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay;
-    const RayBatch rays = per_ray ? reader.LoadFrame(i) : RayBatch(false);
-    std::unique_ptr<CellTree> tree;
-    if (per_ray) {
-      CellTreeBuilder builder;
-      builder.AddBatch(rays);
-      tree = std::make_unique<CellTree>(builder.Finish());
-    } else {
-      tree = std::make_unique<CellTree>(BuildFrameTree(reader, i));
-    }
-    const FrameInfo info{i, tree.get(), i > 0 ? previous.get() : nullptr, cells};
-    const WorkGraph work = per_ray ? RaySegmentWork(rays, cells) : NodeWork(*tree, cells);
-    ReplayResult r =
-        ReplayFrame(work, h.footprints, config, *scheduler, info, Bound(*tree));
+    Frame f = LoadFrame(reader, i, per_ray, sample_every);
+    const FrameInfo info{i, f.tree.get(), i > 0 ? previous.get() : nullptr, cells};
+    const WorkGraph work = per_ray ? RaySegmentWork(f.rays, cells) : NodeWork(*f.tree, cells);
+    ReplayResult r = ReplayFrame(work, h.footprints, config, *scheduler, info, Bound(*f.tree));
+    ScaleBack(r, sample_every, config.processors.count);
     r.frame = reader.frames()[i].frame;
     Accumulate(r, &out.total);
     out.frames.push_back(std::move(r));
-    previous = std::move(tree);
+    previous = std::move(f.tree);
     previous_index = i;
     if (progress) progress(double(k + 1) / frame_indices.size());
   }

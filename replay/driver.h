@@ -19,8 +19,15 @@ struct TraceReplay {
 
 // Replays the frames at `frame_indices` (indices into reader.frames(), increasing).
 // `progress` (may be empty) is told the fraction done.
+//
+// Sampling (sample_every = k > 1) replays only 1 in k ray trees of each frame (a primary ray
+// with all its descendants, SampleRayTrees) and scales back what grows with the rays: rays,
+// segments, samples and work times k, and the simulated time by the added work spread over
+// the processors. Fetches, stall and the bound are those of the sample: the error the
+// sampling makes is what tools/bench/accuracy.py measures.
 TraceReplay ReplayTrace(const TraceReader& reader, const std::vector<std::size_t>& frame_indices,
                         const ReplayConfig& config,
-                        const std::function<void(double)>& progress = {});
+                        const std::function<void(double)>& progress = {},
+                        std::uint32_t sample_every = 1);
 
 }  // namespace raycell

@@ -90,4 +90,25 @@ WorkGraph NodeWork(const CellTree& tree, CellId cells) {
   return w;
 }
 
+RayBatch SampleRayTrees(const RayBatch& frame, std::uint32_t k) {
+  RAYCELL_CHECK(k >= 1);
+  RayBatch out(frame.store_t());
+  std::vector<RayId> new_id(frame.size(), kNoParent);
+  std::uint64_t tree = 0;
+  bool keep = false;
+  for (std::size_t r = 0; r < frame.size(); ++r) {
+    const RayView ray = frame.ray(r);
+    if (ray.is_primary()) keep = tree++ % k == 0;
+    if (!keep) continue;
+    new_id[r] = out.size();
+    const RayId parent = ray.is_primary() ? kNoParent : new_id[ray.parent - frame.first_id()];
+    out.BeginRay(ray.kind, parent, ray.spawn, ray.pixel_x, ray.pixel_y);
+    for (std::size_t v = 0; v < ray.visit_count; ++v) {
+      const Visit visit = ray.visit(v);
+      out.AddVisit(visit.cell, visit.samples, visit.t_enter, visit.t_exit);
+    }
+  }
+  return out;
+}
+
 }  // namespace raycell

@@ -40,4 +40,8 @@ WorkGraph RaySegmentWork(const RayBatch& frame, CellId cells);
 // Per Cell Tree node.
 WorkGraph NodeWork(const CellTree& tree, CellId cells);
 
+// Sampling: the ray trees (a primary ray and its descendants) whose order in the frame is a
+// multiple of k, renumbered from 0. k = 1 returns the frame as it is.
+RayBatch SampleRayTrees(const RayBatch& frame, std::uint32_t k);
+
 }  // namespace raycell

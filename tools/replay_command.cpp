@@ -20,6 +20,7 @@ namespace {
 struct ReplayArgs {
   std::string trace, config, scheduler, granularity, frames, format = "table", out;
   std::vector<std::string> sets;
+  std::uint32_t sample = 1;
   bool print_config = false, quiet = false;
 };
 
@@ -158,8 +159,10 @@ void Run(const ReplayArgs& a) {
   const TraceReader reader = TraceReader::Open(a.trace);
   if (!reader.warning().empty()) std::cerr << "raycell: warning: " << reader.warning() << "\n";
   Progress progress(!a.quiet);
+  if (a.sample < 1) throw InputError("--sample: must be at least 1");
   const TraceReplay t = ReplayTrace(reader, SelectFrames(reader, a.frames), config,
-                                    [&](double f) { progress.Update(f, "replaying"); });
+                                    [&](double f) { progress.Update(f, "replaying"); },
+                                    a.sample);
   progress.Done();
   std::ostringstream out;
   a.format == "json" ? PrintJson(t, out) : a.format == "csv" ? PrintCsv(t, out) : PrintTable(t, out);
@@ -198,6 +201,10 @@ void AddReplayCommand(CLI::App& app) {
   cmd->add_option("--set", args->sets, "override a configuration key, KEY=VALUE (repeatable), "
                   "e.g. processors.count=2");
   cmd->add_option("--frames", args->frames, "frame numbers A..B (default: all)");
+  cmd->add_option("--sample", args->sample,
+                  "replay 1 in K ray trees (a primary ray and its descendants) of each frame and "
+                  "scale rays, segments, samples and work back by K: faster, approximate")
+      ->capture_default_str();
   cmd->add_option("--format", args->format, "table, json or csv")->capture_default_str();
   cmd->add_option("--out", args->out, "write the results to FILE instead of standard output");
   cmd->add_flag("--print-config", args->print_config, "print the full configuration and exit");

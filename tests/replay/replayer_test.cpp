@@ -307,3 +307,23 @@ TEST(Replay, TwoProcessorsNeverTakeLongerWhenFetchesAreFree) {
 
 }  // namespace
 }  // namespace raycell
+
+namespace raycell {
+namespace {
+
+TEST(Sampling, KeepsOneInKRayTreesWithTheirDescendants) {
+  // Trees: {0: A B, 1: spawned at 0's visit 1 (B C)}, {2: C}, {3: A, 4: spawned at 3 (A B)}.
+  const RayBatch f = Frame({{kNoParent, 0, {A, B}}, {0, 1, {B, C}}, {kNoParent, 0, {C}},
+                            {kNoParent, 0, {A}}, {3, 0, {A, B}}});
+  EXPECT_TRUE(SampleRayTrees(f, 1) == f);
+  const RayBatch s = SampleRayTrees(f, 2);  // trees 0 and 2
+  ASSERT_EQ(s.size(), 4u);
+  EXPECT_EQ(s.parents()[1], 0u);
+  EXPECT_EQ(s.parents()[3], 2u);  // ray 4 became ray 3, its parent ray 3 became ray 2
+  EXPECT_EQ(s.ray(3).visit_count, 2u);
+  const RayBatch t = SampleRayTrees(f, 3);  // tree 0 only
+  EXPECT_EQ(t.size(), 2u);
+}
+
+}  // namespace
+}  // namespace raycell

@@ -94,6 +94,12 @@ TEST(Cli, ReplayAndSweepAreDeterministicWhateverTheJobs) {
   EXPECT_EQ(a.out, b.out);
   EXPECT_NE(a.out.find("\"frames\":["), std::string::npos) << a.out;
   EXPECT_NE(a.out.find("\"total\":{\"fetches\":"), std::string::npos) << a.out;
+  // Sampling 1 in 1 ray trees is the full replay; 1 in 2 scales its counts back.
+  const Result s1 = Raycell("replay " + trace + " --format json --quiet --sample 1");
+  EXPECT_EQ(s1.out, a.out);
+  const Result s2 = Raycell("replay " + trace + " --format json --quiet --sample 2");
+  ASSERT_EQ(s2.code, 0) << s2.out;
+  EXPECT_NE(s2.out, a.out);
   const std::string vary = " --vary scheduler=maxwork,celltree,peel --vary processors.count=1,2";
   const std::string one = (d / "one.csv").string(), two = (d / "two.csv").string();
   ASSERT_EQ(Raycell("sweep " + trace + vary + " --jobs 1 --quiet --out " + one).code, 0);

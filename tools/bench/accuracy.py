@@ -52,10 +52,11 @@ def rmse(a, b):
     return float(np.sqrt(np.mean([np.mean((x - y) ** 2) for x, y in zip(a, b)])))
 
 
-def replay(trace, granularity="ray"):
+def replay(trace, granularity="ray", sample=1):
     t0 = time.perf_counter()
     p = subprocess.run([RAYCELL, "replay", trace, "--granularity", granularity, "--format",
-                        "csv", "--quiet"], check=True, stdout=subprocess.PIPE, text=True)
+                        "csv", "--quiet", "--sample", str(sample)], check=True,
+                       stdout=subprocess.PIPE, text=True)
     seconds = time.perf_counter() - t0
     total = [r for r in csv.DictReader(p.stdout.splitlines()) if r["frame"] == "total"][0]
     return seconds, int(total["fetches"]), int(total["time_ps"])
@@ -92,6 +93,18 @@ def granularity_rows(trace):
             for g, r in (("ray", ray), ("node", node))]
 
 
+def sampling_rows(trace):
+    full = replay(trace, "ray")  # sampling saves time where segments are replayed one by one
+    rows = []
+    for k in (1, 2, 4, 8, 16):
+        r = replay(trace, "ray", k)
+        rows.append({"knob": "replay sampling 1 in k (per ray)", "value": k, "seconds": r[0],
+                     "time_ratio": r[0] / full[0], "error": abs(r[2] - full[2]) / full[2],
+                     "error_kind": "simulated time, relative",
+                     "fetch_change": (r[1] - full[1]) / full[1], "default": k == 1})
+    return rows
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--scene", default="builtin")
@@ -102,6 +115,7 @@ def main():
     os.makedirs(opts.out, exist_ok=True)
     rows, default_trace = renderer_rows(opts)
     rows += granularity_rows(default_trace)
+    rows += sampling_rows(default_trace)
     keys = ["knob", "value", "seconds", "time_ratio", "error", "error_kind", "fetch_change",
             "default"]
     with open(os.path.join(opts.out, "accuracy.csv"), "w", newline="") as f:
