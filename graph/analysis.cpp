@@ -32,8 +32,8 @@ FrameAnalysis AnalyzeTree(const CellTree& tree, const AnalyzeOptions& options) {
       a.optimum = r.length;
       a.optimum_status = "optimal";
     } else {
-      a.optimum_status = (r.status == OptimumResult::kTooLarge ? "too large: " : "unknown: ") +
-                         r.reason;
+      a.optimum_status =
+          (r.status == OptimumResult::kTooLarge ? "too large: " : "unknown: ") + r.reason;
     }
   }
   a.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -13,7 +13,7 @@
 namespace raycell {
 
 struct AnalyzeOptions {
-  bool exact = false;        // also search for the optimum (small trees only)
+  bool exact = false;  // also search for the optimum (small trees only)
   std::uint64_t max_states = 2'000'000;
   double max_seconds = 10;
   std::size_t max_nodes = 4096;
@@ -24,8 +24,8 @@ struct FrameAnalysis {
   std::uint64_t rays = 0, nodes = 0;
   std::uint64_t bound = 0;  // sum over cells of maxGen
   std::vector<CellId> peel_schedule;
-  std::uint64_t splits = 0;  // split peels
-  std::optional<std::uint64_t> optimum;  // set only when proved optimal
+  std::uint64_t splits = 0;                     // split peels
+  std::optional<std::uint64_t> optimum;         // set only when proved optimal
   std::string optimum_status = "not computed";  // or "optimal", "unknown: ...", ...
   double seconds = 0;  // building the tree, Peel and (if asked) the exact search
   double rays_per_node() const { return nodes ? double(rays) / double(nodes) : 0.0; }

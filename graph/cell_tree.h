@@ -111,7 +111,7 @@ class CellTreeBuilder {
   std::vector<std::uint32_t> child_counts_{0};  // per node; the root's first
   // (parent << 32 | cell) -> child, for nodes with more than kScanChildren children.
   std::unordered_map<std::uint64_t, NodeId> child_index_;
-  std::vector<RayId> ray_ids_;                             // increasing
+  std::vector<RayId> ray_ids_;            // increasing
   std::vector<std::uint64_t> ray_begin_;  // ray i's visit nodes start at visit_nodes_[this]
   std::vector<NodeId> visit_nodes_;
   RayId last_id_ = 0;

@@ -488,7 +488,9 @@ std::string_view ToString(LevelConfig::Replacement r) {
 }
 
 std::string_view ToString(ReplayConfig::Granularity g) {
-  return g == ReplayConfig::Granularity::kRay ? "ray" : g == ReplayConfig::Granularity::kNode ? "node" : "auto";
+  return g == ReplayConfig::Granularity::kRay    ? "ray"
+         : g == ReplayConfig::Granularity::kNode ? "node"
+                                                 : "auto";
 }
 
 std::string_view ToString(LevelConfig::CapacityUnit u) {

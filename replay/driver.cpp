@@ -35,7 +35,6 @@ void Accumulate(const ReplayResult& f, ReplayResult* t) {
   t->min_converged = t->min_converged && f.min_converged;
 }
 
-
 }  // namespace
 
 namespace {

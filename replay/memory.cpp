@@ -9,8 +9,11 @@ namespace raycell {
 
 CellStore::CellStore(const LevelConfig& level, const std::vector<std::uint64_t>* footprints,
                      std::vector<CellId> future)
-    : level_(level), footprints_(footprints), stamp_(footprints->size(), 0),
-      future_(std::move(future)), uses_(footprints->size()) {
+    : level_(level),
+      footprints_(footprints),
+      stamp_(footprints->size(), 0),
+      future_(std::move(future)),
+      uses_(footprints->size()) {
   for (std::size_t i = 0; i < future_.size(); ++i) uses_[future_[i]].push_back(i);
 }
 
@@ -133,8 +136,8 @@ SimTime& MemoryHierarchy::LinkFree(std::size_t level, std::uint32_t processor) {
   return link_free_[level][level == 0 ? processor : 0];
 }
 
-SimTime MemoryHierarchy::Transfer(std::uint32_t processor, CellId cell, std::size_t from,
-                                  SimTime t, std::optional<CellId> pinned) {
+SimTime MemoryHierarchy::Transfer(std::uint32_t processor, CellId cell, std::size_t from, SimTime t,
+                                  std::optional<CellId> pinned) {
   for (std::size_t i = from; i-- > 0;) {  // down through every level above `from`
     SimTime& free = LinkFree(i, processor);
     const SimTime start = std::max(t, free);
@@ -160,8 +163,7 @@ SimTime MemoryHierarchy::Fetch(std::uint32_t processor, CellId cell, SimTime now
   return Transfer(processor, cell, from, now, std::nullopt);
 }
 
-bool MemoryHierarchy::Prefetch(std::uint32_t processor, CellId cell, SimTime now,
-                               CellId working) {
+bool MemoryHierarchy::Prefetch(std::uint32_t processor, CellId cell, SimTime now, CellId working) {
   CellStore& cache = Store(0, processor);
   if (cache.Contains(cell) || !cache.Fits(cell, working)) return false;
   std::size_t from = 1;

@@ -46,7 +46,6 @@ class CellStore {
   // Position in future_ of the next request of `cell` at or after pos_; SIZE_MAX if none.
   std::size_t NextUse(CellId cell) const;
 
-
   LevelConfig level_;
   const std::vector<std::uint64_t>* footprints_;
   std::vector<std::uint64_t> stamp_;  // 0: absent; else last use (LRU) or arrival (FIFO)

@@ -28,8 +28,7 @@ struct ProcessorState {
 class Board : public Component {
  public:
   Board(const WorkGraph& w, const std::vector<std::uint64_t>& footprints,
-        const ReplayConfig& config, Scheduler& scheduler,
-        const MemoryHierarchy::Requests& futures)
+        const ReplayConfig& config, Scheduler& scheduler, const MemoryHierarchy::Requests& futures)
       : w_(w),
         config_(config),
         scheduler_(scheduler),
@@ -212,15 +211,16 @@ bool UsesMin(const ReplayConfig& config) {
 }  // namespace
 
 ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
-                         const ReplayConfig& config, Scheduler& scheduler,
-                         const FrameInfo& frame, std::uint64_t bound) {
+                         const ReplayConfig& config, Scheduler& scheduler, const FrameInfo& frame,
+                         std::uint64_t bound) {
   RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
   const LevelConfig& cache = config.levels.front();
   if (config.processors.prefetch && cache.capacity_unit == LevelConfig::CapacityUnit::kCells &&
       cache.capacity < 2) {
-    throw InputError("processors.prefetch = true needs a cache that holds two cells (double "
-                     "buffering), but level '" + cache.name + "' holds " +
-                     FormatCapacity(cache));
+    throw InputError(
+        "processors.prefetch = true needs a cache that holds two cells (double "
+        "buffering), but level '" +
+        cache.name + "' holds " + FormatCapacity(cache));
   }
   const bool min = UsesMin(config);
   const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;

@@ -28,8 +28,8 @@ struct ReplayResult {
   std::uint64_t peak_queued_rays = 0, peak_queued_bytes = 0;
   std::uint64_t rays = 0, segments = 0, samples = 0;  // processed; equal the trace's
   std::uint64_t events = 0;                           // engine events handled
-  std::uint64_t prefetches = 0;      // cells prefetched while another was worked
-  std::uint64_t prefetch_hits = 0;   // of them, fetched next from the cache
+  std::uint64_t prefetches = 0;                       // cells prefetched while another was worked
+  std::uint64_t prefetch_hits = 0;                    // of them, fetched next from the cache
   // Runs of the frame: 1, or more with MIN replacement (see ReplayFrame).
   std::uint32_t passes = 1;
   bool min_converged = true;  // MIN's last run made exactly the requests it was told
@@ -44,8 +44,8 @@ struct ReplayResult {
 // min_converged says whether it got there). With one processor the order of cell requests
 // does not depend on the caches, so MIN on the processors' caches is exact after one rerun.
 ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
-                         const ReplayConfig& config, Scheduler& scheduler,
-                         const FrameInfo& frame, std::uint64_t bound);
+                         const ReplayConfig& config, Scheduler& scheduler, const FrameInfo& frame,
+                         std::uint64_t bound);
 
 // Whether the maxGen bound holds for `config`: one processor whose cache holds one cell.
 bool BoundHolds(const ReplayConfig& config);

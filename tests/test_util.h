@@ -12,8 +12,7 @@ namespace raycell::testing {
 
 // A path in the test temporary folder, unique per process: TEMP/raycell_PREFIX_PID_NAME.
 inline std::string TempPath(const std::string& prefix, const std::string& name) {
-  return ::testing::TempDir() + "raycell_" + prefix + "_" + std::to_string(::getpid()) + "_" +
-         name;
+  return ::testing::TempDir() + "raycell_" + prefix + "_" + std::to_string(::getpid()) + "_" + name;
 }
 
 inline std::string ReadBytes(const std::string& path) {

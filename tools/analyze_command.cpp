@@ -41,8 +41,7 @@ std::string OptionalNumber(const std::optional<std::uint64_t>& v, const char* no
 }
 
 std::string Gap(const FrameAnalysis& a) {
-  return a.optimum ? std::to_string(std::int64_t(a.peel_length()) - std::int64_t(*a.optimum))
-                   : "";
+  return a.optimum ? std::to_string(std::int64_t(a.peel_length()) - std::int64_t(*a.optimum)) : "";
 }
 
 std::string JsonString(const std::string& s) {
@@ -73,8 +72,8 @@ const char* kCsvHeader =
 void PrintCsv(const FrameAnalysis& a, std::ostream& out) {
   out << a.frame << ',' << a.rays << ',' << a.nodes << ',' << Fixed(a.rays_per_node(), 3) << ','
       << a.bound << ',' << a.peel_length() << ',' << a.splits << ',' << a.peel_length() - a.bound
-      << ',' << OptionalNumber(a.optimum, "") << ',' << Gap(a) << ",\"" << a.optimum_status
-      << "\"," << Fixed(a.seconds, 6) << ",\"" << Schedule(a.peel_schedule, " ") << "\"\n";
+      << ',' << OptionalNumber(a.optimum, "") << ',' << Gap(a) << ",\"" << a.optimum_status << "\","
+      << Fixed(a.seconds, 6) << ",\"" << Schedule(a.peel_schedule, " ") << "\"\n";
 }
 
 const char* kTableHeader =
@@ -83,13 +82,12 @@ const char* kTableHeader =
 
 void PrintRow(const FrameAnalysis& a, std::ostream& out) {
   char line[256];
-  std::snprintf(line, sizeof line, "%8d %12llu %10llu %10.1f %8llu %8llu %8llu %10llu %8s %8s %7.3fs\n",
-                a.frame, (unsigned long long)a.rays, (unsigned long long)a.nodes,
-                a.rays_per_node(), (unsigned long long)a.bound,
-                (unsigned long long)a.peel_length(), (unsigned long long)a.splits,
-                (unsigned long long)(a.peel_length() - a.bound),
-                OptionalNumber(a.optimum, "-").c_str(), a.optimum ? Gap(a).c_str() : "-",
-                a.seconds);
+  std::snprintf(
+      line, sizeof line, "%8d %12llu %10llu %10.1f %8llu %8llu %8llu %10llu %8s %8s %7.3fs\n",
+      a.frame, (unsigned long long)a.rays, (unsigned long long)a.nodes, a.rays_per_node(),
+      (unsigned long long)a.bound, (unsigned long long)a.peel_length(),
+      (unsigned long long)a.splits, (unsigned long long)(a.peel_length() - a.bound),
+      OptionalNumber(a.optimum, "-").c_str(), a.optimum ? Gap(a).c_str() : "-", a.seconds);
   out << line;
 }
 
@@ -170,7 +168,8 @@ void AnalyzeTrace(const AnalyzeArgs& a, Printer& printer) {
   }
   Progress progress(!a.quiet);
   for (std::size_t k = 0; k < frames.size(); ++k) {
-    progress.Update(double(k) / frames.size(), "frame " + std::to_string(r.frames()[frames[k]].frame));
+    progress.Update(double(k) / frames.size(),
+                    "frame " + std::to_string(r.frames()[frames[k]].frame));
     const auto t0 = std::chrono::steady_clock::now();
     const CellTree tree = BuildFrameTree(r, frames[k]);
     const double build = SecondsSince(t0);
@@ -214,7 +213,8 @@ void AddAnalyzeCommand(CLI::App& app) {
       "Examples:\n"
       "  raycell analyze capture.rct\n"
       "  raycell analyze capture.rct --frame 3 --exact --format json\n"
-      "  raycell trace cat capture.rct --frame 0 > rays.jsonl && raycell analyze --paths rays.jsonl");
+      "  raycell trace cat capture.rct --frame 0 > rays.jsonl && raycell analyze --paths "
+      "rays.jsonl");
   cmd->add_option("TRACE", args->trace, "trace file written by `raycell record`");
   cmd->add_option("--frame", args->frame, "analyse only this frame number");
   cmd->add_flag("--all", args->all, "analyse every frame (the default)");
@@ -228,7 +228,8 @@ void AddAnalyzeCommand(CLI::App& app) {
   cmd->add_option("--max-seconds", args->options.max_seconds, "exact search: time per frame")
       ->capture_default_str();
   cmd->add_option("--max-nodes", args->options.max_nodes,
-                  "exact search: larger trees are not searched")->capture_default_str();
+                  "exact search: larger trees are not searched")
+      ->capture_default_str();
   cmd->add_option("--format", args->format, "table, json or csv")->capture_default_str();
   cmd->add_option("--dot", args->dot,
                   "write the frame's Cell Tree as Graphviz DOT (one colour per cell; dashed "

@@ -101,17 +101,21 @@ void AddRecordCommand(CLI::App& app) {
   cmd->add_option("--cells", args->cells, "cell grid NXxNYxNZ splitting the scene box")
       ->capture_default_str();
   cmd->add_option("--res", args->res, "image size WxH (the paper: 256x256)")->capture_default_str();
-  cmd->add_option("--spp", o.settings.spp, "samples (primary rays) per pixel")->capture_default_str();
+  cmd->add_option("--spp", o.settings.spp, "samples (primary rays) per pixel")
+      ->capture_default_str();
   cmd->add_option("--max-depth", o.settings.max_depth,
                   "reflection/refraction generations; shadow rays are cast at every depth")
       ->capture_default_str();
   cmd->add_option("--step", o.settings.primary_step,
-                  "primary-ray step in voxels (vdb_render's -step)")->capture_default_str();
+                  "primary-ray step in voxels (vdb_render's -step)")
+      ->capture_default_str();
   cmd->add_option("--shadow-step", o.settings.shadow_step,
-                  "shadow-ray step in voxels (vdb_render's -shadowstep)")->capture_default_str();
+                  "shadow-ray step in voxels (vdb_render's -shadowstep)")
+      ->capture_default_str();
   cmd->add_option("--cutoff", o.settings.cutoff,
                   "early-termination threshold on transmittance, and the density below which a "
-                  "sample casts no shadow ray (vdb_render's -cutoff)")->capture_default_str();
+                  "sample casts no shadow ray (vdb_render's -cutoff)")
+      ->capture_default_str();
   cmd->add_option("--material", o.scene.materials,
                   "per-grid material, repeatable. Fog: GRID:absorb=R,G,B:scatter=R,G,B:gain=G "
                   "(per voxel, as vdb_render). Surface: GRID:color=R,G,B:reflect=F:"
@@ -123,13 +127,15 @@ void AddRecordCommand(CLI::App& app) {
   cmd->add_option("--eye", args->eye, "camera position X,Y,Z (default: frames the scene box)");
   cmd->add_option("--target", args->target, "point the camera looks at (default: box centre)");
   cmd->add_option("--up", args->up, "camera up vector")->capture_default_str();
-  cmd->add_option("--fov", o.camera.fov_deg, "vertical field of view, degrees")->capture_default_str();
+  cmd->add_option("--fov", o.camera.fov_deg, "vertical field of view, degrees")
+      ->capture_default_str();
   cmd->add_option("--orbit", args->orbit,
                   "camera path: DEGREES turned about the up axis over the frames, or "
                   "FRAMES:DEGREES to also record frames 0..FRAMES-1 (e.g. 30:360)");
   cmd->add_option("--keyframes", o.camera.keyframes_file,
                   "camera path from a file of lines 'frame ex ey ez tx ty tz fov', "
-                  "interpolated linearly")->check(CLI::ExistingFile);
+                  "interpolated linearly")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--footprint", o.scene.footprint_mode,
                   "cell footprint: sparse (allocated leaves) or dense (voxels)")
       ->capture_default_str();
@@ -140,8 +146,10 @@ void AddRecordCommand(CLI::App& app) {
                 "also store each visit's t_enter/t_exit (larger traces)");
   cmd->add_option("--zstd-level", o.settings.zstd_level, "zstd compression level 1..19")
       ->capture_default_str();
-  cmd->add_option("--threads", o.threads, "rendering threads, 0 = all cores (the trace is the "
-                  "same byte for byte whatever this is)")->capture_default_str();
+  cmd->add_option("--threads", o.threads,
+                  "rendering threads, 0 = all cores (the trace is the "
+                  "same byte for byte whatever this is)")
+      ->capture_default_str();
   cmd->add_flag("--quiet", args->quiet, "no progress bar");
   cmd->callback([args] { Run(*args); });
 }

@@ -46,9 +46,10 @@ void Json(const ReplayResult& r, bool with_frame, std::ostream& out) {
   out << "\"fetches\":" << r.fetches << ",\"bound\":" << Bound(r, "null")
       << ",\"time_ps\":" << r.time.picoseconds() << ",\"work_ps\":" << r.work.picoseconds()
       << ",\"stall_ps\":" << r.stall.picoseconds() << ",\"idle_ps\":" << r.idle.picoseconds()
-      << ",\"utilisation\":" << Number(r.utilisation) << ",\"peak_queued_rays\":"
-      << r.peak_queued_rays << ",\"peak_queued_bytes\":" << r.peak_queued_bytes
-      << ",\"rays\":" << r.rays << ",\"segments\":" << r.segments << ",\"samples\":" << r.samples
+      << ",\"utilisation\":" << Number(r.utilisation)
+      << ",\"peak_queued_rays\":" << r.peak_queued_rays
+      << ",\"peak_queued_bytes\":" << r.peak_queued_bytes << ",\"rays\":" << r.rays
+      << ",\"segments\":" << r.segments << ",\"samples\":" << r.samples
       << ",\"prefetches\":" << r.prefetches << ",\"prefetch_hits\":" << r.prefetch_hits
       << ",\"min_converged\":" << (r.min_converged ? "true" : "false") << ",\"levels\":[";
   for (std::size_t i = 0; i < r.levels.size(); ++i) {
@@ -71,9 +72,9 @@ void PrintJson(const TraceReplay& t, std::ostream& out) {
 
 void CsvRow(const std::string& frame, const ReplayResult& r, std::ostream& out) {
   out << frame << ',' << r.fetches << ',' << Bound(r, "") << ',' << r.time.picoseconds() << ','
-      << r.work.picoseconds() << ',' << r.stall.picoseconds() << ',' << r.idle.picoseconds()
-      << ',' << Number(r.utilisation) << ',' << r.peak_queued_rays << ',' << r.peak_queued_bytes
-      << ',' << r.rays << ',' << r.segments << ',' << r.samples;
+      << r.work.picoseconds() << ',' << r.stall.picoseconds() << ',' << r.idle.picoseconds() << ','
+      << Number(r.utilisation) << ',' << r.peak_queued_rays << ',' << r.peak_queued_bytes << ','
+      << r.rays << ',' << r.segments << ',' << r.samples;
   for (const LevelStats& l : r.levels) out << ',' << l.fetches << ',' << l.bytes;
   out << '\n';
 }
@@ -143,7 +144,8 @@ void Write(const std::string& path, const std::string& text) {
     std::ofstream f(tmp);
     if (!(f << text) || !f.flush()) throw InputError("--out " + path + ": cannot write");
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) throw InputError("--out " + path + ": rename failed");
+  if (std::rename(tmp.c_str(), path.c_str()) != 0)
+    throw InputError("--out " + path + ": rename failed");
 }
 
 void Run(const ReplayArgs& a) {
@@ -160,12 +162,14 @@ void Run(const ReplayArgs& a) {
   if (!reader.warning().empty()) std::cerr << "raycell: warning: " << reader.warning() << "\n";
   Progress progress(!a.quiet);
   if (a.sample < 1) throw InputError("--sample: must be at least 1");
-  const TraceReplay t = ReplayTrace(reader, SelectFrames(reader, a.frames), config,
-                                    [&](double f) { progress.Update(f, "replaying"); },
-                                    a.sample);
+  const TraceReplay t = ReplayTrace(
+      reader, SelectFrames(reader, a.frames), config,
+      [&](double f) { progress.Update(f, "replaying"); }, a.sample);
   progress.Done();
   std::ostringstream out;
-  a.format == "json" ? PrintJson(t, out) : a.format == "csv" ? PrintCsv(t, out) : PrintTable(t, out);
+  a.format == "json"  ? PrintJson(t, out)
+  : a.format == "csv" ? PrintCsv(t, out)
+                      : PrintTable(t, out);
   Write(a.out, out.str());
 }
 
@@ -195,10 +199,12 @@ void AddReplayCommand(CLI::App& app) {
   cmd->add_option("--scheduler", args->scheduler,
                   "maxwork, roundrobin, random, peel (oracle: this frame's Peel schedule) or "
                   "celltree (the paper: the previous frame's Peel schedule)");
-  cmd->add_option("--granularity", args->granularity,
-                  "ray (per ray segment, exact), node (per Cell Tree node, aggregated) or auto (node "
-                  "with one processor, where it is exact; ray otherwise)");
-  cmd->add_option("--set", args->sets, "override a configuration key, KEY=VALUE (repeatable), "
+  cmd->add_option(
+      "--granularity", args->granularity,
+      "ray (per ray segment, exact), node (per Cell Tree node, aggregated) or auto (node "
+      "with one processor, where it is exact; ray otherwise)");
+  cmd->add_option("--set", args->sets,
+                  "override a configuration key, KEY=VALUE (repeatable), "
                   "e.g. processors.count=2");
   cmd->add_option("--frames", args->frames, "frame numbers A..B (default: all)");
   cmd->add_option("--sample", args->sample,

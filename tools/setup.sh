@@ -5,7 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 packages=(
-  build-essential cmake pkg-config git
+  build-essential cmake pkg-config git clang-format
   libopenvdb-dev libopenvdb-tools libboost-iostreams-dev libtbb-dev  # scenes and rendering
   capnproto libcapnp-dev libzstd-dev zstd                            # the trace file
   libcli11-dev libpng-dev libboost-graph-dev libtomlplusplus-dev     # CLI, images, graphs, configs

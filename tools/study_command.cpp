@@ -153,9 +153,12 @@ std::string GridReport(const GridStudy& g) {
     << "![fetches per frame](fetches_" << g.cells << ".png)\n\n"
     << "| | value |\n|---|---:|\n"
     << "| frames | " << tr.size() << " |\n"
-    << "| rays per frame (mean) | " << Fixed(Mean(tr, [](const FrameAnalysis& x) { return double(x.rays); }), 0) << " |\n"
-    << "| Cell Tree nodes per frame (mean) | " << Fixed(Mean(tr, [](const FrameAnalysis& x) { return double(x.nodes); }), 1) << " |\n"
-    << "| rays per node (mean; the paper: about 100) | " << Fixed(Mean(tr, [](const FrameAnalysis& x) { return x.rays_per_node(); }), 1) << " |\n"
+    << "| rays per frame (mean) | "
+    << Fixed(Mean(tr, [](const FrameAnalysis& x) { return double(x.rays); }), 0) << " |\n"
+    << "| Cell Tree nodes per frame (mean) | "
+    << Fixed(Mean(tr, [](const FrameAnalysis& x) { return double(x.nodes); }), 1) << " |\n"
+    << "| rays per node (mean; the paper: about 100) | "
+    << Fixed(Mean(tr, [](const FrameAnalysis& x) { return x.rays_per_node(); }), 1) << " |\n"
     << "| fetches, Max Work | " << mw << " |\n"
     << "| fetches, Cell Tree scheduling | " << ct << " |\n"
     << "| fetches, Peel oracle | " << po << " |\n"
@@ -166,8 +169,9 @@ std::string GridReport(const GridStudy& g) {
     << "| frames whose optimum was proved | " << proved << " of " << tr.size() << " |\n";
   if (proved) s << "| Peel minus optimum on them (summed) | " << peel_proved - opt << " |\n";
   s << "\n![Cell Tree size](cell_trees_" << g.cells << ".png)\n\n"
-    << "Per frame: `cell_trees_" << g.cells << ".csv` (rays, nodes, bound, Peel, optimum), `fetches_"
-    << g.cells << ".csv` (fetches per scheduler and the bound); images in `images_" << g.cells
+    << "Per frame: `cell_trees_" << g.cells
+    << ".csv` (rays, nodes, bound, Peel, optimum), `fetches_" << g.cells
+    << ".csv` (fetches per scheduler and the bound); images in `images_" << g.cells
     << "/`; the capture `capture_" << g.cells << ".rct`.\n\n";
   return s.str();
 }
@@ -175,8 +179,8 @@ std::string GridReport(const GridStudy& g) {
 std::string Report(const StudyArgs& a, const std::vector<GridStudy>& grids) {
   std::ostringstream s;
   s << "# raycell study\n\n"
-    << "Scene `" << a.scene << "`, " << a.frames << " frames orbiting " << a.orbit
-    << " degrees, " << a.res << ". Replays use the default GI-Cube configuration (one block "
+    << "Scene `" << a.scene << "`, " << a.frames << " frames orbiting " << a.orbit << " degrees, "
+    << a.res << ". Replays use the default GI-Cube configuration (one block "
     << "processor with a one-cell cache; `raycell replay --print-config`), per Cell Tree "
     << "node (exact for this configuration). Max Work, Cell Tree scheduling (frame i+1 "
     << "follows the Peel schedule of frame i's tree; frame 0 runs Max Work) and the Peel "
@@ -186,13 +190,16 @@ std::string Report(const StudyArgs& a, const std::vector<GridStudy>& grids) {
   return s.str();
 }
 
-std::string Python() { return access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3"; }
+std::string Python() {
+  return access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
+}
 
 void Plot(const std::string& out, const std::vector<std::string>& cells) {
   std::string cmd = Python() + " '" RAYCELL_SOURCE_DIR "/tools/plot_study.py' '" + out + "'";
   for (const auto& c : cells) cmd += " " + c;
   if (std::system(cmd.c_str()) != 0) {
-    throw InputError("plots failed: `" + cmd + "` (it needs python3 with matplotlib: Debian "
+    throw InputError("plots failed: `" + cmd +
+                     "` (it needs python3 with matplotlib: Debian "
                      "package python3-matplotlib, installed by tools/setup.sh)");
   }
   for (const auto& c : cells) {

@@ -55,8 +55,8 @@ std::string Csv(const Vec3d& v) {
 
 void PrintCameras(const TraceHeader& h, std::ostream& out) {
   for (const CameraKey& c : h.cameras) {
-    out << "camera " << c.frame << " eye " << Csv(c.eye) << " target " << Csv(c.target)
-        << " fov " << std::defaultfloat << std::setprecision(10) << c.fov_deg << "\n";
+    out << "camera " << c.frame << " eye " << Csv(c.eye) << " target " << Csv(c.target) << " fov "
+        << std::defaultfloat << std::setprecision(10) << c.fov_deg << "\n";
   }
 }
 
@@ -77,8 +77,8 @@ void RunVerify(const TraceArgs& a) {
   }
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::cout << std::fixed << std::setprecision(3) << r.frames().size() << " frame(s), " << rays
-            << " rays, " << visits << " visits verified in " << s << " s ("
-            << std::setprecision(1) << visits / std::max(s, 1e-9) / 1e6 << " M visits/s)\n";
+            << " rays, " << visits << " visits verified in " << s << " s (" << std::setprecision(1)
+            << visits / std::max(s, 1e-9) / 1e6 << " M visits/s)\n";
 }
 
 }  // namespace
@@ -115,7 +115,8 @@ void AddTraceCommand(CLI::App& app) {
       "\"cells\":[5,4,1],\"samples\":[12,30,2]}\n"
       "parent and spawn are null for primary rays; spawn indexes the parent's cells, and\n"
       "cells[0] is that cell. Ids are frame-local. Without --frame every frame is written and\n"
-      "each line starts with \"frame\":N. This is the format the Cell Tree analysis\n(`raycell analyze --paths`, issue 3) is specified to read.");
+      "each line starts with \"frame\":N. This is the format the Cell Tree analysis\n(`raycell "
+      "analyze --paths`, issue 3) is specified to read.");
   c->add_option("FILE", cat->file, "trace file")->required();
   c->add_option("--frame", cat->frame, "frame number to write (default: all)");
   c->add_option("--format", cat->format, "output format")->capture_default_str();

@@ -33,16 +33,16 @@ std::string Values(const A& a, const B& b) {
 
 }  // namespace raycell
 
-#define RAYCELL_CHECK(cond)                                                          \
-  do {                                                                               \
-    if (!(cond)) ::raycell::detail::CheckFailed(#cond, __FILE__, __LINE__, "");      \
+#define RAYCELL_CHECK(cond)                                                     \
+  do {                                                                          \
+    if (!(cond)) ::raycell::detail::CheckFailed(#cond, __FILE__, __LINE__, ""); \
   } while (0)
 
-#define RAYCELL_CHECK_OP(a, op, b)                                                   \
-  do {                                                                               \
-    if (!((a)op(b)))                                                                 \
-      ::raycell::detail::CheckFailed(#a " " #op " " #b, __FILE__, __LINE__,          \
-                                     ::raycell::detail::Values((a), (b)));           \
+#define RAYCELL_CHECK_OP(a, op, b)                                          \
+  do {                                                                      \
+    if (!((a)op(b)))                                                        \
+      ::raycell::detail::CheckFailed(#a " " #op " " #b, __FILE__, __LINE__, \
+                                     ::raycell::detail::Values((a), (b)));  \
   } while (0)
 
 #define RAYCELL_CHECK_EQ(a, b) RAYCELL_CHECK_OP(a, ==, b)

@@ -6,10 +6,14 @@ namespace raycell {
 
 const char* ToString(RayKind kind) {
   switch (kind) {
-    case RayKind::kPrimary: return "primary";
-    case RayKind::kReflection: return "reflection";
-    case RayKind::kRefraction: return "refraction";
-    case RayKind::kShadow: return "shadow";
+    case RayKind::kPrimary:
+      return "primary";
+    case RayKind::kReflection:
+      return "reflection";
+    case RayKind::kRefraction:
+      return "refraction";
+    case RayKind::kShadow:
+      return "shadow";
   }
   return "unknown";
 }
@@ -21,8 +25,8 @@ std::optional<RayKind> ParseRayKind(std::string_view name) {
   return std::nullopt;
 }
 
-std::size_t RayBatch::BeginRay(RayKind kind, RayId parent, std::uint32_t spawn,
-                               std::uint32_t px, std::uint32_t py) {
+std::size_t RayBatch::BeginRay(RayKind kind, RayId parent, std::uint32_t spawn, std::uint32_t px,
+                               std::uint32_t py) {
   kind_.push_back(kind);
   parent_.push_back(parent);
   spawn_.push_back(spawn);

@@ -42,8 +42,8 @@ struct Visit {
 // Read-only view of one ray inside a RayBatch.
 struct RayView {
   RayId id;
-  RayId parent;          // kNoParent for primary rays
-  std::uint32_t spawn;   // index into the parent's visits; 0 for primary rays
+  RayId parent;         // kNoParent for primary rays
+  std::uint32_t spawn;  // index into the parent's visits; 0 for primary rays
   RayKind kind;
   std::uint32_t pixel_x, pixel_y;
   const CellId* cells;

@@ -18,14 +18,14 @@ struct Vec3d {
 };
 
 struct GridInfo {
-  std::string name;      // grid name in the .vdb file ("density", "surface", ...)
-  std::string role;      // "fog" or "surface"
-  std::string source;    // file it came from, or "builtin"
+  std::string name;    // grid name in the .vdb file ("density", "surface", ...)
+  std::string role;    // "fog" or "surface"
+  std::string source;  // file it came from, or "builtin"
   double voxel_size = 0;
   std::uint64_t leaf_count = 0;
   bool operator==(const GridInfo& o) const {
-    return name == o.name && role == o.role && source == o.source &&
-           voxel_size == o.voxel_size && leaf_count == o.leaf_count;
+    return name == o.name && role == o.role && source == o.source && voxel_size == o.voxel_size &&
+           leaf_count == o.leaf_count;
   }
 };
 
@@ -44,33 +44,33 @@ struct RenderSettings {
   std::uint32_t max_depth = 3;
   double primary_step = 1.0;  // in voxels of the finest fog grid, as vdb_render's --step
   double shadow_step = 3.0;
-  double cutoff = 0.005;      // early-termination threshold on transmittance
-  bool store_t = false;       // visits carry t_enter/t_exit
+  double cutoff = 0.005;  // early-termination threshold on transmittance
+  bool store_t = false;   // visits carry t_enter/t_exit
   std::uint32_t zstd_level = 3;
   bool operator==(const RenderSettings& o) const {
     return width == o.width && height == o.height && spp == o.spp && max_depth == o.max_depth &&
-           primary_step == o.primary_step && shadow_step == o.shadow_step &&
-           cutoff == o.cutoff && store_t == o.store_t && zstd_level == o.zstd_level;
+           primary_step == o.primary_step && shadow_step == o.shadow_step && cutoff == o.cutoff &&
+           store_t == o.store_t && zstd_level == o.zstd_level;
   }
 };
 
 struct TraceHeader {
   std::uint32_t format_version = kTraceFormatVersion;
-  std::string producer;              // "raycell 0.1.0"
-  std::string scene;                 // what --scene was
+  std::string producer;  // "raycell 0.1.0"
+  std::string scene;     // what --scene was
   std::vector<GridInfo> grids;
-  Vec3d box_min, box_max;            // world-space scene box that the cells split
+  Vec3d box_min, box_max;  // world-space scene box that the cells split
   std::array<std::uint32_t, 3> cells{2, 2, 2};
   std::vector<std::uint64_t> footprints;  // bytes per cell, cell = x + nx*(y + ny*z)
   std::string footprint_mode = "sparse";
-  std::vector<CameraKey> cameras;    // one per frame, in frame order
+  std::vector<CameraKey> cameras;  // one per frame, in frame order
   RenderSettings settings;
   std::uint32_t cell_count() const { return cells[0] * cells[1] * cells[2]; }
   bool operator==(const TraceHeader& o) const {
     return format_version == o.format_version && producer == o.producer && scene == o.scene &&
-           grids == o.grids && box_min == o.box_min && box_max == o.box_max &&
-           cells == o.cells && footprints == o.footprints &&
-           footprint_mode == o.footprint_mode && cameras == o.cameras && settings == o.settings;
+           grids == o.grids && box_min == o.box_min && box_max == o.box_max && cells == o.cells &&
+           footprints == o.footprints && footprint_mode == o.footprint_mode &&
+           cameras == o.cameras && settings == o.settings;
   }
 };
 
@@ -79,8 +79,8 @@ struct FrameSummary {
   std::int32_t frame = 0;
   std::uint64_t rays = 0, visits = 0, samples = 0;
   std::array<std::uint64_t, 4> rays_by_kind{};  // indexed by RayKind
-  std::uint64_t checksum = 0;                    // of the frame's rays, see trace.capnp
-  std::uint64_t offset = 0, length = 0;          // byte range of the frame's zstd frame
+  std::uint64_t checksum = 0;                   // of the frame's rays, see trace.capnp
+  std::uint64_t offset = 0, length = 0;         // byte range of the frame's zstd frame
   bool operator==(const FrameSummary& o) const {
     return frame == o.frame && rays == o.rays && visits == o.visits && samples == o.samples &&
            rays_by_kind == o.rays_by_kind && checksum == o.checksum;

@@ -135,7 +135,6 @@ TEST(CellTreeTest, ParentsInEarlierBatches) {
   EXPECT_EQ(t.enter(Find(t, {A, B})), 2u);
 }
 
-
 std::string BuildError(const std::vector<TestRay>& rays) {
   try {
     Build(rays);

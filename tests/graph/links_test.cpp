@@ -2,8 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/graph/test_trees.h"
-
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -14,6 +12,7 @@
 #include "graph/dependency_graph.h"
 #include "graph/peel.h"
 #include "graph/schedule.h"
+#include "tests/graph/test_trees.h"
 #include "traces/check.h"
 
 namespace raycell {

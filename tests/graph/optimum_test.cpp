@@ -2,8 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/graph/test_trees.h"
-
 #include <algorithm>
 #include <random>
 #include <set>
@@ -11,6 +9,7 @@
 
 #include "graph/peel.h"
 #include "graph/schedule.h"
+#include "tests/graph/test_trees.h"
 
 namespace raycell {
 namespace {

@@ -2,12 +2,11 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/graph/test_trees.h"
-
 #include <algorithm>
 #include <random>
 
 #include "graph/schedule.h"
+#include "tests/graph/test_trees.h"
 
 namespace raycell {
 namespace {

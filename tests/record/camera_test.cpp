@@ -1,4 +1,6 @@
 // Camera paths: orbits and key frames, and the pinhole camera's rays.
+#include "traces/record/camera.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -6,7 +8,6 @@
 #include <fstream>
 
 #include "traces/check.h"
-#include "traces/record/camera.h"
 
 namespace raycell {
 namespace {

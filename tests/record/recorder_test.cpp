@@ -8,9 +8,8 @@
 #include <sstream>
 #include <thread>
 
-#include "traces/check.h"
-
 #include "tests/record/record_test_util.h"
+#include "traces/check.h"
 #include "traces/record/cell_grid.h"
 #include "traces/record/image.h"
 #include "traces/record/renderer.h"
@@ -165,7 +164,8 @@ TEST(Recorder, BadScenesAreClearErrorsAndWriteNothing) {
     return std::string("no error");
   };
   EXPECT_NE(message(vec_only).find("no non-empty float grid (found: velocity (vec3s))"),
-            std::string::npos) << message(vec_only);
+            std::string::npos)
+      << message(vec_only);
   const std::string missing = (dir / "missing.vdb").string();
   EXPECT_NE(message(missing).find(missing), std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(o.out));

@@ -227,8 +227,9 @@ TEST(LoadConfig, BadUnitsAndValuesNameFileAndLine) {
   EXPECT_EQ(LoadError("scheduler = \"fastest\"\n"),
             "replay.toml:1:13: scheduler: unknown scheduler 'fastest' (expected maxwork, "
             "roundrobin, random, peel or celltree)");
-  EXPECT_EQ(LoadError("granularity = \"cell\"\n"),
-            "replay.toml:1:15: granularity: unknown granularity 'cell' (expected ray, node or auto)");
+  EXPECT_EQ(
+      LoadError("granularity = \"cell\"\n"),
+      "replay.toml:1:15: granularity: unknown granularity 'cell' (expected ray, node or auto)");
   EXPECT_EQ(LoadError("[[level]]\nname = \"cache\"\nreplacement = \"mru\"\n"),
             "replay.toml:3:15: level 'cache' replacement: unknown replacement 'mru' (expected "
             "lru, fifo or min)");

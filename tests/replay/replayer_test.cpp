@@ -45,7 +45,7 @@ struct Outcome {
 };
 
 Outcome Replay(const RayBatch& rays, const std::string& scheduler, ReplayConfig config,
-           const CellTree* previous = nullptr, CellId cells = 3) {
+               const CellTree* previous = nullptr, CellId cells = 3) {
   config.scheduler = scheduler;
   const CellTree tree = TreeOf(rays);
   auto s = MakeScheduler(scheduler, config.seed);
@@ -146,7 +146,8 @@ TEST(Replay, ConservationBoundsGranularityAndDeterminismOnRandomFrames) {
           c->processors.prefetch = true;
         }
       }
-      const Outcome a = Replay(f, s, ray, &previous, cells), b = Replay(f, s, node, &previous, cells);
+      const Outcome a = Replay(f, s, ray, &previous, cells),
+                    b = Replay(f, s, node, &previous, cells);
       for (const Outcome* r : {&a, &b}) {
         EXPECT_EQ(r->result.rays, f.size());
         EXPECT_EQ(r->result.segments, f.visit_count());
@@ -179,7 +180,7 @@ TEST(Replay, TimingSanity) {
       l.latency_below = SimTime::Zero();
     }
     const Outcome a = Replay(f, "peel", slow, nullptr, 4), b = Replay(f, "peel", fast, nullptr, 4),
-              c = Replay(f, "peel", inf, nullptr, 4);
+                  c = Replay(f, "peel", inf, nullptr, 4);
     EXPECT_EQ(c.result.stall, SimTime::Zero());
     EXPECT_LE(b.result.stall, a.result.stall);
     EXPECT_LE(b.result.time, a.result.time);
@@ -313,8 +314,11 @@ namespace {
 
 TEST(Sampling, KeepsOneInKRayTreesWithTheirDescendants) {
   // Trees: {0: A B, 1: spawned at 0's visit 1 (B C)}, {2: C}, {3: A, 4: spawned at 3 (A B)}.
-  const RayBatch f = Frame({{kNoParent, 0, {A, B}}, {0, 1, {B, C}}, {kNoParent, 0, {C}},
-                            {kNoParent, 0, {A}}, {3, 0, {A, B}}});
+  const RayBatch f = Frame({{kNoParent, 0, {A, B}},
+                            {0, 1, {B, C}},
+                            {kNoParent, 0, {C}},
+                            {kNoParent, 0, {A}},
+                            {3, 0, {A, B}}});
   EXPECT_TRUE(SampleRayTrees(f, 1) == f);
   const RayBatch s = SampleRayTrees(f, 2);  // trees 0 and 2
   ASSERT_EQ(s.size(), 4u);

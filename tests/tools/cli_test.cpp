@@ -1,8 +1,8 @@
 // The raycell command line end to end: record, trace cat, analyze; exit codes and messages
 // for bad input.
 #include <gtest/gtest.h>
-
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -10,8 +10,6 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
-
-#include <unistd.h>
 
 #include "tests/test_util.h"
 
@@ -34,7 +32,8 @@ Result Raycell(const std::string& args) {
 }
 
 std::filesystem::path Dir() {
-  const auto d = std::filesystem::temp_directory_path() / ("raycell_cli_" + std::to_string(getpid()));
+  const auto d =
+      std::filesystem::temp_directory_path() / ("raycell_cli_" + std::to_string(getpid()));
   std::filesystem::create_directories(d);
   return d;
 }
@@ -111,8 +110,8 @@ TEST(Cli, ReplayAndSweepAreDeterministicWhateverTheJobs) {
 
 TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
   const auto out = Dir() / "study";
-  const Result r = Raycell("study --res 24x24 --frames 3 --cells 2x2x2,1x2x1 --quiet --out " +
-                          out.string());
+  const Result r =
+      Raycell("study --res 24x24 --frames 3 --cells 2x2x2,1x2x1 --quiet --out " + out.string());
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("report: " + (out / "report.md").string()), std::string::npos) << r.out;
   for (const char* cells : {"2x2x2", "1x2x1"}) {
@@ -137,8 +136,9 @@ TEST(Cli, BadInputGetsAClearMessageAndExitCode2) {
   r = Raycell("analyze --paths " + (d / "missing.jsonl").string());
   EXPECT_EQ(r.code, 2);
   const auto bad = d / "bad.jsonl";
-  std::ofstream(bad) << R"({"id":0,"parent":7,"spawn":0,"kind":"shadow","pixel":[0,0],"cells":[1],"samples":[1]})"
-                     << "\n";
+  std::ofstream(bad)
+      << R"({"id":0,"parent":7,"spawn":0,"kind":"shadow","pixel":[0,0],"cells":[1],"samples":[1]})"
+      << "\n";
   r = Raycell("analyze --paths " + bad.string());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("bad.jsonl:1:"), std::string::npos) << r.out;

@@ -44,10 +44,12 @@ std::pair<CellTree, double> Build(std::size_t target, CellId cells, std::mt19937
     batch.set_first_id(next);
     for (int i = 0; i < 1024; ++i) {
       const RayId p = add_ray(RayKind::kPrimary, kNoParent, 0, cell(rng));
-      const std::size_t pv = batch.visit_end(p - batch.first_id()) - batch.visit_begin(p - batch.first_id());
+      const std::size_t pv =
+          batch.visit_end(p - batch.first_id()) - batch.visit_begin(p - batch.first_id());
       for (int k = children(rng); k > 0; --k) {
         const auto spawn = std::uint32_t(rng() % pv);
-        add_ray(RayKind::kShadow, p, spawn, batch.cells()[batch.visit_begin(p - batch.first_id()) + spawn]);
+        add_ray(RayKind::kShadow, p, spawn,
+                batch.cells()[batch.visit_begin(p - batch.first_id()) + spawn]);
       }
     }
     const auto t0 = std::chrono::steady_clock::now();
@@ -66,7 +68,8 @@ double Slope(const std::vector<double>& x, const std::vector<double>& y) {
   for (std::size_t i = 0; i < x.size(); ++i) mx += x[i], my += y[i];
   mx /= x.size(), my /= y.size();
   double num = 0, den = 0;
-  for (std::size_t i = 0; i < x.size(); ++i) num += (x[i] - mx) * (y[i] - my), den += (x[i] - mx) * (x[i] - mx);
+  for (std::size_t i = 0; i < x.size(); ++i)
+    num += (x[i] - mx) * (y[i] - my), den += (x[i] - mx) * (x[i] - mx);
   return num / den;
 }
 

@@ -33,8 +33,8 @@ std::vector<Keyframe> ReadKeyframes(const std::string& path) {
     if (line.find_first_not_of(" \t\r") == std::string::npos || line[0] == '#') continue;
     std::istringstream s(line);
     Keyframe k{};
-    if (!(s >> k.frame >> k.eye.x >> k.eye.y >> k.eye.z >> k.target.x >> k.target.y >>
-          k.target.z >> k.fov) ||
+    if (!(s >> k.frame >> k.eye.x >> k.eye.y >> k.eye.z >> k.target.x >> k.target.y >> k.target.z >>
+          k.fov) ||
         !IsFinite(k.eye) || !IsFinite(k.target) || !(k.fov > 0 && k.fov < 180)) {
       throw InputError(path + ":" + std::to_string(n) +
                        ": expected 'frame ex ey ez tx ty tz fov' with finite numbers and "
@@ -52,7 +52,8 @@ std::vector<Keyframe> ReadKeyframes(const std::string& path) {
 CameraKey Interpolate(const std::vector<Keyframe>& keys, int frame, Vec3d up) {
   auto hi = std::lower_bound(keys.begin(), keys.end(), frame,
                              [](const Keyframe& k, int f) { return k.frame < f; });
-  if (hi == keys.begin()) return {frame, keys.front().eye, keys.front().target, up, keys.front().fov};
+  if (hi == keys.begin())
+    return {frame, keys.front().eye, keys.front().target, up, keys.front().fov};
   if (hi == keys.end()) return {frame, keys.back().eye, keys.back().target, up, keys.back().fov};
   const Keyframe& a = *(hi - 1);
   const Keyframe& b = *hi;

@@ -14,8 +14,8 @@ namespace {
 
 std::uint8_t ToSrgb8(double linear) {
   if (!(linear > 0)) return 0;  // also maps NaN to black; the renderer never produces NaN
-  const double v = linear <= 0.0031308 ? 12.92 * linear
-                                       : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
+  const double v =
+      linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
   return static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0, 1.0) * 255.0));
 }
 
@@ -46,8 +46,8 @@ void WritePng(const Image& image, const std::string& path) {
     throw InputError(path + ": PNG write failed");
   }
   png_init_io(png, file.get());
-  png_set_IHDR(png, info, image.width(), image.height(), 8, PNG_COLOR_TYPE_RGB,
-               PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_set_IHDR(png, info, image.width(), image.height(), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
   png_write_info(png, info);
   std::vector<std::uint8_t> row(std::size_t(image.width()) * 3);

@@ -43,15 +43,19 @@ void ScanScene(const RecordOptions& o, const Scene* first, TraceHeader* h) {
   Vec3d lo = first->box_lo(), hi = first->box_hi();
   for (std::size_t i = 1; seq && i < o.frames.size(); ++i) {
     const auto s = Scene::Load(o.scene, o.frames[i]);
-    lo = {std::min(lo.x, s->box_lo().x), std::min(lo.y, s->box_lo().y), std::min(lo.z, s->box_lo().z)};
-    hi = {std::max(hi.x, s->box_hi().x), std::max(hi.y, s->box_hi().y), std::max(hi.z, s->box_hi().z)};
+    lo = {std::min(lo.x, s->box_lo().x), std::min(lo.y, s->box_lo().y),
+          std::min(lo.z, s->box_lo().z)};
+    hi = {std::max(hi.x, s->box_hi().x), std::max(hi.y, s->box_hi().y),
+          std::max(hi.z, s->box_hi().z)};
   }
   h->box_min = lo;
   h->box_max = hi;
   h->footprints = first->Footprints(lo, hi, o.cells, o.scene.footprint_mode);
   for (std::size_t i = 1; seq && i < o.frames.size(); ++i) {
-    const auto fp = Scene::Load(o.scene, o.frames[i])->Footprints(lo, hi, o.cells, o.scene.footprint_mode);
-    for (std::size_t c = 0; c < fp.size(); ++c) h->footprints[c] = std::max(h->footprints[c], fp[c]);
+    const auto fp =
+        Scene::Load(o.scene, o.frames[i])->Footprints(lo, hi, o.cells, o.scene.footprint_mode);
+    for (std::size_t c = 0; c < fp.size(); ++c)
+      h->footprints[c] = std::max(h->footprints[c], fp[c]);
   }
 }
 
@@ -134,9 +138,9 @@ RecordSummary Record(const RecordOptions& o, std::ostream& log) {
     RenderJob job;
     job.scene = scene.get();
     job.cells = &cells;
-    job.footprints = seq ? scene->Footprints(header.box_min, header.box_max, o.cells,
-                                             o.scene.footprint_mode)
-                         : header.footprints;
+    job.footprints =
+        seq ? scene->Footprints(header.box_min, header.box_max, o.cells, o.scene.footprint_mode)
+            : header.footprints;
     job.camera = header.cameras[i];
     job.settings = o.settings;
     job.threads = o.threads;
@@ -161,7 +165,8 @@ RecordSummary Record(const RecordOptions& o, std::ostream& log) {
     ++sum.frames;
     sum.rays += st.rays, sum.visits += st.visits, sum.samples += st.samples;
     sum.primary_missed += st.primary_missed;
-    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double secs =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     progress.Done();
     log << "frame " << frame << ": " << st.rays << " rays (" << st.rays_by_kind[0] << " primary, "
         << st.rays_by_kind[1] << " reflection, " << st.rays_by_kind[2] << " refraction, "

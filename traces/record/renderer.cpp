@@ -43,9 +43,9 @@ using Intersector = openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid>;
 using Accessor = openvdb::FloatGrid::ConstAccessor;
 using Sampler = openvdb::tools::BoxSampler;
 
-constexpr double kAmbient = 0.04;      // surfaces' unshadowed ambient term
-constexpr int kBisections = 6;         // refinement of a level-set crossing
-constexpr double kSpawnOffset = 0.5;   // in voxels: spawned rays start off the surface
+constexpr double kAmbient = 0.04;     // surfaces' unshadowed ambient term
+constexpr int kBisections = 6;        // refinement of a level-set crossing
+constexpr double kSpawnOffset = 0.5;  // in voxels: spawned rays start off the surface
 
 Vec3d ToVec(const V3& v) { return {v.x(), v.y(), v.z()}; }
 V3 ToV3(const Vec3d& v) { return {v.x, v.y, v.z}; }
@@ -55,8 +55,8 @@ V3 Exp(const V3& v) { return {std::exp(v.x()), std::exp(v.y()), std::exp(v.z())}
 // The visits of one ray while it is traced: the non-empty cells of its chord, with samples.
 class Path {
  public:
-  void Build(const CellGrid& grid, const std::vector<std::uint64_t>& fp, const V3& o,
-             const V3& d, double tmax, std::optional<CellId> start) {
+  void Build(const CellGrid& grid, const std::vector<std::uint64_t>& fp, const V3& o, const V3& d,
+             double tmax, std::optional<CellId> start) {
     cells_.clear(), t0_.clear(), t1_.clear(), samples_.clear();
     cursor_ = 0;
     CellDDA dda(grid, ToVec(o), ToVec(d), 0.0, tmax, start);
@@ -149,7 +149,10 @@ class PixelRecord {
 // One grid as a thread sees it: its own intersector (shallow copy) and accessor.
 struct GridCtx {
   GridCtx(const Intersector& master, const openvdb::FloatGrid& g)
-      : grid(&g), inter(master), acc(g.getConstAccessor()), vs(g.voxelSize()[0]),
+      : grid(&g),
+        inter(master),
+        acc(g.getConstAccessor()),
+        vs(g.voxelSize()[0]),
         inv_vs(1.0 / vs) {}
   const openvdb::FloatGrid* grid;
   Intersector inter;
@@ -208,7 +211,8 @@ class FrameTracer {
 
   ThreadCtx MakeContext() const {
     ThreadCtx c;
-    for (std::size_t i = 0; i < s_.fogs.size(); ++i) c.fogs.emplace_back(fog_masters_[i], *s_.fogs[i].grid);
+    for (std::size_t i = 0; i < s_.fogs.size(); ++i)
+      c.fogs.emplace_back(fog_masters_[i], *s_.fogs[i].grid);
     for (std::size_t i = 0; i < s_.surfaces.size(); ++i)
       c.surfaces.emplace_back(surface_masters_[i], *s_.surfaces[i].grid);
     const std::size_t levels = set_.max_depth + 2;
@@ -251,9 +255,8 @@ class FrameTracer {
   }
 
   // Marches a primary, reflected or refracted ray; returns its radiance.
-  V3 Trace(ThreadCtx& c, const V3& o, const V3& d, RayKind kind, int parent,
-           std::uint32_t spawn, std::uint32_t depth, std::optional<CellId> start,
-           std::uint64_t* missed) const {
+  V3 Trace(ThreadCtx& c, const V3& o, const V3& d, RayKind kind, int parent, std::uint32_t spawn,
+           std::uint32_t depth, std::optional<CellId> start, std::uint64_t* missed) const {
     const int slot = c.rec.Open(kind, parent, spawn);
     Path& path = c.paths[depth];
     path.Build(*job_.cells, job_.footprints, o, d, CellDDA::kInfinity, start);
@@ -290,8 +293,8 @@ class FrameTracer {
   }
 
   // Spans of active fog along the ray within [ta, tb], merged over fog grids, in world t.
-  const std::vector<TimeSpan>& FogSpans(ThreadCtx& c, std::uint32_t depth, const V3& o,
-                                        const V3& d, double ta, double tb) const {
+  const std::vector<TimeSpan>& FogSpans(ThreadCtx& c, std::uint32_t depth, const V3& o, const V3& d,
+                                        double ta, double tb) const {
     auto& merged = c.merged[depth];
     merged.clear();
     for (std::size_t i = 0; i < c.fogs.size(); ++i) {
@@ -372,8 +375,8 @@ class FrameTracer {
   }
 
   // A shadow ray from pos towards light l: its transmittance through fog and surfaces.
-  V3 TraceShadow(ThreadCtx& c, int parent, std::uint32_t spawn, std::uint32_t depth,
-                 const V3& pos, const Light& l, CellId start) const {
+  V3 TraceShadow(ThreadCtx& c, int parent, std::uint32_t spawn, std::uint32_t depth, const V3& pos,
+                 const Light& l, CellId start) const {
     V3 dir = ToV3(l.v);
     double tmax = CellDDA::kInfinity;
     if (l.type == Light::Type::kPoint) {
@@ -517,8 +520,9 @@ class FrameTracer {
       const double cosi = -d.dot(nf);
       const double k = 1.0 - eta * eta * (1.0 - cosi * cosi);
       if (k < 0) {  // total internal reflection
-        out += color * m.transparency *
-               Trace(c, p_out, r.unit(), RayKind::kReflection, slot, visit, depth + 1, cell, nullptr);
+        out +=
+            color * m.transparency *
+            Trace(c, p_out, r.unit(), RayKind::kReflection, slot, visit, depth + 1, cell, nullptr);
       } else {
         const V3 t = (d * eta + nf * (eta * cosi - std::sqrt(k))).unit();
         out += color * m.transparency *
@@ -590,7 +594,7 @@ bool RenderFrame(const RenderJob& job, Image* image, FrameStats* stats) {
         }
       });
     });
-    if (writing.valid()) writing.get();  // the other band is free again
+    if (writing.valid()) writing.get();               // the other band is free again
     for (std::uint32_t i = 0; i < band.count; ++i) {  // in row order: ids continue
       band.rows[i].Rebase(stats->rays);
       Tally(band.rows[i], stats);

@@ -142,7 +142,8 @@ openvdb::BBoxd WorldBox(const openvdb::FloatGrid& grid, openvdb::Vec3d ilo, open
 
 openvdb::BBoxd PaddedActiveBox(const openvdb::FloatGrid& grid) {
   const openvdb::CoordBBox b = grid.evalActiveVoxelBoundingBox();
-  return WorldBox(grid, b.min().asVec3d() - openvdb::Vec3d(1), b.max().asVec3d() + openvdb::Vec3d(1));
+  return WorldBox(grid, b.min().asVec3d() - openvdb::Vec3d(1),
+                  b.max().asVec3d() + openvdb::Vec3d(1));
 }
 
 GridInfo MakeInfo(const openvdb::FloatGrid& grid, const std::string& role,
@@ -224,9 +225,12 @@ openvdb::FloatGrid::Ptr Named(openvdb::FloatGrid::Ptr g, const std::string& name
 void BuildBuiltin(Scene::Impl& s) {
   using openvdb::Vec3f;
   const float vs = 0.025f, band = 3.0f;
-  auto cloud = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(0.75f, Vec3f(0, 0, 0), vs, band);
-  auto blob2 = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(0.5f, Vec3f(0.6f, 0.35f, -0.2f), vs, band);
-  auto blob3 = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(0.45f, Vec3f(-0.55f, 0.25f, 0.25f), vs, band);
+  auto cloud =
+      openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(0.75f, Vec3f(0, 0, 0), vs, band);
+  auto blob2 = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+      0.5f, Vec3f(0.6f, 0.35f, -0.2f), vs, band);
+  auto blob3 = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+      0.45f, Vec3f(-0.55f, 0.25f, 0.25f), vs, band);
   openvdb::tools::csgUnion(*cloud, *blob2);
   openvdb::tools::csgUnion(*cloud, *blob3);
   openvdb::tools::sdfToFogVolume(*cloud, 0.45f);  // density ramps up over 0.45 units
@@ -234,10 +238,15 @@ void BuildBuiltin(Scene::Impl& s) {
   AddGrid(s, cloud, "builtin");
   s.fogs.back().material = FogMaterial{{0.004, 0.006, 0.008}, {0.03, 0.03, 0.03}, 0.2};
 
-  AddGrid(s, Named(openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(0.5f, Vec3f(1.35f, -0.35f, 0.45f), vs, band), "mirror"), "builtin");
+  AddGrid(s,
+          Named(openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+                    0.5f, Vec3f(1.35f, -0.35f, 0.45f), vs, band),
+                "mirror"),
+          "builtin");
   s.surfaces.back().material = SurfaceMaterial{{0.9, 0.9, 0.95}, 0.85, 0.0, 1.5};
 
-  auto glass = openvdb::tools::createLevelSetIcosahedron<openvdb::FloatGrid>(0.9f, Vec3f(-1.3f, -0.3f, 0.6f), vs, band);
+  auto glass = openvdb::tools::createLevelSetIcosahedron<openvdb::FloatGrid>(
+      0.9f, Vec3f(-1.3f, -0.3f, 0.6f), vs, band);
   AddGrid(s, Named(glass, "glass"), "builtin");
   s.surfaces.back().material = SurfaceMaterial{{0.85, 1.0, 0.9}, 0.05, 0.85, 1.5};
 
@@ -295,14 +304,15 @@ void AddSparse(const openvdb::FloatGrid& grid, Vec3d lo, Vec3d hi,
     if (!it.isTileValue()) continue;
     openvdb::CoordBBox cb;
     it.getBoundingBox(cb);
-    const auto box = WorldBox(grid, cb.min().asVec3d() - pad, cb.max().asVec3d() + openvdb::Vec3d(1) + pad);
+    const auto box =
+        WorldBox(grid, cb.min().asVec3d() - pad, cb.max().asVec3d() + openvdb::Vec3d(1) + pad);
     ForCellsOverlapping(box, lo, hi, dims, [&](std::uint32_t c) { fp[c] += sizeof(float); });
   }
 }
 
 // Dense footprint: voxels of the grid's active box inside the cell, 4 bytes each.
-void AddDense(const openvdb::FloatGrid& grid, Vec3d lo, Vec3d hi,
-              std::array<std::uint32_t, 3> dims, std::vector<std::uint64_t>& fp) {
+void AddDense(const openvdb::FloatGrid& grid, Vec3d lo, Vec3d hi, std::array<std::uint32_t, 3> dims,
+              std::vector<std::uint64_t>& fp) {
   const openvdb::BBoxd active = PaddedActiveBox(grid);
   const double voxel = grid.voxelSize()[0];
   const Vec3d size{(hi.x - lo.x) / dims[0], (hi.y - lo.y) / dims[1], (hi.z - lo.z) / dims[2]};

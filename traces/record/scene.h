@@ -23,9 +23,9 @@ struct FogMaterial {
 
 struct SurfaceMaterial {
   Rgb color{0.8, 0.8, 0.8};
-  double reflectivity = 0;   // fraction of light mirrored
-  double transparency = 0;   // fraction of light refracted
-  double ior = 1.5;          // index of refraction
+  double reflectivity = 0;  // fraction of light mirrored
+  double transparency = 0;  // fraction of light refracted
+  double ior = 1.5;         // index of refraction
 };
 
 struct Light {
@@ -41,7 +41,7 @@ struct SceneSpec {
   // "GRID:key=value:key=value", e.g. "density:absorb=0.2:scatter=1,1,1" or
   // "ball:color=1,0,0:reflect=0.5:transparent=0:ior=1.5" (see ParseMaterial).
   std::vector<std::string> materials;
-  std::vector<Light> lights;  // empty: the scene's own lights
+  std::vector<Light> lights;              // empty: the scene's own lights
   std::string footprint_mode = "sparse";  // or "dense"
 };
 
