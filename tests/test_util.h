@@ -8,6 +8,8 @@
 #include <iterator>
 #include <string>
 
+#include "traces/check.h"
+
 namespace raycell::testing {
 
 // A path in the test temporary folder, unique per process: TEMP/raycell_PREFIX_PID_NAME.
@@ -18,6 +20,17 @@ inline std::string TempPath(const std::string& prefix, const std::string& name) 
 inline std::string ReadBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// The InputError message `f` throws, or "" when it throws none.
+template <typename F>
+std::string ErrorOf(F f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
 }
 
 }  // namespace raycell::testing

@@ -9,9 +9,9 @@
 #include "replay/config.h"
 #include "replay/driver.h"
 #include "tools/commands.h"
+#include "tools/frames.h"
 #include "traces/check.h"
 #include "traces/progress.h"
-#include "traces/record/recorder.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {
@@ -123,17 +123,6 @@ ReplayConfig MakeConfig(const ReplayArgs& a) {
   return c;
 }
 
-std::vector<std::size_t> SelectFrames(const TraceReader& r, const std::string& range) {
-  std::vector<std::size_t> out;
-  const std::vector<int> wanted = range.empty() ? std::vector<int>{} : ParseFrameRange(range);
-  for (std::size_t i = 0; i < r.frames().size(); ++i) {
-    const int f = r.frames()[i].frame;
-    if (range.empty() || (f >= wanted.front() && f <= wanted.back())) out.push_back(i);
-  }
-  if (out.empty()) throw InputError(r.path() + ": no frame in --frames " + range);
-  return out;
-}
-
 void Write(const std::string& path, const std::string& text) {
   if (path.empty()) {
     std::cout << text;
@@ -163,7 +152,7 @@ void Run(const ReplayArgs& a) {
   Progress progress(!a.quiet);
   if (a.sample < 1) throw InputError("--sample: must be at least 1");
   const TraceReplay t = ReplayTrace(
-      reader, SelectFrames(reader, a.frames), config,
+      reader, SelectFrameRange(reader, a.frames), config,
       [&](double f) { progress.Update(f, "replaying"); }, a.sample);
   progress.Done();
   std::ostringstream out;

@@ -8,9 +8,9 @@
 #include "replay/config.h"
 #include "replay/sweep.h"
 #include "tools/commands.h"
+#include "tools/frames.h"
 #include "traces/check.h"
 #include "traces/progress.h"
-#include "traces/record/recorder.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {
@@ -24,17 +24,6 @@ struct SweepArgs {
   std::string merge_out;
   std::vector<std::string> merge_shards;
 };
-
-std::vector<std::size_t> SelectFrames(const TraceReader& r, const std::string& range) {
-  std::vector<std::size_t> out;
-  const std::vector<int> wanted = range.empty() ? std::vector<int>{} : ParseFrameRange(range);
-  for (std::size_t i = 0; i < r.frames().size(); ++i) {
-    const int f = r.frames()[i].frame;
-    if (range.empty() || (f >= wanted.front() && f <= wanted.back())) out.push_back(i);
-  }
-  if (out.empty()) throw InputError(r.path() + ": no frame in --frames " + range);
-  return out;
-}
 
 SweepSpec MakeSpec(const SweepArgs& a) {
   SweepSpec spec;
@@ -55,7 +44,7 @@ void Run(const SweepArgs& a) {
   SweepSpec spec = MakeSpec(a);
   const TraceReader reader = TraceReader::Open(a.trace);
   if (!reader.warning().empty()) std::cerr << "raycell: warning: " << reader.warning() << "\n";
-  spec.frame_indices = SelectFrames(reader, a.frames);
+  spec.frame_indices = SelectFrameRange(reader, a.frames);
   Progress progress(!a.quiet);
   SweepOptions options;
   options.jobs = a.jobs;

@@ -13,15 +13,7 @@
 namespace raycell {
 namespace {
 
-template <typename F>
-std::string ErrorOf(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::ErrorOf;
 
 std::string LoadError(const std::string& toml) {
   return ErrorOf([&] { LoadConfigFromString(toml, "replay.toml"); });

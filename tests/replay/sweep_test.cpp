@@ -130,15 +130,7 @@ class SweepTest : public ::testing::Test {
 std::string* SweepTest::trace_path_ = nullptr;
 TraceReader* SweepTest::reader_ = nullptr;
 
-template <typename F>
-std::string ErrorOf(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using testing::ErrorOf;
 
 TEST(Vary, ParsesValuesWithSpaces) {
   const Vary v = Vary::Parse("level.cache.capacity=1 cell,2 cells, 64MiB");

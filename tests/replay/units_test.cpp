@@ -7,6 +7,7 @@
 #include <random>
 #include <string>
 
+#include "tests/test_util.h"
 #include "traces/check.h"
 
 namespace raycell {
@@ -14,16 +15,7 @@ namespace {
 
 constexpr std::uint64_t kMax = std::numeric_limits<std::uint64_t>::max();
 
-// The InputError message for `f`, or "" when it does not throw.
-template <typename F>
-std::string ErrorOf(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::ErrorOf;
 
 TEST(ParseDuration, EveryUnit) {
   EXPECT_EQ(ParseDuration("250ps", "t"), SimTime::Picoseconds(250));
