@@ -8,19 +8,11 @@
 
 namespace raycell {
 
-class CellTreeScheduler : public Scheduler {
+class CellTreeScheduler : public FollowingScheduler {
  public:
   std::string Name() const override { return "celltree"; }
   // Computes Peel of frame.previous; a null previous (frame 0) means Max Work all frame.
   void BeginFrame(const FrameInfo& frame) override;
-  std::optional<CellId> Next(const QueueView& queues) override { return follower_.Next(queues); }
-  std::optional<CellId> Peek(const QueueView& queues) const override {
-    return follower_.Peek(queues);
-  }
-  const ScheduleFollower& follower() const { return follower_; }
-
- private:
-  ScheduleFollower follower_;
 };
 
 }  // namespace raycell

@@ -9,19 +9,11 @@
 
 namespace raycell {
 
-class PeelOracleScheduler : public Scheduler {
+class PeelOracleScheduler : public FollowingScheduler {
  public:
   std::string Name() const override { return "peel"; }
   // Computes Peel of frame.current, which must not be null.
   void BeginFrame(const FrameInfo& frame) override;
-  std::optional<CellId> Next(const QueueView& queues) override { return follower_.Next(queues); }
-  std::optional<CellId> Peek(const QueueView& queues) const override {
-    return follower_.Peek(queues);
-  }
-  const ScheduleFollower& follower() const { return follower_; }
-
- private:
-  ScheduleFollower follower_;
 };
 
 }  // namespace raycell

@@ -95,4 +95,19 @@ const std::vector<std::string>& SchedulerNames();
 // InputError listing the valid names.
 std::unique_ptr<Scheduler> MakeScheduler(const std::string& name, std::uint64_t seed);
 
+// A scheduler that follows a schedule chosen in BeginFrame (ScheduleFollower: entries with no
+// work skipped, then Max Work). The Peel oracle and Cell Tree scheduling differ only in which
+// tree's Peel schedule they follow.
+class FollowingScheduler : public Scheduler {
+ public:
+  std::optional<CellId> Next(const QueueView& queues) override { return follower_.Next(queues); }
+  std::optional<CellId> Peek(const QueueView& queues) const override {
+    return follower_.Peek(queues);
+  }
+  const ScheduleFollower& follower() const { return follower_; }
+
+ protected:
+  ScheduleFollower follower_;
+};
+
 }  // namespace raycell
