@@ -8,16 +8,36 @@
 
 namespace raycell::testing {
 
+// One ray of a hand-made frame: its parent (kNoParent for a primary ray), the parent's visit
+// it was spawned at, and its cells. Rays come one ray tree at a time.
+struct TestRay {
+  RayId parent = kNoParent;
+  std::uint32_t spawn = 0;
+  std::vector<CellId> cells;
+};
+
+// The rays as a frame, `samples` samples per visit.
+inline RayBatch RaysOf(const std::vector<TestRay>& rays, std::uint32_t samples = 1) {
+  RayBatch b(false);
+  for (const TestRay& r : rays) {
+    b.BeginRay(r.parent == kNoParent ? RayKind::kPrimary : RayKind::kShadow, r.parent, r.spawn, 0,
+               0);
+    for (CellId c : r.cells) b.AddVisit(c, samples, 0.f, 0.f);
+  }
+  return b;
+}
+
+inline CellTree TreeOf(const RayBatch& rays) {
+  CellTreeBuilder builder;
+  builder.AddBatch(rays);
+  return builder.Finish();
+}
+
 // Primary rays with the given paths, one sample per visit.
 inline CellTree FromPaths(const std::vector<std::vector<CellId>>& paths) {
-  RayBatch b(false);
-  for (const auto& p : paths) {
-    b.BeginRay(RayKind::kPrimary, kNoParent, 0, 0, 0);
-    for (CellId c : p) b.AddVisit(c, 1, 0.f, 0.f);
-  }
-  CellTreeBuilder builder;
-  builder.AddBatch(b);
-  return builder.Finish();
+  std::vector<TestRay> rays;
+  for (const auto& p : paths) rays.push_back({kNoParent, 0, p});
+  return TreeOf(RaysOf(rays));
 }
 
 // Random rays over `cells` cells: primary rays and rays spawned at a random visit of an

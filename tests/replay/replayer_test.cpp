@@ -10,6 +10,7 @@
 #include "replay/config.h"
 #include "replay/work.h"
 #include "scheduling/scheduler.h"
+#include "tests/graph/test_trees.h"
 #include "traces/check.h"
 
 namespace raycell {
@@ -17,27 +18,11 @@ namespace {
 
 constexpr CellId A = 0, B = 1, C = 2;
 
-struct TestRay {
-  RayId parent;  // kNoParent for primary rays
-  std::uint32_t spawn;
-  std::vector<CellId> cells;
-};
+using testing::TestRay;
+using testing::TreeOf;
 
-RayBatch Frame(const std::vector<TestRay>& rays) {
-  RayBatch b(false);
-  for (const TestRay& r : rays) {
-    b.BeginRay(r.parent == kNoParent ? RayKind::kPrimary : RayKind::kShadow, r.parent, r.spawn, 0,
-               0);
-    for (CellId c : r.cells) b.AddVisit(c, 3, 0, 0);
-  }
-  return b;
-}
-
-CellTree TreeOf(const RayBatch& rays) {
-  CellTreeBuilder builder;
-  builder.AddBatch(rays);
-  return builder.Finish();
-}
+// Three samples per visit.
+RayBatch Frame(const std::vector<TestRay>& rays) { return testing::RaysOf(rays, 3); }
 
 struct Outcome {
   ReplayResult result;

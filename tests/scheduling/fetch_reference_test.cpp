@@ -10,6 +10,7 @@
 #include "graph/schedule.h"
 #include "scheduling/cell_tree_scheduler.h"
 #include "scheduling/scheduler.h"
+#include "tests/graph/test_trees.h"
 
 namespace raycell {
 namespace {
@@ -19,11 +20,7 @@ using Schedule = std::vector<CellId>;
 
 // One ray of a test frame. Rays are listed in id order, one ray tree at a time (a primary
 // ray, then its descendants), as CellTreeBuilder wants them.
-struct TestRay {
-  RayId parent = kNoParent;
-  std::uint32_t spawn = 0;  // the parent's visit it was spawned at
-  Schedule cells;
-};
+using testing::TestRay;
 using TestFrame = std::vector<TestRay>;
 
 TestRay P(Schedule cells) { return {kNoParent, 0, std::move(cells)}; }
@@ -31,17 +28,7 @@ TestRay S(RayId parent, std::uint32_t spawn, Schedule cells) {
   return {parent, spawn, std::move(cells)};
 }
 
-CellTree TreeOf(const TestFrame& frame) {
-  RayBatch b(false);
-  for (const TestRay& r : frame) {
-    b.BeginRay(r.parent == kNoParent ? RayKind::kPrimary : RayKind::kShadow, r.parent, r.spawn, 0,
-               0);
-    for (CellId c : r.cells) b.AddVisit(c, 1, 0.f, 0.f);
-  }
-  CellTreeBuilder builder;
-  builder.AddBatch(b);
-  return builder.Finish();
-}
+CellTree TreeOf(const TestFrame& frame) { return testing::TreeOf(testing::RaysOf(frame)); }
 
 struct ReplayResult {
   Schedule fetched;        // the cells fetched, in order

@@ -9,6 +9,7 @@
 #include "scheduling/peel_oracle.h"
 #include "scheduling/random_scheduler.h"
 #include "scheduling/round_robin.h"
+#include "tests/graph/test_trees.h"
 #include "traces/check.h"
 
 namespace raycell {
@@ -25,17 +26,7 @@ FrameInfo Frame(std::size_t index, CellId cells, const CellTree* current = nullp
   return {index, current, previous, cells};
 }
 
-// Primary rays with the given paths, one sample per visit.
-CellTree FromPaths(const std::vector<Schedule>& paths) {
-  RayBatch b(false);
-  for (const Schedule& p : paths) {
-    b.BeginRay(RayKind::kPrimary, kNoParent, 0, 0, 0);
-    for (CellId c : p) b.AddVisit(c, 1, 0.f, 0.f);
-  }
-  CellTreeBuilder builder;
-  builder.AddBatch(b);
-  return builder.Finish();
-}
+using testing::FromPaths;
 
 // ------------------------------------------------------------------ QueueView, Max Work
 
