@@ -30,8 +30,8 @@ int main(int argc, char** argv) {
   raycell::AddSweepCommand(app);
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+  } catch (const CLI::ParseError& e) {  // --help and --version exit 0, usage errors 2
+    return app.exit(e) == 0 ? 0 : 2;
   } catch (const raycell::InputError& e) {
     std::cerr << "raycell: error: " << e.what() << "\n";
     return 2;

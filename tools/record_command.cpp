@@ -27,7 +27,8 @@ Vec3d ParseVec(const std::string& text, const std::string& option) {
 
 struct RecordArgs {
   RecordOptions opt;
-  std::string frames, cells = "2x2x2", res = "256x256", orbit, eye, target, up = "0,1,0";
+  std::string frames, cells = "2x2x2", res = "256x256", orbit, eye, target, up = "0,1,0",
+                      precision = "double";
   std::vector<std::string> lights;
   bool no_images = false, quiet = false;
 };
@@ -62,6 +63,7 @@ void Run(RecordArgs& a) {
   if (!a.eye.empty()) o.camera.eye = ParseVec(a.eye, "--eye");
   if (!a.target.empty()) o.camera.target = ParseVec(a.target, "--target");
   o.camera.up = ParseVec(a.up, "--up");
+  o.settings.single_precision = a.precision == "single";
   if (a.no_images) o.images_dir.clear();
   o.progress = !a.quiet;
   o.cancel = &g_cancel;
@@ -115,6 +117,12 @@ void AddRecordCommand(CLI::App& app) {
   cmd->add_option("--cutoff", o.settings.cutoff,
                   "early-termination threshold on transmittance, and the density below which a "
                   "sample casts no shadow ray (vdb_render's -cutoff)")
+      ->capture_default_str();
+  cmd->add_option("--precision", args->precision,
+                  "arithmetic of the marcher (sample positions, optical depth, transmittance, "
+                  "radiance): double, or single as hardware would; BENCHMARKS.md has the error "
+                  "and speed of each")
+      ->check(CLI::IsMember({"double", "single"}))
       ->capture_default_str();
   cmd->add_option("--material", o.scene.materials,
                   "per-grid material, repeatable. Fog: GRID:absorb=R,G,B:scatter=R,G,B:gain=G "

@@ -148,6 +148,9 @@ struct Settings {
   # Batches carry Batch.tEnter/tExit (one Float32 per visit each).
   zstdLevel @8 :UInt32;
   # zstd compression level the file was written with.
+  singlePrecision @9 :Bool;
+  # The marcher computed in single precision (Float32) rather than double; files written
+  # before this field read as double.
 }
 
 struct Header {

@@ -44,13 +44,15 @@ struct RenderSettings {
   std::uint32_t max_depth = 3;
   double primary_step = 1.0;  // in voxels of the finest fog grid, as vdb_render's --step
   double shadow_step = 3.0;
-  double cutoff = 0.005;  // early-termination threshold on transmittance
-  bool store_t = false;   // visits carry t_enter/t_exit
+  double cutoff = 0.005;          // early-termination threshold on transmittance
+  bool store_t = false;           // visits carry t_enter/t_exit
+  bool single_precision = false;  // the marcher computed in float rather than double
   std::uint32_t zstd_level = 3;
   bool operator==(const RenderSettings& o) const {
     return width == o.width && height == o.height && spp == o.spp && max_depth == o.max_depth &&
            primary_step == o.primary_step && shadow_step == o.shadow_step && cutoff == o.cutoff &&
-           store_t == o.store_t && zstd_level == o.zstd_level;
+           store_t == o.store_t && single_precision == o.single_precision &&
+           zstd_level == o.zstd_level;
   }
 };
 

@@ -41,8 +41,9 @@ void PrintFootprints(const TraceHeader& h, std::ostream& out) {
 void PrintSettings(const RenderSettings& s, std::ostream& out) {
   out << "settings:       " << s.width << "x" << s.height << ", " << s.spp << " spp, max depth "
       << s.max_depth << ", primary step " << s.primary_step << ", shadow step " << s.shadow_step
-      << ", cutoff " << s.cutoff << ", t " << (s.store_t ? "stored" : "not stored")
-      << ", zstd level " << s.zstd_level << "\n";
+      << ", cutoff " << s.cutoff << ", " << (s.single_precision ? "single" : "double")
+      << " precision, t " << (s.store_t ? "stored" : "not stored") << ", zstd level "
+      << s.zstd_level << "\n";
 }
 
 void PrintHeader(const TraceReader& reader, const std::string& path, std::ostream& out) {

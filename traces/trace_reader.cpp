@@ -215,6 +215,7 @@ RenderSettings ToSettings(schema::Settings::Reader s) {
   r.shadow_step = s.getShadowStep();
   r.cutoff = s.getCutoff();
   r.store_t = s.getStoreT();
+  r.single_precision = s.getSinglePrecision();
   r.zstd_level = s.getZstdLevel();
   return r;
 }

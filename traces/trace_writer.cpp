@@ -391,6 +391,7 @@ void FillSettings(schema::Settings::Builder out, const RenderSettings& s) {
   out.setShadowStep(s.shadow_step);
   out.setCutoff(s.cutoff);
   out.setStoreT(s.store_t);
+  out.setSinglePrecision(s.single_precision);
   out.setZstdLevel(s.zstd_level);
 }
 

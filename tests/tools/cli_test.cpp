@@ -149,6 +149,26 @@ TEST(Cli, BadInputGetsAClearMessageAndExitCode2) {
   r = Raycell("analyze --format yaml --paths " + bad.string());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("yaml"), std::string::npos) << r.out;
+  r = Raycell("record --precision half --out " + (d / "x.rct").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("--precision: half"), std::string::npos) << r.out;
+  r = Raycell("record --no-such-option");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("--no-such-option"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(d / "x.rct"));
+  EXPECT_EQ(Raycell("record --help").code, 0);
+}
+
+TEST(Cli, RecordInSinglePrecisionSaysSoInTheTrace) {
+  const auto d = Dir();
+  const std::string out = (d / "single.rct").string();
+  Result r = Raycell("record --res 16x16 --precision single --no-images --quiet --out " + out);
+  ASSERT_EQ(r.code, 0) << r.out;
+  r = Raycell("trace info " + out);
+  EXPECT_NE(r.out.find("single precision"), std::string::npos) << r.out;
+  r = Raycell("record --res 16x16 --no-images --quiet --out " + out);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(Raycell("trace info " + out).out.find("double precision"), std::string::npos);
 }
 
 }  // namespace

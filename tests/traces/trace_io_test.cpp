@@ -48,6 +48,7 @@ TraceHeader MakeHeader(bool store_t, std::array<std::uint32_t, 3> cells = {3, 3,
   for (int f = 0; f < 4; ++f)
     h.cameras.push_back({10 + f, {1, 2, 3.0 + f}, {0, 0, 0}, {0, 1, 0}, 40});
   h.settings.store_t = store_t;
+  h.settings.single_precision = !store_t;  // both values round-trip
   h.settings.width = 320;
   h.settings.height = 200;
   return h;

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Run time against error for the knobs that trade one for the other (issue 5).
 
-Renderer step size and early-termination cutoff: capture time (as a ratio to the most
+Renderer step size, early-termination cutoff and the marcher's precision: capture time (as a ratio to the most
 accurate setting measured in the same run) against the image RMSE to a reference rendered
 with a four times finer step than the default, and against the change in Cell Tree
 scheduling's fetch count. Replay granularity: replay time against the error in fetches and
@@ -69,6 +69,7 @@ def renderer_rows(opts):
     rows = []
     knobs = [("step", s, ["--step", str(s), "--shadow-step", str(3 * s)]) for s in (0.5, 1, 2, 4)]
     knobs += [("cutoff", c, ["--cutoff", str(c)]) for c in (0.001, 0.02, 0.05)]
+    knobs += [("precision", "single", ["--precision", "single"])]  # step 1, as the default
     for knob, value, extra in knobs:
         seconds, folder = record(opts, f"{knob}-{value}", extra)
         _, fetches, _ = replay(os.path.join(folder, "c.rct"))

@@ -31,12 +31,10 @@
 #include "traces/check.h"
 #include "traces/record/camera.h"
 #include "traces/record/scene_vdb.h"
-#include "traces/record/vec3.h"
 
 namespace raycell {
 namespace {
 
-using V3 = openvdb::Vec3d;
 using RayT = openvdb::math::Ray<double>;
 using TimeSpan = RayT::TimeSpan;
 using Intersector = openvdb::tools::VolumeRayIntersector<openvdb::FloatGrid>;
@@ -47,19 +45,43 @@ constexpr double kAmbient = 0.04;     // surfaces' unshadowed ambient term
 constexpr int kBisections = 6;        // refinement of a level-set crossing
 constexpr double kSpawnOffset = 0.5;  // in voxels: spawned rays start off the surface
 
-Vec3d ToVec(const V3& v) { return {v.x(), v.y(), v.z()}; }
-V3 ToV3(const Vec3d& v) { return {v.x, v.y, v.z}; }
-V3 ToV3(const Rgb& c) { return {c.r, c.g, c.b}; }
-V3 Exp(const V3& v) { return {std::exp(v.x()), std::exp(v.y()), std::exp(v.z())}; }
+// The marcher computes in Real (float or double, RenderSettings::single_precision): ray
+// origins and directions, sample positions, optical depths, transmittance and radiance.
+// Geometry it does not own stays in double: the camera, the cell DDA, OpenVDB's intersector
+// (whose spans are rounded to Real) and the trilinear sampler (whose Real position widens
+// exactly).
+template <class Real>
+using Vec = openvdb::math::Vec3<Real>;
+
+template <class Real>
+Vec<Real> FromVec(const Vec3d& v) {
+  return {Real(v.x), Real(v.y), Real(v.z)};
+}
+template <class Real>
+Vec<Real> FromRgb(const Rgb& c) {
+  return {Real(c.r), Real(c.g), Real(c.b)};
+}
+template <class Real>
+Vec3d ToVec(const Vec<Real>& v) {
+  return {double(v.x()), double(v.y()), double(v.z())};
+}
+template <class Real>
+openvdb::Vec3d ToVdb(const Vec<Real>& v) {
+  return {double(v.x()), double(v.y()), double(v.z())};
+}
+template <class Real>
+Vec<Real> ExpOf(const Vec<Real>& v) {
+  return {std::exp(v.x()), std::exp(v.y()), std::exp(v.z())};
+}
 
 // The visits of one ray while it is traced: the non-empty cells of its chord, with samples.
 class Path {
  public:
-  void Build(const CellGrid& grid, const std::vector<std::uint64_t>& fp, const V3& o, const V3& d,
-             double tmax, std::optional<CellId> start) {
+  void Build(const CellGrid& grid, const std::vector<std::uint64_t>& fp, const Vec3d& o,
+             const Vec3d& d, double tmax, std::optional<CellId> start) {
     cells_.clear(), t0_.clear(), t1_.clear(), samples_.clear();
     cursor_ = 0;
-    CellDDA dda(grid, ToVec(o), ToVec(d), 0.0, tmax, start);
+    CellDDA dda(grid, o, d, 0.0, tmax, start);
     for (CellSegment s; dda.Next(&s);) {
       if (fp[s.cell] == 0) continue;
       cells_.push_back(s.cell), t0_.push_back(s.t0), t1_.push_back(s.t1);
@@ -117,6 +139,7 @@ class PixelRecord {
     }
     r.end = std::uint32_t(pool_.size());
   }
+  RayKind kind(int slot) const { return rays_[slot].kind; }
   // Forgets the last opened ray (a primary ray that met no non-empty cell).
   void DropLast() { rays_.pop_back(); }
   void FlushTo(RayBatch& out, std::uint32_t px, std::uint32_t py) {
@@ -147,54 +170,65 @@ class PixelRecord {
 };
 
 // One grid as a thread sees it: its own intersector (shallow copy) and accessor.
+template <class Real>
 struct GridCtx {
+  using V3 = Vec<Real>;
   GridCtx(const Intersector& master, const openvdb::FloatGrid& g)
       : grid(&g),
         inter(master),
         acc(g.getConstAccessor()),
-        vs(g.voxelSize()[0]),
-        inv_vs(1.0 / vs) {}
+        vs(Real(g.voxelSize()[0])),
+        inv_vs(Real(1) / vs) {}
   const openvdb::FloatGrid* grid;
   Intersector inter;
   Accessor acc;
-  double vs, inv_vs;
+  Real vs, inv_vs;
   // A world ray in this grid's index space: the position at world t is eye + dir * t.
   struct IndexRay {
     V3 eye, dir;
   };
   IndexRay ToIndex(const V3& o, const V3& d) const {
-    const V3 eye = grid->worldToIndex(o);
-    return {eye, grid->worldToIndex(o + d) - eye};
+    const V3 eye(grid->worldToIndex(ToVdb(o)));
+    return {eye, V3(grid->worldToIndex(ToVdb<Real>(o + d))) - eye};
   }
-  float Sample(const IndexRay& r, double t) { return Sampler::sample(acc, r.eye + r.dir * t); }
-  float SampleAt(const V3& world) { return Sampler::sample(acc, grid->worldToIndex(world)); }
+  float Sample(const IndexRay& r, Real t) {
+    return Sampler::sample(acc, ToVdb<Real>(r.eye + r.dir * t));
+  }
+  float SampleAt(const V3& world) { return Sampler::sample(acc, grid->worldToIndex(ToVdb(world))); }
   // World-t spans of active leaves along the current ray within [ta, tb].
   void Spans(const V3& o, const V3& d, double ta, double tb, std::vector<TimeSpan>* out) {
     out->clear();
-    if (!inter.setWorldRay(RayT(o, d, ta, tb))) return;
+    if (!inter.setWorldRay(RayT(ToVdb(o), ToVdb(d), ta, tb))) return;
     inter.hits(*out);
     for (auto& s : *out) s.t0 *= vs, s.t1 *= vs;  // index t -> world t (uniform scale)
   }
 };
 
+template <class Real>
 struct Hit {
-  double t = 0;
+  Real t = 0;
   int surface = -1;
 };
 
 // Everything a thread needs; scratch is kept per ray depth so that a parent's state
 // survives while its children are traced.
+template <class Real>
 struct ThreadCtx {
-  std::vector<GridCtx> fogs, surfaces;
+  std::vector<GridCtx<Real>> fogs, surfaces;
   std::vector<Path> paths;
   std::vector<std::vector<TimeSpan>> spans, merged;
-  std::vector<std::vector<double>> surface_samples;
-  std::vector<std::vector<GridCtx::IndexRay>> fog_rays;  // [depth][fog grid]
+  std::vector<std::vector<Real>> surface_samples;
+  std::vector<std::vector<typename GridCtx<Real>::IndexRay>> fog_rays;  // [depth][fog grid]
   PixelRecord rec;
+  std::uint32_t px = 0, py = 0;  // the pixel being traced (for the sample probe)
 };
 
+template <class Real>
 class FrameTracer {
  public:
+  using V3 = Vec<Real>;
+  using Ctx = ThreadCtx<Real>;
+
   explicit FrameTracer(const RenderJob& job)
       : job_(job), s_(job.scene->impl()), set_(job.settings) {
     // Reserved first: a copied intersector is shallow, only the master owns its tree.
@@ -202,15 +236,32 @@ class FrameTracer {
     surface_masters_.reserve(s_.surfaces.size());
     for (const auto& f : s_.fogs) fog_masters_.emplace_back(*f.grid);
     for (const auto& f : s_.surfaces) surface_masters_.emplace_back(*f.grid);
-    min_fog_vs_ = 0;
+    double min_vs = 0;
     for (const auto& f : s_.fogs) {
       const double vs = f.grid->voxelSize()[0];
-      min_fog_vs_ = min_fog_vs_ == 0 ? vs : std::min(min_fog_vs_, vs);
+      min_vs = min_vs == 0 ? vs : std::min(min_vs, vs);
+    }
+    primary_step_ = Real(set_.primary_step * min_vs);
+    shadow_step_ = Real(set_.shadow_step * min_vs);
+    cutoff_ = Real(set_.cutoff);
+    for (const auto& f : s_.fogs) {
+      const V3 sc = FromRgb<Real>(f.material.scattering);
+      fog_mats_.push_back(
+          {FromRgb<Real>(f.material.absorption) + sc, sc, Real(f.material.shadow_gain)});
+    }
+    for (const auto& f : s_.surfaces) {
+      const SurfaceMaterial& m = f.material;
+      surface_mats_.push_back(
+          {FromRgb<Real>(m.color), Real(m.reflectivity), Real(m.transparency), Real(m.ior)});
+    }
+    for (const Light& l : s_.lights) {
+      lights_.push_back(
+          {l.type == Light::Type::kPoint, FromVec<Real>(l.v), FromRgb<Real>(l.color)});
     }
   }
 
-  ThreadCtx MakeContext() const {
-    ThreadCtx c;
+  Ctx MakeContext() const {
+    Ctx c;
     for (std::size_t i = 0; i < s_.fogs.size(); ++i)
       c.fogs.emplace_back(fog_masters_[i], *s_.fogs[i].grid);
     for (std::size_t i = 0; i < s_.surfaces.size(); ++i)
@@ -220,30 +271,45 @@ class FrameTracer {
     c.spans.resize(levels);
     c.merged.resize(levels);
     c.surface_samples.resize(levels);
-    c.fog_rays.assign(levels, std::vector<GridCtx::IndexRay>(c.fogs.size()));
+    c.fog_rays.assign(levels, std::vector<typename GridCtx<Real>::IndexRay>(c.fogs.size()));
     return c;
   }
 
   // Traces all rays of row y into `out` (ids relative to the row) and the image row.
-  std::uint64_t RenderRow(ThreadCtx& c, std::uint32_t y, RayBatch& out, Image& img) const {
+  std::uint64_t RenderRow(Ctx& c, std::uint32_t y, RayBatch& out, Image& img) const {
     const PinholeCamera cam = PinholeCamera::Create(job_.camera, set_.width, set_.height);
     std::uint64_t missed = 0;
+    c.py = y;
     for (std::uint32_t x = 0; x < set_.width; ++x) {
-      V3 sum(0.0);
+      c.px = x;
+      V3 sum(Real(0));
       for (std::uint32_t s = 0; s < set_.spp; ++s) {
         const auto [jx, jy] = Jitter(x, y, s);
-        const V3 o = ToV3(cam.eye()), d = ToV3(cam.Direction(x + jx, y + jy));
+        const V3 o = FromVec<Real>(cam.eye()), d = FromVec<Real>(cam.Direction(x + jx, y + jy));
         sum += Trace(c, o, d, RayKind::kPrimary, -1, 0, 0, std::nullopt, &missed);
       }
       c.rec.FlushTo(out, x, y);
-      sum *= 1.0 / set_.spp;
+      sum *= Real(1) / Real(set_.spp);
       RAYCELL_CHECK(std::isfinite(sum.x()) && std::isfinite(sum.y()) && std::isfinite(sum.z()));
-      img.at(x, y) = {sum.x(), sum.y(), sum.z()};
+      img.at(x, y) = {double(sum.x()), double(sum.y()), double(sum.z())};
     }
     return missed;
   }
 
  private:
+  struct FogCoeffs {
+    V3 extinction, scattering;  // per voxel of the grid, per unit density
+    Real shadow_gain;
+  };
+  struct SurfaceCoeffs {
+    V3 color;
+    Real reflectivity, transparency, ior;
+  };
+  struct LightR {
+    bool point;
+    V3 v, color;
+  };
+
   std::pair<double, double> Jitter(std::uint32_t x, std::uint32_t y, std::uint32_t s) const {
     if (set_.spp == 1) return {0.5, 0.5};
     auto hash = [](std::uint64_t v) {
@@ -255,50 +321,47 @@ class FrameTracer {
   }
 
   // Marches a primary, reflected or refracted ray; returns its radiance.
-  V3 Trace(ThreadCtx& c, const V3& o, const V3& d, RayKind kind, int parent, std::uint32_t spawn,
+  V3 Trace(Ctx& c, const V3& o, const V3& d, RayKind kind, int parent, std::uint32_t spawn,
            std::uint32_t depth, std::optional<CellId> start, std::uint64_t* missed) const {
     const int slot = c.rec.Open(kind, parent, spawn);
     Path& path = c.paths[depth];
-    path.Build(*job_.cells, job_.footprints, o, d, CellDDA::kInfinity, start);
+    path.Build(*job_.cells, job_.footprints, ToVec(o), ToVec(d), CellDDA::kInfinity, start);
     if (path.empty()) {  // only a primary ray can miss every non-empty cell
       c.rec.DropLast();
       if (missed) ++*missed;
       return BackgroundOf(d);
     }
-    const std::optional<Hit> hit = FindSurface(c, depth, o, d, path.t_lo(), path.t_hi());
-    const double t_fog_end = hit ? hit->t : path.t_hi();
-    V3 lumi(0.0), trans(1.0);
-    std::optional<double> t_term =
+    const std::optional<Hit<Real>> hit = FindSurface(c, depth, o, d, path.t_lo(), path.t_hi());
+    const double t_fog_end = hit ? double(hit->t) : path.t_hi();
+    V3 lumi(Real(0)), trans(Real(1));
+    std::optional<Real> t_term =
         MarchFog(c, slot, depth, o, d, path.t_lo(), t_fog_end, &lumi, &trans);
     if (!t_term) {
       lumi += trans * (hit ? Shade(c, slot, depth, o, d, *hit) : BackgroundOf(d));
     }
-    Finish(c, slot, depth, t_term ? *t_term : t_fog_end);
+    Finish(c, slot, depth, t_term ? double(*t_term) : t_fog_end);
     return lumi;
   }
 
   // Attributes the surface search's samples up to t_end, cuts the path there, records it.
-  void Finish(ThreadCtx& c, int slot, std::uint32_t depth, double t_end) const {
+  void Finish(Ctx& c, int slot, std::uint32_t depth, double t_end) const {
     Path& path = c.paths[depth];
-    for (double t : c.surface_samples[depth]) {
+    for (Real t : c.surface_samples[depth]) {
       if (t <= t_end) path.AddSamples(t, 1);
     }
     path.Truncate(t_end);
     c.rec.Close(slot, path);
   }
 
-  V3 BackgroundOf(const V3& d) const {
-    const Rgb b = job_.scene->background(ToVec(d));
-    return {b.r, b.g, b.b};
-  }
+  V3 BackgroundOf(const V3& d) const { return FromRgb<Real>(job_.scene->background(ToVec(d))); }
 
   // Spans of active fog along the ray within [ta, tb], merged over fog grids, in world t.
-  const std::vector<TimeSpan>& FogSpans(ThreadCtx& c, std::uint32_t depth, const V3& o, const V3& d,
+  const std::vector<TimeSpan>& FogSpans(Ctx& c, std::uint32_t depth, const V3& o, const V3& d,
                                         double ta, double tb) const {
     auto& merged = c.merged[depth];
     merged.clear();
     for (std::size_t i = 0; i < c.fogs.size(); ++i) {
-      GridCtx& g = c.fogs[i];
+      GridCtx<Real>& g = c.fogs[i];
       c.fog_rays[depth][i] = g.ToIndex(o, d);
       g.Spans(o, d, ta, tb, &c.spans[depth]);
       merged.insert(merged.end(), c.spans[depth].begin(), c.spans[depth].end());
@@ -320,105 +383,122 @@ class FrameTracer {
     s.resize(n);
   }
 
+  void Probe(const Ctx& c, RayKind kind, int slot, std::uint32_t depth, Real t, const V3& tau,
+             const V3& trans) const {
+    if (!job_.sample_probe) return;
+    job_.sample_probe(MarchSample{c.px,
+                                  c.py,
+                                  std::uint32_t(slot),
+                                  kind,
+                                  depth,
+                                  double(t),
+                                  {double(tau.x()), double(tau.y()), double(tau.z())},
+                                  {double(trans.x()), double(trans.y()), double(trans.z())}});
+  }
+
   // The optical depth of one step of `step` world units at world t (coefficients are per
   // voxel of each grid, as in vdb_render) and the single-scattering albedo there; returns the
   // largest density. Densities below 0 (or NaN) count as 0, so depth is never negative and
   // transmittance never grows along a ray; an infinite depth is fine (the step is opaque).
-  double FogAt(ThreadCtx& c, std::uint32_t depth, double t, double step, V3* tau,
-               V3* albedo) const {
-    double max_density = 0;
-    V3 extinction(0.0), scattering(0.0);  // density-weighted coefficients per world unit
+  Real FogAt(Ctx& c, std::uint32_t depth, Real t, Real step, V3* tau, V3* albedo) const {
+    Real max_density = 0;
+    V3 extinction(Real(0)), scattering(Real(0));  // density-weighted, per world unit
     for (std::size_t i = 0; i < c.fogs.size(); ++i) {
-      const double dens = Density(c.fogs[i].Sample(c.fog_rays[depth][i], t));
+      const Real dens = Density(c.fogs[i].Sample(c.fog_rays[depth][i], t));
       max_density = std::max(max_density, dens);
-      const FogMaterial& m = s_.fogs[i].material;
-      const double k = dens * c.fogs[i].inv_vs;
-      extinction += (ToV3(m.absorption) + ToV3(m.scattering)) * k;
-      scattering += ToV3(m.scattering) * k;
+      const Real k = dens * c.fogs[i].inv_vs;
+      extinction += fog_mats_[i].extinction * k;
+      scattering += fog_mats_[i].scattering * k;
     }
     *tau = extinction * step;
     for (int ch = 0; ch < 3; ++ch) {  // a ratio of coefficients: finite whatever the density
       (*albedo)[ch] = extinction[ch] > 0 && std::isfinite(extinction[ch])
                           ? scattering[ch] / extinction[ch]
-                          : 0.0;
+                          : Real(0);
     }
     return max_density;
   }
 
-  static double Density(double sampled) { return sampled > 0 ? sampled : 0.0; }
+  static Real Density(float sampled) { return sampled > 0 ? Real(sampled) : Real(0); }
 
   // Front-to-back fog integration over [ta, tb]; every lit sample casts shadow rays.
   // Returns the parameter of early termination, if it happened.
-  std::optional<double> MarchFog(ThreadCtx& c, int slot, std::uint32_t depth, const V3& o,
-                                 const V3& d, double ta, double tb, V3* lumi, V3* trans) const {
+  std::optional<Real> MarchFog(Ctx& c, int slot, std::uint32_t depth, const V3& o, const V3& d,
+                               double ta, double tb, V3* lumi, V3* trans) const {
     if (c.fogs.empty()) return std::nullopt;
-    const double step = set_.primary_step * min_fog_vs_;
+    const Real step = primary_step_;
+    const RayKind kind = c.rec.kind(slot);
     for (const TimeSpan& span : FogSpans(c, depth, o, d, ta, tb)) {
-      for (double k = std::ceil(span.t0 / step); k * step <= span.t1; k += 1) {
-        const double t = k * step;
+      const Real t1 = Real(span.t1);
+      for (Real k = std::ceil(Real(span.t0) / step); k * step <= t1; k += 1) {
+        const Real t = k * step;
         const std::uint32_t visit = c.paths[depth].AddSampleInOrder(t);
         V3 tau, albedo;
-        const double density = FogAt(c, depth, t, step, &tau, &albedo);
-        if (density < set_.cutoff || density == 0) continue;
-        const V3 dT = Exp(-tau);
+        const Real density = FogAt(c, depth, t, step, &tau, &albedo);
+        if (density < cutoff_ || density == 0) continue;
+        const V3 dT = ExpOf(-tau);
         const V3 pos = o + d * t;
         const CellId cell = c.paths[depth].cell(visit);
-        for (const Light& l : s_.lights) {
+        for (const LightR& l : lights_) {
           const V3 s_trans = TraceShadow(c, slot, visit, depth + 1, pos, l, cell);
-          *lumi += albedo * ToV3(l.color) * s_trans * *trans * (V3(1.0) - dT);
+          *lumi += albedo * l.color * s_trans * *trans * (V3(Real(1)) - dT);
         }
         *trans *= dT;
-        if (trans->lengthSqr() < set_.cutoff) return t;
+        Probe(c, kind, slot, depth, t, tau, *trans);
+        if (trans->lengthSqr() < cutoff_) return t;
       }
     }
     return std::nullopt;
   }
 
   // A shadow ray from pos towards light l: its transmittance through fog and surfaces.
-  V3 TraceShadow(ThreadCtx& c, int parent, std::uint32_t spawn, std::uint32_t depth, const V3& pos,
-                 const Light& l, CellId start) const {
-    V3 dir = ToV3(l.v);
+  V3 TraceShadow(Ctx& c, int parent, std::uint32_t spawn, std::uint32_t depth, const V3& pos,
+                 const LightR& l, CellId start) const {
+    V3 dir = l.v;
     double tmax = CellDDA::kInfinity;
-    if (l.type == Light::Type::kPoint) {
+    if (l.point) {
       dir -= pos;
-      tmax = dir.length();
-      if (!(tmax > 0)) return V3(1.0);
-      dir /= tmax;
+      const Real len = dir.length();
+      if (!(len > 0)) return V3(Real(1));
+      dir /= len;
+      tmax = len;
     }
     const int slot = c.rec.Open(RayKind::kShadow, parent, spawn);
     Path& path = c.paths[depth];
-    path.Build(*job_.cells, job_.footprints, pos, dir, tmax, start);
-    const std::optional<Hit> hit = FindSurface(c, depth, pos, dir, path.t_lo(), path.t_hi());
-    const double t_stop = hit ? hit->t : path.t_hi();
-    V3 trans(1.0);
-    std::optional<double> t_term = Attenuate(c, depth, pos, dir, path.t_lo(), t_stop, &trans);
-    if (hit && !t_term) trans *= s_.surfaces[hit->surface].material.transparency;
-    Finish(c, slot, depth, t_term ? *t_term : t_stop);
+    path.Build(*job_.cells, job_.footprints, ToVec(pos), ToVec(dir), tmax, start);
+    const std::optional<Hit<Real>> hit = FindSurface(c, depth, pos, dir, path.t_lo(), path.t_hi());
+    const double t_stop = hit ? double(hit->t) : path.t_hi();
+    V3 trans(Real(1));
+    std::optional<Real> t_term = Attenuate(c, slot, depth, pos, dir, path.t_lo(), t_stop, &trans);
+    if (hit && !t_term) trans *= surface_mats_[hit->surface].transparency;
+    Finish(c, slot, depth, t_term ? double(*t_term) : t_stop);
     return trans;
   }
 
   // Shadow-ray transmittance through fog over [ta, tb], vdb_render's rule with gain.
-  std::optional<double> Attenuate(ThreadCtx& c, std::uint32_t depth, const V3& o, const V3& d,
-                                  double ta, double tb, V3* trans) const {
+  std::optional<Real> Attenuate(Ctx& c, int slot, std::uint32_t depth, const V3& o, const V3& d,
+                                double ta, double tb, V3* trans) const {
     if (c.fogs.empty()) return std::nullopt;
-    const double step = set_.shadow_step * min_fog_vs_;
+    const Real step = shadow_step_;
     for (const TimeSpan& span : FogSpans(c, depth, o, d, ta, tb)) {
-      for (double k = std::ceil(span.t0 / step); k * step <= span.t1; k += 1) {
-        const double t = k * step;
+      const Real t1 = Real(span.t1);
+      for (Real k = std::ceil(Real(span.t0) / step); k * step <= t1; k += 1) {
+        const Real t = k * step;
         c.paths[depth].AddSampleInOrder(t);
-        V3 tau(0.0);
-        double max_density = 0;
+        V3 tau(Real(0));
+        Real max_density = 0;
         for (std::size_t i = 0; i < c.fogs.size(); ++i) {
-          const double dens = Density(c.fogs[i].Sample(c.fog_rays[depth][i], t));
+          const Real dens = Density(c.fogs[i].Sample(c.fog_rays[depth][i], t));
           max_density = std::max(max_density, dens);
-          const FogMaterial& m = s_.fogs[i].material;
-          const double voxel_t = t * c.fogs[i].inv_vs;
-          tau += (ToV3(m.absorption) + ToV3(m.scattering)) *
-                 (dens * step * c.fogs[i].inv_vs / (1.0 + voxel_t * m.shadow_gain));
+          const FogCoeffs& m = fog_mats_[i];
+          const Real voxel_t = t * c.fogs[i].inv_vs;
+          tau +=
+              m.extinction * (dens * step * c.fogs[i].inv_vs / (Real(1) + voxel_t * m.shadow_gain));
         }
-        if (max_density < set_.cutoff) continue;
-        *trans *= Exp(-tau);
-        if (trans->lengthSqr() < set_.cutoff) return t;
+        if (max_density < cutoff_) continue;
+        *trans *= ExpOf(-tau);
+        Probe(c, RayKind::kShadow, slot, depth, t, tau, *trans);
+        if (trans->lengthSqr() < cutoff_) return t;
       }
     }
     return std::nullopt;
@@ -426,67 +506,68 @@ class FrameTracer {
 
   // The nearest level-set crossing along the ray in [ta, tb]. Every level-set evaluation's t
   // is kept in surface_samples[depth] so that it can be counted where the ray really goes.
-  std::optional<Hit> FindSurface(ThreadCtx& c, std::uint32_t depth, const V3& o, const V3& d,
-                                 double ta, double tb) const {
+  std::optional<Hit<Real>> FindSurface(Ctx& c, std::uint32_t depth, const V3& o, const V3& d,
+                                       double ta, double tb) const {
     auto& samples = c.surface_samples[depth];
     samples.clear();
-    std::optional<Hit> best;
+    std::optional<Hit<Real>> best;
     for (std::size_t i = 0; i < c.surfaces.size(); ++i) {
-      const double limit = best ? best->t : tb;
+      const double limit = best ? double(best->t) : tb;
       if (auto t = Crossing(c.surfaces[i], c.spans[depth], samples, o, d, ta, limit)) {
-        best = Hit{*t, int(i)};
+        best = Hit<Real>{*t, int(i)};
       }
     }
     return best;
   }
 
-  static std::optional<double> Crossing(GridCtx& g, std::vector<TimeSpan>& spans,
-                                        std::vector<double>& samples, const V3& o, const V3& d,
-                                        double ta, double tb) {
-    const GridCtx::IndexRay ray = g.ToIndex(o, d);
+  static std::optional<Real> Crossing(GridCtx<Real>& g, std::vector<TimeSpan>& spans,
+                                      std::vector<Real>& samples, const V3& o, const V3& d,
+                                      double ta, double tb) {
+    const typename GridCtx<Real>::IndexRay ray = g.ToIndex(o, d);
     g.Spans(o, d, ta, tb, &spans);
     bool have_prev = false, inside = false;
-    double prev_t = 0;
+    Real prev_t = 0;
     for (const TimeSpan& span : spans) {
-      for (double t = span.t0;;) {
-        const double phi = g.Sample(ray, t);
+      const Real t1 = Real(span.t1);
+      for (Real t = Real(span.t0);;) {
+        const Real phi = g.Sample(ray, t);
         samples.push_back(t);
         const bool in = phi < 0;
         if (have_prev && in != inside) return Refine(g, ray, samples, prev_t, t, inside);
         have_prev = true, inside = in, prev_t = t;
-        if (t >= span.t1 || t > tb) break;
-        t = std::min(span.t1, t + std::max(0.9 * std::abs(phi), 0.25 * g.vs));
+        if (t >= t1 || t > tb) break;
+        t = std::min(t1, t + std::max(Real(0.9) * std::abs(phi), Real(0.25) * g.vs));
       }
     }
     return std::nullopt;
   }
 
   // Bisection of a sign change of the level set between a (side `inside_a`) and b.
-  static double Refine(GridCtx& g, const GridCtx::IndexRay& ray, std::vector<double>& samples,
-                       double a, double b, bool inside_a) {
+  static Real Refine(GridCtx<Real>& g, const typename GridCtx<Real>::IndexRay& ray,
+                     std::vector<Real>& samples, Real a, Real b, bool inside_a) {
     for (int i = 0; i < kBisections; ++i) {
-      const double m = 0.5 * (a + b);
+      const Real m = Real(0.5) * (a + b);
       samples.push_back(m);
       ((g.Sample(ray, m) < 0) == inside_a ? a : b) = m;
     }
-    return 0.5 * (a + b);
+    return Real(0.5) * (a + b);
   }
 
-  V3 Normal(GridCtx& g, const V3& p) const {
-    const double h = 0.5 * g.vs;
+  V3 Normal(GridCtx<Real>& g, const V3& p) const {
+    const Real h = Real(0.5) * g.vs;
     V3 n(g.SampleAt(p + V3(h, 0, 0)) - g.SampleAt(p - V3(h, 0, 0)),
          g.SampleAt(p + V3(0, h, 0)) - g.SampleAt(p - V3(0, h, 0)),
          g.SampleAt(p + V3(0, 0, h)) - g.SampleAt(p - V3(0, 0, h)));
-    const double len = n.length();
+    const Real len = n.length();
     return len > 0 ? n / len : V3(0, 1, 0);
   }
 
   // Radiance leaving a surface hit towards -d: diffuse light through shadow rays, mirror
   // reflection and refraction, each spawned in the hit's cell.
-  V3 Shade(ThreadCtx& c, int slot, std::uint32_t depth, const V3& o, const V3& d,
-           const Hit& hit) const {
-    GridCtx& g = c.surfaces[hit.surface];
-    const SurfaceMaterial& m = s_.surfaces[hit.surface].material;
+  V3 Shade(Ctx& c, int slot, std::uint32_t depth, const V3& o, const V3& d,
+           const Hit<Real>& hit) const {
+    GridCtx<Real>& g = c.surfaces[hit.surface];
+    const SurfaceCoeffs& m = surface_mats_[hit.surface];
     const V3 p = o + d * hit.t;
     Path& path = c.paths[depth];
     path.AddSamples(hit.t, 6);  // the normal's central differences
@@ -495,37 +576,37 @@ class FrameTracer {
     const V3 n = Normal(g, p);
     const bool entering = d.dot(n) < 0;
     const V3 nf = entering ? n : -n;  // faces the incoming ray
-    const V3 p_out = p + nf * (kSpawnOffset * g.vs), p_in = p - nf * (kSpawnOffset * g.vs);
-    const V3 color = ToV3(m.color);
-    V3 out(0.0);
-    const double diffuse = 1.0 - m.reflectivity - m.transparency;
+    const Real offset = Real(kSpawnOffset) * g.vs;
+    const V3 p_out = p + nf * offset, p_in = p - nf * offset;
+    V3 out(Real(0));
+    const Real diffuse = Real(1) - m.reflectivity - m.transparency;
     if (diffuse > 0) {
-      out += color * (diffuse * kAmbient);
-      for (const Light& l : s_.lights) {
-        V3 ldir = l.type == Light::Type::kPoint ? (ToV3(l.v) - p).unit() : ToV3(l.v);
-        const double ndl = nf.dot(ldir);
+      out += m.color * (diffuse * Real(kAmbient));
+      for (const LightR& l : lights_) {
+        const V3 ldir = l.point ? (l.v - p).unit() : l.v;
+        const Real ndl = nf.dot(ldir);
         if (ndl <= 0) continue;
         const V3 tr = TraceShadow(c, slot, visit, depth + 1, p_out, l, cell);
-        out += color * ToV3(l.color) * tr * (diffuse * ndl);
+        out += m.color * l.color * tr * (diffuse * ndl);
       }
     }
     if (depth >= set_.max_depth) return out;
-    const V3 r = d - nf * (2.0 * d.dot(nf));
+    const V3 r = d - nf * (Real(2) * d.dot(nf));
     if (m.reflectivity > 0) {
-      out += color * m.reflectivity *
+      out += m.color * m.reflectivity *
              Trace(c, p_out, r.unit(), RayKind::kReflection, slot, visit, depth + 1, cell, nullptr);
     }
     if (m.transparency > 0) {
-      const double eta = entering ? 1.0 / m.ior : m.ior;
-      const double cosi = -d.dot(nf);
-      const double k = 1.0 - eta * eta * (1.0 - cosi * cosi);
+      const Real eta = entering ? Real(1) / m.ior : m.ior;
+      const Real cosi = -d.dot(nf);
+      const Real k = Real(1) - eta * eta * (Real(1) - cosi * cosi);
       if (k < 0) {  // total internal reflection
         out +=
-            color * m.transparency *
+            m.color * m.transparency *
             Trace(c, p_out, r.unit(), RayKind::kReflection, slot, visit, depth + 1, cell, nullptr);
       } else {
         const V3 t = (d * eta + nf * (eta * cosi - std::sqrt(k))).unit();
-        out += color * m.transparency *
+        out += m.color * m.transparency *
                Trace(c, p_in, t, RayKind::kRefraction, slot, visit, depth + 1, cell, nullptr);
       }
     }
@@ -536,7 +617,10 @@ class FrameTracer {
   const Scene::Impl& s_;
   const RenderSettings& set_;
   std::vector<Intersector> fog_masters_, surface_masters_;
-  double min_fog_vs_ = 0;
+  Real primary_step_ = 0, shadow_step_ = 0, cutoff_ = 0;  // steps in world units
+  std::vector<FogCoeffs> fog_mats_;
+  std::vector<SurfaceCoeffs> surface_mats_;
+  std::vector<LightR> lights_;
 };
 
 void Tally(const RayBatch& b, FrameStats* st) {
@@ -546,10 +630,6 @@ void Tally(const RayBatch& b, FrameStats* st) {
   for (std::uint32_t s : b.samples()) st->samples += s;
 }
 
-}  // namespace
-
-namespace {
-
 // The rows of one band: traced in parallel, then numbered and handed on in row order.
 struct Band {
   std::vector<RayBatch> rows;
@@ -557,17 +637,14 @@ struct Band {
   std::uint32_t count = 0;
 };
 
-}  // namespace
-
 // Bands of rows are traced in parallel while the previous band is handed to the sink on
 // another thread (encoding and compressing it), so neither waits for the other.
-bool RenderFrame(const RenderJob& job, Image* image, FrameStats* stats) {
-  RAYCELL_CHECK(job.scene && job.cells && job.sink);
-  RAYCELL_CHECK_EQ(job.footprints.size(), std::size_t(job.cells->cell_count()));
+template <class Real>
+bool RenderFrameIn(const RenderJob& job, Image* image, FrameStats* stats) {
   const RenderSettings& set = job.settings;
   *stats = FrameStats{};
-  FrameTracer tracer(job);
-  tbb::enumerable_thread_specific<ThreadCtx> contexts([&] { return tracer.MakeContext(); });
+  FrameTracer<Real> tracer(job);
+  tbb::enumerable_thread_specific<ThreadCtx<Real>> contexts([&] { return tracer.MakeContext(); });
   tbb::task_arena arena(job.threads > 0 ? job.threads : tbb::task_arena::automatic);
   constexpr std::uint32_t kBand = 16;
   Band bands[2];
@@ -586,7 +663,7 @@ bool RenderFrame(const RenderJob& job, Image* image, FrameStats* stats) {
     band.count = std::min(kBand, set.height - y0);
     arena.execute([&] {
       tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, band.count, 1), [&](const auto& r) {
-        ThreadCtx& c = contexts.local();
+        ThreadCtx<Real>& c = contexts.local();
         for (std::uint32_t i = r.begin(); i < r.end(); ++i) {
           band.rows[i].Clear();  // ids relative to the row until Rebase
           band.rows[i].set_first_id(0);
@@ -607,6 +684,15 @@ bool RenderFrame(const RenderJob& job, Image* image, FrameStats* stats) {
   }
   if (writing.valid()) writing.get();
   return !cancelled;
+}
+
+}  // namespace
+
+bool RenderFrame(const RenderJob& job, Image* image, FrameStats* stats) {
+  RAYCELL_CHECK(job.scene && job.cells && job.sink);
+  RAYCELL_CHECK_EQ(job.footprints.size(), std::size_t(job.cells->cell_count()));
+  return job.settings.single_precision ? RenderFrameIn<float>(job, image, stats)
+                                       : RenderFrameIn<double>(job, image, stats);
 }
 
 }  // namespace raycell

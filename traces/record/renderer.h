@@ -24,6 +24,17 @@ struct FrameStats {
   std::uint64_t primary_missed = 0;  // primary rays that met no non-empty cell (not recorded)
 };
 
+// One fog sample of the marcher, for checks (RenderJob::sample_probe): the ray's optical
+// depth over the step and its transmittance after it.
+struct MarchSample {
+  std::uint32_t px, py;  // the pixel
+  std::uint32_t ray;     // the ray's index among the pixel's rays, in start order
+  RayKind kind;
+  std::uint32_t depth;  // 0 for a primary ray, +1 per spawn
+  double t;             // world units along the ray
+  std::array<double, 3> tau, transmittance;
+};
+
 struct RenderJob {
   const Scene* scene = nullptr;
   const CellGrid* cells = nullptr;
@@ -37,6 +48,10 @@ struct RenderJob {
   // Called on the calling thread with the fraction of the frame done.
   std::function<void(double)> progress;
   const std::atomic<bool>* cancel = nullptr;  // stop early (the frame is then incomplete)
+  // For checks: called for every fog sample that attenuates a ray (primary, secondary or
+  // shadow), in order along each ray, from the tracing threads (concurrently unless threads
+  // is 1). Empty: never called, at no cost.
+  std::function<void(const MarchSample&)> sample_probe;
 };
 
 // Renders one frame into `image` (linear RGB) and streams its rays to job.sink. The rays
