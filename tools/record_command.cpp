@@ -126,12 +126,13 @@ void AddRecordCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--material", o.scene.materials,
                   "per-grid material, repeatable. Fog: GRID:absorb=R,G,B:scatter=R,G,B:gain=G "
-                  "(per voxel, as vdb_render). Surface: GRID:color=R,G,B:reflect=F:"
-                  "transparency=F:ior=N");
+                  "(per voxel, as vdb_render; >= 0). Surface: GRID:color=R,G,B:reflect=F:"
+                  "transparency=F:ior=N (colour, reflect, transparency in 0..1, reflect + "
+                  "transparency <= 1, ior in 1..10)");
   cmd->add_option("--light", args->lights,
                   "light, repeatable: dir:X,Y,Z[:R,G,B] (towards the light) or "
-                  "point:X,Y,Z[:R,G,B]; default the scene's own (files: vdb_render's "
-                  "dir:0.3,0.3,0:0.7,0.7,0.7)");
+                  "point:X,Y,Z[:R,G,B] (colour in 0..1e30); default the scene's own (files: "
+                  "vdb_render's dir:0.3,0.3,0:0.7,0.7,0.7)");
   cmd->add_option("--eye", args->eye, "camera position X,Y,Z (default: frames the scene box)");
   cmd->add_option("--target", args->target, "point the camera looks at (default: box centre)");
   cmd->add_option("--up", args->up, "camera up vector")->capture_default_str();

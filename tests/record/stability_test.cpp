@@ -240,6 +240,74 @@ TEST(Stability, TransmittanceStaysInTheUnitIntervalAndNeverIncreasesAlongARay) {
   }
 }
 
+// Materials and lights at the ends of their ranges (the parser's limits): transparent and
+// overflowing fog, huge gain, full mirrors, glass that does not bend and glass of index 10,
+// black surfaces, point lights inside the fog and inside the mirror sphere. The renderer
+// CHECKs every pixel finite; the probe checks every sample.
+TEST(Stability, MaterialsAndLightsAtTheEndsOfTheirRangesStayFinite) {
+  const std::vector<std::vector<std::string>> materials = {
+      {"cloud:absorb=0,0,0:scatter=0,0,0"},
+      {"cloud:absorb=1e38,1e38,1e38:scatter=1e38,1e38,1e38"},        // the sum overflows a float
+      {"cloud:absorb=1e300,1e300,1e300:scatter=1e300,1e300,1e300"},  // and a double
+      {"cloud:absorb=0,0,0:scatter=1e-30,1e-30,1e-30:gain=1e30"},
+      {"mirror:reflect=1", "glass:reflect=0:transparency=1:ior=1"},
+      {"mirror:color=0,0,0", "glass:reflect=0:transparency=1:ior=10:color=1,0,1"},
+  };
+  std::vector<std::vector<Light>> lights = {{}};
+  lights.push_back({{Light::Type::kPoint, {0, 0, 0}, {1, 1, 1}}});            // in the cloud
+  lights.push_back({{Light::Type::kPoint, {1.35, -0.35, 0.45}, {1, 1, 1}}});  // in the sphere
+  lights.push_back({{Light::Type::kDirectional, {0, 1, 0}, {1e30, 1e30, 1e30}}});
+  for (const bool single : {false, true}) {
+    for (const auto& m : materials) {
+      for (const auto& l : lights) {
+        SceneSpec scene;
+        scene.materials = m;
+        scene.lights = l;
+        SCOPED_TRACE(m.front() + (m.size() > 1 ? " " + m.back() : "") + ", " +
+                     std::to_string(l.size()) + " light(s) given, " +
+                     (single ? "single" : "double"));
+        RenderSettings set;
+        set.width = set.height = 24;
+        set.single_precision = single;
+        TransmittanceChecker checker;
+        const InMemory r = RenderInMemory(scene, {}, set, {3, 3, 3}, checker.Probe());
+        EXPECT_EQ(checker.failures(), 0);
+        EXPECT_GT(r.stats.visits, 0u);
+      }
+    }
+  }
+}
+
+// Beyond those ends: a clear message naming the value, nothing rendered.
+TEST(Stability, MaterialsAndLightsBeyondTheirRangesAreRefused) {
+  const auto message = [](const SceneSpec& spec) -> std::string {
+    try {
+      Scene::Load(spec, 0);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  SceneSpec s;
+  s.materials = {"mirror:color=1.5,0,0"};
+  EXPECT_NE(message(s).find("'mirror:color=1.5,0,0' key 'color': must be at most 1"),
+            std::string::npos)
+      << message(s);
+  s = {};
+  s.lights = {{Light::Type::kPoint, {0, 0, 0}, {1e31, 0, 0}}};
+  EXPECT_NE(message(s).find("must be at most 1e+30"), std::string::npos) << message(s);
+  s.lights = {{Light::Type::kPoint, {0, NAN, 0}, {1, 1, 1}}};
+  EXPECT_NE(message(s).find("must be finite"), std::string::npos) << message(s);
+  s.lights = {{Light::Type::kDirectional, {0, 0, 0}, {1, 1, 1}}};
+  EXPECT_NE(message(s).find("must not be zero"), std::string::npos) << message(s);
+  try {
+    ParseLight("dir:0,1,0:1,-1,1");
+    ADD_FAILURE() << "a negative light was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("must not be negative"), std::string::npos) << e.what();
+  }
+}
+
 // Sums of squares and the largest difference between two linear images.
 struct ImageDiff {
   double rmse = 0, max_abs = 0, mean = 0;

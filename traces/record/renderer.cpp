@@ -405,6 +405,7 @@ class FrameTracer {
     V3 extinction(Real(0)), scattering(Real(0));  // density-weighted, per world unit
     for (std::size_t i = 0; i < c.fogs.size(); ++i) {
       const Real dens = Density(c.fogs[i].Sample(c.fog_rays[depth][i], t));
+      if (dens == 0) continue;  // adds nothing (and 0 * an overflowed coefficient is NaN)
       max_density = std::max(max_density, dens);
       const Real k = dens * c.fogs[i].inv_vs;
       extinction += fog_mats_[i].extinction * k;
@@ -489,6 +490,7 @@ class FrameTracer {
         Real max_density = 0;
         for (std::size_t i = 0; i < c.fogs.size(); ++i) {
           const Real dens = Density(c.fogs[i].Sample(c.fog_rays[depth][i], t));
+          if (dens == 0) continue;  // as in FogAt
           max_density = std::max(max_density, dens);
           const FogCoeffs& m = fog_mats_[i];
           const Real voxel_t = t * c.fogs[i].inv_vs;

@@ -62,6 +62,18 @@ void RequireNonNegative(const Rgb& c, const std::string& what) {
   if (c.r < 0 || c.g < 0 || c.b < 0) throw InputError(what + ": must not be negative");
 }
 
+void RequireAtMost(const Rgb& c, double limit, const std::string& what, const char* why) {
+  if (c.r > limit || c.g > limit || c.b > limit) {
+    std::ostringstream s;
+    s << what << ": must be at most " << limit << " (" << why << ")";
+    throw InputError(s.str());
+  }
+}
+
+// Light colours are bounded so that radiance fits a float in the single-precision marcher
+// (it never exceeds the sum of the lights: surface colours and albedos are at most 1).
+constexpr double kMaxLight = 1e30;
+
 double ParseFraction(const std::string& text, const std::string& what) {
   const double v = ParseNumber(text, what);
   if (v < 0 || v > 1) throw InputError(what + ": must be in [0, 1], got " + text);
@@ -89,6 +101,7 @@ void ApplySurfaceKey(SurfaceMaterial& m, const std::string& key, const std::stri
   if (key == "color") {
     m.color = ParseRgb(value, what);
     RequireNonNegative(m.color, what);
+    RequireAtMost(m.color, 1.0, what, "a surface reflects at most the light it gets");
   } else if (key == "reflect") {
     m.reflectivity = ParseFraction(value, what);
   } else if (key == "transparency") {
@@ -331,6 +344,18 @@ void AddDense(const openvdb::FloatGrid& grid, Vec3d lo, Vec3d hi, std::array<std
 
 }  // namespace
 
+void ValidateLight(const Light& l, const std::string& what) {
+  if (!IsFinite(l.v)) throw InputError(what + ": position or direction must be finite");
+  if (!(std::isfinite(l.color.r) && std::isfinite(l.color.g) && std::isfinite(l.color.b))) {
+    throw InputError(what + ": colour must be finite");
+  }
+  RequireNonNegative(l.color, what);
+  RequireAtMost(l.color, kMaxLight, what, "radiance must fit a float");
+  if (l.type == Light::Type::kDirectional && !(Length(l.v) > 0)) {
+    throw InputError(what + ": direction must not be zero");
+  }
+}
+
 Light ParseLight(const std::string& text) {
   const auto f = Split(text, ':');
   const std::string what = "--light '" + text + "'";
@@ -340,13 +365,10 @@ Light ParseLight(const std::string& text) {
   Light l;
   l.type = f[0] == "dir" ? Light::Type::kDirectional : Light::Type::kPoint;
   l.v = ParseTriple(f[1], what);
-  if (l.type == Light::Type::kDirectional && !(Length(l.v) > 0)) {
-    throw InputError(what + ": direction must not be zero");
-  }
   if (f.size() == 3) {
     l.color = ParseRgb(f[2], what);
-    RequireNonNegative(l.color, what);
   }
+  ValidateLight(l, what);
   return l;
 }
 
@@ -375,6 +397,7 @@ std::unique_ptr<Scene> Scene::Load(const SceneSpec& spec, int frame) {
   for (const auto& m : spec.materials) ApplyMaterial(*s, m, spec.source);
   if (!spec.lights.empty()) s->lights = spec.lights;
   for (auto& l : s->lights) {
+    ValidateLight(l, "light");
     if (l.type == Light::Type::kDirectional) l.v = Normalize(l.v);
   }
   ComputeBox(*s);

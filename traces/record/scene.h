@@ -47,6 +47,9 @@ struct SceneSpec {
 
 // Parses "dir:X,Y,Z[:R,G,B]" or "point:X,Y,Z[:R,G,B]".
 Light ParseLight(const std::string& text);
+// Checks a light: finite, a non-zero direction, colour in [0, 1e30] (so that radiance fits a
+// float). InputError naming `what` otherwise.
+void ValidateLight(const Light& l, const std::string& what);
 bool IsSequencePattern(const std::string& source);
 // The file of one frame: the pattern formatted with the frame number, or the file itself.
 std::string FrameFile(const std::string& source, int frame);
