@@ -28,8 +28,10 @@ namespace fs = std::filesystem;
 
 struct StudyArgs {
   std::string scene = "builtin", cells = "2x2x2,3x3x3", res = "256x256", out = "study";
+  std::string accuracy_res = "128x128";
   int frames = 24;
-  double orbit = 90;  // 3.75 degrees per frame: consecutive frames alike, as in an animation
+  int accuracy_frames = 2;  // 0: no run time against error section
+  double orbit = 90;        // 3.75 degrees per frame: consecutive frames alike, as in an animation
   int threads = 0;
   bool quiet = false;
 };
@@ -194,8 +196,51 @@ std::string Python() {
   return access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
 }
 
+// 'text' for the shell.
+std::string Quote(const std::string& text) {
+  std::string q = "'";
+  for (char c : text) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+// Run time against error on a short capture of the same scene: tools/bench/accuracy.py runs
+// this binary on each knob's settings; its table goes into the report, its CSV and plot
+// into OUT/accuracy/. Empty when switched off.
+std::string Accuracy(const StudyArgs& a) {
+  if (a.accuracy_frames == 0) return "";
+  const fs::path dir = fs::path(a.out) / "accuracy";
+  const std::string cmd = "RAYCELL=" + Quote(fs::read_symlink("/proc/self/exe").string()) + " " +
+                          Python() + " " + Quote(RAYCELL_SOURCE_DIR "/tools/bench/accuracy.py") +
+                          " --scene " + Quote(a.scene) + " --res " + Quote(a.accuracy_res) +
+                          " --frames " + std::to_string(a.accuracy_frames) + " --out " +
+                          Quote(dir.string());
+  if (!a.quiet) std::cerr << "measuring run time against error (" << cmd << ")\n";
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) throw InputError("cannot run `" + cmd + "`");
+  std::string table;
+  char buf[4096];
+  for (std::size_t n; (n = fread(buf, 1, sizeof buf, p)) > 0;) table.append(buf, n);
+  if (pclose(p) != 0 || !fs::exists(dir / "accuracy.png")) {
+    throw InputError("run time against error failed: `" + cmd +
+                     "` (it needs python3 with matplotlib and numpy: Debian package "
+                     "python3-matplotlib, installed by tools/setup.sh)");
+  }
+  std::ostringstream s;
+  s << "## Run time against error\n\n"
+    << "The knobs that trade accuracy for speed, on " << a.accuracy_frames << " frame(s) of the "
+    << "same scene at " << a.accuracy_res << " in 3x3x3 cells (`tools/bench/accuracy.py`; "
+    << "times are ratios to the most accurate setting measured in the same run). Renderer "
+    << "rows: image RMSE against a capture with a four times finer step, and the change in "
+    << "Cell Tree scheduling's fetches. Replay rows: error in simulated time and fetches "
+    << "against per-ray-segment replay without sampling.\n\n"
+    << table << "\n![run time against error](accuracy/accuracy.png)\n\n"
+    << "CSV: `accuracy/accuracy.csv`.\n";
+  return s.str();
+}
+
 void Plot(const std::string& out, const std::vector<std::string>& cells) {
-  std::string cmd = Python() + " '" RAYCELL_SOURCE_DIR "/tools/plot_study.py' '" + out + "'";
+  std::string cmd =
+      Python() + " " + Quote(RAYCELL_SOURCE_DIR "/tools/plot_study.py") + " " + Quote(out);
   for (const auto& c : cells) cmd += " " + c;
   if (std::system(cmd.c_str()) != 0) {
     throw InputError("plots failed: `" + cmd +
@@ -211,6 +256,10 @@ void Plot(const std::string& out, const std::vector<std::string>& cells) {
 
 void Run(const StudyArgs& a) {
   if (a.frames < 2 || a.frames > 10000) throw InputError("--frames: must be in 2..10000");
+  if (a.accuracy_frames < 0 || a.accuracy_frames > 1000) {
+    throw InputError("--accuracy-frames: must be in 0..1000");
+  }
+  ParseResolution(a.accuracy_res);  // InputError naming it, before any work
   if (!std::isfinite(a.orbit)) throw InputError("--orbit: must be a finite number of degrees");
   const std::vector<std::string> cells = SplitList(a.cells);
   fs::create_directories(a.out);
@@ -221,7 +270,8 @@ void Run(const StudyArgs& a) {
     WriteFile(a.out, "fetches_" + g.cells + ".csv", FetchesCsv(g));
   }
   Plot(a.out, cells);
-  WriteFile(a.out, "report.md", Report(a, grids));
+  const std::string accuracy = Accuracy(a);
+  WriteFile(a.out, "report.md", Report(a, grids) + accuracy);
   std::cout << "report: " << (fs::path(a.out) / "report.md").string() << "\n";
 }
 
@@ -237,6 +287,9 @@ void AddStudyCommand(CLI::App& app) {
       "search proves it within a second), replays the capture under Max Work, Cell Tree\n"
       "scheduling and the Peel oracle, and writes OUT/report.md with the tables, the CSV\n"
       "behind each, and plots of fetches and Cell Tree size per frame (matplotlib).\n"
+      "Then measures run time against error for the renderer's step, cutoff and precision\n"
+      "and the replay's granularity and sampling on a short capture of the same scene\n"
+      "(tools/bench/accuracy.py; --accuracy-frames 0 skips it).\n"
       "With no options: the built-in scene, 24 frames over 90 degrees, 2x2x2 and 3x3x3\n"
       "cells, 256x256; about a minute on 2 cores.");
   cmd->add_option("--scene", args->scene, "builtin, a .vdb file, or a printf pattern (see record)")
@@ -249,6 +302,12 @@ void AddStudyCommand(CLI::App& app) {
   cmd->add_option("--out", args->out, "folder for the report, CSVs, plots, captures, images")
       ->capture_default_str();
   cmd->add_option("--threads", args->threads, "rendering threads, 0 = all cores")
+      ->capture_default_str();
+  cmd->add_option("--accuracy-frames", args->accuracy_frames,
+                  "frames of the run time against error capture; 0 skips that section")
+      ->capture_default_str();
+  cmd->add_option("--accuracy-res", args->accuracy_res,
+                  "image size of the run time against error capture")
       ->capture_default_str();
   cmd->add_flag("--quiet", args->quiet, "no progress bars");
   cmd->callback([args] { Run(*args); });

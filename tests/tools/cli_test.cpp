@@ -110,8 +110,10 @@ TEST(Cli, ReplayAndSweepAreDeterministicWhateverTheJobs) {
 
 TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
   const auto out = Dir() / "study";
-  const Result r =
-      Raycell("study --res 24x24 --frames 3 --cells 2x2x2,1x2x1 --quiet --out " + out.string());
+  const Result r = Raycell(
+      "study --res 24x24 --frames 3 --cells 2x2x2,1x2x1 --accuracy-frames 1 "
+      "--accuracy-res 16x16 --quiet --out " +
+      out.string());
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("report: " + (out / "report.md").string()), std::string::npos) << r.out;
   for (const char* cells : {"2x2x2", "1x2x1"}) {
@@ -126,6 +128,15 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
   EXPECT_NE(report.find("![fetches per frame](fetches_2x2x2.png)"), std::string::npos);
   const std::string fetches = raycell::testing::ReadBytes((out / "fetches_2x2x2.csv").string());
   EXPECT_EQ(std::count(fetches.begin(), fetches.end(), '\n'), 4);  // header + 3 frames
+  // Run time against error: every knob's rows, finite, with their plot.
+  EXPECT_NE(report.find("## Run time against error"), std::string::npos);
+  EXPECT_NE(report.find("| renderer precision | single |"), std::string::npos) << report;
+  EXPECT_NE(report.find("![run time against error](accuracy/accuracy.png)"), std::string::npos);
+  EXPECT_GT(std::filesystem::file_size(out / "accuracy" / "accuracy.png"), 1000u);
+  const std::string acc = raycell::testing::ReadBytes((out / "accuracy" / "accuracy.csv").string());
+  EXPECT_EQ(std::count(acc.begin(), acc.end(), '\n'), 1 + 5 + 3 + 1 + 2 + 5) << acc;
+  EXPECT_EQ(acc.find("nan"), std::string::npos) << acc;
+  EXPECT_EQ(acc.find("inf"), std::string::npos) << acc;
 }
 
 TEST(Cli, BadInputGetsAClearMessageAndExitCode2) {

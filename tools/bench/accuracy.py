@@ -129,17 +129,22 @@ def main():
         print(f"| {r['knob']} | {r['value']} | {r['seconds']:.2f} s ({r['time_ratio']:.2f}) | "
               f"{r['error']:.4f} ({r['error_kind']}) | {100 * r['fetch_change']:+.1f}% | "
               f"{'yes' if r['default'] else ''} |")
-    fig, ax = plt.subplots(figsize=(7, 4))
-    for knob in sorted({r["knob"] for r in rows}):
-        pts = sorted((r["time_ratio"], r["error"], r["value"]) for r in rows if r["knob"] == knob)
-        ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", label=knob)
-        for p in pts:
-            ax.annotate(str(p[2]), (p[0], p[1]), fontsize=7)
-    ax.set_xlabel("run time, ratio to the most accurate setting")
-    ax.set_ylabel("error")
-    ax.set_title("Run time against error")
-    ax.legend()
-    ax.grid(alpha=0.3)
+    # One panel per kind of error: the renderer's image RMSE, the replay's simulated time.
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    for ax, part, ylabel in ((axes[0], "renderer", "image RMSE against step 0.25"),
+                             (axes[1], "replay", "relative error in simulated time")):
+        for knob in sorted({r["knob"] for r in rows if r["knob"].startswith(part)}):
+            pts = sorted((r["time_ratio"], r["error"], str(r["value"])) for r in rows
+                         if r["knob"] == knob)
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", label=knob[len(part) + 1:])
+            for p in pts:
+                ax.annotate(p[2], (p[0], p[1]), fontsize=7, xytext=(3, 3),
+                            textcoords="offset points")
+        ax.set_xlabel("run time, ratio to the most accurate setting")
+        ax.set_ylabel(ylabel)
+        ax.set_title(f"{part.capitalize()}: run time against error")
+        ax.legend(fontsize=8)
+        ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(os.path.join(opts.out, "accuracy.png"), dpi=100)
     return 0
