@@ -17,8 +17,10 @@
 #include "replay/driver.h"
 #include "tools/commands.h"
 #include "traces/check.h"
+#include "traces/progress.h"
 #include "traces/record/cell_grid.h"
 #include "traces/record/recorder.h"
+#include "traces/record/scene.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {
@@ -30,19 +32,22 @@ struct StudyArgs {
   std::string scene = "builtin", cells = "2x2x2,3x3x3", res = "256x256", out = "study";
   std::string accuracy_res = "128x128";
   int frames = 24;
-  int accuracy_frames = 2;  // 0: no run time against error section
-  double orbit = 90;        // 3.75 degrees per frame: consecutive frames alike, as in an animation
+  int accuracy_frames = 2;          // 0: no run time against error section
+  std::vector<std::string> traces;  // reused captures instead of recording
+  double orbit = 90;  // 3.75 degrees per frame: consecutive frames alike, as in an animation
   int threads = 0;
   bool quiet = false;
 };
 
 const char* kSchedulers[] = {"maxwork", "celltree", "peel"};
+constexpr std::uint64_t kOptimumStates = 50'000;
 
-// The results for one cell grid.
+// The results for one cell grid (recorded) or one given trace.
 struct GridStudy {
-  std::string cells;
-  std::vector<FrameAnalysis> trees;
-  std::vector<TraceReplay> replays;  // in kSchedulers order
+  std::string cells;  // the label in file names: "3x3x3", or the given trace's file stem
+  std::string heading, capture, images;  // images: empty for a given trace
+  std::vector<FrameAnalysis> trees{};
+  std::vector<TraceReplay> replays{};  // in kSchedulers order
 };
 
 std::vector<std::string> SplitList(const std::string& text) {
@@ -81,19 +86,32 @@ TraceReader RecordGrid(const StudyArgs& a, const std::string& cells) {
   return TraceReader::Open(o.out);
 }
 
-GridStudy StudyGrid(const StudyArgs& a, const std::string& cells) {
-  const TraceReader reader = RecordGrid(a, cells);
-  GridStudy g{cells, {}, {}};
+std::string Dims(const TraceHeader& h) {
+  return std::to_string(h.cells[0]) + "x" + std::to_string(h.cells[1]) + "x" +
+         std::to_string(h.cells[2]);
+}
+
+// Analyses every frame's Cell Tree and replays the capture under each scheduler.
+GridStudy StudyTrace(const TraceReader& reader, GridStudy g, bool quiet) {
   std::vector<std::size_t> all;
   AnalyzeOptions exact;
   exact.exact = true;
-  exact.max_seconds = 1;
-  for (std::size_t i = 0; i < reader.frames().size(); ++i) {
+  // Limited by expanded states, not time, so that the report is the same on any machine and
+  // load (50 000 states take about a second on a 27-cell tree of the built-in scene); the
+  // time limit is only a safety net far above that.
+  exact.max_states = kOptimumStates;
+  exact.max_seconds = 600;
+  Progress progress(!quiet);
+  const std::size_t n = reader.frames().size();
+  for (std::size_t i = 0; i < n; ++i) {
+    progress.Update(double(i) / n, g.cells + ": Cell Tree of frame " + std::to_string(i + 1) + "/" +
+                                       std::to_string(n));
     all.push_back(i);
     FrameAnalysis fa = AnalyzeTree(BuildFrameTree(reader, i), exact);
     fa.frame = reader.frames()[i].frame;
     g.trees.push_back(std::move(fa));
   }
+  progress.Done();
   for (const char* s : kSchedulers) {
     ReplayConfig config = DefaultConfig();
     config.scheduler = s;
@@ -101,6 +119,34 @@ GridStudy StudyGrid(const StudyArgs& a, const std::string& cells) {
     g.replays.push_back(ReplayTrace(reader, all, config));
   }
   return g;
+}
+
+GridStudy StudyGrid(const StudyArgs& a, const std::string& cells) {
+  const TraceReader reader = RecordGrid(a, cells);
+  return StudyTrace(reader,
+                    {cells, cells + " cells", "capture_" + cells + ".rct", "images_" + cells + "/"},
+                    a.quiet);
+}
+
+// The given traces, each labelled by its file stem (which must differ between them).
+std::vector<GridStudy> StudyGivenTraces(const StudyArgs& a) {
+  std::vector<GridStudy> grids;
+  for (const std::string& path : a.traces) {
+    const std::string stem = fs::path(path).stem().string();
+    for (const GridStudy& g : grids) {
+      if (g.cells == stem) {
+        throw InputError("--trace '" + path + "': another trace is also named '" + stem +
+                         "' (their CSVs and plots would collide)");
+      }
+    }
+    const TraceReader reader = TraceReader::Open(path);
+    if (reader.frames().empty()) throw InputError("--trace '" + path + "': no frames");
+    std::cerr << "reusing " << path << ": " << reader.frames().size() << " frames in "
+              << Dims(reader.header()) << " cells\n";
+    grids.push_back(StudyTrace(
+        reader, {stem, "`" + path + "` (" + Dims(reader.header()) + " cells)", path, ""}, a.quiet));
+  }
+  return grids;
 }
 
 // Writes `text` to dir/name via a temporary file.
@@ -151,7 +197,7 @@ std::string GridReport(const GridStudy& g) {
     bound += t.bound, peel += t.peel_length();
     if (t.optimum) ++proved, opt += *t.optimum, peel_proved += t.peel_length();
   }
-  s << "## " << g.cells << " cells\n\n"
+  s << "## " << g.heading << "\n\n"
     << "![fetches per frame](fetches_" << g.cells << ".png)\n\n"
     << "| | value |\n|---|---:|\n"
     << "| frames | " << tr.size() << " |\n"
@@ -173,21 +219,28 @@ std::string GridReport(const GridStudy& g) {
   s << "\n![Cell Tree size](cell_trees_" << g.cells << ".png)\n\n"
     << "Per frame: `cell_trees_" << g.cells
     << ".csv` (rays, nodes, bound, Peel, optimum), `fetches_" << g.cells
-    << ".csv` (fetches per scheduler and the bound); images in `images_" << g.cells
-    << "/`; the capture `capture_" << g.cells << ".rct`.\n\n";
+    << ".csv` (fetches per scheduler and the bound)"
+    << (g.images.empty() ? "" : "; images in `" + g.images + "`") << "; the capture `" << g.capture
+    << "`.\n\n";
   return s.str();
 }
 
 std::string Report(const StudyArgs& a, const std::vector<GridStudy>& grids) {
   std::ostringstream s;
-  s << "# raycell study\n\n"
-    << "Scene `" << a.scene << "`, " << a.frames << " frames orbiting " << a.orbit << " degrees, "
-    << a.res << ". Replays use the default GI-Cube configuration (one block "
+  s << "# raycell study\n\n";
+  if (a.traces.empty()) {
+    s << "Scene `" << a.scene << "`, " << a.frames << " frames orbiting " << a.orbit << " degrees, "
+      << a.res << ". ";
+  } else {
+    s << "Given captures, every frame of each. ";
+  }
+  s << "Replays use the default GI-Cube configuration (one block "
     << "processor with a one-cell cache; `raycell replay --print-config`), per Cell Tree "
     << "node (exact for this configuration). Max Work, Cell Tree scheduling (frame i+1 "
     << "follows the Peel schedule of frame i's tree; frame 0 runs Max Work) and the Peel "
     << "oracle (each frame's own Peel schedule) against the maxGen lower bound. The "
-    << "optimum comes from an A* search limited to one second per frame.\n\n";
+    << "optimum comes from an A* search limited to " << kOptimumStates
+    << " expanded states per frame.\n\n";
   for (const GridStudy& g : grids) s << GridReport(g);
   return s.str();
 }
@@ -206,12 +259,20 @@ std::string Quote(const std::string& text) {
 // Run time against error on a short capture of the same scene: tools/bench/accuracy.py runs
 // this binary on each knob's settings; its table goes into the report, its CSV and plot
 // into OUT/accuracy/. Empty when switched off.
-std::string Accuracy(const StudyArgs& a) {
+std::string Accuracy(const StudyArgs& a, const std::string& scene) {
   if (a.accuracy_frames == 0) return "";
+  try {
+    SceneSpec spec;
+    spec.source = scene;
+    Scene::Load(spec, 0);  // a given trace's scene may live elsewhere
+  } catch (const InputError& e) {
+    return "## Run time against error\n\nNot measured: the scene `" + scene +
+           "` cannot be loaded here (" + e.what() + ").\n";
+  }
   const fs::path dir = fs::path(a.out) / "accuracy";
   const std::string cmd = "RAYCELL=" + Quote(fs::read_symlink("/proc/self/exe").string()) + " " +
                           Python() + " " + Quote(RAYCELL_SOURCE_DIR "/tools/bench/accuracy.py") +
-                          " --scene " + Quote(a.scene) + " --res " + Quote(a.accuracy_res) +
+                          " --scene " + Quote(scene) + " --res " + Quote(a.accuracy_res) +
                           " --frames " + std::to_string(a.accuracy_frames) + " --out " +
                           Quote(dir.string());
   if (!a.quiet) std::cerr << "measuring run time against error (" << cmd << ")\n";
@@ -241,7 +302,7 @@ std::string Accuracy(const StudyArgs& a) {
 void Plot(const std::string& out, const std::vector<std::string>& cells) {
   std::string cmd =
       Python() + " " + Quote(RAYCELL_SOURCE_DIR "/tools/plot_study.py") + " " + Quote(out);
-  for (const auto& c : cells) cmd += " " + c;
+  for (const auto& c : cells) cmd += " " + Quote(c);
   if (std::system(cmd.c_str()) != 0) {
     throw InputError("plots failed: `" + cmd +
                      "` (it needs python3 with matplotlib: Debian "
@@ -261,16 +322,26 @@ void Run(const StudyArgs& a) {
   }
   ParseResolution(a.accuracy_res);  // InputError naming it, before any work
   if (!std::isfinite(a.orbit)) throw InputError("--orbit: must be a finite number of degrees");
-  const std::vector<std::string> cells = SplitList(a.cells);
-  fs::create_directories(a.out);
   std::vector<GridStudy> grids;
-  for (const std::string& c : cells) grids.push_back(StudyGrid(a, c));
+  std::string accuracy_scene = a.scene;
+  if (a.traces.empty()) {
+    const std::vector<std::string> cells = SplitList(a.cells);
+    fs::create_directories(a.out);
+    for (const std::string& c : cells) grids.push_back(StudyGrid(a, c));
+  } else {
+    for (const std::string& t : a.traces) TraceReader::Open(t);  // every one readable first
+    fs::create_directories(a.out);
+    grids = StudyGivenTraces(a);
+    accuracy_scene = TraceReader::Open(a.traces.front()).header().scene;
+  }
+  std::vector<std::string> labels;
+  for (const GridStudy& g : grids) labels.push_back(g.cells);
   for (const GridStudy& g : grids) {
     WriteFile(a.out, "cell_trees_" + g.cells + ".csv", TreesCsv(g));
     WriteFile(a.out, "fetches_" + g.cells + ".csv", FetchesCsv(g));
   }
-  Plot(a.out, cells);
-  const std::string accuracy = Accuracy(a);
+  Plot(a.out, labels);
+  const std::string accuracy = Accuracy(a, accuracy_scene);
   WriteFile(a.out, "report.md", Report(a, grids) + accuracy);
   std::cout << "report: " << (fs::path(a.out) / "report.md").string() << "\n";
 }
@@ -284,21 +355,33 @@ void AddStudyCommand(CLI::App& app) {
   cmd->footer(
       "For each cell grid: records an orbit of the scene (trace and PNG per frame), analyses\n"
       "every frame's Cell Tree (rays per node, maxGen bound, Peel, the optimum where an A*\n"
-      "search proves it within a second), replays the capture under Max Work, Cell Tree\n"
+      "search proves it within 50 000 states), replays the capture under Max Work, Cell Tree\n"
       "scheduling and the Peel oracle, and writes OUT/report.md with the tables, the CSV\n"
       "behind each, and plots of fetches and Cell Tree size per frame (matplotlib).\n"
       "Then measures run time against error for the renderer's step, cutoff and precision\n"
       "and the replay's granularity and sampling on a short capture of the same scene\n"
       "(tools/bench/accuracy.py; --accuracy-frames 0 skips it).\n"
       "With no options: the built-in scene, 24 frames over 90 degrees, 2x2x2 and 3x3x3\n"
-      "cells, 256x256; about a minute on 2 cores.");
-  cmd->add_option("--scene", args->scene, "builtin, a .vdb file, or a printf pattern (see record)")
-      ->capture_default_str();
-  cmd->add_option("--cells", args->cells, "cell grids, comma-separated")->capture_default_str();
-  cmd->add_option("--frames", args->frames, "frames of the orbit")->capture_default_str();
-  cmd->add_option("--orbit", args->orbit, "degrees the camera turns over the frames")
-      ->capture_default_str();
-  cmd->add_option("--res", args->res, "image size WxH")->capture_default_str();
+      "cells, 256x256; about a minute on 2 cores.\n"
+      "With --trace: no recording; every frame of each given capture is analysed and\n"
+      "replayed (labelled by its file name), and the run time against error section uses\n"
+      "the scene the first capture names, if it can be loaded here.\n\n"
+      "Examples:\n"
+      "  raycell study --scene ../shared/data/mj_smoke.vdb --frames 30 --out smoke-study\n"
+      "  raycell study --trace smoke.rct --trace fluid.rct --accuracy-frames 0");
+  std::vector<CLI::Option*> recording = {
+      cmd->add_option("--scene", args->scene,
+                      "builtin, a .vdb file, or a printf pattern (see record)")
+          ->capture_default_str(),
+      cmd->add_option("--cells", args->cells, "cell grids, comma-separated")->capture_default_str(),
+      cmd->add_option("--frames", args->frames, "frames of the orbit")->capture_default_str(),
+      cmd->add_option("--orbit", args->orbit, "degrees the camera turns over the frames")
+          ->capture_default_str(),
+      cmd->add_option("--res", args->res, "image size WxH")->capture_default_str()};
+  CLI::Option* trace =
+      cmd->add_option("--trace", args->traces,
+                      "a capture to study instead of recording, repeatable (record's OUT)");
+  for (CLI::Option* o : recording) trace->excludes(o);
   cmd->add_option("--out", args->out, "folder for the report, CSVs, plots, captures, images")
       ->capture_default_str();
   cmd->add_option("--threads", args->threads, "rendering threads, 0 = all cores")

@@ -137,6 +137,21 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
   EXPECT_EQ(std::count(acc.begin(), acc.end(), '\n'), 1 + 5 + 3 + 1 + 2 + 5) << acc;
   EXPECT_EQ(acc.find("nan"), std::string::npos) << acc;
   EXPECT_EQ(acc.find("inf"), std::string::npos) << acc;
+
+  // A given capture is studied without recording, with the same results.
+  const auto again = Dir() / "study_again";
+  const std::string capture = (out / "capture_2x2x2.rct").string();
+  const Result r2 =
+      Raycell("study --trace " + capture + " --accuracy-frames 0 --quiet --out " + again.string());
+  ASSERT_EQ(r2.code, 0) << r2.out;
+  EXPECT_EQ(raycell::testing::ReadBytes((again / "fetches_capture_2x2x2.csv").string()), fetches);
+  EXPECT_EQ(raycell::testing::ReadBytes((again / "cell_trees_capture_2x2x2.csv").string()),
+            raycell::testing::ReadBytes((out / "cell_trees_2x2x2.csv").string()));
+  EXPECT_GT(std::filesystem::file_size(again / "fetches_capture_2x2x2.png"), 1000u);
+  EXPECT_FALSE(std::filesystem::exists(again / "images_2x2x2"));
+  const Result r3 = Raycell("study --trace " + capture + " --cells 3x3x3 --out " + again.string());
+  EXPECT_EQ(r3.code, 2);
+  EXPECT_NE(r3.out.find("--cells excludes --trace"), std::string::npos) << r3.out;
 }
 
 TEST(Cli, BadInputGetsAClearMessageAndExitCode2) {
