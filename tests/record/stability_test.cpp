@@ -128,11 +128,13 @@ TEST(Stability, CameraInsideTheVolumeAndRaysTangentToTheMirror) {
   EXPECT_GT(r.frames().at(0).rays_by_kind[int(RayKind::kReflection)], 0u);
 }
 
-// One frame rendered in memory: the linear image, the stats and the visits per cell.
+// One frame rendered in memory: the linear image, the stats, the visits per cell and the
+// visits whose recorded t_enter/t_exit are not finite or out of order (always 0 expected).
 struct InMemory {
   Image image{1, 1};
   FrameStats stats;
   std::vector<std::uint64_t> visits_per_cell;
+  std::uint64_t bad_t = 0;
 };
 
 InMemory RenderInMemory(const SceneSpec& spec, const CameraPathSpec& camera,
@@ -146,12 +148,17 @@ InMemory RenderInMemory(const SceneSpec& spec, const CameraPathSpec& camera,
   job.footprints = scene->Footprints(scene->box_lo(), scene->box_hi(), dims, "sparse");
   job.camera = MakeCameraPath(camera, {0}, scene->box_lo(), scene->box_hi()).at(0);
   job.settings = settings;
+  job.settings.store_t = true;  // the trace's parameters are checked too
   job.threads = probe ? 1 : 0;
   job.sample_probe = std::move(probe);
   InMemory out;
   out.visits_per_cell.assign(cells.cell_count(), 0);
   job.sink = [&](const RayBatch& b) {
     for (CellId c : b.cells()) ++out.visits_per_cell.at(c);
+    for (std::size_t v = 0; v < b.visit_count(); ++v) {
+      const float t0 = b.t_enters()[v], t1 = b.t_exits()[v];
+      if (!(std::isfinite(t0) && std::isfinite(t1) && t0 >= 0 && t0 <= t1)) ++out.bad_t;
+    }
   };
   out.image = Image(settings.width, settings.height);
   EXPECT_TRUE(RenderFrame(job, &out.image, &out.stats));
@@ -231,8 +238,9 @@ TEST(Stability, TransmittanceStaysInTheUnitIntervalAndNeverIncreasesAlongARay) {
       set.cutoff = c.cutoff;
       set.single_precision = single;
       TransmittanceChecker checker;
-      RenderInMemory(c.scene, c.camera, set, {3, 3, 3}, checker.Probe());
+      const InMemory r = RenderInMemory(c.scene, c.camera, set, {3, 3, 3}, checker.Probe());
       EXPECT_EQ(checker.failures(), 0);
+      EXPECT_EQ(r.bad_t, 0u);
       if (c.name != "negative ball") {
         EXPECT_GT(checker.rays(), 0u);
       }
@@ -272,6 +280,7 @@ TEST(Stability, MaterialsAndLightsAtTheEndsOfTheirRangesStayFinite) {
         TransmittanceChecker checker;
         const InMemory r = RenderInMemory(scene, {}, set, {3, 3, 3}, checker.Probe());
         EXPECT_EQ(checker.failures(), 0);
+        EXPECT_EQ(r.bad_t, 0u);
         EXPECT_GT(r.stats.visits, 0u);
       }
     }
