@@ -420,6 +420,15 @@ class FrameTracer {
     return max_density;
   }
 
+  // The first of vdb_render's step positions k * step at or after t. k is an integer so that
+  // the march ends even where t is too large for Real to tell k from k + 1 (a distant camera
+  // in single precision): the positions then repeat, the count of steps stays right.
+  static std::int64_t FirstStep(Real t, Real step) {
+    const Real k = std::ceil(t / step);
+    RAYCELL_CHECK(std::abs(k) < Real(0x1p62));  // more steps than any run could take
+    return std::int64_t(k);
+  }
+
   static Real Density(float sampled) { return sampled > 0 ? Real(sampled) : Real(0); }
 
   // Front-to-back fog integration over [ta, tb]; every lit sample casts shadow rays.
@@ -431,8 +440,8 @@ class FrameTracer {
     const RayKind kind = c.rec.kind(slot);
     for (const TimeSpan& span : FogSpans(c, depth, o, d, ta, tb)) {
       const Real t1 = Real(span.t1);
-      for (Real k = std::ceil(Real(span.t0) / step); k * step <= t1; k += 1) {
-        const Real t = k * step;
+      for (std::int64_t k = FirstStep(Real(span.t0), step); Real(k) * step <= t1; ++k) {
+        const Real t = Real(k) * step;
         const std::uint32_t visit = c.paths[depth].AddSampleInOrder(t);
         V3 tau, albedo;
         const Real density = FogAt(c, depth, t, step, &tau, &albedo);
@@ -483,8 +492,8 @@ class FrameTracer {
     const Real step = shadow_step_;
     for (const TimeSpan& span : FogSpans(c, depth, o, d, ta, tb)) {
       const Real t1 = Real(span.t1);
-      for (Real k = std::ceil(Real(span.t0) / step); k * step <= t1; k += 1) {
-        const Real t = k * step;
+      for (std::int64_t k = FirstStep(Real(span.t0), step); Real(k) * step <= t1; ++k) {
+        const Real t = Real(k) * step;
         c.paths[depth].AddSampleInOrder(t);
         V3 tau(Real(0));
         Real max_density = 0;
@@ -538,7 +547,10 @@ class FrameTracer {
         if (have_prev && in != inside) return Refine(g, ray, samples, prev_t, t, inside);
         have_prev = true, inside = in, prev_t = t;
         if (t >= t1 || t > tb) break;
-        t = std::min(t1, t + std::max(Real(0.9) * std::abs(phi), Real(0.25) * g.vs));
+        const Real next = std::min(t1, t + std::max(Real(0.9) * std::abs(phi), Real(0.25) * g.vs));
+        // Where the step is below t's resolution (a distant camera in single precision), the
+        // next representable t: the search still moves on.
+        t = next > t ? next : std::nextafter(t, t1);
       }
     }
     return std::nullopt;
