@@ -325,6 +325,46 @@ TEST(Stability, MaterialsAndLightsBeyondTheirRangesAreRefused) {
   }
 }
 
+// The sink runs on a thread of its own: its exception (a full disk, say) stops the frame
+// and reaches the caller; a cancel leaves the rays of the finished rows, in id order.
+TEST(Stability, SinkErrorsAndCancelsStopTheFrameCleanly) {
+  const auto scene = Scene::Load({}, 0);
+  const CellGrid cells = CellGrid::Create(scene->box_lo(), scene->box_hi(), {2, 2, 2});
+  RenderJob job;
+  job.scene = scene.get();
+  job.cells = &cells;
+  job.footprints = scene->Footprints(scene->box_lo(), scene->box_hi(), {2, 2, 2}, "sparse");
+  job.camera = MakeCameraPath({}, {0}, scene->box_lo(), scene->box_hi()).at(0);
+  job.settings.width = job.settings.height = 64;
+  Image image(64, 64);
+  FrameStats stats;
+  int batches = 0;
+  job.sink = [&](const RayBatch&) {
+    if (++batches == 5) throw InputError("disk full (test)");
+  };
+  try {
+    RenderFrame(job, &image, &stats);
+    ADD_FAILURE() << "the sink's error was lost";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "disk full (test)");
+  }
+  EXPECT_EQ(batches, 5);  // nothing more reached the sink after its error
+
+  std::atomic<bool> cancel{false};
+  job.cancel = &cancel;
+  RayId next = 0;
+  std::uint32_t rows = 0;
+  job.sink = [&](const RayBatch& b) {
+    EXPECT_EQ(b.first_id(), next);
+    next += b.size();
+    if (++rows == 10) cancel = true;
+  };
+  EXPECT_FALSE(RenderFrame(job, &image, &stats));
+  EXPECT_GE(rows, 10u);
+  EXPECT_LT(rows, 64u);
+  EXPECT_EQ(next, stats.rays);
+}
+
 // Sums of squares and the largest difference between two linear images.
 struct ImageDiff {
   double rmse = 0, max_abs = 0, mean = 0;

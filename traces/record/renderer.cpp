@@ -18,15 +18,20 @@
 #include <openvdb/math/Ray.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/RayIntersector.h>
-#include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
+#include <tbb/parallel_pipeline.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
-#include <future>
+#include <condition_variable>
+#include <deque>
+#include <exception>
+#include <memory>
+#include <mutex>
 #include <optional>
+#include <thread>
 
 #include "traces/check.h"
 #include "traces/record/camera.h"
@@ -644,15 +649,61 @@ void Tally(const RayBatch& b, FrameStats* st) {
   for (std::uint32_t s : b.samples()) st->samples += s;
 }
 
-// The rows of one band: traced in parallel, then numbered and handed on in row order.
-struct Band {
-  std::vector<RayBatch> rows;
-  std::vector<std::uint64_t> missed;
-  std::uint32_t count = 0;
+// One image row in flight: its rays (ids relative to the row until numbered in order).
+struct Row {
+  explicit Row(bool store_t) : rays(store_t) {}
+  std::uint32_t y = 0;
+  RayBatch rays;
+  std::uint64_t missed = 0;
 };
 
-// Bands of rows are traced in parallel while the previous band is handed to the sink on
-// another thread (encoding and compressing it), so neither waits for the other.
+// The rows of a frame: at most `limit` exist; each is free, traced, or numbered and waiting
+// for the sink. Reused rows keep their buffers' capacity.
+class RowPool {
+ public:
+  RowPool(std::size_t limit, bool store_t) : limit_(limit), store_t_(store_t) {}
+  // A free row; waits while all `limit` rows are in use.
+  Row* Take() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    changed_.wait(lock, [&] { return !free_.empty() || all_.size() < limit_; });
+    if (free_.empty()) return all_.emplace_back(std::make_unique<Row>(store_t_)).get();
+    Row* row = free_.back();
+    free_.pop_back();
+    return row;
+  }
+  void Give(Row* row) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    free_.push_back(row);
+    changed_.notify_all();
+  }
+  // Numbered rows, in order, for the sink; nullptr ends the frame.
+  void Push(Row* row) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ready_.push_back(row);
+    changed_.notify_all();
+  }
+  Row* Pop() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    changed_.wait(lock, [&] { return !ready_.empty(); });
+    Row* row = ready_.front();
+    ready_.pop_front();
+    return row;
+  }
+
+ private:
+  const std::size_t limit_;
+  const bool store_t_;
+  std::vector<std::unique_ptr<Row>> all_;
+  std::vector<Row*> free_;
+  std::deque<Row*> ready_;
+  std::mutex mutex_;
+  std::condition_variable changed_;
+};
+
+// Rows flow through a TBB pipeline: handed out in order, traced in parallel, then numbered
+// in row order; a thread of its own gives them to the sink (encoding and compressing them)
+// while later rows are traced. No tracing thread waits at a barrier between rows, and the
+// sink's work overlaps tracing even with one tracing thread.
 template <class Real>
 bool RenderFrameIn(const RenderJob& job, Image* image, FrameStats* stats) {
   const RenderSettings& set = job.settings;
@@ -660,43 +711,63 @@ bool RenderFrameIn(const RenderJob& job, Image* image, FrameStats* stats) {
   FrameTracer<Real> tracer(job);
   tbb::enumerable_thread_specific<ThreadCtx<Real>> contexts([&] { return tracer.MakeContext(); });
   tbb::task_arena arena(job.threads > 0 ? job.threads : tbb::task_arena::automatic);
-  constexpr std::uint32_t kBand = 16;
-  Band bands[2];
-  for (Band& b : bands) {
-    b.rows.assign(kBand, RayBatch(set.store_t));
-    b.missed.assign(kBand, 0);
-  }
-  std::future<void> writing;
-  bool cancelled = false;
-  for (std::uint32_t y0 = 0, k = 0; y0 < set.height; y0 += kBand, k ^= 1) {
-    if (job.cancel && job.cancel->load()) {
-      cancelled = true;
-      break;
-    }
-    Band& band = bands[k];
-    band.count = std::min(kBand, set.height - y0);
-    arena.execute([&] {
-      tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, band.count, 1), [&](const auto& r) {
-        ThreadCtx<Real>& c = contexts.local();
-        for (std::uint32_t i = r.begin(); i < r.end(); ++i) {
-          band.rows[i].Clear();  // ids relative to the row until Rebase
-          band.rows[i].set_first_id(0);
-          band.missed[i] = tracer.RenderRow(c, y0 + i, band.rows[i], *image);
+  const std::size_t tokens = 4 * std::size_t(arena.max_concurrency());
+  RowPool pool(2 * tokens, set.store_t);
+  std::exception_ptr sink_error;  // the sink's first exception (e.g. a full disk)
+  std::atomic<bool> sink_failed{false};
+  std::thread writer([&] {
+    while (Row* row = pool.Pop()) {
+      if (!sink_failed.load()) {
+        try {
+          job.sink(row->rays);
+        } catch (...) {
+          sink_error = std::current_exception();
+          sink_failed.store(true);
         }
-      });
-    });
-    if (writing.valid()) writing.get();               // the other band is free again
-    for (std::uint32_t i = 0; i < band.count; ++i) {  // in row order: ids continue
-      band.rows[i].Rebase(stats->rays);
-      Tally(band.rows[i], stats);
-      stats->primary_missed += band.missed[i];
+      }
+      pool.Give(row);
     }
-    writing = std::async(std::launch::async, [&job, &band] {
-      for (std::uint32_t i = 0; i < band.count; ++i) job.sink(band.rows[i]);
+  });
+  std::uint32_t next_y = 0;
+  bool cancelled = false;
+  auto hand_out = [&](tbb::flow_control& fc) -> Row* {
+    if (next_y == set.height || sink_failed.load() || (job.cancel && job.cancel->load())) {
+      cancelled = next_y < set.height;
+      fc.stop();
+      return nullptr;
+    }
+    Row* row = pool.Take();
+    row->y = next_y++;
+    return row;
+  };
+  auto trace = [&](Row* row) {
+    row->rays.Clear();
+    row->rays.set_first_id(0);
+    row->missed = tracer.RenderRow(contexts.local(), row->y, row->rays, *image);
+    return row;
+  };
+  auto number = [&](Row* row) {
+    row->rays.Rebase(stats->rays);  // in row order: ids continue
+    Tally(row->rays, stats);
+    stats->primary_missed += row->missed;
+    if (job.progress) job.progress(double(row->y + 1) / set.height);
+    pool.Push(row);
+  };
+  std::exception_ptr trace_error;
+  try {
+    arena.execute([&] {
+      tbb::parallel_pipeline(
+          tokens, tbb::make_filter<void, Row*>(tbb::filter_mode::serial_in_order, hand_out) &
+                      tbb::make_filter<Row*, Row*>(tbb::filter_mode::parallel, trace) &
+                      tbb::make_filter<Row*, void>(tbb::filter_mode::serial_in_order, number));
     });
-    if (job.progress) job.progress(double(y0 + band.count) / set.height);
+  } catch (...) {
+    trace_error = std::current_exception();
   }
-  if (writing.valid()) writing.get();
+  pool.Push(nullptr);
+  writer.join();
+  if (trace_error) std::rethrow_exception(trace_error);
+  if (sink_error) std::rethrow_exception(sink_error);
   return !cancelled;
 }
 

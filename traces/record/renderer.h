@@ -45,7 +45,7 @@ struct RenderJob {
   // Receives the frame's rays in id order, one batch at a time, from one thread at a time
   // (not necessarily the calling one: it runs while the next rows are traced).
   std::function<void(const RayBatch&)> sink;
-  // Called on the calling thread with the fraction of the frame done.
+  // Called with the fraction of the frame done, one call at a time, from a tracing thread.
   std::function<void(double)> progress;
   const std::atomic<bool>* cancel = nullptr;  // stop early (the frame is then incomplete)
   // For checks: called for every fog sample that attenuates a ray (primary, secondary or
@@ -55,7 +55,9 @@ struct RenderJob {
 };
 
 // Renders one frame into `image` (linear RGB) and streams its rays to job.sink. The rays
-// and the image are the same whatever the thread count. Returns false if cancelled.
+// and the image are the same whatever the thread count. Returns false if cancelled (the
+// sink has then had the rays of the rows finished so far, in order). An exception from the
+// sink stops the frame and is rethrown here, once the tracing threads have stopped.
 bool RenderFrame(const RenderJob& job, Image* image, FrameStats* stats);
 
 }  // namespace raycell
