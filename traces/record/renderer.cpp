@@ -74,8 +74,10 @@ template <class Real>
 openvdb::Vec3d ToVdb(const Vec<Real>& v) {
   return {double(v.x()), double(v.y()), double(v.z())};
 }
+// Grey media (equal coefficients in every channel, the default) need one exp, not three.
 template <class Real>
 Vec<Real> ExpOf(const Vec<Real>& v) {
+  if (v.x() == v.y() && v.y() == v.z()) return Vec<Real>(std::exp(v.x()));
   return {std::exp(v.x()), std::exp(v.y()), std::exp(v.z())};
 }
 
