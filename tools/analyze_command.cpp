@@ -20,7 +20,7 @@ namespace {
 struct AnalyzeArgs {
   std::string trace, paths, format = "table", dot;
   std::optional<int> frame;
-  bool all = false, quiet = false;
+  bool all = false, quiet = false, timing = false;
   AnalyzeOptions options;
 };
 
@@ -54,57 +54,68 @@ std::string JsonString(const std::string& s) {
   return out + "\"";
 }
 
-void PrintJson(const FrameAnalysis& a, std::ostream& out) {
+void PrintJson(const FrameAnalysis& a, bool timing, std::ostream& out) {
   out << "{\"frame\":" << a.frame << ",\"rays\":" << a.rays << ",\"nodes\":" << a.nodes
       << ",\"rays_per_node\":" << Fixed(a.rays_per_node(), 3) << ",\"bound\":" << a.bound
       << ",\"peel_length\":" << a.peel_length() << ",\"peel_schedule\":["
       << Schedule(a.peel_schedule, ",") << "],\"splits\":" << a.splits
       << ",\"peel_minus_bound\":" << a.peel_length() - a.bound
       << ",\"optimum\":" << OptionalNumber(a.optimum, "null")
-      << ",\"optimum_status\":" << JsonString(a.optimum_status)
-      << ",\"seconds\":" << Fixed(a.seconds, 6) << "}\n";
+      << ",\"optimum_status\":" << JsonString(a.optimum_status);
+  if (timing) out << ",\"seconds\":" << Fixed(a.seconds, 6);
+  out << "}\n";
 }
 
-const char* kCsvHeader =
-    "frame,rays,nodes,rays_per_node,bound,peel_length,splits,peel_minus_bound,optimum,"
-    "peel_minus_optimum,optimum_status,seconds,peel_schedule\n";
+void PrintCsvHeader(bool timing, std::ostream& out) {
+  out << "frame,rays,nodes,rays_per_node,bound,peel_length,splits,peel_minus_bound,optimum,"
+         "peel_minus_optimum,optimum_status,"
+      << (timing ? "seconds," : "") << "peel_schedule\n";
+}
 
-void PrintCsv(const FrameAnalysis& a, std::ostream& out) {
+void PrintCsv(const FrameAnalysis& a, bool timing, std::ostream& out) {
   out << a.frame << ',' << a.rays << ',' << a.nodes << ',' << Fixed(a.rays_per_node(), 3) << ','
       << a.bound << ',' << a.peel_length() << ',' << a.splits << ',' << a.peel_length() - a.bound
       << ',' << OptionalNumber(a.optimum, "") << ',' << Gap(a) << ",\"" << a.optimum_status << "\","
-      << Fixed(a.seconds, 6) << ",\"" << Schedule(a.peel_schedule, " ") << "\"\n";
+      << (timing ? Fixed(a.seconds, 6) + "," : "") << '"' << Schedule(a.peel_schedule, " ")
+      << "\"\n";
 }
 
-const char* kTableHeader =
-    "   frame         rays      nodes  rays/node    bound     peel   splits peel-bound"
-    "  optimum peel-opt     time\n";
+void PrintTableHeader(bool timing, std::ostream& out) {
+  out << "   frame         rays      nodes  rays/node    bound     peel   splits peel-bound"
+         "  optimum peel-opt"
+      << (timing ? "     time" : "") << "\n";
+}
 
-void PrintRow(const FrameAnalysis& a, std::ostream& out) {
+void PrintRow(const FrameAnalysis& a, bool timing, std::ostream& out) {
   char line[256];
-  std::snprintf(
-      line, sizeof line, "%8d %12llu %10llu %10.1f %8llu %8llu %8llu %10llu %8s %8s %7.3fs\n",
-      a.frame, (unsigned long long)a.rays, (unsigned long long)a.nodes, a.rays_per_node(),
-      (unsigned long long)a.bound, (unsigned long long)a.peel_length(),
-      (unsigned long long)a.splits, (unsigned long long)(a.peel_length() - a.bound),
-      OptionalNumber(a.optimum, "-").c_str(), a.optimum ? Gap(a).c_str() : "-", a.seconds);
+  std::snprintf(line, sizeof line, "%8d %12llu %10llu %10.1f %8llu %8llu %8llu %10llu %8s %8s",
+                a.frame, (unsigned long long)a.rays, (unsigned long long)a.nodes, a.rays_per_node(),
+                (unsigned long long)a.bound, (unsigned long long)a.peel_length(),
+                (unsigned long long)a.splits, (unsigned long long)(a.peel_length() - a.bound),
+                OptionalNumber(a.optimum, "-").c_str(), a.optimum ? Gap(a).c_str() : "-");
   out << line;
+  if (timing) {
+    std::snprintf(line, sizeof line, " %7.3fs", a.seconds);
+    out << line;
+  }
+  out << "\n";
 }
 
+// Results only, unless --timing: then the output depends on the machine too.
 class Printer {
  public:
-  explicit Printer(const std::string& format) : format_(format) {
+  Printer(const std::string& format, bool timing) : format_(format), timing_(timing) {
     if (format != "table" && format != "json" && format != "csv") {
       throw InputError("--format '" + format + "': expected table, json or csv");
     }
-    if (format_ == "table") std::cout << kTableHeader;
-    if (format_ == "csv") std::cout << kCsvHeader;
+    if (format_ == "table") PrintTableHeader(timing_, std::cout);
+    if (format_ == "csv") PrintCsvHeader(timing_, std::cout);
   }
   void Print(const FrameAnalysis& a) {
-    if (format_ == "json") PrintJson(a, std::cout);
-    if (format_ == "csv") PrintCsv(a, std::cout);
+    if (format_ == "json") PrintJson(a, timing_, std::cout);
+    if (format_ == "csv") PrintCsv(a, timing_, std::cout);
     if (format_ == "table") {
-      PrintRow(a, std::cout);
+      PrintRow(a, timing_, std::cout);
       if (!a.optimum && a.optimum_status != "not computed") {
         std::cout << "         optimum " << a.optimum_status << "\n";
       }
@@ -114,6 +125,7 @@ class Printer {
 
  private:
   std::string format_;
+  bool timing_;
 };
 
 // The tree as Graphviz DOT, with the cache-saving links of its Peel schedule, written to a
@@ -190,7 +202,7 @@ void Run(const AnalyzeArgs& a) {
   if (!a.paths.empty() && (a.frame || a.all)) {
     throw InputError("--frame/--all select frames of a TRACE, not of --paths");
   }
-  Printer printer(a.format);
+  Printer printer(a.format, a.timing);
   a.paths.empty() ? AnalyzeTrace(a, printer) : AnalyzePaths(a, printer);
 }
 
@@ -205,11 +217,14 @@ void AddAnalyzeCommand(CLI::App& app) {
       "sum over cells of maxGen (no schedule with a one-cell cache fetches fewer cells),\n"
       "the Peel schedule's length and split peels, Peel minus bound and, with --exact on\n"
       "small trees, the optimum and Peel minus optimum (past the search limits the optimum\n"
-      "is reported unknown, never guessed), and the time taken.\n"
+      "is reported unknown, never guessed), and with --timing the time taken.\n"
       "--format json prints one object per frame and line with the keys frame, rays,\n"
       "nodes, rays_per_node, bound, peel_length, peel_schedule (cells in fetch order),\n"
       "splits, peel_minus_bound, optimum (null when not computed or unknown),\n"
-      "optimum_status, seconds.\n\n"
+      "optimum_status (and seconds with --timing).\n"
+      "Without --timing the output depends only on the input and the options, byte for\n"
+      "byte, except where --max-seconds stops a search (its status says so); --max-states\n"
+      "limits the search the same way on every machine.\n\n"
       "Examples:\n"
       "  raycell analyze capture.rct\n"
       "  raycell analyze capture.rct --frame 3 --exact --format json\n"
@@ -235,6 +250,7 @@ void AddAnalyzeCommand(CLI::App& app) {
                   "write the frame's Cell Tree as Graphviz DOT (one colour per cell; dashed "
                   "edges: the cache-saving links of the Peel schedule). Render with "
                   "`dot -Tsvg FILE > tree.svg` (Debian package graphviz)");
+  cmd->add_flag("--timing", args->timing, "also print the time each frame took");
   cmd->add_flag("--quiet", args->quiet, "no progress bar");
   cmd->callback([args] { Run(*args); });
 }
