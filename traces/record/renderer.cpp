@@ -225,6 +225,7 @@ struct ThreadCtx {
   std::vector<Path> paths;
   std::vector<std::vector<TimeSpan>> spans, merged;
   std::vector<std::vector<Real>> surface_samples;
+  std::vector<Real> densities;  // [fog grid]: the last FogAt's
   std::vector<std::vector<typename GridCtx<Real>::IndexRay>> fog_rays;  // [depth][fog grid]
   PixelRecord rec;
   std::uint32_t px = 0, py = 0;  // the pixel being traced (for the sample probe)
@@ -253,8 +254,8 @@ class FrameTracer {
     cutoff_ = Real(set_.cutoff);
     for (const auto& f : s_.fogs) {
       const V3 sc = FromRgb<Real>(f.material.scattering);
-      fog_mats_.push_back(
-          {FromRgb<Real>(f.material.absorption) + sc, sc, Real(f.material.shadow_gain)});
+      const V3 ext = FromRgb<Real>(f.material.absorption) + sc;
+      fog_mats_.push_back({ext, sc, Ratio(sc, ext), Real(f.material.shadow_gain)});
     }
     for (const auto& f : s_.surfaces) {
       const SurfaceMaterial& m = f.material;
@@ -278,6 +279,7 @@ class FrameTracer {
     c.spans.resize(levels);
     c.merged.resize(levels);
     c.surface_samples.resize(levels);
+    c.densities.assign(c.fogs.size(), Real(0));
     c.fog_rays.assign(levels, std::vector<typename GridCtx<Real>::IndexRay>(c.fogs.size()));
     return c;
   }
@@ -306,6 +308,7 @@ class FrameTracer {
  private:
   struct FogCoeffs {
     V3 extinction, scattering;  // per voxel of the grid, per unit density
+    V3 albedo;                  // scattering / extinction (0 where extinction is 0)
     Real shadow_gain;
   };
   struct SurfaceCoeffs {
@@ -403,28 +406,46 @@ class FrameTracer {
                                   {double(trans.x()), double(trans.y()), double(trans.z())}});
   }
 
-  // The optical depth of one step of `step` world units at world t (coefficients are per
-  // voxel of each grid, as in vdb_render) and the single-scattering albedo there; returns the
+  // a / b per channel: 0 where b is 0 or not finite, so finite whatever the coefficients.
+  static V3 Ratio(const V3& a, const V3& b) {
+    V3 r(Real(0));
+    for (int ch = 0; ch < 3; ++ch) {
+      if (b[ch] > 0 && std::isfinite(b[ch])) r[ch] = a[ch] / b[ch];
+    }
+    return r;
+  }
+
+  // One fog sample: the densities of every grid at world t, the optical depth of one step of
+  // `step` world units (coefficients are per voxel of each grid, as in vdb_render) and the
   // largest density. Densities below 0 (or NaN) count as 0, so depth is never negative and
   // transmittance never grows along a ray; an infinite depth is fine (the step is opaque).
-  Real FogAt(Ctx& c, std::uint32_t depth, Real t, Real step, V3* tau, V3* albedo) const {
+  struct FogSample {
     Real max_density = 0;
-    V3 extinction(Real(0)), scattering(Real(0));  // density-weighted, per world unit
+    V3 tau{Real(0)}, extinction{Real(0)};  // extinction: density-weighted, per world unit
+  };
+  FogSample FogAt(Ctx& c, std::uint32_t depth, Real t, Real step) const {
+    FogSample s;
     for (std::size_t i = 0; i < c.fogs.size(); ++i) {
       const Real dens = Density(c.fogs[i].Sample(c.fog_rays[depth][i], t));
+      c.densities[i] = dens;
       if (dens == 0) continue;  // adds nothing (and 0 * an overflowed coefficient is NaN)
-      max_density = std::max(max_density, dens);
-      const Real k = dens * c.fogs[i].inv_vs;
-      extinction += fog_mats_[i].extinction * k;
-      scattering += fog_mats_[i].scattering * k;
+      s.max_density = std::max(s.max_density, dens);
+      s.extinction += fog_mats_[i].extinction * (dens * c.fogs[i].inv_vs);
     }
-    *tau = extinction * step;
-    for (int ch = 0; ch < 3; ++ch) {  // a ratio of coefficients: finite whatever the density
-      (*albedo)[ch] = extinction[ch] > 0 && std::isfinite(extinction[ch])
-                          ? scattering[ch] / extinction[ch]
-                          : Real(0);
+    s.tau = s.extinction * step;
+    return s;
+  }
+
+  // The single-scattering albedo of the sample FogAt took last: the material's own with one
+  // fog grid (as vdb_render), else the ratio of the density-weighted coefficients.
+  V3 AlbedoOf(const Ctx& c, const FogSample& s) const {
+    if (c.fogs.size() == 1) return fog_mats_[0].albedo;
+    V3 scattering(Real(0));
+    for (std::size_t i = 0; i < c.fogs.size(); ++i) {
+      if (c.densities[i] != 0)
+        scattering += fog_mats_[i].scattering * (c.densities[i] * c.fogs[i].inv_vs);
     }
-    return max_density;
+    return Ratio(scattering, s.extinction);
   }
 
   // The first of vdb_render's step positions k * step at or after t. k is an integer so that
@@ -450,9 +471,10 @@ class FrameTracer {
       for (std::int64_t k = FirstStep(Real(span.t0), step); Real(k) * step <= t1; ++k) {
         const Real t = Real(k) * step;
         const std::uint32_t visit = c.paths[depth].AddSampleInOrder(t);
-        V3 tau, albedo;
-        const Real density = FogAt(c, depth, t, step, &tau, &albedo);
-        if (density < cutoff_ || density == 0) continue;
+        const FogSample fog = FogAt(c, depth, t, step);
+        if (fog.max_density < cutoff_ || fog.max_density == 0) continue;
+        const V3& tau = fog.tau;
+        const V3 albedo = AlbedoOf(c, fog);
         const V3 dT = ExpOf(-tau);
         const V3 pos = o + d * t;
         const CellId cell = c.paths[depth].cell(visit);
