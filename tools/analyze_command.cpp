@@ -7,6 +7,7 @@
 #include <optional>
 #include <sstream>
 
+#include "engine/stats.h"
 #include "graph/analysis.h"
 #include "graph/links.h"
 #include "tools/commands.h"
@@ -44,16 +45,6 @@ std::string Gap(const FrameAnalysis& a) {
   return a.optimum ? std::to_string(std::int64_t(a.peel_length()) - std::int64_t(*a.optimum)) : "";
 }
 
-std::string JsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) continue;
-    out += c;
-  }
-  return out + "\"";
-}
-
 void PrintJson(const FrameAnalysis& a, bool timing, std::ostream& out) {
   out << "{\"frame\":" << a.frame << ",\"rays\":" << a.rays << ",\"nodes\":" << a.nodes
       << ",\"rays_per_node\":" << Fixed(a.rays_per_node(), 3) << ",\"bound\":" << a.bound
@@ -61,7 +52,7 @@ void PrintJson(const FrameAnalysis& a, bool timing, std::ostream& out) {
       << Schedule(a.peel_schedule, ",") << "],\"splits\":" << a.splits
       << ",\"peel_minus_bound\":" << a.peel_length() - a.bound
       << ",\"optimum\":" << OptionalNumber(a.optimum, "null")
-      << ",\"optimum_status\":" << JsonString(a.optimum_status);
+      << ",\"optimum_status\":" << JsonQuote(a.optimum_status);
   if (timing) out << ",\"seconds\":" << Fixed(a.seconds, 6);
   out << "}\n";
 }
