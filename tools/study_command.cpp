@@ -128,23 +128,38 @@ GridStudy StudyGrid(const StudyArgs& a, const std::string& cells) {
                     a.quiet);
 }
 
-// The given traces, each labelled by its file stem (which must differ between them).
-std::vector<GridStudy> StudyGivenTraces(const StudyArgs& a) {
-  std::vector<GridStudy> grids;
-  for (const std::string& path : a.traces) {
-    const std::string stem = fs::path(path).stem().string();
-    for (const GridStudy& g : grids) {
-      if (g.cells == stem) {
-        throw InputError("--trace '" + path + "': another trace is also named '" + stem +
+std::string Stem(const std::string& path) { return fs::path(path).stem().string(); }
+
+// The given traces, opened and checked before any work: readable, with frames, and with
+// file stems (their labels) that differ, as their CSVs and plots would collide.
+std::vector<TraceReader> OpenGivenTraces(const StudyArgs& a) {
+  std::vector<TraceReader> readers;
+  for (std::size_t i = 0; i < a.traces.size(); ++i) {
+    const std::string& path = a.traces[i];
+    for (std::size_t j = 0; j < i; ++j) {
+      if (Stem(a.traces[j]) == Stem(path)) {
+        throw InputError("--trace '" + path + "': another trace is also named '" + Stem(path) +
                          "' (their CSVs and plots would collide)");
       }
     }
-    const TraceReader reader = TraceReader::Open(path);
-    if (reader.frames().empty()) throw InputError("--trace '" + path + "': no frames");
+    readers.push_back(TraceReader::Open(path));
+    if (readers.back().frames().empty()) throw InputError("--trace '" + path + "': no frames");
+  }
+  return readers;
+}
+
+// The given traces, each labelled by its file stem.
+std::vector<GridStudy> StudyGivenTraces(const StudyArgs& a,
+                                        const std::vector<TraceReader>& readers) {
+  std::vector<GridStudy> grids;
+  for (std::size_t i = 0; i < readers.size(); ++i) {
+    const std::string& path = a.traces[i];
+    const TraceReader& reader = readers[i];
     std::cerr << "reusing " << path << ": " << reader.frames().size() << " frames in "
               << Dims(reader.header()) << " cells\n";
     grids.push_back(StudyTrace(
-        reader, {stem, "`" + path + "` (" + Dims(reader.header()) + " cells)", path, ""}, a.quiet));
+        reader, {Stem(path), "`" + path + "` (" + Dims(reader.header()) + " cells)", path, ""},
+        a.quiet));
   }
   return grids;
 }
@@ -329,10 +344,10 @@ void Run(const StudyArgs& a) {
     fs::create_directories(a.out);
     for (const std::string& c : cells) grids.push_back(StudyGrid(a, c));
   } else {
-    for (const std::string& t : a.traces) TraceReader::Open(t);  // every one readable first
+    const std::vector<TraceReader> readers = OpenGivenTraces(a);
     fs::create_directories(a.out);
-    grids = StudyGivenTraces(a);
-    accuracy_scene = TraceReader::Open(a.traces.front()).header().scene;
+    grids = StudyGivenTraces(a, readers);
+    accuracy_scene = readers.front().header().scene;
   }
   std::vector<std::string> labels;
   for (const GridStudy& g : grids) labels.push_back(g.cells);
