@@ -176,12 +176,6 @@ TEST(Replay, TimingSanity) {
   }
 }
 
-}  // namespace
-}  // namespace raycell
-
-namespace raycell {
-namespace {
-
 // Belady's MIN on the processor's cache: with one processor the request sequence does not
 // depend on the cache, so MIN (exact after one rerun) never fetches more than LRU or FIFO.
 TEST(Replay, MinNeverFetchesMoreThanLruOrFifo) {
@@ -207,12 +201,6 @@ TEST(Replay, MinNeverFetchesMoreThanLruOrFifo) {
     EXPECT_LE(fetches[2], fetches[1]) << "trial " << trial;
   }
 }
-
-}  // namespace
-}  // namespace raycell
-
-namespace raycell {
-namespace {
 
 // Double buffering: ray 0 works 100 us in A; ray 1 needs B. Max Work takes A first (a tie,
 // lowest cell), predicts B and prefetches it while A is worked: B's fetch (about 34 us from
@@ -261,12 +249,6 @@ TEST(Replay, PrefetchNeedsRoomForTwoCellsAndKeepsConservation) {
   }
 }
 
-}  // namespace
-}  // namespace raycell
-
-namespace raycell {
-namespace {
-
 // Where fetches cost nothing, one processor is never idle, so its time is the frame's work;
 // with two, at any moment until the end at least one works, so they never take longer. (With
 // costly fetches list-scheduling anomalies can make more processors slower; the model
@@ -290,12 +272,6 @@ TEST(Replay, TwoProcessorsNeverTakeLongerWhenFetchesAreFree) {
     }
   }
 }
-
-}  // namespace
-}  // namespace raycell
-
-namespace raycell {
-namespace {
 
 TEST(Sampling, KeepsOneInKRayTreesWithTheirDescendants) {
   // Trees: {0: A B, 1: spawned at 0's visit 1 (B C)}, {2: C}, {3: A, 4: spawned at 3 (A B)}.

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "tests/test_util.h"
+#include "tests/traces/trace_format.h"
 #include "traces/check.h"
 #include "traces/trace.capnp.h"
 #include "traces/trace_reader.h"
@@ -58,6 +59,7 @@ class Watchdog {
 
 std::string TempPath(const std::string& name) { return testing::TempPath("corrupt", name); }
 
+using testing::Head;
 using testing::ReadBytes;
 
 void WriteBytes(const std::string& path, const std::string& bytes) {
@@ -351,13 +353,6 @@ std::string ZstdFrame(const std::string& content) {
   return out;
 }
 
-// Head bytes (see "Ray heads" in trace.capnp).
-constexpr std::uint8_t Head(RayKind kind, unsigned parent_code, unsigned spawn_code, bool new_path,
-                            bool new_pixel) {
-  return static_cast<std::uint8_t>(static_cast<unsigned>(kind) | parent_code << 2 |
-                                   spawn_code << 4 | (new_path ? 0x40 : 0) |
-                                   (new_pixel ? 0x80 : 0));
-}
 constexpr std::uint8_t kPrimaryHead = Head(RayKind::kPrimary, 0, 0, true, true);
 // Parent: the last non-shadow ray; spawn: 0 (no sibling) + 1; its own path; same pixel.
 constexpr std::uint8_t kShadowHead = Head(RayKind::kShadow, 0, 1, true, false);

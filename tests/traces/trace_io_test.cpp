@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "tests/test_util.h"
+#include "tests/traces/trace_format.h"
 #include "traces/check.h"
 #include "traces/trace.capnp.h"
 #include "traces/trace_inspect.h"
@@ -33,6 +34,7 @@ std::string TempPath(const std::string& name) { return testing::TempPath("io", n
 
 bool Exists(const std::string& path) { return std::ifstream(path).good(); }
 
+using testing::Head;
 using testing::ReadBytes;
 
 TraceHeader MakeHeader(bool store_t, std::array<std::uint32_t, 3> cells = {3, 3, 3}) {
@@ -484,13 +486,6 @@ std::vector<std::uint64_t> Values(schema::Column::Reader c) {
   unsigned wide = 0;
   for (std::uint8_t b : c.getNarrow()) v.push_back(b < 255 ? b : c.getWide()[wide++]);
   return v;
-}
-
-constexpr std::uint8_t Head(RayKind kind, unsigned parent_code, unsigned spawn_code, bool new_path,
-                            bool new_pixel) {
-  return static_cast<std::uint8_t>(static_cast<unsigned>(kind) | parent_code << 2 |
-                                   spawn_code << 4 | (new_path ? 0x40 : 0) |
-                                   (new_pixel ? 0x80 : 0));
 }
 
 TEST(TraceIoTest, SiblingRaysEncodeToRunsOfEqualHeads) {
