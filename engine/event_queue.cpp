@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "traces/check.h"
+#include "base/check.h"
 
 namespace raycell {
 namespace {

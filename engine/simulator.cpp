@@ -2,8 +2,8 @@
 
 #include <sstream>
 
-#include "engine/checked.h"
-#include "traces/check.h"
+#include "base/check.h"
+#include "base/checked.h"
 
 namespace raycell {
 

@@ -1,44 +1,14 @@
 #include "engine/stats.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
-#include <cstdio>
 #include <sstream>
 
-#include "traces/check.h"
+#include "base/check.h"
+#include "base/format.h"
 
 namespace raycell {
 namespace {
-
-std::string FormatReal(double v) {
-  if (std::isnan(v)) return "nan";
-  if (std::isinf(v)) return v < 0 ? "-inf" : "inf";
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof(buf), v);  // shortest round-trip form
-  RAYCELL_CHECK(r.ec == std::errc());
-  return std::string(buf, r.ptr);
-}
-
-// c as it appears inside a JSON string literal; UTF-8 bytes pass through.
-std::string JsonEscape(char c) {
-  switch (c) {
-    case '"':
-      return "\\\"";
-    case '\\':
-      return "\\\\";
-    case '\n':
-      return "\\n";
-    case '\r':
-      return "\\r";
-    case '\t':
-      return "\\t";
-  }
-  if (static_cast<unsigned char>(c) >= 0x20) return std::string(1, c);
-  char buf[8];
-  std::snprintf(buf, sizeof(buf), "\\u%04x", static_cast<unsigned>(c));
-  return buf;
-}
 
 bool IsNonFinite(const StatValue& value) {
   const double* d = std::get_if<double>(&value);
@@ -87,19 +57,6 @@ std::string FormatValue(const StatValue& value) {
   if (const auto* u = std::get_if<std::uint64_t>(&value)) return std::to_string(*u);
   if (const auto* d = std::get_if<double>(&value)) return FormatReal(*d);
   return std::get<std::string>(value);
-}
-
-std::string JsonQuote(const std::string& s) {
-  std::string out = "\"";
-  for (const char c : s) out += JsonEscape(c);
-  return out + "\"";
-}
-
-std::string CsvField(const std::string& s) {
-  if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
-  std::string out = "\"";
-  for (const char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
 }
 
 void PrintText(const StatsTable& table, std::ostream& os) {

@@ -10,6 +10,8 @@
 #include <variant>
 #include <vector>
 
+#include "base/format.h"  // JsonQuote, CsvField: the printers' quoting
+
 namespace raycell {
 
 using StatValue = std::variant<std::uint64_t, double, std::string>;
@@ -53,10 +55,5 @@ void PrintCsvRow(const StatsTable& table, std::ostream& os);
 std::string ToText(const StatsTable& table);
 std::string ToJson(const StatsTable& table);
 std::string ToCsv(const StatsTable& table);
-
-// JSON string literal with quotes: "a\"b" -> "\"a\\\"b\"".
-std::string JsonQuote(const std::string& s);
-// A CSV field: quoted when it holds a comma, quote, CR or LF, with quotes doubled.
-std::string CsvField(const std::string& s);
 
 }  // namespace raycell

@@ -9,7 +9,7 @@
 #include <ostream>
 #include <string>
 
-#include "engine/checked.h"
+#include "base/checked.h"
 
 namespace raycell {
 

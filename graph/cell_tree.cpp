@@ -5,7 +5,7 @@
 #include <sstream>
 #include <utility>
 
-#include "traces/check.h"
+#include "base/check.h"
 
 namespace raycell {
 

@@ -6,7 +6,7 @@
 #include <numeric>
 #include <utility>
 
-#include "traces/check.h"
+#include "base/check.h"
 
 namespace raycell {
 

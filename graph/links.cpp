@@ -7,7 +7,7 @@
 #include <ostream>
 #include <utility>
 
-#include "traces/check.h"
+#include "base/check.h"
 
 namespace raycell {
 

@@ -6,9 +6,9 @@
 #include <queue>
 #include <sstream>
 
+#include "base/check.h"
 #include "graph/peel.h"
 #include "graph/schedule.h"
-#include "traces/check.h"
 
 // Why the search is exact.
 //

@@ -6,7 +6,7 @@
 #include <sstream>
 #include <utility>
 
-#include "traces/check.h"
+#include "base/check.h"
 
 namespace raycell {
 

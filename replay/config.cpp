@@ -11,7 +11,8 @@
 #include <set>
 #include <sstream>
 
-#include "traces/check.h"
+#include "base/check.h"
+#include "base/parse.h"
 
 namespace raycell {
 namespace {
@@ -80,25 +81,11 @@ std::string SourceOf(const std::string& key) {
   throw InputError(what + ": " + message);
 }
 
-std::string_view Trim(std::string_view s) {
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
-  return s;
-}
-
 // A decimal unsigned integer in [lo, hi], digits only.
-std::uint64_t ParseUint(std::string_view text, const std::string& what, std::uint64_t lo,
-                        std::uint64_t hi) {
-  const std::string_view t = Trim(text);
+std::uint64_t ParseCount(std::string_view text, const std::string& what, std::uint64_t lo,
+                         std::uint64_t hi) {
   std::uint64_t v = 0;
-  bool ok = !t.empty();
-  for (const char c : t) {
-    if (c < '0' || c > '9' || __builtin_mul_overflow(v, 10, &v) ||
-        __builtin_add_overflow(v, std::uint64_t(c - '0'), &v)) {
-      ok = false;
-      break;
-    }
-  }
+  const bool ok = TryParseUint(Trim(text), &v);
   if (!ok) Fail(what, "expected a whole number, got '" + std::string(text) + "'");
   if (v < lo || v > hi) {
     Fail(what, "must be in " + std::to_string(lo) + ".." + std::to_string(hi) + ", got " +
@@ -142,8 +129,8 @@ void ParseCapacity(std::string_view text, const std::string& what, LevelConfig* 
   for (const std::string_view suffix : {"cells", "cell"}) {
     if (t.size() > suffix.size() && t.substr(t.size() - suffix.size()) == suffix) {
       level->capacity_unit = LevelConfig::CapacityUnit::kCells;
-      level->capacity = ParseUint(t.substr(0, t.size() - suffix.size()), what + " (cells)", 1,
-                                  std::numeric_limits<std::uint64_t>::max());
+      level->capacity = ParseCount(t.substr(0, t.size() - suffix.size()), what + " (cells)", 1,
+                                   std::numeric_limits<std::uint64_t>::max());
       return;
     }
   }
@@ -235,8 +222,8 @@ class Section {
   // An integer, or a decimal string for values above 2^63 - 1.
   std::uint64_t BigInteger(const toml::node& n, const char* key) const {
     if (n.is_string()) {
-      return ParseUint(n.as_string()->get(), What(n, key), 0,
-                       std::numeric_limits<std::uint64_t>::max());
+      return ParseCount(n.as_string()->get(), What(n, key), 0,
+                        std::numeric_limits<std::uint64_t>::max());
     }
     return Integer(n, key, 0, std::numeric_limits<std::uint64_t>::max());
   }
@@ -584,19 +571,20 @@ void ApplyOverride(ReplayConfig& config, const std::string& key, const std::stri
   if (key == "scheduler") {
     c.scheduler = ParseScheduler(Trim(value), what);
   } else if (key == "seed") {
-    c.seed = ParseUint(value, what, 0, std::numeric_limits<std::uint64_t>::max());
+    c.seed = ParseCount(value, what, 0, std::numeric_limits<std::uint64_t>::max());
   } else if (key == "granularity") {
     c.granularity = ParseGranularity(Trim(value), what);
   } else if (key == "processors.count") {
-    p.count = std::uint32_t(ParseUint(value, what, 1, 1024));
+    p.count = std::uint32_t(ParseCount(value, what, 1, 1024));
   } else if (key == "processors.time_per_sample") {
     p.time_per_sample = ParsePositiveDuration(value, what);
   } else if (key == "processors.queue_record_bytes") {
     const std::string_view t = Trim(value);
     const bool digits = !t.empty() && std::all_of(t.begin(), t.end(),
                                                   [](char ch) { return ch >= '0' && ch <= '9'; });
-    p.queue_record_bytes = digits ? ParseUint(t, what, 0, std::numeric_limits<std::uint64_t>::max())
-                                  : ParseBytes(value, what).count();
+    p.queue_record_bytes = digits
+                               ? ParseCount(t, what, 0, std::numeric_limits<std::uint64_t>::max())
+                               : ParseBytes(value, what).count();
   } else if (key == "processors.prefetch") {
     p.prefetch = ParseBool(value, what);
   } else if (key.rfind("level.", 0) == 0 && key.find('.', 6) != std::string::npos) {

@@ -2,10 +2,10 @@
 
 #include <memory>
 
-#include "engine/checked.h"
+#include "base/check.h"
+#include "base/checked.h"
 #include "graph/analysis.h"
 #include "scheduling/scheduler.h"
-#include "traces/check.h"
 
 namespace raycell {
 namespace {

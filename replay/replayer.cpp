@@ -3,9 +3,9 @@
 #include <deque>
 #include <sstream>
 
-#include "engine/checked.h"
+#include "base/check.h"
+#include "base/checked.h"
 #include "engine/simulator.h"
-#include "traces/check.h"
 
 namespace raycell {
 namespace {

@@ -12,10 +12,13 @@
 #include <set>
 #include <thread>
 
+#include "base/check.h"
+#include "base/file.h"
+#include "base/format.h"
+#include "base/hash.h"
+#include "base/parse.h"
 #include "engine/stats.h"
 #include "replay/driver.h"
-#include "traces/check.h"
-#include "traces/trace_writer.h"
 
 namespace raycell {
 namespace {
@@ -25,28 +28,11 @@ constexpr char kCommentStart[] = "# raycell sweep ";
 constexpr char kShardPart[] = " shard=";
 constexpr char kCombinationsPart[] = " combinations=";
 
-std::string Trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t");
-  if (b == std::string::npos) return "";
-  return s.substr(b, s.find_last_not_of(" \t") - b + 1);
-}
-
-std::vector<std::string> Split(const std::string& s, char sep) {
-  std::vector<std::string> out;
-  std::size_t start = 0;
-  for (std::size_t p; (p = s.find(sep, start)) != std::string::npos; start = p + 1) {
-    out.push_back(s.substr(start, p - start));
-  }
-  out.push_back(s.substr(start));
-  return out;
-}
-
 // Whole decimal number, or false.
 bool ParseSize(const std::string& s, std::size_t* out) {
-  if (s.empty() || s.size() > 18 || s.find_first_not_of("0123456789") != std::string::npos) {
-    return false;
-  }
-  *out = std::stoull(s);
+  std::uint64_t v = 0;
+  if (!TryParseUint(s, &v) || s.size() > 18) return false;
+  *out = std::size_t(v);
   return true;
 }
 
@@ -79,17 +65,6 @@ bool ReadFile(const std::string& path, std::string* text) {
 void WriteFile(const std::string& path, const std::string& text) {
   std::ofstream f(path, std::ios::binary | std::ios::trunc);
   if (!(f << text) || !f.flush()) throw InputError(path + ": cannot write");
-}
-
-void Rename(const std::string& from, const std::string& to) {
-  if (std::rename(from.c_str(), to.c_str()) != 0) {
-    throw InputError(to + ": cannot rename " + from + " to it");
-  }
-}
-
-void WriteAtomically(const std::string& path, const std::string& text) {
-  WriteFile(path + ".tmp", text);
-  Rename(path + ".tmp", path);
 }
 
 // The lines of `text` (which ends with '\n' or is empty), without their '\n'.
@@ -331,13 +306,13 @@ Vary Vary::Parse(const std::string& text, const std::string& option) {
   const std::string what = option + " '" + text + "'";
   const auto eq = text.find('=');
   if (eq == std::string::npos) throw InputError(what + ": expected KEY=V1,V2,...");
-  Vary v{Trim(text.substr(0, eq)), {}};
+  Vary v{std::string(Trim(std::string_view(text).substr(0, eq))), {}};
   if (v.key.empty()) throw InputError(what + ": the key before '=' is empty");
   if (text.find_first_of("\r\n") != std::string::npos) {
     throw InputError(what + ": holds a line break");
   }
   for (const std::string& value : Split(text.substr(eq + 1), ',')) {
-    v.values.push_back(Trim(value));
+    v.values.emplace_back(Trim(value));
     if (v.values.back().empty()) {
       throw InputError(what + ": empty value for " + v.key + " (expected KEY=V1,V2,...)");
     }
@@ -474,7 +449,7 @@ SweepOutcome RunSweep(const TraceReader& reader, const SweepSpec& spec, const st
   const std::vector<std::size_t> todo(indices.begin() + outcome.resumed, indices.end());
   outcome.ran = RunRows(reader, spec, todo, partial, outcome.resumed, options);
   outcome.complete = outcome.ran == todo.size();
-  if (outcome.complete) Rename(partial, out);
+  if (outcome.complete) RenameFile(partial, out);
   return outcome;
 }
 
@@ -491,7 +466,7 @@ void MergeSweepShards(const std::string& out, const std::vector<std::string>& sh
   std::string text = shards.front().comment_prefix + kShardPart + JsonQuote("all") + "\n" +
                      shards.front().header + "\n";
   for (const std::string& row : rows) text += row + "\n";
-  WriteAtomically(out, text);
+  WriteFileAtomically(out, text);
 }
 
 }  // namespace raycell

@@ -3,7 +3,8 @@
 #include <cctype>
 #include <limits>
 
-#include "traces/check.h"
+#include "base/check.h"
+#include "base/parse.h"
 
 namespace raycell {
 namespace {
@@ -15,12 +16,6 @@ constexpr std::uint64_t kPsPerS = 1000'000'000'000;
 
 [[noreturn]] void Fail(const std::string& what, const std::string& reason, std::string_view text) {
   throw InputError(what + ": " + reason + ": '" + std::string(text) + "'");
-}
-
-std::string_view Trim(std::string_view s) {
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.front()))) s.remove_prefix(1);
-  while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.remove_suffix(1);
-  return s;
 }
 
 std::string Lower(std::string_view s) {

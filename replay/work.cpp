@@ -2,7 +2,7 @@
 
 #include <numeric>
 
-#include "traces/check.h"
+#include "base/check.h"
 
 namespace raycell {
 namespace {

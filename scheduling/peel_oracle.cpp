@@ -1,7 +1,7 @@
 #include "scheduling/peel_oracle.h"
 
+#include "base/check.h"
 #include "graph/peel.h"
-#include "traces/check.h"
 
 namespace raycell {
 

@@ -3,12 +3,12 @@
 #include <sstream>
 #include <utility>
 
+#include "base/check.h"
 #include "scheduling/cell_tree_scheduler.h"
 #include "scheduling/max_work.h"
 #include "scheduling/peel_oracle.h"
 #include "scheduling/random_scheduler.h"
 #include "scheduling/round_robin.h"
-#include "traces/check.h"
 
 namespace raycell {
 

@@ -8,7 +8,7 @@
 #include <iterator>
 #include <string>
 
-#include "traces/check.h"
+#include "base/check.h"
 
 namespace raycell::testing {
 

@@ -7,12 +7,13 @@
 #include <optional>
 #include <sstream>
 
-#include "engine/stats.h"
+#include "base/check.h"
+#include "base/file.h"
+#include "base/format.h"
+#include "base/progress.h"
 #include "graph/analysis.h"
 #include "graph/links.h"
 #include "tools/commands.h"
-#include "traces/check.h"
-#include "traces/progress.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {
@@ -24,12 +25,6 @@ struct AnalyzeArgs {
   bool all = false, quiet = false, timing = false;
   AnalyzeOptions options;
 };
-
-std::string Fixed(double v, int digits) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v;
-  return s.str();
-}
 
 std::string Schedule(const std::vector<CellId>& s, const char* sep) {
   std::string out;
@@ -47,13 +42,13 @@ std::string Gap(const FrameAnalysis& a) {
 
 void PrintJson(const FrameAnalysis& a, bool timing, std::ostream& out) {
   out << "{\"frame\":" << a.frame << ",\"rays\":" << a.rays << ",\"nodes\":" << a.nodes
-      << ",\"rays_per_node\":" << Fixed(a.rays_per_node(), 3) << ",\"bound\":" << a.bound
+      << ",\"rays_per_node\":" << FormatFixed(a.rays_per_node(), 3) << ",\"bound\":" << a.bound
       << ",\"peel_length\":" << a.peel_length() << ",\"peel_schedule\":["
       << Schedule(a.peel_schedule, ",") << "],\"splits\":" << a.splits
       << ",\"peel_minus_bound\":" << a.peel_length() - a.bound
       << ",\"optimum\":" << OptionalNumber(a.optimum, "null")
       << ",\"optimum_status\":" << JsonQuote(a.optimum_status);
-  if (timing) out << ",\"seconds\":" << Fixed(a.seconds, 6);
+  if (timing) out << ",\"seconds\":" << FormatFixed(a.seconds, 6);
   out << "}\n";
 }
 
@@ -64,11 +59,11 @@ void PrintCsvHeader(bool timing, std::ostream& out) {
 }
 
 void PrintCsv(const FrameAnalysis& a, bool timing, std::ostream& out) {
-  out << a.frame << ',' << a.rays << ',' << a.nodes << ',' << Fixed(a.rays_per_node(), 3) << ','
-      << a.bound << ',' << a.peel_length() << ',' << a.splits << ',' << a.peel_length() - a.bound
-      << ',' << OptionalNumber(a.optimum, "") << ',' << Gap(a) << ",\"" << a.optimum_status << "\","
-      << (timing ? Fixed(a.seconds, 6) + "," : "") << '"' << Schedule(a.peel_schedule, " ")
-      << "\"\n";
+  out << a.frame << ',' << a.rays << ',' << a.nodes << ',' << FormatFixed(a.rays_per_node(), 3)
+      << ',' << a.bound << ',' << a.peel_length() << ',' << a.splits << ','
+      << a.peel_length() - a.bound << ',' << OptionalNumber(a.optimum, "") << ',' << Gap(a) << ",\""
+      << a.optimum_status << "\"," << (timing ? FormatFixed(a.seconds, 6) + "," : "") << '"'
+      << Schedule(a.peel_schedule, " ") << "\"\n";
 }
 
 void PrintTableHeader(bool timing, std::ostream& out) {
@@ -122,17 +117,9 @@ class Printer {
 // The tree as Graphviz DOT, with the cache-saving links of its Peel schedule, written to a
 // temporary name and renamed when complete.
 void WriteDotFile(const std::string& path, const CellTree& tree, const FrameAnalysis& a) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw InputError("--dot " + path + ": cannot open for writing");
-    WriteDot(out, tree, LinksOf(tree, a.peel_schedule));
-    if (!out.flush()) throw InputError("--dot " + path + ": write failed");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw InputError("--dot " + path + ": cannot rename " + tmp);
-  }
+  WriteFileAtomically(
+      path, [&](std::ostream& out) { WriteDot(out, tree, LinksOf(tree, a.peel_schedule)); },
+      "--dot " + path);
 }
 
 double SecondsSince(std::chrono::steady_clock::time_point t0) {

@@ -1,7 +1,7 @@
 #include "tools/frames.h"
 
-#include "traces/check.h"
-#include "traces/record/recorder.h"
+#include "base/check.h"
+#include "base/parse.h"
 
 namespace raycell {
 

@@ -3,8 +3,8 @@
 #include <exception>
 #include <iostream>
 
+#include "base/check.h"
 #include "tools/commands.h"
-#include "traces/check.h"
 
 int main(int argc, char** argv) {
   CLI::App app{

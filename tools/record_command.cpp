@@ -3,8 +3,9 @@
 #include <iostream>
 #include <memory>
 
+#include "base/check.h"
+#include "base/parse.h"
 #include "tools/commands.h"
-#include "traces/check.h"
 #include "traces/record/cell_grid.h"
 #include "traces/record/recorder.h"
 
@@ -45,7 +46,9 @@ void ApplyOrbit(RecordArgs& a) {
   }
   if (colon != std::string::npos) {
     if (!a.frames.empty()) throw InputError("--orbit FRAMES:DEGREES and --frames both set frames");
-    a.opt.frames = ParseFrameRange("0.." + std::to_string(std::stoi(a.orbit.substr(0, colon)) - 1));
+    const auto n = ParseInt(std::string_view(a.orbit).substr(0, colon),
+                            "--orbit '" + a.orbit + "' frames", 1, 1000000);
+    a.opt.frames = ParseFrameRange("0.." + std::to_string(n - 1));
   }
 }
 

@@ -5,13 +5,14 @@
 #include <memory>
 #include <sstream>
 
+#include "base/check.h"
+#include "base/file.h"
+#include "base/progress.h"
 #include "engine/stats.h"
 #include "replay/config.h"
 #include "replay/driver.h"
 #include "tools/commands.h"
 #include "tools/frames.h"
-#include "traces/check.h"
-#include "traces/progress.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {
@@ -128,13 +129,7 @@ void Write(const std::string& path, const std::string& text) {
     std::cout << text;
     return;
   }
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp);
-    if (!(f << text) || !f.flush()) throw InputError("--out " + path + ": cannot write");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0)
-    throw InputError("--out " + path + ": rename failed");
+  WriteFileAtomically(path, text, "--out " + path);
 }
 
 void Run(const ReplayArgs& a) {

@@ -12,12 +12,15 @@
 #include <memory>
 #include <sstream>
 
+#include "base/check.h"
+#include "base/file.h"
+#include "base/format.h"
+#include "base/parse.h"
+#include "base/progress.h"
 #include "graph/analysis.h"
 #include "replay/config.h"
 #include "replay/driver.h"
 #include "tools/commands.h"
-#include "traces/check.h"
-#include "traces/progress.h"
 #include "traces/record/cell_grid.h"
 #include "traces/record/recorder.h"
 #include "traces/record/scene.h"
@@ -61,12 +64,6 @@ std::vector<std::string> SplitList(const std::string& text) {
   return out;
 }
 
-std::string Fixed(double v, int digits) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v;
-  return s.str();
-}
-
 TraceReader RecordGrid(const StudyArgs& a, const std::string& cells) {
   RecordOptions o;
   o.scene.source = a.scene;
@@ -82,7 +79,7 @@ TraceReader RecordGrid(const StudyArgs& a, const std::string& cells) {
   std::ostringstream log;
   const RecordSummary s = Record(o, log);
   std::cerr << "recorded " << s.frames << " frames in " << cells << " cells (" << s.rays
-            << " rays) in " << Fixed(s.seconds, 1) << " s\n";
+            << " rays) in " << FormatFixed(s.seconds, 1) << " s\n";
   return TraceReader::Open(o.out);
 }
 
@@ -166,20 +163,15 @@ std::vector<GridStudy> StudyGivenTraces(const StudyArgs& a,
 
 // Writes `text` to dir/name via a temporary file.
 void WriteFile(const std::string& dir, const std::string& name, const std::string& text) {
-  const fs::path path = fs::path(dir) / name, tmp = path.string() + ".tmp";
-  {
-    std::ofstream f(tmp);
-    if (!(f << text) || !f.flush()) throw InputError(path.string() + ": cannot write");
-  }
-  fs::rename(tmp, path);
+  WriteFileAtomically((fs::path(dir) / name).string(), text);
 }
 
 std::string TreesCsv(const GridStudy& g) {
   std::ostringstream s;
   s << "frame,rays,nodes,rays_per_node,bound,peel_length,splits,optimum\n";
   for (const FrameAnalysis& t : g.trees) {
-    s << t.frame << ',' << t.rays << ',' << t.nodes << ',' << Fixed(t.rays_per_node(), 2) << ','
-      << t.bound << ',' << t.peel_length() << ',' << t.splits << ','
+    s << t.frame << ',' << t.rays << ',' << t.nodes << ',' << FormatFixed(t.rays_per_node(), 2)
+      << ',' << t.bound << ',' << t.peel_length() << ',' << t.splits << ','
       << (t.optimum ? std::to_string(*t.optimum) : "") << '\n';
   }
   return s.str();
@@ -217,17 +209,17 @@ std::string GridReport(const GridStudy& g) {
     << "| | value |\n|---|---:|\n"
     << "| frames | " << tr.size() << " |\n"
     << "| rays per frame (mean) | "
-    << Fixed(Mean(tr, [](const FrameAnalysis& x) { return double(x.rays); }), 0) << " |\n"
+    << FormatFixed(Mean(tr, [](const FrameAnalysis& x) { return double(x.rays); }), 0) << " |\n"
     << "| Cell Tree nodes per frame (mean) | "
-    << Fixed(Mean(tr, [](const FrameAnalysis& x) { return double(x.nodes); }), 1) << " |\n"
+    << FormatFixed(Mean(tr, [](const FrameAnalysis& x) { return double(x.nodes); }), 1) << " |\n"
     << "| rays per node (mean; the paper: about 100) | "
-    << Fixed(Mean(tr, [](const FrameAnalysis& x) { return x.rays_per_node(); }), 1) << " |\n"
+    << FormatFixed(Mean(tr, [](const FrameAnalysis& x) { return x.rays_per_node(); }), 1) << " |\n"
     << "| fetches, Max Work | " << mw << " |\n"
     << "| fetches, Cell Tree scheduling | " << ct << " |\n"
     << "| fetches, Peel oracle | " << po << " |\n"
     << "| maxGen bound | " << bound << " |\n"
     << "| Cell Tree against Max Work (the paper: 30% fewer) | "
-    << Fixed(mw ? 100.0 * (double(ct) - double(mw)) / double(mw) : 0.0, 1) << "% |\n"
+    << FormatFixed(mw ? 100.0 * (double(ct) - double(mw)) / double(mw) : 0.0, 1) << "% |\n"
     << "| Peel length minus bound (summed) | " << peel - bound << " |\n"
     << "| frames whose optimum was proved | " << proved << " of " << tr.size() << " |\n";
   if (proved) s << "| Peel minus optimum on them (summed) | " << peel_proved - opt << " |\n";

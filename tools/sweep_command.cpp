@@ -5,12 +5,12 @@
 #include <memory>
 #include <thread>
 
+#include "base/check.h"
+#include "base/progress.h"
 #include "replay/config.h"
 #include "replay/sweep.h"
 #include "tools/commands.h"
 #include "tools/frames.h"
-#include "traces/check.h"
-#include "traces/progress.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {

@@ -6,8 +6,8 @@
 #include <optional>
 #include <sstream>
 
+#include "base/check.h"
 #include "tools/commands.h"
-#include "traces/check.h"
 #include "traces/trace_inspect.h"
 #include "traces/trace_reader.h"
 

@@ -1,6 +1,6 @@
 #include "traces/ray_batch.h"
 
-#include "traces/check.h"
+#include "base/check.h"
 
 namespace raycell {
 

@@ -17,7 +17,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "traces/check.h"
+#include "base/check.h"
 #include "traces/trace.capnp.h"
 #include "traces/trace_writer.h"
 

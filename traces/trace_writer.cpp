@@ -16,32 +16,13 @@
 #include <utility>
 #include <vector>
 
-#include "traces/check.h"
+#include "base/check.h"
+#include "base/file.h"
 #include "traces/trace.capnp.h"
 
 namespace raycell {
 
-// ---- Hash64, FrameAccumulator ------------------------------------------------------------
-
-void Hash64::AddBytes(const void* data, std::size_t size) {
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (std::size_t i = 0; i < size; i += 8) {
-    std::uint64_t w = 0;
-    for (std::size_t b = 0; b < 8 && i + b < size; ++b) w |= std::uint64_t{p[i + b]} << (8 * b);
-    Add(w);
-  }
-  Add(size);
-}
-
-std::uint64_t Hash64::Finish() const {
-  std::uint64_t h = h_;
-  h ^= h >> 33;
-  h *= kP2;
-  h ^= h >> 29;
-  h *= kP3;
-  h ^= h >> 32;
-  return h;
-}
+// ---- FrameAccumulator ------------------------------------------------------------------
 
 FrameAccumulator::FrameAccumulator(std::int32_t frame, bool store_t) : store_t_(store_t) {
   summary_.frame = frame;
@@ -638,10 +619,7 @@ void TraceWriter::Finish() {
   const std::vector<unsigned char> index = IndexFrame(w.header_length, w.frames);
   w.file.Write(index.data(), index.size());
   w.file.SyncAndClose();
-  const std::string tmp = w.path + ".tmp";
-  if (std::rename(tmp.c_str(), w.path.c_str()) != 0) {
-    throw InputError(w.path + ": cannot rename " + tmp + " to it: " + ErrnoText());
-  }
+  RenameFile(w.path + ".tmp", w.path);
   w.finished = true;
 }
 

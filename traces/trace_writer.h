@@ -5,7 +5,7 @@
 // interrupted capture leaves a .tmp whose finished frames TraceReader can still read.
 //
 // Also here: the pieces of the format that writer and reader share (limits, magic numbers,
-// the 64-bit hash and the frame checksum).
+// the frame checksum; the hash itself is base/hash.h).
 #pragma once
 
 #include <cstddef>
@@ -13,6 +13,7 @@
 #include <memory>
 #include <string>
 
+#include "base/hash.h"
 #include "traces/ray_batch.h"
 #include "traces/trace_header.h"
 
@@ -47,28 +48,6 @@ inline constexpr unsigned kParentIsLastNonShadow = 0;
 inline constexpr unsigned kParentOfPreviousRay = 1;
 inline constexpr unsigned kParentExplicit = 2;
 inline constexpr unsigned kSpawnExplicit = 3;
-
-// ---- Hash (see "Checksums" in trace.capnp) -----------------------------------------------
-
-class Hash64 {
- public:
-  void Add(std::uint64_t word) {
-    h_ ^= word * kP2;
-    h_ = ((h_ << 31) | (h_ >> 33)) * kP1;
-  }
-  // Adds `size` bytes (a whole number of words read little-endian, else zero-padded) and
-  // their length.
-  void AddBytes(const void* data, std::size_t size);
-  std::uint64_t Finish() const;
-
-  static constexpr std::uint64_t kP1 = 0x9E3779B185EBCA87ull;
-  static constexpr std::uint64_t kP2 = 0xC2B2AE3D27D4EB4Full;
-  static constexpr std::uint64_t kP3 = 0x165667B19E3779F9ull;
-  static constexpr std::uint64_t kSeed = 0x52435431ull;
-
- private:
-  std::uint64_t h_ = kSeed;
-};
 
 // Running totals and checksum of one frame's rays, fed ray by ray in id order. Writer and
 // reader both use it, so the checksum does not depend on how rays were split into batches.

@@ -7,7 +7,7 @@
 #include <sstream>
 #include <type_traits>
 
-#include "engine/checked.h"
+#include "base/checked.h"
 
 namespace raycell {
 namespace {

@@ -4,7 +4,7 @@
 
 #include <sstream>
 
-#include "traces/check.h"
+#include "base/check.h"
 
 namespace raycell {
 namespace {

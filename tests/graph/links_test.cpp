@@ -9,11 +9,11 @@
 #include <random>
 #include <sstream>
 
+#include "base/check.h"
 #include "graph/dependency_graph.h"
 #include "graph/peel.h"
 #include "graph/schedule.h"
 #include "tests/graph/test_trees.h"
-#include "traces/check.h"
 
 namespace raycell {
 namespace {

@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "traces/check.h"
+#include "base/check.h"
 
 namespace raycell {
 namespace {

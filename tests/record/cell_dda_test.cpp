@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "traces/check.h"
+#include "base/check.h"
 #include "traces/record/cell_grid.h"
 
 namespace raycell {

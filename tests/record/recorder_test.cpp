@@ -8,8 +8,9 @@
 #include <sstream>
 #include <thread>
 
+#include "base/check.h"
+#include "base/parse.h"
 #include "tests/record/record_test_util.h"
-#include "traces/check.h"
 #include "traces/record/cell_grid.h"
 #include "traces/record/image.h"
 #include "traces/record/renderer.h"

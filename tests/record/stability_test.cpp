@@ -14,8 +14,8 @@
 #include <sstream>
 #include <tuple>
 
+#include "base/check.h"
 #include "tests/record/record_test_util.h"
-#include "traces/check.h"
 #include "traces/record/cell_grid.h"
 #include "traces/record/image.h"
 #include "traces/record/renderer.h"

@@ -7,8 +7,8 @@
 #include <limits>
 #include <string>
 
+#include "base/check.h"
 #include "tests/test_util.h"
-#include "traces/check.h"
 
 namespace raycell {
 namespace {

@@ -6,12 +6,12 @@
 
 #include <random>
 
+#include "base/check.h"
 #include "graph/peel.h"
 #include "replay/config.h"
 #include "replay/work.h"
 #include "scheduling/scheduler.h"
 #include "tests/graph/test_trees.h"
-#include "traces/check.h"
 
 namespace raycell {
 namespace {

@@ -9,9 +9,9 @@
 #include <fstream>
 #include <random>
 
+#include "base/check.h"
 #include "replay/driver.h"
 #include "tests/test_util.h"
-#include "traces/check.h"
 #include "traces/trace_writer.h"
 
 namespace raycell {

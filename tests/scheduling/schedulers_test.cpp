@@ -3,6 +3,7 @@
 #include <random>
 #include <set>
 
+#include "base/check.h"
 #include "graph/peel.h"
 #include "scheduling/cell_tree_scheduler.h"
 #include "scheduling/max_work.h"
@@ -10,7 +11,6 @@
 #include "scheduling/random_scheduler.h"
 #include "scheduling/round_robin.h"
 #include "tests/graph/test_trees.h"
-#include "traces/check.h"
 
 namespace raycell {
 namespace {

@@ -20,9 +20,9 @@
 #include <thread>
 #include <vector>
 
+#include "base/check.h"
 #include "tests/test_util.h"
 #include "tests/traces/trace_format.h"
-#include "traces/check.h"
 #include "traces/trace.capnp.h"
 #include "traces/trace_reader.h"
 #include "traces/trace_writer.h"

@@ -19,9 +19,9 @@
 #include <string>
 #include <vector>
 
+#include "base/check.h"
 #include "tests/test_util.h"
 #include "tests/traces/trace_format.h"
-#include "traces/check.h"
 #include "traces/trace.capnp.h"
 #include "traces/trace_inspect.h"
 #include "traces/trace_reader.h"

@@ -12,9 +12,9 @@
 #include <cstdlib>
 #include <string>
 
+#include "base/check.h"
 #include "engine/event_queue.h"
 #include "engine/simulator.h"
-#include "traces/check.h"
 
 namespace raycell {
 namespace {

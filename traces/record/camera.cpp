@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "traces/check.h"
+#include "base/check.h"
 
 namespace raycell {
 namespace {

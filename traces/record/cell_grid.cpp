@@ -7,7 +7,7 @@
 #include <functional>
 #include <sstream>
 
-#include "traces/check.h"
+#include "base/check.h"
 #include "traces/record/vec3.h"
 
 namespace raycell {

@@ -7,7 +7,8 @@
 #include <cstdio>
 #include <memory>
 
-#include "traces/check.h"
+#include "base/check.h"
+#include "base/file.h"
 
 namespace raycell {
 namespace {
@@ -24,28 +25,22 @@ double FromSrgb8(std::uint8_t v) {
   return s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4);
 }
 
-struct FileCloser {
-  void operator()(std::FILE* f) const {
-    if (f) std::fclose(f);
-  }
-};
-using File = std::unique_ptr<std::FILE, FileCloser>;
+void AppendPngBytes(png_structp png, png_bytep data, png_size_t size) {
+  static_cast<std::string*>(png_get_io_ptr(png))->append(reinterpret_cast<const char*>(data), size);
+}
 
 }  // namespace
 
 void WritePng(const Image& image, const std::string& path) {
-  const std::string tmp = path + ".tmp";
-  File file(std::fopen(tmp.c_str(), "wb"));
-  if (!file) throw InputError(path + ": cannot open for writing");
+  // Encoded in memory, then written through base's atomic write.
+  std::string bytes;
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!png || !info || setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
-    file.reset();
-    std::remove(tmp.c_str());
-    throw InputError(path + ": PNG write failed");
+    throw InputError(path + ": PNG encoding failed");
   }
-  png_init_io(png, file.get());
+  png_set_write_fn(png, &bytes, AppendPngBytes, nullptr);
   png_set_IHDR(png, info, image.width(), image.height(), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
@@ -62,12 +57,7 @@ void WritePng(const Image& image, const std::string& path) {
   }
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
-  if (std::fflush(file.get()) != 0) throw InputError(path + ": write failed");
-  file.reset();
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw InputError(path + ": cannot rename " + tmp);
-  }
+  WriteFileAtomically(path, bytes);
 }
 
 Image ReadPng(const std::string& path) {

@@ -9,32 +9,16 @@
 #include <memory>
 #include <sstream>
 
-#include "traces/check.h"
-#include "traces/progress.h"
+#include "base/check.h"
+#include "base/format.h"
+#include "base/parse.h"
+#include "base/progress.h"
 #include "traces/record/cell_grid.h"
 #include "traces/record/renderer.h"
 #include "traces/trace_writer.h"
 
 namespace raycell {
 namespace {
-
-int ParseInt(const std::string& s, const std::string& what) {
-  std::size_t used = 0;
-  int v = 0;
-  try {
-    v = std::stoi(s, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (s.empty() || used != s.size()) throw InputError(what + ": '" + s + "' is not an integer");
-  return v;
-}
-
-std::string Fmt(double v, int precision) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(precision) << v;
-  return s.str();
-}
 
 // The scene box over all frames (sequences may move) and, per cell, the largest footprint
 // of any frame (header.footprints; each frame also uses its own to decide emptiness).
@@ -67,28 +51,12 @@ std::string ImagePath(const std::string& dir, int frame) {
 
 }  // namespace
 
-std::vector<int> ParseFrameRange(const std::string& text) {
-  const std::string what = "--frames";
-  std::size_t sep = text.find("..");
-  std::size_t skip = 2;
-  if (sep == std::string::npos) {
-    sep = text.find('-', 1);
-    skip = 1;
-  }
-  const int a = ParseInt(sep == std::string::npos ? text : text.substr(0, sep), what);
-  const int b = sep == std::string::npos ? a : ParseInt(text.substr(sep + skip), what);
-  if (b < a) throw InputError(what + " '" + text + "': the range ends before it starts");
-  if (std::int64_t(b) - a >= 1000000) throw InputError(what + " '" + text + "': too many frames");
-  std::vector<int> frames;
-  for (int f = a; f <= b; ++f) frames.push_back(f);
-  return frames;
-}
-
 std::array<std::uint32_t, 2> ParseResolution(const std::string& text) {
   const auto x = text.find_first_of("xX");
   const std::string what = "--res '" + text + "'";
   if (x == std::string::npos) throw InputError(what + ": expected WxH, e.g. 256x256");
-  const int w = ParseInt(text.substr(0, x), what), h = ParseInt(text.substr(x + 1), what);
+  const std::string_view t = text;
+  const auto w = ParseInt(t.substr(0, x), what), h = ParseInt(t.substr(x + 1), what);
   if (w < 1 || h < 1 || w > 65536 || h > 65536) {
     throw InputError(what + ": width and height must be in 1..65536");
   }
@@ -171,7 +139,7 @@ RecordSummary Record(const RecordOptions& o, std::ostream& log) {
     log << "frame " << frame << ": " << st.rays << " rays (" << st.rays_by_kind[0] << " primary, "
         << st.rays_by_kind[1] << " reflection, " << st.rays_by_kind[2] << " refraction, "
         << st.rays_by_kind[3] << " shadow), " << st.visits << " visits, " << st.samples
-        << " samples, " << Fmt(secs, 2) << " s\n";
+        << " samples, " << FormatFixed(secs, 2) << " s\n";
   }
   if (!sum.interrupted) writer.Finish();
   sum.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();

@@ -34,8 +34,6 @@ struct RecordSummary {
   bool interrupted = false;
 };
 
-// Parses "A", "A..B" or "A-B" (inclusive) into frame numbers. InputError on bad text.
-std::vector<int> ParseFrameRange(const std::string& text);
 // Parses "WxH". InputError on bad text or a zero size.
 std::array<std::uint32_t, 2> ParseResolution(const std::string& text);
 // Checks every numeric setting (positive steps, cutoff in [0,1), ...); InputError if not.

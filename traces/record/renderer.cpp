@@ -33,7 +33,7 @@
 #include <optional>
 #include <thread>
 
-#include "traces/check.h"
+#include "base/check.h"
 #include "traces/record/camera.h"
 #include "traces/record/scene_vdb.h"
 

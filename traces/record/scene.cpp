@@ -12,21 +12,13 @@
 #include <mutex>
 #include <sstream>
 
-#include "traces/check.h"
+#include "base/check.h"
+#include "base/parse.h"
 #include "traces/record/scene_vdb.h"
 #include "traces/record/vec3.h"
 
 namespace raycell {
 namespace {
-
-std::vector<std::string> Split(const std::string& s, char sep) {
-  std::vector<std::string> out;
-  std::string cur;
-  std::istringstream in(s);
-  while (std::getline(in, cur, sep)) out.push_back(cur);
-  if (!s.empty() && s.back() == sep) out.push_back("");
-  return out;
-}
 
 double ParseNumber(const std::string& text, const std::string& what) {
   std::size_t used = 0;

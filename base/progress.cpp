@@ -1,4 +1,4 @@
-#include "traces/progress.h"
+#include "base/progress.h"
 
 #include <unistd.h>
 

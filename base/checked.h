@@ -4,7 +4,7 @@
 
 #include <cstdint>
 
-#include "traces/check.h"
+#include "base/check.h"
 
 namespace raycell {
 

@@ -1,0 +1,20 @@
+// Text formatting shared by every printer: JSON string literals, CSV fields and numbers.
+// Deterministic: the same value gives the same text on every machine.
+#pragma once
+
+#include <string>
+
+namespace raycell {
+
+// JSON string literal with quotes: a"b -> "a\"b"; control characters as \uXXXX, UTF-8
+// bytes passed through.
+std::string JsonQuote(const std::string& s);
+// A CSV field: quoted when it holds a comma, quote, CR or LF, with quotes doubled (RFC 4180).
+std::string CsvField(const std::string& s);
+// The shortest decimal that reads back to the same double ("0.1", "1e+300"); "nan", "inf",
+// "-inf" for non-finite values.
+std::string FormatReal(double v);
+// Fixed-point with `digits` decimals, as printf("%.*f"): FormatFixed(2.5, 2) == "2.50".
+std::string FormatFixed(double v, int digits);
+
+}  // namespace raycell

@@ -1,0 +1,132 @@
+// base/: parsing edge cases, atomic writes (the temporary never survives a failure, the old
+// file is kept), formatting and the hash whose values the trace format depends on.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <stdexcept>
+
+#include "base/file.h"
+#include "base/format.h"
+#include "base/hash.h"
+#include "base/parse.h"
+#include "tests/test_util.h"
+
+namespace raycell {
+namespace {
+
+using testing::ErrorOf;
+using testing::ReadBytes;
+using testing::TempPath;
+
+TEST(Parse, TrimRemovesWhiteSpaceAtBothEndsOnly) {
+  EXPECT_EQ(Trim(""), "");
+  EXPECT_EQ(Trim(" \t\n"), "");
+  EXPECT_EQ(Trim(" a b\t"), "a b");
+}
+
+TEST(Parse, SplitKeepsEveryEmptyField) {
+  EXPECT_EQ(Split("", ','), std::vector<std::string>{""});
+  EXPECT_EQ(Split("a,,b", ','), (std::vector<std::string>{"a", "", "b"}));
+  EXPECT_EQ(Split("a,", ','), (std::vector<std::string>{"a", ""}));
+  EXPECT_EQ(Split(",", ','), (std::vector<std::string>{"", ""}));
+}
+
+TEST(Parse, IntegersAreWholeDecimalNumbersInRange) {
+  EXPECT_EQ(ParseInt("-12", "x"), -12);
+  EXPECT_EQ(ParseInt("0", "x"), 0);
+  EXPECT_EQ(ParseUint("18446744073709551615", "x"), 18446744073709551615ull);
+  for (const char* bad : {"", " 1", "1 ", "+1", "1.0", "0x10", "1e3", "abc", "--1"}) {
+    EXPECT_NE(ErrorOf([&] { ParseInt(bad, "--opt"); }).find("--opt: '"), std::string::npos) << bad;
+  }
+  EXPECT_NE(ErrorOf([] { ParseUint("-1", "--n"); }).find("--n"), std::string::npos);
+  EXPECT_NE(ErrorOf([] { ParseUint("18446744073709551616", "--n"); }).find("out of range"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([] { ParseInt("5", "--n", 1, 4); }).find("--n: 5 is out of range 1..4"),
+            std::string::npos);
+  std::uint64_t v = 7;
+  EXPECT_FALSE(TryParseUint("", &v));
+  EXPECT_FALSE(TryParseUint("1a", &v));
+  EXPECT_TRUE(TryParseUint("42", &v));
+  EXPECT_EQ(v, 42u);
+}
+
+TEST(Parse, FrameRanges) {
+  EXPECT_EQ(ParseFrameRange("3"), std::vector<int>{3});
+  EXPECT_EQ(ParseFrameRange("2..4"), (std::vector<int>{2, 3, 4}));
+  EXPECT_EQ(ParseFrameRange("2-4"), (std::vector<int>{2, 3, 4}));
+  EXPECT_EQ(ParseFrameRange("-2..-1"), (std::vector<int>{-2, -1}));
+  EXPECT_NE(ErrorOf([] { ParseFrameRange("4..2"); }).find("ends before it starts"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([] { ParseFrameRange("0..1000000"); }).find("too many"), std::string::npos);
+  EXPECT_NE(ErrorOf([] { ParseFrameRange("a..b"); }).find("--frames 'a..b'"), std::string::npos);
+  EXPECT_NE(ErrorOf([] { ParseFrameRange(""); }).find("--frames"), std::string::npos);
+}
+
+TEST(File, WriteFileAtomicallyReplacesTheFileAndLeavesNoTemporary) {
+  const std::string path = TempPath("base", "atomic.txt");
+  WriteFileAtomically(path, "first");
+  WriteFileAtomically(path, [](std::ostream& out) { out << "second"; });
+  EXPECT_EQ(ReadBytes(path), "second");
+  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+  std::filesystem::remove(path);
+}
+
+TEST(File, AFailedWriteKeepsTheOldFileAndRemovesTheTemporary) {
+  const std::string path = TempPath("base", "kept.txt");
+  WriteFileAtomically(path, "old");
+  EXPECT_THROW(WriteFileAtomically(path,
+                                   [](std::ostream& out) {
+                                     out << "half";
+                                     throw std::runtime_error("writer failed");
+                                   }),
+               std::runtime_error);
+  EXPECT_EQ(ReadBytes(path), "old");
+  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+  std::filesystem::remove(path);
+}
+
+TEST(File, ARenameThatFailsRemovesTheTemporaryAndNamesWhat) {
+  // The target is a non-empty folder: rename(2) fails after the temporary was written.
+  const std::string dir = TempPath("base", "dir");
+  std::filesystem::create_directories(dir + "/inside");
+  const std::string message = ErrorOf([&] { WriteFileAtomically(dir, "x", "--out DIR"); });
+  EXPECT_NE(message.find("--out DIR: cannot rename"), std::string::npos) << message;
+  EXPECT_FALSE(std::filesystem::exists(dir + ".tmp"));
+  EXPECT_TRUE(std::filesystem::is_directory(dir + "/inside"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST(File, AnUnwritableFolderIsAnInputError) {
+  const std::string message =
+      ErrorOf([] { WriteFileAtomically("/nonexistent-raycell-dir/out.csv", "x", "--out"); });
+  EXPECT_NE(message.find("--out: cannot open"), std::string::npos) << message;
+}
+
+TEST(Format, JsonCsvAndNumbers) {
+  EXPECT_EQ(JsonQuote("a\"b\\c\n\x01"), "\"a\\\"b\\\\c\\n\\u0001\"");
+  EXPECT_EQ(CsvField("plain"), "plain");
+  EXPECT_EQ(CsvField("a,\"b\""), "\"a,\"\"b\"\"\"");
+  EXPECT_EQ(FormatReal(0.1), "0.1");
+  EXPECT_EQ(FormatReal(1e300), "1e+300");
+  EXPECT_EQ(FormatReal(-1.0 / 0.0), "-inf");
+  EXPECT_EQ(FormatFixed(2.5, 2), "2.50");
+  EXPECT_EQ(FormatFixed(0.125, 0), "0");
+}
+
+// The hash is part of the trace format: its values must never change. The expected values
+// come from an independent Python transcription of the algorithm in traces/trace.capnp
+// ("Checksums"), not from this code.
+TEST(Hash, ValuesAreStable) {
+  EXPECT_EQ(Hash64().Finish(), 0xb6cf3414414875d0ull);
+  Hash64 bytes;
+  bytes.AddBytes("raycell", 7);
+  EXPECT_EQ(bytes.Finish(), 0xefa509afd368aa40ull);
+  Hash64 word;
+  word.Add(42);
+  EXPECT_EQ(word.Finish(), 0x8dc5fc419cd24e33ull);
+}
+
+}  // namespace
+}  // namespace raycell

@@ -1,0 +1,88 @@
+#!/usr/bin/env python3
+"""Checks that includes follow the module order of DESIGN.md §4.
+
+    base < engine, traces < graph < scheduling < replay < tools
+
+A module may include its own headers and those of the modules below it; base includes no
+other module; traces/record (the renderer) is included only from tools and the tests;
+OpenVDB headers appear only in traces/record. Every target exports the project root as its
+include path, so a wrong edge through a header is caught by nothing else.
+
+Usage: tools/check_deps.py [ROOT]   (exit 1 and one line per wrong include)
+"""
+import pathlib
+import re
+import sys
+
+# The modules each module may include (besides itself).
+ALLOWED = {
+    "base": set(),
+    "engine": {"base"},
+    "traces": {"base"},
+    "traces/record": {"base", "traces"},
+    "graph": {"base", "traces"},
+    "scheduling": {"base", "traces", "graph"},
+    "replay": {"base", "engine", "traces", "graph", "scheduling"},
+    "tools": {"base", "engine", "traces", "traces/record", "graph", "scheduling", "replay"},
+}
+# Tests and fuzz targets may include any module; OpenVDB still only in record's tests.
+ANY = {"tests", "fuzz"}
+OPENVDB_OK = ("traces/record/", "tests/record/")
+INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]')
+
+
+def module_of(rel):
+    """The module a project path belongs to, or None for paths outside the modules."""
+    if rel.startswith("traces/record/"):
+        return "traces/record"
+    top = rel.split("/", 1)[0]
+    if top in ALLOWED or top in ANY:
+        return top
+    return None
+
+
+def check(root):
+    errors = []
+    sources = [p for ext in ("*.h", "*.cpp", "*.cc") for p in root.rglob(ext)]
+    for path in sorted(sources):
+        rel = path.relative_to(root).as_posix()
+        if rel.startswith("build") or "/build" in rel.split("/", 1)[0]:
+            continue
+        mod = module_of(rel)
+        if mod is None:
+            continue
+        for n, line in enumerate(path.read_text(errors="replace").splitlines(), 1):
+            m = INCLUDE.match(line)
+            if not m:
+                continue
+            bracket, target = m.groups()
+            if "openvdb" in target.lower() or "nanovdb" in target.lower():
+                if not rel.startswith(OPENVDB_OK):
+                    errors.append(f"{rel}:{n}: OpenVDB header <{target}> outside traces/record")
+                continue
+            if bracket != '"':
+                continue
+            dep = module_of(target)
+            if dep is None or dep == mod or mod in ANY:
+                continue
+            if dep not in ALLOWED[mod] and dep not in ANY:
+                errors.append(f"{rel}:{n}: {mod} includes {target} ({dep} is not below {mod})")
+            elif dep in ANY:
+                errors.append(f"{rel}:{n}: {mod} includes test code {target}")
+    return errors
+
+
+def main():
+    root = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else ".").resolve()
+    errors = check(root)
+    for e in errors:
+        print(e)
+    if errors:
+        print(f"check_deps: {len(errors)} include(s) against the module order of DESIGN.md §4")
+        return 1
+    print("check_deps: every include follows the module order")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
