@@ -14,34 +14,12 @@
 namespace raycell {
 namespace {
 
+using testing::BruteForceOptimum;
 using testing::FromPaths;
 using testing::RandomTree;
 
 constexpr CellId A = 0, B = 1, C = 2, D = 3;
 using Schedule = std::vector<CellId>;
-
-// The fewest fetches by breadth-first search over sets of processed nodes, no heuristic, no
-// incumbent: each level tries every cell, scanning every node.
-std::size_t BruteForceOptimum(const CellTree& t) {
-  std::vector<bool> start(t.size(), false);
-  start[kRootNode] = true;
-  std::set<std::vector<bool>> seen{start};
-  std::vector<std::vector<bool>> level{start};
-  for (std::size_t depth = 0;; ++depth) {
-    std::vector<std::vector<bool>> next;
-    for (const std::vector<bool>& done : level) {
-      if (std::all_of(done.begin(), done.end(), [](bool d) { return d; })) return depth;
-      for (CellId c = 0; c < t.cell_count(); ++c) {
-        std::vector<bool> after = done;
-        for (NodeId n = 1; n < t.size(); ++n) {
-          if (!done[n] && done[t.parent(n)] && t.cell(n) == c) after[n] = true;
-        }
-        if (seen.insert(after).second) next.push_back(after);
-      }
-    }
-    level = std::move(next);
-  }
-}
 
 void ExpectOptimal(const CellTree& t, std::uint64_t length) {
   const OptimumResult r = ExactOptimum(t);

@@ -1,7 +1,9 @@
 // Cell Trees for the tests: from given paths, and random ones.
 #pragma once
 
+#include <algorithm>
 #include <random>
+#include <set>
 #include <vector>
 
 #include "graph/cell_tree.h"
@@ -67,6 +69,30 @@ inline CellTree RandomTree(std::mt19937& rng, CellId cells, int rays, int max_le
   CellTreeBuilder builder;
   builder.AddBatch(b);
   return builder.Finish();
+}
+
+// The fewest fetches (one-cell cache) by breadth-first search over sets of processed nodes,
+// no heuristic, no incumbent: each level tries every cell, scanning every node. The
+// reference every bound and schedule of graph/ is tested against; small trees only.
+inline std::size_t BruteForceOptimum(const CellTree& t) {
+  std::vector<bool> start(t.size(), false);
+  start[kRootNode] = true;
+  std::set<std::vector<bool>> seen{start};
+  std::vector<std::vector<bool>> level{start};
+  for (std::size_t depth = 0;; ++depth) {
+    std::vector<std::vector<bool>> next;
+    for (const std::vector<bool>& done : level) {
+      if (std::all_of(done.begin(), done.end(), [](bool d) { return d; })) return depth;
+      for (CellId c = 0; c < t.cell_count(); ++c) {
+        std::vector<bool> after = done;
+        for (NodeId n = 1; n < t.size(); ++n) {
+          if (!done[n] && done[t.parent(n)] && t.cell(n) == c) after[n] = true;
+        }
+        if (seen.insert(after).second) next.push_back(after);
+      }
+    }
+    level = std::move(next);
+  }
 }
 
 }  // namespace raycell::testing
