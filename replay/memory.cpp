@@ -11,36 +11,8 @@ CellStore::CellStore(const LevelConfig& level, const std::vector<std::uint64_t>*
                      std::vector<CellId> future)
     : level_(level),
       footprints_(footprints),
-      stamp_(footprints->size(), 0),
-      future_(std::move(future)),
-      uses_(footprints->size()) {
-  for (std::size_t i = 0; i < future_.size(); ++i) uses_[future_[i]].push_back(i);
-}
-
-std::size_t CellStore::NextUse(CellId cell) const {
-  const auto& u = uses_[cell];
-  const auto it = std::lower_bound(u.begin(), u.end(), pos_);
-  return it == u.end() ? SIZE_MAX : *it;
-}
-
-std::optional<CellId> CellStore::MinVictim(std::optional<CellId> pinned) const {
-  std::optional<CellId> victim;
-  std::size_t farthest = 0;
-  for (CellId c = 0; c < stamp_.size(); ++c) {
-    if (stamp_[c] == 0 || c == pinned) continue;
-    const std::size_t next = NextUse(c);
-    if (!victim || next > farthest) victim = c, farthest = next;
-  }
-  return victim;
-}
-
-std::optional<CellId> CellStore::OldestVictim(std::optional<CellId> pinned) const {
-  std::optional<CellId> victim;
-  for (CellId c = 0; c < stamp_.size(); ++c) {
-    if (stamp_[c] != 0 && c != pinned && (!victim || stamp_[c] < stamp_[*victim])) victim = c;
-  }
-  return victim;
-}
+      policy_(MakeReplacement(level.replacement, CellId(footprints->size()), std::move(future))),
+      held_(footprints->size(), false) {}
 
 std::uint64_t CellStore::Size(CellId cell) const {
   return level_.capacity_unit == LevelConfig::CapacityUnit::kCells ? 1 : (*footprints_)[cell];
@@ -48,44 +20,30 @@ std::uint64_t CellStore::Size(CellId cell) const {
 
 bool CellStore::Lookup(CellId cell) {
   requests_.push_back(cell);
-  if (level_.replacement == LevelConfig::Replacement::kMin) {
-    if (pos_ < future_.size() && future_[pos_] == cell) {
-      ++pos_;
-    } else {
-      diverged_ = true;  // resynchronise on this cell's next request, if any
-      const std::size_t next = NextUse(cell);
-      if (next != SIZE_MAX) pos_ = next + 1;
-    }
-  }
-  if (stamp_[cell] == 0) return false;
-  if (level_.replacement == LevelConfig::Replacement::kLru) stamp_[cell] = ++clock_;
-  return true;
-}
-
-bool CellStore::EvictOne(std::optional<CellId> pinned) {
-  const std::optional<CellId> victim = level_.replacement == LevelConfig::Replacement::kMin
-                                           ? MinVictim(pinned)
-                                           : OldestVictim(pinned);
-  if (!victim) return false;
-  stamp_[*victim] = 0;
-  used_ -= Size(*victim);
+  policy_->Requested(cell);
+  if (!held_[cell]) return false;
+  policy_->Hit(cell);
   return true;
 }
 
 bool CellStore::Fits(CellId cell, std::optional<CellId> pinned) const {
-  const std::uint64_t keep = pinned && stamp_[*pinned] != 0 ? Size(*pinned) : 0;
-  return stamp_[cell] != 0 || keep + Size(cell) <= level_.capacity;
+  const std::uint64_t keep = pinned && held_[*pinned] ? Size(*pinned) : 0;
+  return held_[cell] || keep + Size(cell) <= level_.capacity;
 }
 
 bool CellStore::Insert(CellId cell, std::optional<CellId> pinned) {
-  if (stamp_[cell] != 0) return true;
+  if (held_[cell]) return true;
   if (!Fits(cell, pinned)) return false;
   while (used_ + Size(cell) > level_.capacity) {
-    const bool evicted = EvictOne(pinned);
-    RAYCELL_CHECK(evicted);
+    const std::optional<CellId> victim = policy_->Victim(pinned);
+    RAYCELL_CHECK(victim.has_value());
+    held_[*victim] = false;
+    used_ -= Size(*victim);
+    policy_->Evicted(*victim);
   }
-  stamp_[cell] = ++clock_;
+  held_[cell] = true;
   used_ += Size(cell);
+  policy_->Inserted(cell);
   return true;
 }
 

@@ -5,56 +5,50 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "engine/time.h"
 #include "replay/config.h"
+#include "replay/replacement.h"
 #include "traces/ray_batch.h"
 
 namespace raycell {
 
-// One level's contents, with LRU, FIFO or Belady's MIN replacement. Capacity in cells or
+// One level's contents: which cells it holds and their bytes; its replacement policy
+// (replay/replacement.h: LRU, FIFO or Belady's MIN) picks the victims. Capacity in cells or
 // bytes; a cell larger than the whole capacity passes through without being kept.
 //
-// MIN evicts the cell whose next request lies farthest in the future (never requested again
-// first; lowest cell number on ties). It needs this store's future requests: `future`, the
-// requests a previous run of the same frame made (see ReplayFrame). Every Lookup is recorded
-// in requests(), and diverged() tells whether they strayed from `future`.
+// MIN needs this store's future requests: `future`, the requests a previous run of the same
+// frame made (see ReplayFrame). Every Lookup is recorded in requests(), and diverged() tells
+// whether they strayed from `future`.
 class CellStore {
  public:
   CellStore(const LevelConfig& level, const std::vector<std::uint64_t>* footprints,
             std::vector<CellId> future = {});
-  // True if `cell` is held; a hit refreshes it under LRU.
+  // True if `cell` is held; the policy is told of the request and the hit.
   bool Lookup(CellId cell);
-  // Keeps `cell`, evicting the least recently used (LRU) or oldest (FIFO) cells to make room,
-  // never `pinned` (the cell a processor is working). False if it cannot be kept.
+  // Keeps `cell`, evicting the policy's victims to make room, never `pinned` (the cell a
+  // processor is working). False if it cannot be kept.
   bool Insert(CellId cell, std::optional<CellId> pinned = std::nullopt);
   // Whether Insert(cell, pinned) would keep the cell.
   bool Fits(CellId cell, std::optional<CellId> pinned) const;
-  bool Contains(CellId cell) const { return stamp_[cell] != 0; }
+  bool Contains(CellId cell) const { return held_[cell]; }
   std::uint64_t used() const { return used_; }
   const std::vector<CellId>& requests() const { return requests_; }
-  bool diverged() const { return diverged_; }
+  bool diverged() const { return policy_->diverged(); }
 
  private:
   std::uint64_t Size(CellId cell) const;
-  bool EvictOne(std::optional<CellId> pinned);
-  std::optional<CellId> MinVictim(std::optional<CellId> pinned) const;
-  std::optional<CellId> OldestVictim(std::optional<CellId> pinned) const;
-  // Position in future_ of the next request of `cell` at or after pos_; SIZE_MAX if none.
-  std::size_t NextUse(CellId cell) const;
 
   LevelConfig level_;
   const std::vector<std::uint64_t>* footprints_;
-  std::vector<std::uint64_t> stamp_;  // 0: absent; else last use (LRU) or arrival (FIFO)
-  std::uint64_t clock_ = 0, used_ = 0;
-  std::vector<CellId> future_;
-  std::vector<std::vector<std::size_t>> uses_;  // per cell: its positions in future_
-  std::size_t pos_ = 0;
+  std::unique_ptr<ReplacementPolicy> policy_;
+  std::vector<bool> held_;
+  std::uint64_t used_ = 0;
   std::vector<CellId> requests_;
-  bool diverged_ = false;
 };
 
 struct LevelStats {

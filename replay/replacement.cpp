@@ -1,0 +1,78 @@
+#include "replay/replacement.h"
+
+#include <algorithm>
+#include <cstdint>
+
+#include "base/check.h"
+
+namespace raycell {
+
+std::unique_ptr<ReplacementPolicy> MakeReplacement(LevelConfig::Replacement kind, CellId cells,
+                                                   std::vector<CellId> future) {
+  switch (kind) {
+    case LevelConfig::Replacement::kLru:
+      return std::make_unique<RecencyReplacement>(cells, true);
+    case LevelConfig::Replacement::kFifo:
+      return std::make_unique<RecencyReplacement>(cells, false);
+    case LevelConfig::Replacement::kMin:
+      return std::make_unique<MinReplacement>(cells, std::move(future));
+  }
+  RAYCELL_CHECK(false);
+  return nullptr;
+}
+
+// ---- LRU and FIFO ------------------------------------------------------------------------
+
+RecencyReplacement::RecencyReplacement(CellId cells, bool move_on_hit)
+    : move_on_hit_(move_on_hit), pos_(cells) {}
+
+void RecencyReplacement::Hit(CellId cell) {
+  if (move_on_hit_) order_.splice(order_.end(), order_, pos_[cell]);
+}
+
+void RecencyReplacement::Inserted(CellId cell) { pos_[cell] = order_.insert(order_.end(), cell); }
+
+void RecencyReplacement::Evicted(CellId cell) { order_.erase(pos_[cell]); }
+
+std::optional<CellId> RecencyReplacement::Victim(std::optional<CellId> pinned) const {
+  for (const CellId c : order_) {
+    if (c != pinned) return c;
+  }
+  return std::nullopt;
+}
+
+// ---- MIN ---------------------------------------------------------------------------------
+
+MinReplacement::MinReplacement(CellId cells, std::vector<CellId> future)
+    : future_(std::move(future)), uses_(cells), held_(cells, false) {
+  for (std::size_t i = 0; i < future_.size(); ++i) uses_[future_[i]].push_back(i);
+}
+
+std::size_t MinReplacement::NextUse(CellId cell) const {
+  const auto& u = uses_[cell];
+  const auto it = std::lower_bound(u.begin(), u.end(), pos_);
+  return it == u.end() ? SIZE_MAX : *it;
+}
+
+void MinReplacement::Requested(CellId cell) {
+  if (pos_ < future_.size() && future_[pos_] == cell) {
+    ++pos_;
+    return;
+  }
+  diverged_ = true;  // resynchronise on this cell's next request, if any
+  const std::size_t next = NextUse(cell);
+  if (next != SIZE_MAX) pos_ = next + 1;
+}
+
+std::optional<CellId> MinReplacement::Victim(std::optional<CellId> pinned) const {
+  std::optional<CellId> victim;
+  std::size_t farthest = 0;
+  for (CellId c = 0; c < held_.size(); ++c) {
+    if (!held_[c] || c == pinned) continue;
+    const std::size_t next = NextUse(c);
+    if (!victim || next > farthest) victim = c, farthest = next;
+  }
+  return victim;
+}
+
+}  // namespace raycell

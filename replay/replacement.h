@@ -1,0 +1,79 @@
+// Replacement policies of a memory level (DESIGN.md §2; CONVENTIONS.md: policies plug in
+// through small interfaces, after ChampSim's replacement modules). A CellStore keeps which
+// cells it holds and their bytes; its policy is told every request, hit, insertion and
+// eviction, and picks the victim when room is needed.
+#pragma once
+
+#include <cstddef>
+#include <list>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "graph/cell_tree.h"  // CellId
+#include "replay/config.h"
+
+namespace raycell {
+
+class ReplacementPolicy {
+ public:
+  virtual ~ReplacementPolicy() = default;
+  // Every lookup, hit or miss, in request order (MIN follows its future with it).
+  virtual void Requested(CellId /*cell*/) {}
+  // A lookup that found `cell` held.
+  virtual void Hit(CellId cell) = 0;
+  // `cell` was brought in / thrown out.
+  virtual void Inserted(CellId cell) = 0;
+  virtual void Evicted(CellId cell) = 0;
+  // The held cell to evict, never `pinned`; nullopt when there is none.
+  virtual std::optional<CellId> Victim(std::optional<CellId> pinned) const = 0;
+  // MIN only: whether the requests strayed from the future it was given.
+  virtual bool diverged() const { return false; }
+};
+
+// The policy `kind` for a store of `cells` cells. `future` (MIN only): the requests a
+// previous run of the same frame made at this store; MIN with no future is a CHECK failure
+// (MemoryHierarchy runs LRU first to learn it).
+std::unique_ptr<ReplacementPolicy> MakeReplacement(LevelConfig::Replacement kind, CellId cells,
+                                                   std::vector<CellId> future = {});
+
+// Least recently used (move_on_hit) or first in, first out: held cells in a list, oldest use
+// or arrival first; the victim is the first that is not pinned.
+class RecencyReplacement : public ReplacementPolicy {
+ public:
+  RecencyReplacement(CellId cells, bool move_on_hit);
+  void Hit(CellId cell) override;
+  void Inserted(CellId cell) override;
+  void Evicted(CellId cell) override;
+  std::optional<CellId> Victim(std::optional<CellId> pinned) const override;
+
+ private:
+  bool move_on_hit_;
+  std::list<CellId> order_;                       // oldest first
+  std::vector<std::list<CellId>::iterator> pos_;  // per cell, valid while held
+};
+
+// Belady's MIN: evicts the held cell whose next request lies farthest in the future (never
+// requested again first; lowest cell number on ties).
+class MinReplacement : public ReplacementPolicy {
+ public:
+  MinReplacement(CellId cells, std::vector<CellId> future);
+  void Requested(CellId cell) override;
+  void Hit(CellId) override {}
+  void Inserted(CellId cell) override { held_[cell] = true; }
+  void Evicted(CellId cell) override { held_[cell] = false; }
+  std::optional<CellId> Victim(std::optional<CellId> pinned) const override;
+  bool diverged() const override { return diverged_; }
+
+ private:
+  // Position in future_ of the next request of `cell` at or after pos_; SIZE_MAX if none.
+  std::size_t NextUse(CellId cell) const;
+
+  std::vector<CellId> future_;
+  std::vector<std::vector<std::size_t>> uses_;  // per cell: its positions in future_
+  std::vector<bool> held_;
+  std::size_t pos_ = 0;
+  bool diverged_ = false;
+};
+
+}  // namespace raycell

@@ -1,0 +1,104 @@
+// Replacement policies behind CellStore, on hand-worked request sequences (the expected
+// victims worked out by hand from each policy's definition).
+#include "replay/replacement.h"
+
+#include <gtest/gtest.h>
+
+#include "replay/memory.h"
+
+namespace raycell {
+namespace {
+
+LevelConfig Cells(std::uint64_t capacity, LevelConfig::Replacement r) {
+  LevelConfig l;
+  l.name = "cache";
+  l.capacity_unit = LevelConfig::CapacityUnit::kCells;
+  l.capacity = capacity;
+  l.replacement = r;
+  return l;
+}
+
+// Looks `cell` up and, on a miss, inserts it; returns whether it was a hit.
+bool Access(CellStore& s, CellId cell) {
+  if (s.Lookup(cell)) return true;
+  EXPECT_TRUE(s.Insert(cell));
+  return false;
+}
+
+const std::vector<std::uint64_t> kFootprints(8, 100);
+
+TEST(Replacement, LruEvictsTheLeastRecentlyUsed) {
+  CellStore s(Cells(2, LevelConfig::Replacement::kLru), &kFootprints);
+  Access(s, 0), Access(s, 1);
+  EXPECT_TRUE(Access(s, 0));   // 0 is now the most recent
+  EXPECT_FALSE(Access(s, 2));  // evicts 1
+  EXPECT_TRUE(s.Contains(0));
+  EXPECT_FALSE(s.Contains(1));
+  EXPECT_TRUE(s.Contains(2));
+}
+
+TEST(Replacement, FifoEvictsTheOldestArrivalWhateverTheHits) {
+  CellStore s(Cells(2, LevelConfig::Replacement::kFifo), &kFootprints);
+  Access(s, 0), Access(s, 1);
+  EXPECT_TRUE(Access(s, 0));   // a hit does not refresh 0
+  EXPECT_FALSE(Access(s, 2));  // evicts 0, the first in
+  EXPECT_FALSE(s.Contains(0));
+  EXPECT_TRUE(s.Contains(1));
+}
+
+TEST(Replacement, PinnedCellsAreNeverEvicted) {
+  CellStore s(Cells(2, LevelConfig::Replacement::kLru), &kFootprints);
+  Access(s, 0), Access(s, 1);
+  EXPECT_TRUE(s.Insert(2, CellId{0}));  // 0 is the least recent but pinned: 1 goes
+  EXPECT_TRUE(s.Contains(0));
+  EXPECT_FALSE(s.Contains(1));
+  CellStore one(Cells(1, LevelConfig::Replacement::kLru), &kFootprints);
+  Access(one, 3);
+  EXPECT_FALSE(one.Insert(4, CellId{3}));  // no room beside the pinned cell
+  EXPECT_TRUE(one.Contains(3));
+}
+
+TEST(Replacement, MinEvictsTheCellUsedFarthestAhead) {
+  // Requests 0 1 2 0 1 3 0 with two cells: at the request of 2, 0 is next used at 3 and 1 at
+  // 4, so 1 goes; at 3, 0 is next used at 6 and 2 never again, so 2 goes. Hits: 0 (at 3),
+  // 0 (at 6): 5 misses, where LRU misses on all 7.
+  const std::vector<CellId> requests = {0, 1, 2, 0, 1, 3, 0};
+  CellStore min(Cells(2, LevelConfig::Replacement::kMin), &kFootprints, requests);
+  CellStore lru(Cells(2, LevelConfig::Replacement::kLru), &kFootprints);
+  int min_misses = 0, lru_misses = 0;
+  for (CellId c : requests) {
+    min_misses += !Access(min, c);
+    lru_misses += !Access(lru, c);
+  }
+  EXPECT_EQ(min_misses, 5);
+  EXPECT_EQ(lru_misses, 7);
+  EXPECT_FALSE(min.diverged());
+}
+
+TEST(Replacement, MinTiesGoToTheLowestCellAndStrayingIsReported) {
+  // Neither 0 nor 1 is requested again: the lowest, 0, is evicted.
+  CellStore s(Cells(2, LevelConfig::Replacement::kMin), &kFootprints, {0, 1, 2});
+  Access(s, 0), Access(s, 1), Access(s, 2);
+  EXPECT_FALSE(s.Contains(0));
+  EXPECT_TRUE(s.Contains(1));
+  EXPECT_FALSE(s.diverged());
+  Access(s, 5);  // not in the future it was given
+  EXPECT_TRUE(s.diverged());
+}
+
+TEST(Replacement, BytesCapacityEvictsUntilTheCellFits) {
+  const std::vector<std::uint64_t> sizes = {40, 40, 70};
+  LevelConfig l = Cells(100, LevelConfig::Replacement::kLru);
+  l.capacity_unit = LevelConfig::CapacityUnit::kBytes;
+  CellStore s(l, &sizes);
+  Access(s, 0), Access(s, 1);
+  EXPECT_EQ(s.used(), 80u);
+  Access(s, 2);  // 70 bytes: after evicting 0, 40 + 70 is still over 100, so 1 goes too
+  EXPECT_FALSE(s.Contains(0));
+  EXPECT_FALSE(s.Contains(1));
+  EXPECT_TRUE(s.Contains(2));
+  EXPECT_EQ(s.used(), 70u);
+}
+
+}  // namespace
+}  // namespace raycell
