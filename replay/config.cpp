@@ -3,6 +3,7 @@
 #include <toml++/toml.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <fstream>
 #include <limits>
@@ -13,66 +14,10 @@
 
 #include "base/check.h"
 #include "base/parse.h"
+#include "scheduling/scheduler.h"
 
 namespace raycell {
 namespace {
-
-// ---------------------------------------------------------------------------------------------
-// Default values and where they come from: one table used by DefaultConfig's documentation,
-// ToToml's comments and DefaultsHelp.
-
-struct KeyDoc {
-  const char* key;      // dotted override key; "level.*.x" for any level
-  const char* meaning;  // what the key is
-};
-
-constexpr KeyDoc kKeyDocs[] = {
-    {"scheduler", "cell scheduler: maxwork | roundrobin | random | peel | celltree"},
-    {"seed", "seed of the random scheduler"},
-    {"granularity",
-     "ray: per ray segment (exact) | node: per Cell Tree node (aggregated, fast) | auto: node "
-     "with one processor (where it is exact), ray otherwise"},
-    {"processors.count", "number of block processors, 1..1024"},
-    {"processors.time_per_sample", "time a block processor takes per sample"},
-    {"processors.queue_record_bytes", "bytes per queued ray (an integer or a size, \"32B\")"},
-    {"processors.prefetch",
-     "fetch the next scheduled cell while the current one is worked (double buffering)"},
-    {"level.*.name", "unique name, [A-Za-z0-9_-]+; override keys are level.NAME.KEY"},
-    {"level.*.capacity", "\"N cell\" / \"N cells\", or a size such as \"256MiB\""},
-    {"level.*.bandwidth", "to the level below (below the last: host memory); \"unlimited\" ok"},
-    {"level.*.latency", "to the level below"},
-    {"level.*.replacement", "lru | fifo | min (Belady's MIN, a bound)"},
-};
-
-// Source of each default value, keyed like kKeyDocs but with default level names.
-const std::map<std::string, std::string>& DefaultSources() {
-  static const std::map<std::string, std::string> sources = {
-      {"scheduler", "the paper's Cell Tree scheduler"},
-      {"seed", "any fixed value keeps a replay deterministic"},
-      {"granularity", "exact and as fast as possible"},
-      {"processors.count", "one block processor, the paper's case"},
-      {"processors.time_per_sample",
-       "one sample per cycle of a 100 MHz pipeline, the Cube-5/GI-Cube design point"},
-      {"processors.queue_record_bytes", "position, direction, colour/opacity, cell-tree node"},
-      {"processors.prefetch", "no double buffering, the paper's model"},
-      {"level.cache", "the block processor's on-chip cell cache"},
-      {"level.cache.capacity", "\"cell size set to memory size\", the paper's case"},
-      {"level.cache.bandwidth", "one Direct RDRAM PC800 channel, 2 bytes x 800 MT/s"},
-      {"level.cache.latency", "RDRAM row access"},
-      {"level.cache.replacement", "with one cell every policy behaves alike"},
-      {"level.board", "board memory (RDRAM) of the PCI board"},
-      {"level.board.capacity", "RDRAM board memory of a PCI board of the period"},
-      {"level.board.bandwidth", "32-bit 33 MHz PCI to host memory"},
-      {"level.board.latency", "a PCI transaction"},
-      {"level.board.replacement", "LRU, the usual hardware policy"},
-  };
-  return sources;
-}
-
-std::string SourceOf(const std::string& key) {
-  const auto it = DefaultSources().find(key);
-  return it == DefaultSources().end() ? std::string() : it->second;
-}
 
 // ---------------------------------------------------------------------------------------------
 // Value parsing shared by files and overrides. `what` prefixes every message.
@@ -101,12 +46,21 @@ bool ParseBool(std::string_view text, const std::string& what) {
   Fail(what, "expected true or false, got '" + std::string(text) + "'");
 }
 
-std::string ParseScheduler(std::string_view text, const std::string& what) {
-  for (const std::string_view s : kSchedulers) {
-    if (text == s) return std::string(s);
+// "a, b or c".
+std::string JoinOr(const std::vector<std::string>& names) {
+  std::string out;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    out += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
   }
-  Fail(what, "unknown scheduler '" + std::string(text) +
-                 "' (expected maxwork, roundrobin, random, peel or celltree)");
+  return out;
+}
+
+std::string ParseScheduler(std::string_view text, const std::string& what) {
+  for (const std::string& s : SchedulerNames()) {
+    if (text == s) return s;
+  }
+  Fail(what,
+       "unknown scheduler '" + std::string(text) + "' (expected " + JoinOr(SchedulerNames()) + ")");
 }
 
 ReplayConfig::Granularity ParseGranularity(std::string_view text, const std::string& what) {
@@ -150,6 +104,181 @@ bool ValidLevelName(std::string_view name) {
   return !name.empty() && std::all_of(name.begin(), name.end(), [](char c) {
     return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
   });
+}
+
+std::string Quote(std::string_view s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", unsigned(static_cast<unsigned char>(c)));
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+// ---------------------------------------------------------------------------------------------
+// The keys: one descriptor each. Everything the TOML reader and writer, the --set/--vary
+// overrides, OverrideKeys and DefaultsHelp know of a key is here; a new key is one entry.
+
+// The TOML value a key takes. Strings go to the key's parser as they are; integers (range
+// checked) and booleans go to the same parser as text, so a file and an override parse alike.
+enum class TomlKind { kString, kInteger, kBoolean, kIntegerOrString };
+
+template <typename T>
+struct Key {
+  std::string name;      // the override key; the TOML key is its part after the last '.'
+  std::string meaning;   // one line, for the TOML comments
+  TomlKind kind;         //
+  const char* expected;  // for a value of the wrong TOML type
+  std::uint64_t lo, hi;  // integers: the valid range
+  void (*parse)(std::string_view text, const std::string& what, T& target);
+  std::string (*text)(const T& target);  // as overrides take it and --help prints it
+  const char* source;  // where the default comes from ("" for level keys: per level below)
+};
+
+constexpr std::uint64_t kMax64 = std::numeric_limits<std::uint64_t>::max();
+
+// Keys of the top-level table and of [processors] ("processors." keys), in file order.
+const std::vector<Key<ReplayConfig>>& ConfigKeys() {
+  static const std::vector<Key<ReplayConfig>> keys = {
+      {"scheduler", "cell scheduler: " + SchedulerNameList(" | "), TomlKind::kString, "a string", 0,
+       0,
+       [](std::string_view t, const std::string& what, ReplayConfig& c) {
+         c.scheduler = ParseScheduler(Trim(t), what);
+       },
+       [](const ReplayConfig& c) { return c.scheduler; }, "the paper's Cell Tree scheduler"},
+      {"seed", "seed of the random scheduler", TomlKind::kIntegerOrString, "an integer", 0, kMax64,
+       [](std::string_view t, const std::string& what, ReplayConfig& c) {
+         c.seed = ParseCount(t, what, 0, kMax64);
+       },
+       [](const ReplayConfig& c) { return std::to_string(c.seed); },
+       "any fixed value keeps a replay deterministic"},
+      {"granularity",
+       "ray: per ray segment (exact) | node: per Cell Tree node (aggregated, fast) | auto: node "
+       "with one processor (where it is exact), ray otherwise",
+       TomlKind::kString, "a string", 0, 0,
+       [](std::string_view t, const std::string& what, ReplayConfig& c) {
+         c.granularity = ParseGranularity(Trim(t), what);
+       },
+       [](const ReplayConfig& c) { return std::string(ToString(c.granularity)); },
+       "exact and as fast as possible"},
+      {"processors.count", "number of block processors, 1..1024", TomlKind::kInteger, "an integer",
+       1, 1024,
+       [](std::string_view t, const std::string& what, ReplayConfig& c) {
+         c.processors.count = std::uint32_t(ParseCount(t, what, 1, 1024));
+       },
+       [](const ReplayConfig& c) { return std::to_string(c.processors.count); },
+       "one block processor, the paper's case"},
+      {"processors.time_per_sample", "time a block processor takes per sample", TomlKind::kString,
+       "a duration string such as \"10ns\"", 0, 0,
+       [](std::string_view t, const std::string& what, ReplayConfig& c) {
+         c.processors.time_per_sample = ParsePositiveDuration(t, what);
+       },
+       [](const ReplayConfig& c) { return FormatDuration(c.processors.time_per_sample); },
+       "one sample per cycle of a 100 MHz pipeline, the Cube-5/GI-Cube design point"},
+      {"processors.queue_record_bytes", "bytes per queued ray (an integer or a size, \"32B\")",
+       TomlKind::kIntegerOrString, "an integer", 0, kMax64,
+       [](std::string_view t, const std::string& what, ReplayConfig& c) {
+         const std::string_view v = Trim(t);
+         const bool digits = !v.empty() && std::all_of(v.begin(), v.end(), [](char ch) {
+           return ch >= '0' && ch <= '9';
+         });
+         c.processors.queue_record_bytes =
+             digits ? ParseCount(v, what, 0, kMax64) : ParseBytes(t, what).count();
+       },
+       [](const ReplayConfig& c) { return std::to_string(c.processors.queue_record_bytes); },
+       "position, direction, colour/opacity, cell-tree node"},
+      {"processors.prefetch",
+       "fetch the next scheduled cell while the current one is worked (double buffering)",
+       TomlKind::kBoolean, "true or false", 0, 0,
+       [](std::string_view t, const std::string& what, ReplayConfig& c) {
+         c.processors.prefetch = ParseBool(t, what);
+       },
+       [](const ReplayConfig& c) { return std::string(c.processors.prefetch ? "true" : "false"); },
+       "no double buffering, the paper's model"},
+  };
+  return keys;
+}
+
+// Keys of a [[level]] table besides its name; override keys are level.NAME.KEY.
+const std::vector<Key<LevelConfig>>& LevelKeys() {
+  static const std::vector<Key<LevelConfig>> keys = {
+      {"capacity", "\"N cell\" / \"N cells\", or a size such as \"256MiB\"", TomlKind::kString,
+       "a string such as \"1 cell\" or \"256MiB\"", 0, 0,
+       [](std::string_view t, const std::string& what, LevelConfig& l) {
+         ParseCapacity(t, what, &l);
+       },
+       [](const LevelConfig& l) { return FormatCapacity(l); }, ""},
+      {"bandwidth", "to the level below (below the last: host memory); \"unlimited\" ok",
+       TomlKind::kString, "a bandwidth string such as \"1.6GB/s\"", 0, 0,
+       [](std::string_view t, const std::string& what, LevelConfig& l) {
+         l.bandwidth_below = ParseBandwidth(t, what);
+       },
+       [](const LevelConfig& l) { return l.bandwidth_below.ToString(); }, ""},
+      {"latency", "to the level below", TomlKind::kString, "a duration string such as \"40ns\"", 0,
+       0,
+       [](std::string_view t, const std::string& what, LevelConfig& l) {
+         l.latency_below = ParseDuration(t, what);
+       },
+       [](const LevelConfig& l) { return FormatDuration(l.latency_below); }, ""},
+      {"replacement", "lru | fifo | min (Belady's MIN, a bound)", TomlKind::kString, "a string", 0,
+       0,
+       [](std::string_view t, const std::string& what, LevelConfig& l) {
+         l.replacement = ParseReplacement(Trim(t), what);
+       },
+       [](const LevelConfig& l) { return std::string(ToString(l.replacement)); }, ""},
+  };
+  return keys;
+}
+
+// The default levels (DefaultConfig) and where each of their values comes from, in
+// LevelKeys() order.
+struct DefaultLevelDoc {
+  const char* name;
+  const char* about;
+  const char* sources[4];
+};
+constexpr DefaultLevelDoc kDefaultLevelDocs[] = {
+    {"cache",
+     "the block processor's on-chip cell cache",
+     {"\"cell size set to memory size\", the paper's case",
+      "one Direct RDRAM PC800 channel, 2 bytes x 800 MT/s", "RDRAM row access",
+      "with one cell every policy behaves alike"}},
+    {"board",
+     "board memory (RDRAM) of the PCI board",
+     {"RDRAM board memory of a PCI board of the period", "32-bit 33 MHz PCI to host memory",
+      "a PCI transaction", "LRU, the usual hardware policy"}},
+};
+
+const DefaultLevelDoc* DefaultLevelDocOf(const std::string& name) {
+  for (const DefaultLevelDoc& d : kDefaultLevelDocs) {
+    if (name == d.name) return &d;
+  }
+  return nullptr;
+}
+
+// The part of a dotted key after its last '.': the key inside its TOML table.
+std::string TableKey(const std::string& name) { return name.substr(name.rfind('.') + 1); }
+bool InProcessors(const std::string& name) { return name.rfind("processors.", 0) == 0; }
+
+// A value as TOML writes it: booleans and integers that fit a TOML integer bare, the rest as
+// strings.
+std::string TomlLiteral(TomlKind kind, const std::string& text) {
+  if (kind == TomlKind::kBoolean) return text;
+  if (kind != TomlKind::kString) {
+    std::uint64_t v = 0;
+    if (TryParseUint(text, &v) && v <= std::uint64_t(std::numeric_limits<std::int64_t>::max())) {
+      return text;
+    }
+  }
+  return Quote(text);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -208,29 +337,31 @@ class Section {
     return n.as_string()->get();
   }
 
-  std::uint64_t Integer(const toml::node& n, const char* key, std::uint64_t lo,
-                        std::uint64_t hi) const {
-    if (!n.is_integer()) TypeError(n, key, "an integer");
-    const std::int64_t v = n.as_integer()->get();
-    if (v < 0 || std::uint64_t(v) < lo || std::uint64_t(v) > hi) {
-      Fail(What(n, key), "must be in " + std::to_string(lo) + ".." + std::to_string(hi) + ", got " +
-                             std::to_string(v));
+  // Reads `key` (its part after the last '.') into `target` if the table has it; true if so.
+  template <typename T>
+  bool Read(const Key<T>& key, T& target) {
+    const std::string k = TableKey(key.name);
+    const toml::node* n = Get(k.c_str());
+    if (n == nullptr) return false;
+    const std::string what = What(*n, k.c_str());
+    std::string text;
+    if (n->is_string() && key.kind != TomlKind::kInteger && key.kind != TomlKind::kBoolean) {
+      text = n->as_string()->get();
+    } else if (n->is_integer() &&
+               (key.kind == TomlKind::kInteger || key.kind == TomlKind::kIntegerOrString)) {
+      const std::int64_t v = n->as_integer()->get();
+      if (v < 0 || std::uint64_t(v) < key.lo || std::uint64_t(v) > key.hi) {
+        Fail(what, "must be in " + std::to_string(key.lo) + ".." + std::to_string(key.hi) +
+                       ", got " + std::to_string(v));
+      }
+      text = std::to_string(v);
+    } else if (n->is_boolean() && key.kind == TomlKind::kBoolean) {
+      text = n->as_boolean()->get() ? "true" : "false";
+    } else {
+      TypeError(*n, k.c_str(), key.expected);
     }
-    return std::uint64_t(v);
-  }
-
-  // An integer, or a decimal string for values above 2^63 - 1.
-  std::uint64_t BigInteger(const toml::node& n, const char* key) const {
-    if (n.is_string()) {
-      return ParseCount(n.as_string()->get(), What(n, key), 0,
-                        std::numeric_limits<std::uint64_t>::max());
-    }
-    return Integer(n, key, 0, std::numeric_limits<std::uint64_t>::max());
-  }
-
-  bool Boolean(const toml::node& n, const char* key) const {
-    if (!n.is_boolean()) TypeError(n, key, "true or false");
-    return n.as_boolean()->get();
+    key.parse(text, what, target);
+    return true;
   }
 
   [[noreturn]] void Missing(const char* key) const {
@@ -258,28 +389,6 @@ class Section {
   std::set<std::string> used_;
 };
 
-void ReadProcessors(const toml::table& table, const std::string& file, ProcessorConfig* p) {
-  Section s(table, "[processors]", "processors.", file);
-  if (const toml::node* n = s.Get("count"))
-    p->count = std::uint32_t(s.Integer(*n, "count", 1, 1024));
-  if (const toml::node* n = s.Get("time_per_sample")) {
-    p->time_per_sample =
-        ParsePositiveDuration(s.String(*n, "time_per_sample", "a duration string such as \"10ns\""),
-                              s.What(*n, "time_per_sample"));
-  }
-  if (const toml::node* n = s.Get("queue_record_bytes")) {
-    if (n->is_string()) {
-      p->queue_record_bytes =
-          ParseBytes(n->as_string()->get(), s.What(*n, "queue_record_bytes")).count();
-    } else {
-      p->queue_record_bytes =
-          s.Integer(*n, "queue_record_bytes", 0, std::numeric_limits<std::uint64_t>::max());
-    }
-  }
-  if (const toml::node* n = s.Get("prefetch")) p->prefetch = s.Boolean(*n, "prefetch");
-  s.ReportUnused();
-}
-
 LevelConfig ReadLevel(const toml::table& table, std::size_t index, const std::string& file) {
   const std::string number = "#" + std::to_string(index + 1);
   LevelConfig level;
@@ -303,27 +412,11 @@ LevelConfig ReadLevel(const toml::table& table, std::size_t index, const std::st
   }
   Section s(table, "[[level]] '" + level.name + "'", "level '" + level.name + "' ", file);
   s.Get("name");
-  const auto get = [&](const char* key) {
-    const toml::node* n = s.Get(key);
-    if (n == nullptr && !is_default && std::string_view(key) != "replacement") s.Missing(key);
-    return n;
-  };
-  if (const toml::node* n = get("capacity")) {
-    ParseCapacity(s.String(*n, "capacity", "a string such as \"1 cell\" or \"256MiB\""),
-                  s.What(*n, "capacity"), &level);
-  }
-  if (const toml::node* n = get("bandwidth")) {
-    level.bandwidth_below =
-        ParseBandwidth(s.String(*n, "bandwidth", "a bandwidth string such as \"1.6GB/s\""),
-                       s.What(*n, "bandwidth"));
-  }
-  if (const toml::node* n = get("latency")) {
-    level.latency_below = ParseDuration(
-        s.String(*n, "latency", "a duration string such as \"40ns\""), s.What(*n, "latency"));
-  }
-  if (const toml::node* n = get("replacement")) {
-    level.replacement =
-        ParseReplacement(s.String(*n, "replacement", "a string"), s.What(*n, "replacement"));
+  for (const Key<LevelConfig>& key : LevelKeys()) {
+    // A level not named like a default one needs every value but its replacement.
+    if (!s.Read(key, level) && !is_default && key.name != "replacement") {
+      s.Missing(key.name.c_str());
+    }
   }
   s.ReportUnused();
   return level;
@@ -357,18 +450,16 @@ std::vector<LevelConfig> ReadLevels(const toml::node& node, const std::string& f
 ReplayConfig ReadConfig(const toml::table& root, const std::string& file) {
   ReplayConfig config = DefaultConfig();
   Section s(root, "the top-level table", "", file);
-  if (const toml::node* n = s.Get("scheduler")) {
-    config.scheduler =
-        ParseScheduler(s.String(*n, "scheduler", "a string"), s.What(*n, "scheduler"));
-  }
-  if (const toml::node* n = s.Get("seed")) config.seed = s.BigInteger(*n, "seed");
-  if (const toml::node* n = s.Get("granularity")) {
-    config.granularity =
-        ParseGranularity(s.String(*n, "granularity", "a string"), s.What(*n, "granularity"));
+  for (const Key<ReplayConfig>& key : ConfigKeys()) {
+    if (!InProcessors(key.name)) s.Read(key, config);
   }
   if (const toml::node* n = s.Get("processors")) {
     if (!n->is_table()) s.TypeError(*n, "processors", "a [processors] table");
-    ReadProcessors(*n->as_table(), file, &config.processors);
+    Section p(*n->as_table(), "[processors]", "processors.", file);
+    for (const Key<ReplayConfig>& key : ConfigKeys()) {
+      if (InProcessors(key.name)) p.Read(key, config);
+    }
+    p.ReportUnused();
   }
   if (const toml::node* n = s.Get("level")) config.levels = ReadLevels(*n, file);
   s.ReportUnused();
@@ -379,44 +470,14 @@ ReplayConfig ReadConfig(const toml::table& root, const std::string& file) {
 // ---------------------------------------------------------------------------------------------
 // TOML writing.
 
-std::string Quote(std::string_view s) {
-  std::string out = "\"";
-  for (const char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", unsigned(static_cast<unsigned char>(c)));
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
-
-const char* Meaning(const std::string& key) {
-  for (const KeyDoc& d : kKeyDocs) {
-    if (key == d.key) return d.meaning;
-  }
-  return "";
-}
-
-// "# meaning\n# Default VALUE: source.\nkey = value\n".
-void WriteKey(std::ostringstream& out, const std::string& doc_key, const std::string& source_key,
-              const std::string& default_value, const char* toml_key, const std::string& value) {
-  std::string meaning = Meaning(doc_key);
+// "# Meaning.\n# Default VALUE: source.\nkey = value\n" (no Default line without a source).
+void WriteKey(std::ostringstream& out, std::string meaning, const std::string& source,
+              const std::string& default_value, const std::string& toml_key,
+              const std::string& value) {
   if (!meaning.empty()) meaning[0] = char(std::toupper(static_cast<unsigned char>(meaning[0])));
   out << "# " << meaning << ".\n";
-  const std::string source = SourceOf(source_key);
   if (!source.empty()) out << "# Default " << default_value << ": " << source << ".\n";
   out << toml_key << " = " << value << "\n";
-}
-
-std::string UintToml(std::uint64_t v) {
-  if (v <= std::uint64_t(std::numeric_limits<std::int64_t>::max())) return std::to_string(v);
-  return Quote(std::to_string(v));
 }
 
 const LevelConfig* DefaultLevel(const std::string& name) {
@@ -549,17 +610,10 @@ ReplayConfig LoadConfig(const std::string& path) {
 }
 
 std::vector<std::string> OverrideKeys(const ReplayConfig& config) {
-  std::vector<std::string> keys = {"scheduler",
-                                   "seed",
-                                   "granularity",
-                                   "processors.count",
-                                   "processors.time_per_sample",
-                                   "processors.queue_record_bytes",
-                                   "processors.prefetch"};
+  std::vector<std::string> keys;
+  for (const Key<ReplayConfig>& k : ConfigKeys()) keys.push_back(k.name);
   for (const LevelConfig& l : config.levels) {
-    for (const char* k : {"capacity", "bandwidth", "latency", "replacement"}) {
-      keys.push_back("level." + l.name + "." + k);
-    }
+    for (const Key<LevelConfig>& k : LevelKeys()) keys.push_back("level." + l.name + "." + k.name);
   }
   return keys;
 }
@@ -567,40 +621,21 @@ std::vector<std::string> OverrideKeys(const ReplayConfig& config) {
 void ApplyOverride(ReplayConfig& config, const std::string& key, const std::string& value) {
   const std::string what = "override '" + key + "'";
   ReplayConfig c = config;
-  ProcessorConfig& p = c.processors;
-  if (key == "scheduler") {
-    c.scheduler = ParseScheduler(Trim(value), what);
-  } else if (key == "seed") {
-    c.seed = ParseCount(value, what, 0, std::numeric_limits<std::uint64_t>::max());
-  } else if (key == "granularity") {
-    c.granularity = ParseGranularity(Trim(value), what);
-  } else if (key == "processors.count") {
-    p.count = std::uint32_t(ParseCount(value, what, 1, 1024));
-  } else if (key == "processors.time_per_sample") {
-    p.time_per_sample = ParsePositiveDuration(value, what);
-  } else if (key == "processors.queue_record_bytes") {
-    const std::string_view t = Trim(value);
-    const bool digits = !t.empty() && std::all_of(t.begin(), t.end(),
-                                                  [](char ch) { return ch >= '0' && ch <= '9'; });
-    p.queue_record_bytes = digits
-                               ? ParseCount(t, what, 0, std::numeric_limits<std::uint64_t>::max())
-                               : ParseBytes(value, what).count();
-  } else if (key == "processors.prefetch") {
-    p.prefetch = ParseBool(value, what);
+  const auto top = std::find_if(ConfigKeys().begin(), ConfigKeys().end(),
+                                [&](const Key<ReplayConfig>& k) { return k.name == key; });
+  if (top != ConfigKeys().end()) {
+    top->parse(value, what, c);
   } else if (key.rfind("level.", 0) == 0 && key.find('.', 6) != std::string::npos) {
     const std::size_t dot = key.find('.', 6);
     const std::string field = key.substr(dot + 1);
-    if (field == "capacity" || field == "bandwidth" || field == "latency" ||
-        field == "replacement") {
-      LevelConfig* l = FindLevel(c, key.substr(6, dot - 6), what);
-      if (field == "capacity") ParseCapacity(value, what, l);
-      if (field == "bandwidth") l->bandwidth_below = ParseBandwidth(value, what);
-      if (field == "latency") l->latency_below = ParseDuration(value, what);
-      if (field == "replacement") l->replacement = ParseReplacement(Trim(value), what);
-    } else {
-      Fail(what, "unknown level key '" + field +
-                     "' (expected capacity, bandwidth, latency or replacement)");
+    const auto lk = std::find_if(LevelKeys().begin(), LevelKeys().end(),
+                                 [&](const Key<LevelConfig>& k) { return k.name == field; });
+    if (lk == LevelKeys().end()) {
+      std::vector<std::string> fields;
+      for (const Key<LevelConfig>& k : LevelKeys()) fields.push_back(k.name);
+      Fail(what, "unknown level key '" + field + "' (expected " + JoinOr(fields) + ")");
     }
+    lk->parse(value, what, *FindLevel(c, key.substr(6, dot - 6), what));
   } else {
     std::string keys;
     for (const std::string& k : OverrideKeys(config)) keys += (keys.empty() ? "" : ", ") + k;
@@ -612,78 +647,54 @@ void ApplyOverride(ReplayConfig& config, const std::string& key, const std::stri
 
 std::string ToToml(const ReplayConfig& config) {
   const ReplayConfig d = DefaultConfig();
-  const ProcessorConfig& p = config.processors;
   std::ostringstream out;
   out << "# raycell replay configuration (DESIGN.md §2).\n"
          "# Defaults model the GI-Cube board on the slides: a PCI board whose block processors\n"
          "# are backed by Direct RDRAM, with host memory reached over PCI.\n\n";
-  WriteKey(out, "scheduler", "scheduler", Quote(d.scheduler), "scheduler", Quote(config.scheduler));
-  WriteKey(out, "seed", "seed", UintToml(d.seed), "seed", UintToml(config.seed));
-  WriteKey(out, "granularity", "granularity", Quote(ToString(d.granularity)), "granularity",
-           Quote(ToString(config.granularity)));
-  out << "\n[processors]\n";
-  const auto pkey = [&](const char* k, const std::string& def, const std::string& value) {
-    const std::string full = std::string("processors.") + k;
-    WriteKey(out, full, full, def, k, value);
-  };
-  pkey("count", std::to_string(d.processors.count), std::to_string(p.count));
-  pkey("time_per_sample", Quote(FormatDuration(d.processors.time_per_sample)),
-       Quote(FormatDuration(p.time_per_sample)));
-  // Above 2^63 - 1 a TOML integer cannot hold it: written as a size string instead.
-  const auto record_bytes = [](std::uint64_t v) {
-    return v <= std::uint64_t(std::numeric_limits<std::int64_t>::max())
-               ? std::to_string(v)
-               : Quote(Bytes(v).ToString());
-  };
-  pkey("queue_record_bytes", record_bytes(d.processors.queue_record_bytes),
-       record_bytes(p.queue_record_bytes));
-  pkey("prefetch", d.processors.prefetch ? "true" : "false", p.prefetch ? "true" : "false");
+  bool in_processors = false;
+  for (const Key<ReplayConfig>& k : ConfigKeys()) {
+    if (InProcessors(k.name) && !in_processors) out << "\n[processors]\n";
+    in_processors = InProcessors(k.name);
+    WriteKey(out, k.meaning, k.source, TomlLiteral(k.kind, k.text(d)), TableKey(k.name),
+             TomlLiteral(k.kind, k.text(config)));
+  }
   out << "\n# Memory levels, nearest (on-chip cache) first; the level below the last is host\n"
          "# memory, unlimited. [[level]] tables in a file replace the default levels entirely.\n";
   for (const LevelConfig& l : config.levels) {
     const LevelConfig* dl = DefaultLevel(l.name);
-    const std::string prefix = dl != nullptr ? "level." + l.name : std::string("level.*");
+    const DefaultLevelDoc* doc = DefaultLevelDocOf(l.name);
     out << "\n[[level]]\n";
-    const std::string about = SourceOf("level." + l.name);
-    if (!about.empty()) out << "# Default level: " << about << ".\n";
+    if (doc != nullptr) out << "# Default level: " << doc->about << ".\n";
     out << "name = " << Quote(l.name) << "\n";
-    const auto lkey = [&](const char* k, const std::string& def, const std::string& value) {
-      WriteKey(out, std::string("level.*.") + k, prefix + "." + k, def, k, value);
-    };
     const LevelConfig& ref = dl != nullptr ? *dl : l;
-    lkey("capacity", Quote(FormatCapacity(ref)), Quote(FormatCapacity(l)));
-    lkey("bandwidth", Quote(ref.bandwidth_below.ToString()), Quote(l.bandwidth_below.ToString()));
-    lkey("latency", Quote(FormatDuration(ref.latency_below)),
-         Quote(FormatDuration(l.latency_below)));
-    lkey("replacement", Quote(ToString(ref.replacement)), Quote(ToString(l.replacement)));
+    for (std::size_t i = 0; i < LevelKeys().size(); ++i) {
+      const Key<LevelConfig>& k = LevelKeys()[i];
+      WriteKey(out, k.meaning, doc != nullptr ? doc->sources[i] : "",
+               TomlLiteral(k.kind, k.text(ref)), k.name, TomlLiteral(k.kind, k.text(l)));
+    }
   }
   return out.str();
 }
 
 std::string DefaultsHelp() {
   const ReplayConfig d = DefaultConfig();
-  std::vector<std::pair<std::string, std::string>> rows = {
-      {"scheduler", d.scheduler},
-      {"seed", std::to_string(d.seed)},
-      {"granularity", std::string(ToString(d.granularity))},
-      {"processors.count", std::to_string(d.processors.count)},
-      {"processors.time_per_sample", FormatDuration(d.processors.time_per_sample)},
-      {"processors.queue_record_bytes", std::to_string(d.processors.queue_record_bytes)},
-      {"processors.prefetch", d.processors.prefetch ? "true" : "false"}};
+  std::vector<std::array<std::string, 3>> rows;  // key, value, source
+  for (const Key<ReplayConfig>& k : ConfigKeys()) rows.push_back({k.name, k.text(d), k.source});
   for (const LevelConfig& l : d.levels) {
-    const std::string k = "level." + l.name + ".";
-    rows.push_back({k + "capacity", FormatCapacity(l)});
-    rows.push_back({k + "bandwidth", l.bandwidth_below.ToString()});
-    rows.push_back({k + "latency", FormatDuration(l.latency_below)});
-    rows.push_back({k + "replacement", std::string(ToString(l.replacement))});
+    const DefaultLevelDoc* doc = DefaultLevelDocOf(l.name);
+    RAYCELL_CHECK(doc != nullptr);
+    for (std::size_t i = 0; i < LevelKeys().size(); ++i) {
+      const Key<LevelConfig>& k = LevelKeys()[i];
+      rows.push_back({"level." + l.name + "." + k.name, k.text(l), doc->sources[i]});
+    }
   }
   std::size_t width = 0;
-  for (const auto& [k, v] : rows) width = std::max(width, k.size() + 3 + v.size());
+  for (const auto& [k, v, source] : rows) width = std::max(width, k.size() + 3 + v.size());
   std::string out;
-  for (const auto& [k, v] : rows) {
+  for (const auto& [k, v, source] : rows) {
     std::string line = "  " + k + " = " + v;
     line.resize(2 + width, ' ');
-    out += line + "  (" + SourceOf(k) + ")\n";
+    out += line + "  (" + source + ")\n";
   }
   return out;
 }

@@ -1,13 +1,15 @@
 // The replay configuration (DESIGN.md §2): typed structs with documented defaults, read from
 // TOML (CONVENTIONS.md "Configuration read into typed structs with defaults"). Every key in a
 // file must be read: an unknown key is an InputError naming FILE:LINE:COL, like pbrt's
-// ReportUnused. Units are parsed once at load (replay/units.h).
+// ReportUnused. Units are parsed once at load (replay/units.h). Each key is described once,
+// in config.cpp's key tables (name, meaning, TOML type, parser, printer, the source of its
+// default); the TOML reader and writer, --set/--vary overrides and --help derive from them.
 //
 // File layout (ToToml(DefaultConfig()) prints the full, commented form):
 //
-//   scheduler = "celltree"        # maxwork | roundrobin | random | peel | celltree
+//   scheduler = "celltree"        # a name of SchedulerRegistry() (scheduling/scheduler.h)
 //   seed = 1
-//   granularity = "ray"           # ray | node
+//   granularity = "auto"          # ray | node | auto
 //   [processors]
 //   count = 1
 //   time_per_sample = "10ns"
@@ -76,7 +78,8 @@ struct ReplayConfig {
   //           latency 1us (a PCI transaction).
   std::vector<LevelConfig> levels;
   ProcessorConfig processors;
-  // Default "celltree" (the paper's Cell Tree scheduler); one of kSchedulers.
+  // Default "celltree" (the paper's Cell Tree scheduler); a name of SchedulerRegistry()
+  // (scheduling/scheduler.h).
   std::string scheduler = "celltree";
   // Default 1: seeds the random scheduler; any fixed value keeps replays deterministic.
   std::uint64_t seed = 1;
@@ -84,10 +87,6 @@ struct ReplayConfig {
   // gives, i.e. with one processor; per ray segment otherwise.
   Granularity granularity = Granularity::kAuto;
 };
-
-// The valid scheduler names.
-inline constexpr std::string_view kSchedulers[] = {"maxwork", "roundrobin", "random", "peel",
-                                                   "celltree"};
 
 bool operator==(const LevelConfig& a, const LevelConfig& b);
 bool operator!=(const LevelConfig& a, const LevelConfig& b);

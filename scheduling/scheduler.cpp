@@ -65,21 +65,53 @@ std::optional<CellId> ScheduleFollower::Next(const QueueView& queues) {
   return c;
 }
 
+const std::vector<SchedulerEntry>& SchedulerRegistry() {
+  static const std::vector<SchedulerEntry> registry = {
+      {"maxwork", "Max Work: the cell with the most queued rays",
+       [](std::uint64_t) -> std::unique_ptr<Scheduler> {
+         return std::make_unique<MaxWorkScheduler>();
+       }},
+      {"roundrobin", "Round Robin: the next cell with work after the last one (a baseline)",
+       [](std::uint64_t) -> std::unique_ptr<Scheduler> {
+         return std::make_unique<RoundRobinScheduler>();
+       }},
+      {"random", "a seeded random cell with work (a baseline)",
+       [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+         return std::make_unique<RandomScheduler>(seed);
+       }},
+      {"peel", "the Peel oracle: each frame follows its own tree's Peel schedule",
+       [](std::uint64_t) -> std::unique_ptr<Scheduler> {
+         return std::make_unique<PeelOracleScheduler>();
+       }},
+      {"celltree", "the paper's Cell Tree scheduling: frame i+1 follows frame i's Peel schedule",
+       [](std::uint64_t) -> std::unique_ptr<Scheduler> {
+         return std::make_unique<CellTreeScheduler>();
+       }},
+  };
+  return registry;
+}
+
 const std::vector<std::string>& SchedulerNames() {
-  static const std::vector<std::string> names = {"maxwork", "roundrobin", "random", "peel",
-                                                 "celltree"};
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> n;
+    for (const SchedulerEntry& e : SchedulerRegistry()) n.push_back(e.name);
+    return n;
+  }();
   return names;
 }
 
+std::string SchedulerNameList(const char* separator) {
+  std::string out;
+  for (const std::string& n : SchedulerNames()) out += (out.empty() ? "" : separator) + n;
+  return out;
+}
+
 std::unique_ptr<Scheduler> MakeScheduler(const std::string& name, std::uint64_t seed) {
-  if (name == "maxwork") return std::make_unique<MaxWorkScheduler>();
-  if (name == "roundrobin") return std::make_unique<RoundRobinScheduler>();
-  if (name == "random") return std::make_unique<RandomScheduler>(seed);
-  if (name == "peel") return std::make_unique<PeelOracleScheduler>();
-  if (name == "celltree") return std::make_unique<CellTreeScheduler>();
-  std::string valid;
-  for (const std::string& n : SchedulerNames()) valid += (valid.empty() ? "" : ", ") + n;
-  throw InputError("unknown scheduler '" + name + "' (expected one of: " + valid + ")");
+  for (const SchedulerEntry& e : SchedulerRegistry()) {
+    if (name == e.name) return e.make(seed);
+  }
+  throw InputError("unknown scheduler '" + name + "' (expected one of: " + SchedulerNameList(", ") +
+                   ")");
 }
 
 }  // namespace raycell

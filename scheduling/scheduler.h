@@ -89,10 +89,18 @@ class ScheduleFollower {
   Stats stats_;
 };
 
-// The names MakeScheduler accepts: maxwork, roundrobin, random, peel, celltree.
+// Every scheduler by name: the one list that MakeScheduler, the configuration's validation
+// and messages, and --help are derived from. A new scheduler is one entry here.
+struct SchedulerEntry {
+  const char* name;     // as in configs and --scheduler: "maxwork"
+  const char* meaning;  // one line for --help and the configuration's comments
+  std::unique_ptr<Scheduler> (*make)(std::uint64_t seed);  // seed: used by "random" only
+};
+const std::vector<SchedulerEntry>& SchedulerRegistry();
+// The registry's names, in its order; and joined by `separator` ("maxwork | roundrobin ...").
 const std::vector<std::string>& SchedulerNames();
-// A new scheduler by name; `seed` is used by "random" only. An unknown name is an
-// InputError listing the valid names.
+std::string SchedulerNameList(const char* separator);
+// A new scheduler by name. An unknown name is an InputError listing the valid names.
 std::unique_ptr<Scheduler> MakeScheduler(const std::string& name, std::uint64_t seed);
 
 // A scheduler that follows a schedule chosen in BeginFrame (ScheduleFollower: entries with no

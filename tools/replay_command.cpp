@@ -1,5 +1,7 @@
 // raycell replay: a trace through the GI-Cube memory model under a ray scheduler.
+#include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -11,6 +13,7 @@
 #include "engine/stats.h"
 #include "replay/config.h"
 #include "replay/driver.h"
+#include "scheduling/scheduler.h"
 #include "tools/commands.h"
 #include "tools/frames.h"
 #include "traces/trace_reader.h"
@@ -159,6 +162,22 @@ void Run(const ReplayArgs& a) {
 
 }  // namespace
 
+namespace {
+
+// One line per scheduler of the registry: "  maxwork      Max Work: ...".
+std::string SchedulersHelp() {
+  std::size_t width = 0;
+  for (const SchedulerEntry& e : SchedulerRegistry()) width = std::max(width, std::strlen(e.name));
+  std::string out;
+  for (const SchedulerEntry& e : SchedulerRegistry()) {
+    out += "  " + std::string(e.name) + std::string(width + 2 - std::strlen(e.name), ' ') +
+           e.meaning + "\n";
+  }
+  return out;
+}
+
+}  // namespace
+
 void AddReplayCommand(CLI::App& app) {
   auto args = std::make_shared<ReplayArgs>();
   CLI::App* cmd = app.add_subcommand(
@@ -171,8 +190,8 @@ void AddReplayCommand(CLI::App& app) {
       "level), the maxGen bound where it holds (one processor with a one-cell cache),\n"
       "simulated time split into work, fetch stall and idle, utilisation, peak queued rays,\n"
       "and the rays, segments and samples processed (equal to the trace's).\n\n"
-      "Defaults (see --print-config):\n" +
-      DefaultsHelp() +
+      "Schedulers:\n" +
+      SchedulersHelp() + "\nDefaults (see --print-config):\n" + DefaultsHelp() +
       "\nExamples:\n"
       "  raycell replay capture.rct --scheduler maxwork\n"
       "  raycell replay capture.rct --granularity node --format json --out r.json\n"
@@ -181,8 +200,7 @@ void AddReplayCommand(CLI::App& app) {
   cmd->add_option("TRACE", args->trace, "trace file written by `raycell record`");
   cmd->add_option("--config", args->config, "TOML configuration (unknown keys are errors)");
   cmd->add_option("--scheduler", args->scheduler,
-                  "maxwork, roundrobin, random, peel (oracle: this frame's Peel schedule) or "
-                  "celltree (the paper: the previous frame's Peel schedule)");
+                  SchedulerNameList(", ") + " (see Schedulers below)");
   cmd->add_option(
       "--granularity", args->granularity,
       "ray (per ray segment, exact), node (per Cell Tree node, aggregated) or auto (node "

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "base/check.h"
+#include "scheduling/scheduler.h"
 #include "tests/test_util.h"
 
 namespace raycell {
@@ -403,6 +404,37 @@ TEST(ValidateConfig, Invariants) {
   c.scheduler = "x";
   EXPECT_NE(ErrorOf([&] { ValidateConfig(c, "cfg"); }).find("unknown scheduler 'x'"),
             std::string::npos);
+}
+
+}  // namespace
+}  // namespace raycell
+
+namespace raycell {
+namespace {
+
+// The scheduler list is derived from the registry (scheduling/scheduler.h) everywhere: every
+// registered name is accepted by overrides and files and named in the printed configuration.
+TEST(ConfigKeys, EverySchedulerOfTheRegistryIsAcceptedAndDocumented) {
+  const std::string toml = ToToml(DefaultConfig());
+  for (const std::string& name : SchedulerNames()) {
+    ReplayConfig c = DefaultConfig();
+    ApplyOverride(c, "scheduler", name);
+    EXPECT_EQ(c.scheduler, name);
+    EXPECT_EQ(LoadConfigFromString("scheduler = \"" + name + "\"\n", "x.toml").scheduler, name);
+    EXPECT_NE(toml.find(name), std::string::npos) << name;
+  }
+}
+
+// Every override key reads back from the TOML the writer prints for it: one descriptor serves
+// the reader, the writer and the overrides.
+TEST(ConfigKeys, EveryOverrideKeyAppearsInThePrintedConfigurationAndInTheHelp) {
+  const ReplayConfig d = DefaultConfig();
+  const std::string toml = ToToml(d), help = DefaultsHelp();
+  for (const std::string& key : OverrideKeys(d)) {
+    const std::string table_key = key.substr(key.rfind('.') + 1);
+    EXPECT_NE(toml.find("\n" + table_key + " = "), std::string::npos) << key;
+    EXPECT_NE(help.find("  " + key + " = "), std::string::npos) << key;
+  }
 }
 
 }  // namespace
