@@ -1,4 +1,4 @@
-// Parameter sweeps (issue 4): one replay of a trace per combination of varied configuration
+// Parameter sweeps: one replay of a trace per combination of varied configuration
 // keys, one CSV row per combination.
 //
 // Combinations are numbered 0..K-1 row-major over the Vary list in the order given (the last

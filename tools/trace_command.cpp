@@ -116,7 +116,7 @@ void AddTraceCommand(CLI::App& app) {
       "parent and spawn are null for primary rays; spawn indexes the parent's cells, and\n"
       "cells[0] is that cell. Ids are frame-local. Without --frame every frame is written and\n"
       "each line starts with \"frame\":N. This is the format the Cell Tree analysis\n(`raycell "
-      "analyze --paths`, issue 3) is specified to read.");
+      "analyze --paths`) reads.");
   c->add_option("FILE", cat->file, "trace file")->required();
   c->add_option("--frame", cat->frame, "frame number to write (default: all)");
   c->add_option("--format", cat->format, "output format")->capture_default_str();
