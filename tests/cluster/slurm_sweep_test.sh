@@ -7,7 +7,8 @@
 # Starts a private single-node cluster on this machine: munged, slurmctld and slurmd on
 # localhost with a generated munge key and slurm.conf, their sockets, ports, state, spool and
 # logs in a temporary folder; Slurm commands find it through SLURM_CONF, so nothing in /etc
-# is read or changed. Then, on a 3-frame 32x32 capture, a 6-combination sweep in 4 shards:
+# is read or changed. Then, on a 3-frame 32x32 capture, a 6-combination sweep (3 schedulers x
+# a cache of "1 cell" or "2 cells") in 4 shards:
 #  1. with shard 1 interrupted earlier (a .partial with one row) and shard 2 unable to write
 #     (its .partial is a directory): tasks 0, 1, 3 succeed, 1 resuming its row; task 2 fails;
 #     the merge job is cancelled, not left pending; no sweep.csv;
@@ -190,7 +191,8 @@ echo "$(elapsed): cluster up: $host ($node), ports $ctld_port/$slurmd_port"
 cd "$tmp"
 "$raycell" record --res 32x32 --cells 2x2x2 --orbit 3:30 --no-images --threads 1 \
   --out tiny.rct >/dev/null 2>&1 || fail "raycell record failed"
-sweep=(--vary "scheduler=maxwork,celltree,peel" --vary "processors.count=1,2")
+# A value with a space: the arguments must reach every task intact.
+sweep=(--vary "scheduler=maxwork,celltree,peel" --vary "level.cache.capacity=1 cell,2 cells")
 "$raycell" sweep tiny.rct --jobs 1 --out reference.csv "${sweep[@]}"
 [[ $(grep -vc '^#' reference.csv) == 7 ]] || fail "reference.csv should have a header and 6 rows"
 
