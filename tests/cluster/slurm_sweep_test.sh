@@ -14,7 +14,8 @@
 #     the merge job is cancelled, not left pending; no sweep.csv;
 #  2. the same command again, the blocker removed: only shard 2 is submitted, the merge runs,
 #     and OUTDIR/sweep.csv is byte-identical to the unsharded run;
-#  3. the same OUTDIR with other arguments is refused.
+#  3. the same OUTDIR with other arguments, or holding a shard file of another configuration,
+#     is refused.
 # Every wait is bounded (RAYCELL_SLURM_TIMEOUT seconds, default 120). On exit, success or not,
 # every daemon and job process it started is stopped, and the test fails if one survives.
 #
@@ -240,6 +241,12 @@ if msg=$("${submit[@]}" tiny.rct out -- --vary scheduler=maxwork 2>&1); then
   fail "submitting another sweep into out/ was accepted"
 fi
 grep -q "holds another sweep" <<<"$msg" || fail "unexpected refusal message: $msg"
+# ... and so is a shard file of another configuration (as if the config had been edited)
+sed -i '1s/config_hash=[0-9a-f]*/config_hash=0123456789abcdef/' out/shards/shard_3.csv
+if msg=$("${submit[@]}" tiny.rct out -- "${sweep[@]}" 2>&1); then
+  fail "a shard file of another configuration was accepted"
+fi
+grep -q "shard_3.csv is from another sweep" <<<"$msg" || fail "unexpected refusal message: $msg"
 
 echo "$(elapsed): PASS: 6 combinations in 4 shards on Slurm, a failed task rerun and a resumed one," \
   "merged byte-identical to the unsharded sweep"

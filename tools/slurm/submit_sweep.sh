@@ -39,7 +39,8 @@ valid for the configuration) by a shard that owns no combination.
 
 Resubmitting: run the same command again. Shards whose file exists are kept; the others run,
 resuming from their .partial where an earlier task was cancelled, timed out or lost its node;
-then the merge. OUTDIR holds one sweep: other arguments are refused (use another OUTDIR).
+then the merge. OUTDIR holds one sweep: other arguments, or shard files that name another
+sweep (a configuration file edited since), are refused.
 
 Example:
   tools/slurm/submit_sweep.sh -n 16 -c 4 smoke.rct runs/cache -- --config gicube.toml \
@@ -136,9 +137,22 @@ else
   echo "$record" >"$outdir/sweep.args"
 fi
 
+# The first line of a sweep file names the sweep exactly (replay/sweep.h): trace, config and
+# its hash, varies, frames, shard. Shard files left by an earlier run must name this sweep, so
+# that a configuration file edited since is not merged with old rows.
+name=$(head -n 1 "$check/check.csv")
+probe=' shard="9999999/10000000"'
+[[ $name == *"$probe"* ]] || die "raycell wrote an unexpected first line: $name"
 todo=()
 for ((i = 0; i < shards; i++)); do
-  [[ -f $outdir/shards/shard_$i.csv ]] || todo+=("$i")
+  f=$outdir/shards/shard_$i.csv
+  want=${name/"$probe"/ shard=\"$i/$shards\"}
+  ((shards > 1)) || want=${name/"$probe"/ shard=\"all\"}
+  for g in "$f" "$f.partial"; do
+    [[ ! -f $g || $(head -n 1 "$g") == "$want" ]] ||
+      die "$g is from another sweep (its first line differs: was the configuration edited?); use another OUTDIR, or delete the file to run that shard again"
+  done
+  [[ -f $f ]] || todo+=("$i")
 done
 
 array_job="-" dependency=()
