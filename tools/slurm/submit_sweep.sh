@@ -173,7 +173,7 @@ merge_job=${out%%;*}
 if ((parsable)); then
   echo "$array_job $merge_job"
 elif ((${#todo[@]})); then
-  echo "Submitted array job $array_job: shards $spec of $shards ($((shards - ${#todo[@]})) already done)."
+  echo "Submitted array job $array_job: shard(s) $spec of $shards; $((shards - ${#todo[@]})) already done."
   echo "Submitted merge job $merge_job, after every shard succeeds."
   echo "Result: $outdir/sweep.csv   (logs: $outdir/logs/, status: squeue -j $array_job,$merge_job)"
   echo "If a task fails, the merge job is cancelled: see its log, then run this command again."
