@@ -43,11 +43,14 @@ std::string Gap(const FrameAnalysis& a) {
   return a.optimum ? std::to_string(std::int64_t(a.peel_length()) - std::int64_t(*a.optimum)) : "";
 }
 
+// The version of the JSON output's schema (docs/schemas.md), the first key of every object.
+constexpr char kJsonSchema[] = "raycell-analyze/1";
+
 void PrintJson(const FrameAnalysis& a, bool timing, std::ostream& out) {
-  out << "{\"frame\":" << a.frame << ",\"rays\":" << a.rays << ",\"nodes\":" << a.nodes
-      << ",\"rays_per_node\":" << FormatFixed(a.rays_per_node(), 3) << ",\"bound\":" << a.bound
-      << ",\"peel_length\":" << a.peel_length() << ",\"peel_schedule\":["
-      << Schedule(a.peel_schedule, ",") << "],\"splits\":" << a.splits
+  out << "{\"schema\":\"" << kJsonSchema << "\",\"frame\":" << a.frame << ",\"rays\":" << a.rays
+      << ",\"nodes\":" << a.nodes << ",\"rays_per_node\":" << FormatFixed(a.rays_per_node(), 3)
+      << ",\"bound\":" << a.bound << ",\"peel_length\":" << a.peel_length()
+      << ",\"peel_schedule\":[" << Schedule(a.peel_schedule, ",") << "],\"splits\":" << a.splits
       << ",\"peel_minus_bound\":" << a.peel_length() - a.bound
       << ",\"optimum\":" << OptionalNumber(a.optimum, "null")
       << ",\"optimum_status\":" << JsonQuote(a.optimum_status);
@@ -217,10 +220,11 @@ void AddAnalyzeCommand(CLI::App& app) {
       "the Peel schedule's length and split peels, Peel minus bound and, with --exact on\n"
       "small trees, the optimum and Peel minus optimum (past the search limits the optimum\n"
       "is reported unknown, never guessed), and with --timing the time taken.\n"
-      "--format json prints one object per frame and line with the keys frame, rays,\n"
-      "nodes, rays_per_node, bound, peel_length, peel_schedule (cells in fetch order),\n"
-      "splits, peel_minus_bound, optimum (null when not computed or unknown),\n"
-      "optimum_status (and seconds with --timing).\n"
+      "--format json prints one object per frame and line with the keys schema\n"
+      "(\"raycell-analyze/1\"), frame, rays, nodes, rays_per_node, bound, peel_length,\n"
+      "peel_schedule (cells in fetch order), splits, peel_minus_bound, optimum (null when\n"
+      "not computed or unknown), optimum_status (and seconds with --timing); docs/schemas.md\n"
+      "documents each.\n"
       "--paths reads ray paths as JSON Lines from raycell (`raycell trace cat`) or any other\n"
       "tool: keys in any order, rays in any order within a frame, ids any non-negative\n"
       "integers; required \"id\", \"parent\", \"spawn\", \"cells\" (\"parent\" and \"spawn\"\n"
