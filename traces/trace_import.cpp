@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 
@@ -57,6 +58,11 @@ JsonlReadOptions ReadOptions(const ImportOptions& o) {
 std::ifstream Open(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open");
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) {
+    throw InputError(path + ": not a regular file (trace import reads it twice: first to " +
+                     "check it, then to write the trace); save the paths to a file first");
+  }
   return in;
 }
 

@@ -160,6 +160,8 @@ TEST(TraceImportTest, BadInputWritesNothing) {
   EXPECT_EQ(ErrorOf([&] { ImportJsonl(o); }), jsonl + ": no rays");
   o.paths = Temp("missing.jsonl");
   EXPECT_EQ(ErrorOf([&] { ImportJsonl(o); }), o.paths + ": cannot open");
+  o.paths = ::testing::TempDir();  // opens, but is not a file
+  EXPECT_NE(ErrorOf([&] { ImportJsonl(o); }).find(": not a regular file"), std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(trace));
   EXPECT_FALSE(std::filesystem::exists(trace + ".tmp"));
   std::remove(jsonl.c_str());
