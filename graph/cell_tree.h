@@ -6,13 +6,12 @@
 //
 // CellTreeBuilder builds the tree while rays stream in, batch by batch, in ray id order.
 // Its memory grows with the nodes, plus, to place spawned rays, one NodeId per visit of
-// every ray seen so far and 16 bytes per ray (see CellTreeBuilder). FromJsonl reads the
-// line-per-ray text format.
+// every ray seen so far and 16 bytes per ray (see CellTreeBuilder). Rays read from JSON Lines
+// (traces/jsonl.h) come in the order the builder needs.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
-#include <iosfwd>
 #include <limits>
 #include <string>
 #include <unordered_map>
@@ -117,13 +116,5 @@ class CellTreeBuilder {
   RayId last_id_ = 0;
   bool any_ray_ = false;
 };
-
-// Reads one ray per line, e.g.
-//   {"id":7,"parent":3,"spawn":2,"kind":"reflection","pixel":[4,5],"cells":[5,4,1],
-//    "samples":[12,30,2]}
-// (on one line). parent and spawn are null for primary rays; an optional "frame" key is
-// ignored; keys may come in any order; blank lines are skipped. Any malformed line gives an
-// InputError "name:LINE: what was wrong".
-CellTree FromJsonl(std::istream& in, const std::string& name);
 
 }  // namespace raycell

@@ -1,4 +1,5 @@
 // raycell analyze: each frame's Cell Tree: size, maxGen bound, Peel, the exact optimum.
+#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <iomanip>
@@ -6,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <utility>
 
 #include "base/check.h"
 #include "base/file.h"
@@ -14,6 +16,7 @@
 #include "graph/analysis.h"
 #include "graph/links.h"
 #include "tools/commands.h"
+#include "traces/jsonl.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {
@@ -40,11 +43,14 @@ std::string Gap(const FrameAnalysis& a) {
   return a.optimum ? std::to_string(std::int64_t(a.peel_length()) - std::int64_t(*a.optimum)) : "";
 }
 
+// The version of the JSON output's schema (docs/schemas.md), the first key of every object.
+constexpr char kJsonSchema[] = "raycell-analyze/1";
+
 void PrintJson(const FrameAnalysis& a, bool timing, std::ostream& out) {
-  out << "{\"frame\":" << a.frame << ",\"rays\":" << a.rays << ",\"nodes\":" << a.nodes
-      << ",\"rays_per_node\":" << FormatFixed(a.rays_per_node(), 3) << ",\"bound\":" << a.bound
-      << ",\"peel_length\":" << a.peel_length() << ",\"peel_schedule\":["
-      << Schedule(a.peel_schedule, ",") << "],\"splits\":" << a.splits
+  out << "{\"schema\":\"" << kJsonSchema << "\",\"frame\":" << a.frame << ",\"rays\":" << a.rays
+      << ",\"nodes\":" << a.nodes << ",\"rays_per_node\":" << FormatFixed(a.rays_per_node(), 3)
+      << ",\"bound\":" << a.bound << ",\"peel_length\":" << a.peel_length()
+      << ",\"peel_schedule\":[" << Schedule(a.peel_schedule, ",") << "],\"splits\":" << a.splits
       << ",\"peel_minus_bound\":" << a.peel_length() - a.bound
       << ",\"optimum\":" << OptionalNumber(a.optimum, "null")
       << ",\"optimum_status\":" << JsonQuote(a.optimum_status);
@@ -126,16 +132,37 @@ double SecondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// Every frame of the file (or the one --frame names), one at a time; the time of a frame
+// includes reading its lines.
 void AnalyzePaths(const AnalyzeArgs& a, Printer& printer) {
   std::ifstream in(a.paths);
   if (!in) throw InputError(a.paths + ": cannot open");
-  const auto t0 = std::chrono::steady_clock::now();
-  const CellTree tree = FromJsonl(in, a.paths);
-  const double build = SecondsSince(t0);
-  FrameAnalysis r = AnalyzeTree(tree, a.options);
-  r.seconds += build;
-  printer.Print(r);
-  if (!a.dot.empty()) WriteDotFile(a.dot, tree, r);
+  JsonlReader reader(in, a.paths);
+  JsonlFrame frame;
+  std::optional<std::pair<CellTree, FrameAnalysis>> dot;
+  std::size_t analysed = 0;
+  for (auto t0 = std::chrono::steady_clock::now(); reader.Next(frame);
+       t0 = std::chrono::steady_clock::now()) {
+    if (a.frame && frame.frame != *a.frame) continue;
+    if (!a.dot.empty() && analysed > 0) {
+      throw InputError("--dot writes one frame's tree, and " + a.paths +
+                       " has several: choose one with --frame N");
+    }
+    CellTreeBuilder builder;
+    builder.AddBatch(frame.rays);
+    CellTree tree = builder.Finish();
+    const double build = SecondsSince(t0);
+    FrameAnalysis r = AnalyzeTree(tree, a.options);
+    r.frame = frame.frame;
+    r.seconds += build;
+    printer.Print(r);
+    ++analysed;
+    if (!a.dot.empty()) dot.emplace(std::move(tree), std::move(r));
+  }
+  if (a.frame && analysed == 0) {
+    throw InputError(a.paths + ": no frame " + std::to_string(*a.frame));
+  }
+  if (dot) WriteDotFile(a.dot, dot->first, dot->second);
 }
 
 std::vector<std::size_t> SelectFrames(const TraceReader& r, const AnalyzeArgs& a) {
@@ -177,9 +204,6 @@ void Run(const AnalyzeArgs& a) {
     throw InputError("give either a TRACE file or --paths FILE.jsonl");
   }
   if (a.frame && a.all) throw InputError("--frame and --all exclude each other");
-  if (!a.paths.empty() && (a.frame || a.all)) {
-    throw InputError("--frame/--all select frames of a TRACE, not of --paths");
-  }
   Printer printer(a.format, a.timing);
   a.paths.empty() ? AnalyzeTrace(a, printer) : AnalyzePaths(a, printer);
 }
@@ -196,10 +220,19 @@ void AddAnalyzeCommand(CLI::App& app) {
       "the Peel schedule's length and split peels, Peel minus bound and, with --exact on\n"
       "small trees, the optimum and Peel minus optimum (past the search limits the optimum\n"
       "is reported unknown, never guessed), and with --timing the time taken.\n"
-      "--format json prints one object per frame and line with the keys frame, rays,\n"
-      "nodes, rays_per_node, bound, peel_length, peel_schedule (cells in fetch order),\n"
-      "splits, peel_minus_bound, optimum (null when not computed or unknown),\n"
-      "optimum_status (and seconds with --timing).\n"
+      "--format json prints one object per frame and line with the keys schema\n"
+      "(\"raycell-analyze/1\"), frame, rays, nodes, rays_per_node, bound, peel_length,\n"
+      "peel_schedule (cells in fetch order), splits, peel_minus_bound, optimum (null when\n"
+      "not computed or unknown), optimum_status (and seconds with --timing); docs/schemas.md\n"
+      "documents each.\n"
+      "--paths reads ray paths as JSON Lines from raycell (`raycell trace cat`) or any other\n"
+      "tool: keys in any order, rays in any order within a frame, ids any non-negative\n"
+      "integers; required \"id\", \"parent\", \"spawn\", \"cells\" (\"parent\" and \"spawn\"\n"
+      "null for primary rays); optional \"kind\" (default primary without a parent,\n"
+      "reflection with one), \"pixel\" (default [0,0], or the parent's), \"samples\"\n"
+      "(default 1 per visit) and \"frame\" (each frame's lines together; without it the\n"
+      "file is frame 0). Every frame is analysed (--frame N picks one). docs/jsonl.md has\n"
+      "the details and the order in which rays are renumbered.\n"
       "Without --timing the output depends only on the input and the options, byte for\n"
       "byte, except where --max-seconds stops a search (its status says so); --max-states\n"
       "limits the search the same way on every machine.\n\n"
@@ -207,13 +240,15 @@ void AddAnalyzeCommand(CLI::App& app) {
       "  raycell analyze capture.rct\n"
       "  raycell analyze capture.rct --frame 3 --exact --format json\n"
       "  raycell trace cat capture.rct --frame 0 > rays.jsonl && raycell analyze --paths "
-      "rays.jsonl");
+      "rays.jsonl\n"
+      "  echo '{\"id\":0,\"parent\":null,\"spawn\":null,\"cells\":[0,1]}' > p.jsonl && "
+      "raycell analyze --paths p.jsonl");
   cmd->add_option("TRACE", args->trace, "trace file written by `raycell record`");
-  cmd->add_option("--frame", args->frame, "analyse only this frame number");
+  cmd->add_option("--frame", args->frame, "analyse only this frame number (of TRACE or --paths)");
   cmd->add_flag("--all", args->all, "analyse every frame (the default)");
   cmd->add_option("--paths", args->paths,
-                  "ray paths as JSON Lines (the format of `raycell trace cat`; one frame, rays "
-                  "one ray tree at a time) instead of a trace");
+                  "ray paths as JSON Lines (the format of `raycell trace cat`, from any tool; "
+                  "see below) instead of a trace");
   cmd->add_flag("--exact", args->options.exact,
                 "also compute the optimum by A* search (small trees)");
   cmd->add_option("--max-states", args->options.max_states, "exact search: states to expand")

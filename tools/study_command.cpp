@@ -34,13 +34,44 @@ namespace fs = std::filesystem;
 struct StudyArgs {
   std::string scene = "builtin", cells = "2x2x2,3x3x3", res = "256x256", out = "study";
   std::string accuracy_res = "128x128";
-  int frames = 24;
+  std::string frames = "24";        // a count N (frames 0..N-1) or frame numbers A..B
+  std::vector<int> frame_numbers;   // what `frames` says, set by Run
   int accuracy_frames = 2;          // 0: no run time against error section
   std::vector<std::string> traces;  // reused captures instead of recording
-  double orbit = 90;  // 3.75 degrees per frame: consecutive frames alike, as in an animation
+  // Degrees the camera turns over the frames. Default: 90 for one volume (3.75 degrees per
+  // frame over 24: consecutive frames alike, as in an animation), 0 for a sequence, whose
+  // volumes are the animation.
+  double orbit = 90;
+  bool orbit_given = false;
   int threads = 0;
   bool quiet = false;
+  bool sequence() const { return IsSequencePattern(scene); }
+  double orbit_degrees() const { return orbit_given || !sequence() ? orbit : 0; }
 };
+
+constexpr int kMinFrames = 2, kMaxFrames = 10000;
+
+// "N": frames 0..N-1 (an orbit of one volume); "A..B" (or "A-B"): frames A to B, as record
+// reads them, which a sequence pattern needs (its files are numbered). Cell Tree scheduling
+// follows frame i's tree in frame i+1, so a study needs at least two frames.
+std::vector<int> StudyFrames(const StudyArgs& a) {
+  const bool count =
+      !a.frames.empty() && a.frames.find_first_not_of("0123456789") == std::string::npos;
+  if (count && a.sequence()) {
+    throw InputError("--frames '" + a.frames + "': --scene '" + a.scene +
+                     "' is a sequence pattern: give the frame numbers of its files, A..B");
+  }
+  if (count) {
+    const auto n = ParseInt(a.frames, "--frames (a count of frames)", kMinFrames, kMaxFrames);
+    return ParseFrameRange("0.." + std::to_string(n - 1));
+  }
+  const std::vector<int> frames = ParseFrameRange(a.frames);
+  if (frames.size() < std::size_t{kMinFrames} || frames.size() > std::size_t{kMaxFrames}) {
+    throw InputError("--frames '" + a.frames + "': a study needs " + std::to_string(kMinFrames) +
+                     " to " + std::to_string(kMaxFrames) + " frames");
+  }
+  return frames;
+}
 
 const char* kSchedulers[] = {"maxwork", "celltree", "peel"};
 constexpr std::uint64_t kOptimumStates = 50'000;
@@ -67,8 +98,8 @@ std::vector<std::string> SplitList(const std::string& text) {
 TraceReader RecordGrid(const StudyArgs& a, const std::string& cells) {
   RecordOptions o;
   o.scene.source = a.scene;
-  o.frames = ParseFrameRange("0.." + std::to_string(a.frames - 1));
-  o.camera.orbit_degrees = a.orbit;
+  o.frames = a.frame_numbers;
+  o.camera.orbit_degrees = a.orbit_degrees();
   o.cells = ParseCellDims(cells);
   const auto wh = ParseResolution(a.res);
   o.settings.width = wh[0], o.settings.height = wh[1];
@@ -235,9 +266,13 @@ std::string GridReport(const GridStudy& g) {
 std::string Report(const StudyArgs& a, const std::vector<GridStudy>& grids) {
   std::ostringstream s;
   s << "# raycell study\n\n";
-  if (a.traces.empty()) {
-    s << "Scene `" << a.scene << "`, " << a.frames << " frames orbiting " << a.orbit << " degrees, "
+  if (a.traces.empty() && a.sequence()) {
+    s << "Scene `" << a.scene << "` (one volume per frame), frames " << a.frame_numbers.front()
+      << ".." << a.frame_numbers.back() << " orbiting " << a.orbit_degrees() << " degrees, "
       << a.res << ". ";
+  } else if (a.traces.empty()) {
+    s << "Scene `" << a.scene << "`, " << a.frame_numbers.size() << " frames orbiting "
+      << a.orbit_degrees() << " degrees, " << a.res << ". ";
   } else {
     s << "Given captures, every frame of each. ";
   }
@@ -322,15 +357,18 @@ void Plot(const std::string& out, const std::vector<std::string>& cells) {
   }
 }
 
-void Run(const StudyArgs& a) {
-  if (a.frames < 2 || a.frames > 10000) throw InputError("--frames: must be in 2..10000");
+void Run(StudyArgs& a) {
+  if (a.traces.empty()) a.frame_numbers = StudyFrames(a);
   if (a.accuracy_frames < 0 || a.accuracy_frames > 1000) {
     throw InputError("--accuracy-frames: must be in 0..1000");
   }
   ParseResolution(a.accuracy_res);  // InputError naming it, before any work
-  if (!std::isfinite(a.orbit)) throw InputError("--orbit: must be a finite number of degrees");
+  if (!std::isfinite(a.orbit_degrees())) {
+    throw InputError("--orbit: must be a finite number of degrees");
+  }
   std::vector<GridStudy> grids;
-  std::string accuracy_scene = a.scene;
+  // A sequence's knobs are measured on the volume of its first frame.
+  std::string accuracy_scene = a.sequence() ? FrameFile(a.scene, a.frame_numbers.front()) : a.scene;
   if (a.traces.empty()) {
     const std::vector<std::string> cells = SplitList(a.cells);
     fs::create_directories(a.out);
@@ -370,20 +408,29 @@ void AddStudyCommand(CLI::App& app) {
       "(tools/bench/accuracy.py; --accuracy-frames 0 skips it).\n"
       "With no options: the built-in scene, 24 frames over 90 degrees, 2x2x2 and 3x3x3\n"
       "cells, 256x256; about a minute on 2 cores.\n"
+      "--frames N records frames 0..N-1 of one volume; --frames A..B records frames A to B,\n"
+      "as record does: a sequence pattern (--scene 'fluid_%04d.vdb') needs this form, one\n"
+      "file per frame, and then the camera stays still unless --orbit is given (the run\n"
+      "time against error section uses the volume of its first frame).\n"
       "With --trace: no recording; every frame of each given capture is analysed and\n"
       "replayed (labelled by its file name), and the run time against error section uses\n"
       "the scene the first capture names, if it can be loaded here.\n\n"
       "Examples:\n"
       "  raycell study --scene ../shared/data/mj_smoke.vdb --frames 30 --out smoke-study\n"
+      "  raycell study --scene '../shared/data/fluid_seq/fluid_data_%04d.vdb' --frames 150..155\n"
       "  raycell study --trace smoke.rct --trace fluid.rct --accuracy-frames 0");
   std::vector<CLI::Option*> recording = {
       cmd->add_option("--scene", args->scene,
-                      "builtin, a .vdb file, or a printf pattern (see record)")
+                      "builtin, a .vdb file, or a printf pattern of one file per frame (see "
+                      "record), e.g. fluid_data_%04d.vdb with --frames 150..155")
           ->capture_default_str(),
       cmd->add_option("--cells", args->cells, "cell grids, comma-separated")->capture_default_str(),
-      cmd->add_option("--frames", args->frames, "frames of the orbit")->capture_default_str(),
-      cmd->add_option("--orbit", args->orbit, "degrees the camera turns over the frames")
+      cmd->add_option("--frames", args->frames,
+                      "N: frames 0..N-1; A..B: frame numbers A to B (a sequence pattern's files)")
           ->capture_default_str(),
+      cmd->add_option("--orbit", args->orbit,
+                      "degrees the camera turns over the frames (default 90; 0 for a sequence "
+                      "pattern)"),
       cmd->add_option("--res", args->res, "image size WxH")->capture_default_str()};
   CLI::Option* trace =
       cmd->add_option("--trace", args->traces,
@@ -400,7 +447,11 @@ void AddStudyCommand(CLI::App& app) {
                   "image size of the run time against error capture")
       ->capture_default_str();
   cmd->add_flag("--quiet", args->quiet, "no progress bars");
-  cmd->callback([args] { Run(*args); });
+  CLI::Option* orbit = recording[3];
+  cmd->callback([args, orbit] {
+    args->orbit_given = orbit->count() > 0;
+    Run(*args);
+  });
 }
 
 }  // namespace raycell

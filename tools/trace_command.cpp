@@ -1,4 +1,5 @@
-// raycell trace: inspect a capture (info) and hand its rays to other tools (cat).
+// raycell trace: inspect a capture (info, verify), hand its rays to other tools (cat) and make
+// a capture from another tool's ray paths (import).
 #include <chrono>
 #include <iomanip>
 #include <iostream>
@@ -7,7 +8,12 @@
 #include <sstream>
 
 #include "base/check.h"
+#include "base/parse.h"
+#include "replay/units.h"
 #include "tools/commands.h"
+#include "traces/jsonl.h"
+#include "traces/record/cell_grid.h"
+#include "traces/trace_import.h"
 #include "traces/trace_inspect.h"
 #include "traces/trace_reader.h"
 
@@ -81,6 +87,78 @@ void RunVerify(const TraceArgs& a) {
             << visits / std::max(s, 1e-9) / 1e6 << " M visits/s)\n";
 }
 
+struct ImportArgs {
+  ImportOptions options;
+  std::string cells, footprint, box;
+};
+
+// "X0,Y0,Z0,X1,Y1,Z1".
+std::pair<Vec3d, Vec3d> ParseBox(const std::string& text) {
+  const std::vector<std::string> f = Split(text, ',');
+  double v[6];
+  for (std::size_t i = 0; i < 6 && f.size() == 6; ++i) {
+    char* end = nullptr;
+    v[i] = std::strtod(f[i].c_str(), &end);
+    if (f[i].empty() || *end) break;
+    if (i == 5) return {{v[0], v[1], v[2]}, {v[3], v[4], v[5]}};
+  }
+  throw InputError("--box '" + text + "': expected six numbers X0,Y0,Z0,X1,Y1,Z1");
+}
+
+void RunImport(ImportArgs& a) {
+  ImportOptions& o = a.options;
+  o.cells = ParseCellDims(a.cells);
+  if (!a.footprint.empty()) o.footprint = ParseBytes(a.footprint, "--footprint").count();
+  if (!a.box.empty()) o.box = ParseBox(a.box);
+  const ImportSummary s = ImportJsonl(o);
+  std::cerr << "imported " << s.frames << " frame(s), " << s.rays << " rays, " << s.visits
+            << " visits from " << o.paths << " -> " << o.out << "\n";
+  if (s.renumbered_frames) {
+    std::cerr << "note: ray ids renumbered in " << s.renumbered_frames
+              << " frame(s) (ray trees by their primary ray's id, parents before children; "
+                 "`raycell trace cat` shows the new ids)\n";
+  }
+}
+
+void AddImport(CLI::App& trace) {
+  auto args = std::make_shared<ImportArgs>();
+  ImportOptions& o = args->options;
+  CLI::App* c = trace.add_subcommand(
+      "import", "Make a trace from ray paths in JSON Lines, e.g. written by another renderer.");
+  c->footer(
+      "Reads the format `raycell trace cat` writes, with keys in any order and rays in any\n"
+      "order within a frame; the least a line needs is\n"
+      "  {\"id\":7,\"parent\":3,\"spawn\":2,\"cells\":[5,4,1]}\n"
+      "(\"parent\" and \"spawn\" null for primary rays). Defaults: \"kind\" primary without\n"
+      "a parent, reflection with one; \"pixel\" [0,0] for a primary ray, its parent's for a\n"
+      "spawned one; \"samples\" 1 per visit. Lines with a \"frame\" key make one trace frame\n"
+      "per frame number (each frame's lines together, as `trace cat` writes them); without\n"
+      "it the file is frame 0. Ids may be any non-negative integers: each frame is renumbered\n"
+      "0, 1, 2, ... taking ray trees by their primary ray's id and, within a tree, the\n"
+      "smallest id whose parent is placed (ids already in that order are kept).\n"
+      "What the paths do not say gets a default: scene box 0,0,0 to NX,NY,NZ (--box),\n"
+      "every cell --footprint bytes (the bytes a replay fetches), cameras at the origin,\n"
+      "image size the largest pixel + 1. The file is read twice (checked, then written),\n"
+      "so nothing is written when a line is bad. docs/jsonl.md has the details.\n\n"
+      "Example:\n"
+      "  raycell trace import rays.jsonl --cells 3x3x3 --out rays.rct && raycell replay "
+      "rays.rct");
+  c->add_option("PATHS", o.paths, "ray paths as JSON Lines (a file; it is read twice)")->required();
+  c->add_option("--cells", args->cells,
+                "cell grid NXxNYxNZ the paths' cells number (cell = x + NX*(y + NY*z)); every "
+                "cell of the paths must be below NX*NY*NZ")
+      ->required();
+  c->add_option("--out", o.out, "trace file to write")->required();
+  c->add_option("--footprint", args->footprint,
+                "bytes of every cell, with a unit (e.g. 512KiB, 4MiB); default 1MiB, a dense "
+                "64^3 brick of 4-byte voxels");
+  c->add_option("--box", args->box,
+                "scene box X0,Y0,Z0,X1,Y1,Z1 the cells split; default 0,0,0,NX,NY,NZ");
+  c->add_option("--zstd-level", o.zstd_level, "zstd compression level 1..19")
+      ->capture_default_str();
+  c->callback([args] { RunImport(*args); });
+}
+
 }  // namespace
 
 void AddTraceCommand(CLI::App& app) {
@@ -115,12 +193,14 @@ void AddTraceCommand(CLI::App& app) {
       "\"cells\":[5,4,1],\"samples\":[12,30,2]}\n"
       "parent and spawn are null for primary rays; spawn indexes the parent's cells, and\n"
       "cells[0] is that cell. Ids are frame-local. Without --frame every frame is written and\n"
-      "each line starts with \"frame\":N. This is the format the Cell Tree analysis\n(`raycell "
-      "analyze --paths`) reads.");
+      "each line starts with \"frame\":N when the file has more than one frame. `raycell\n"
+      "analyze --paths` and `raycell trace import` read this format (docs/jsonl.md).");
   c->add_option("FILE", cat->file, "trace file")->required();
   c->add_option("--frame", cat->frame, "frame number to write (default: all)");
   c->add_option("--format", cat->format, "output format")->capture_default_str();
   c->callback([cat] { RunCat(*cat); });
+
+  AddImport(*trace);
 }
 
 }  // namespace raycell

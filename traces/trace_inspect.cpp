@@ -1,6 +1,5 @@
 #include "traces/trace_inspect.h"
 
-#include <charconv>
 #include <cstdint>
 #include <iomanip>
 #include <sstream>
@@ -107,89 +106,12 @@ void PrintRatio(const TraceReader& reader, std::ostream& out) {
   out.unsetf(std::ios::floatfield);
 }
 
-// Appends JSON lines to a buffer with std::to_chars, flushing it to the stream in chunks.
-class JsonlBuffer {
- public:
-  explicit JsonlBuffer(std::ostream& out) : out_(out) { buf_.reserve(kFlushAt + 4096); }
-  ~JsonlBuffer() { Flush(); }
-
-  void Ray(const RayView& r, const std::optional<std::int32_t>& frame) {
-    Put('{');
-    if (frame) Key("\"frame\":").Int(*frame).Put(',');
-    Key("\"id\":").Int(r.id);
-    if (r.is_primary()) {
-      Key(",\"parent\":null,\"spawn\":null");
-    } else {
-      Key(",\"parent\":").Int(r.parent).Key(",\"spawn\":").Int(r.spawn);
-    }
-    Key(",\"kind\":\"").Key(ToString(r.kind)).Key("\",\"pixel\":[").Int(r.pixel_x).Put(',');
-    Int(r.pixel_y).Key("],\"cells\":");
-    List(r.cells, r.visit_count).Key(",\"samples\":").List(r.samples, r.visit_count);
-    Key("}\n");
-    if (buf_.size() >= kFlushAt) Flush();
-  }
-
-  void Flush() {
-    out_.write(buf_.data(), static_cast<std::streamsize>(buf_.size()));
-    buf_.clear();
-  }
-
- private:
-  static constexpr std::size_t kFlushAt = std::size_t{1} << 20;
-
-  JsonlBuffer& Put(char c) {
-    buf_.push_back(c);
-    return *this;
-  }
-  JsonlBuffer& Key(const char* s) {
-    buf_.append(s);
-    return *this;
-  }
-  template <typename T>
-  JsonlBuffer& Int(T v) {
-    char tmp[24];
-    const auto end = std::to_chars(tmp, tmp + sizeof tmp, v).ptr;
-    buf_.append(tmp, end);
-    return *this;
-  }
-  JsonlBuffer& List(const std::uint32_t* v, std::size_t n) {
-    Put('[');
-    for (std::size_t i = 0; i < n; ++i) {
-      if (i) Put(',');
-      Int(v[i]);
-    }
-    return Put(']');
-  }
-
-  std::ostream& out_;
-  std::string buf_;
-};
-
-void WriteFrame(const TraceReader& reader, std::size_t index, bool with_frame, JsonlBuffer& buf) {
-  std::optional<std::int32_t> frame;
-  if (with_frame) frame = reader.frames()[index].frame;
-  reader.ForEachBatch(index, [&](const RayBatch& b) {
-    for (std::size_t i = 0; i < b.size(); ++i) buf.Ray(b.ray(i), frame);
-  });
-}
-
 }  // namespace
 
 void PrintInfo(const TraceReader& reader, const std::string& path, std::ostream& out) {
   PrintHeader(reader, path, out);
   PrintTable(reader, out);
   PrintRatio(reader, out);
-}
-
-void WriteJsonl(const TraceReader& reader, std::optional<std::size_t> frame_index,
-                std::ostream& out) {
-  JsonlBuffer buf(out);
-  if (frame_index) {
-    WriteFrame(reader, *frame_index, false, buf);
-    return;
-  }
-  const bool with_frame = reader.frames().size() > 1;
-  for (std::size_t i = 0; i < reader.frames().size(); ++i) WriteFrame(reader, i, with_frame, buf);
 }
 
 }  // namespace raycell

@@ -2,8 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include <sstream>
-
 #include "base/check.h"
 
 namespace raycell {
@@ -165,74 +163,6 @@ TEST(CellTreeTest, RayIdsMustIncrease) {
   CellTreeBuilder builder;
   builder.AddBatch(MakeBatch({{kNoParent, 0, {A}, {}}}, 5));
   EXPECT_THROW(builder.AddBatch(MakeBatch({{kNoParent, 0, {A}, {}}}, 5)), InputError);
-}
-
-// ------------------------------------------------------------------------------ JSONL
-
-TEST(CellTreeJsonlTest, ReadsTheSpawnExample) {
-  std::istringstream in(
-      R"({"frame":0,"id":0,"parent":null,"spawn":null,"kind":"primary","pixel":[0,0],"cells":[0,1,2],"samples":[1,2,3]})"
-      "\n"
-      R"({"id":1,"parent":0,"spawn":1,"kind":"reflection","pixel":[0,0],"cells":[1,0],"samples":[10,20]})"
-      "\n\n"
-      R"({"id":2,"parent":1,"spawn":1,"kind":"shadow","pixel":[0,0],"cells":[0],"samples":[7]})"
-      "\n"
-      R"( { "id" : 3 , "parent":null,"spawn":null,"kind":"primary","pixel":[1,0],"cells":[0,1],"samples":[5,6]} )"
-      "\n");
-  const CellTree t = FromJsonl(in, "x.jsonl");
-  ASSERT_EQ(t.node_count(), 4u);
-  EXPECT_EQ(t.samples(Find(t, {A, B, A})), 27u);
-  EXPECT_EQ(t.enter(Find(t, {A, B})), 2u);
-  EXPECT_EQ(t.samples(Find(t, {A, B})), 18u);
-}
-
-std::string JsonlError(const std::string& second_line) {
-  std::istringstream in(
-      R"({"id":0,"parent":null,"spawn":null,"kind":"primary","pixel":[0,0],"cells":[0,1],"samples":[1,2]})"
-      "\n" +
-      second_line + "\n");
-  try {
-    FromJsonl(in, "r.jsonl");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "no error";
-}
-
-std::string Line(const std::string& fields) {
-  return R"({"id":1,"kind":"reflection","pixel":[0,0],)" + fields + "}";
-}
-
-TEST(CellTreeJsonlTest, MalformedLinesNameTheLine) {
-  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":1,"cells":[1],"samples":[1])")), "no error");
-  EXPECT_EQ(JsonlError(Line(R"("parent":9,"spawn":1,"cells":[1],"samples":[1])")),
-            "r.jsonl:2: \"parent\" must be less than \"id\"");
-  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":2,"cells":[1],"samples":[1])")),
-            "r.jsonl:2: ray 1: spawn 2 out of range: parent 0 has 2 visits");
-  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":1,"cells":[0],"samples":[1])")),
-            "r.jsonl:2: ray 1: first cell 0 is not the cell 1 of parent 0's spawn visit 1");
-  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":1,"cells":[1,1],"samples":[1,1])")),
-            "r.jsonl:2: ray 1: cell 1 repeated at visit 1");
-  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":1,"cells":[1],"samples":[1,2])")),
-            "r.jsonl:2: \"cells\" and \"samples\" differ in length");
-  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":null,"cells":[1],"samples":[1])")),
-            "r.jsonl:2: \"parent\" and \"spawn\" must both be null or both be set");
-  EXPECT_EQ(JsonlError(Line(R"("parent":0,"cells":[1],"samples":[1])")),
-            "r.jsonl:2: missing \"spawn\"");
-  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":1,"cells":[1],"samples":[1],"x":1)")),
-            "r.jsonl:2: unknown key \"x\"");
-  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":1,"cells":[1],"samples":"1")")),
-            "r.jsonl:2: \"samples\" has the wrong type");
-  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":1,"cells":[1],"samples":[-1])")),
-            "r.jsonl:2: column 87: expected a non-negative integer");
-  EXPECT_EQ(JsonlError(Line(R"("parent":0,"spawn":1,"cells":[1],"samples":[1])") + "x"),
-            "r.jsonl:2: column 90: unexpected text after the object");
-  EXPECT_EQ(JsonlError(R"({"id":1,"parent":null,"spawn":null,"kind":"bouncy"})"),
-            "r.jsonl:2: unknown kind \"bouncy\"");
-  EXPECT_EQ(JsonlError(R"({"id":0,"parent":null,"spawn":null,"kind":"primary","pixel":[0,0],)"
-                       R"("cells":[0],"samples":[1]})"),
-            "r.jsonl:2: ray 0: ids must increase; previous ray was 0");
-  EXPECT_EQ(JsonlError(R"({"id":1)"), "r.jsonl:2: column 8: expected '}'");
 }
 
 TEST(CellTreeTest, ToStringListsNodesDepthFirst) {

@@ -1,43 +1,28 @@
 // The raycell command line end to end: record, trace cat, analyze; exit codes and messages
 // for bad input.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <random>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "tests/test_util.h"
+#include "tests/tools/cli_util.h"
+#include "tests/tools/json_value.h"
 
 namespace {
 
-struct Result {
-  int code;
-  std::string out;
-};
+using raycell::testing::Raycell;
+using raycell::testing::Result;
 
-// Runs `raycell ARGS` through the shell, stdout and stderr together.
-Result Raycell(const std::string& args) {
-  const std::string cmd = std::string(RAYCELL_BINARY) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf;
-  for (std::size_t n; (n = fread(buf.data(), 1, buf.size(), p)) > 0;) out.append(buf.data(), n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
-std::filesystem::path Dir() {
-  const auto d =
-      std::filesystem::temp_directory_path() / ("raycell_cli_" + std::to_string(getpid()));
-  std::filesystem::create_directories(d);
-  return d;
-}
+std::filesystem::path Dir() { return raycell::testing::CliDir("cli"); }
 
 // Two rays with paths A B and B A (cells 0 and 1): bound 2, Peel 3, optimum 3.
 TEST(Cli, AnalyzePathsOfTwoCrossingRays) {
@@ -67,6 +52,113 @@ TEST(Cli, AnalyzeOfATraceEqualsAnalyzeOfItsJsonLines) {
   EXPECT_EQ(a.out, b.out);  // byte for byte: no timing unless asked
   const Result t = Raycell("analyze " + trace + " --format csv --quiet --timing");
   EXPECT_NE(t.out.find("optimum_status,seconds,peel_schedule"), std::string::npos) << t.out;
+}
+
+// The lines of `full` (as `trace cat` writes them) in the least form another tool may write:
+// only frame, id, parent, spawn and cells, keys shuffled, ids a random increasing map with
+// gaps, lines shuffled within each frame.
+std::string ShuffledMinimal(const std::string& full, std::mt19937& rng) {
+  using raycell::testing::Json;
+  std::vector<std::vector<std::string>> frames;
+  std::map<std::string, std::uint64_t> ids;  // "frame/id" -> new id
+  std::uint64_t next = 1000;
+  std::string frame = "none";
+  std::istringstream in(full);
+  for (std::string line; std::getline(in, line);) {
+    const Json j = Json::Parse(line);
+    const std::string f = j.members[0].first == "frame" ? j["frame"].text : "";
+    if (frames.empty() || f != frame) frames.emplace_back();
+    frame = f;
+    next += 1 + rng() % 1000;
+    ids[f + "/" + j["id"].text] = next;
+    const bool primary = j["parent"].type == Json::Type::kNull;
+    std::string cells = "[";
+    for (const Json& c : j["cells"].items) cells += (cells.size() > 1 ? "," : "") + c.text;
+    std::vector<std::string> kv = {
+        "\"id\":" + std::to_string(next),
+        "\"parent\":" + (primary ? "null" : std::to_string(ids.at(f + "/" + j["parent"].text))),
+        "\"spawn\":" + (primary ? "null" : j["spawn"].text), "\"cells\":" + cells + "]"};
+    if (!f.empty()) kv.push_back("\"frame\":" + f);
+    std::shuffle(kv.begin(), kv.end(), rng);
+    std::string out = "{";
+    for (const std::string& x : kv) out += (out.size() > 1 ? ", " : "") + x;
+    frames.back().push_back(out + "}\n");
+  }
+  std::string out;
+  for (auto& lines : frames) {
+    std::shuffle(lines.begin(), lines.end(), rng);
+    for (const std::string& l : lines) out += l;
+  }
+  return out;
+}
+
+// Other tools write paths in other orders with fewer keys: the analysis is the same byte for
+// byte (nothing it reports depends on kind, pixel or samples).
+TEST(Cli, AnalyzePathsOfAShuffledMinimalFileEqualsTheOrderedFullFile) {
+  const auto d = Dir();
+  const std::string trace = (d / "two.rct").string(), full = (d / "full.jsonl").string(),
+                    minimal = (d / "minimal.jsonl").string();
+  ASSERT_EQ(
+      Raycell("record --res 32x32 --cells 3x3x3 --orbit 2:40 --no-images --quiet --out " + trace)
+          .code,
+      0);
+  ASSERT_EQ(Raycell("trace cat " + trace + " > " + full).code, 0);
+  std::mt19937 rng(5);
+  const std::string shuffled = ShuffledMinimal(raycell::testing::ReadBytes(full), rng);
+  std::ofstream(minimal) << shuffled;
+  ASSERT_NE(shuffled, raycell::testing::ReadBytes(full));
+  const Result a = Raycell("analyze --paths " + full + " --format json", false);
+  const Result b = Raycell("analyze --paths " + minimal + " --format json", false);
+  ASSERT_EQ(a.code, 0) << a.out;
+  ASSERT_EQ(b.code, 0) << b.out;
+  EXPECT_EQ(std::count(a.out.begin(), a.out.end(), '\n'), 2);  // both frames
+  EXPECT_EQ(a.out, b.out);
+  const Result t = Raycell("analyze " + trace + " --format json --quiet", false);
+  EXPECT_EQ(t.out, a.out);
+  const Result one = Raycell("analyze --paths " + minimal + " --frame 1 --format csv", false);
+  ASSERT_EQ(one.code, 0) << one.out;
+  EXPECT_EQ(one.out, Raycell("analyze " + trace + " --frame 1 --format csv --quiet", false).out);
+}
+
+// The tour's `raycell trace cat` and `raycell trace import` lines, run exactly as the README
+// shows them (on a small capture with the tour's smoke.rct's cell grid): the import gives the
+// same rays back, and replays.
+TEST(Cli, ReadmeTourImportRunsAsShown) {
+  std::istringstream readme(raycell::testing::ReadBytes(RAYCELL_SOURCE_DIR "/README.md"));
+  std::string cat, import;
+  for (std::string line; std::getline(readme, line);) {
+    const std::string command = line.substr(0, line.find(" #"));
+    if (line.rfind("raycell trace cat ", 0) == 0) cat = command;
+    if (line.rfind("raycell trace import ", 0) == 0) import = command;
+  }
+  ASSERT_NE(cat, "") << "no `raycell trace cat` line in the README";
+  ASSERT_NE(import, "") << "no `raycell trace import` line in the README";
+  EXPECT_NE(cat.find("smoke.rct --frame 3"), std::string::npos) << cat;
+  const auto d = Dir() / "tour";
+  std::filesystem::create_directories(d);
+  ASSERT_EQ(Raycell("record --res 24x24 --cells 3x3x3 --orbit 4:60 --no-images --quiet --out " +
+                    (d / "smoke.rct").string())
+                .code,
+            0);
+  const std::string in_dir = "cd " + d.string() + " && " + RAYCELL_BINARY;
+  const auto run = [&](const std::string& command) {
+    const std::string cmd = in_dir + command.substr(std::string("raycell").size()) + " 2>&1";
+    const int status = std::system(cmd.c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  };
+  ASSERT_EQ(run(cat), 0) << cat;
+  ASSERT_EQ(run(import), 0) << import;
+  const std::string rays = raycell::testing::ReadBytes((d / "rays.jsonl").string());
+  ASSERT_GT(rays.size(), 1000u);
+  const std::string out = import.substr(import.find("--out ") + 6);
+  const std::string imported = (d / out.substr(0, out.find(' '))).string();
+  EXPECT_EQ(Raycell("trace cat " + imported, false).out, rays);
+  const Result replay = Raycell("replay " + imported + " --format json --quiet", false);
+  ASSERT_EQ(replay.code, 0) << replay.out;
+  EXPECT_NE(replay.out.find("\"total\":{\"fetches\":"), std::string::npos) << replay.out;
+  const Result analyze = Raycell("analyze " + imported + " --format csv --quiet", false);
+  EXPECT_EQ(analyze.out,
+            Raycell("analyze --paths " + (d / "rays.jsonl").string() + " --format csv", false).out);
 }
 
 TEST(Cli, DotOfAFrameRendersWithGraphviz) {
@@ -204,6 +296,21 @@ TEST(Cli, BadInputGetsAClearMessageAndExitCode2) {
   r = Raycell("analyze --paths " + bad.string());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("bad.jsonl:1:"), std::string::npos) << r.out;
+  const auto big = d / "big_cell.jsonl";
+  std::ofstream(big) << R"({"id":0,"parent":null,"spawn":null,"cells":[0]})"
+                        "\n"
+                     << R"({"id":1,"parent":null,"spawn":null,"cells":[8]})"
+                        "\n";
+  r = Raycell("trace import " + big.string() + " --cells 2x2x2 --out " + (d / "x.rct").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("big_cell.jsonl:2: ray 1: cell 8 out of range: --cells 2x2x2 has 8 cells"),
+            std::string::npos)
+      << r.out;
+  r = Raycell("trace import " + big.string() + " --cells 3x3x3 --footprint 12 --out " +
+              (d / "x.rct").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("--footprint"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(d / "x.rct"));
   r = Raycell("record --cells 2x2 --out " + (d / "x.rct").string());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("2x2"), std::string::npos) << r.out;

@@ -22,6 +22,7 @@
 #include "base/check.h"
 #include "tests/test_util.h"
 #include "tests/traces/trace_format.h"
+#include "traces/jsonl.h"
 #include "traces/trace.capnp.h"
 #include "traces/trace_inspect.h"
 #include "traces/trace_reader.h"

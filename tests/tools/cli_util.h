@@ -1,0 +1,40 @@
+// Running the raycell binary from the command-line tests.
+#pragma once
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+namespace raycell::testing {
+
+struct Result {
+  int code;
+  std::string out;
+};
+
+// Runs `raycell ARGS` through the shell; its output is stdout, and stderr too unless
+// `with_stderr` is false.
+inline Result Raycell(const std::string& args, bool with_stderr = true) {
+  const std::string cmd =
+      std::string(RAYCELL_BINARY) + " " + args + (with_stderr ? " 2>&1" : " 2>/dev/null");
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buf;
+  for (std::size_t n; (n = fread(buf.data(), 1, buf.size(), p)) > 0;) out.append(buf.data(), n);
+  const int status = pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+// A folder for one test's files, unique per process: TEMP/raycell_NAME_PID.
+inline std::filesystem::path CliDir(const std::string& name) {
+  const auto d =
+      std::filesystem::temp_directory_path() / ("raycell_" + name + "_" + std::to_string(getpid()));
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+}  // namespace raycell::testing
