@@ -56,6 +56,27 @@ NodeId CellTree::AddNode(NodeId parent, CellId cell) {
 }
 
 // Depth-first with a per-cell count of the nodes of that cell on the current path: O(nodes).
+CellTree UnionTree(const std::vector<const CellTree*>& trees) {
+  CellTree u;
+  for (const CellTree* t : trees) {
+    std::vector<NodeId> image(t->size(), kNoNode);  // t's node -> u's node
+    image[kRootNode] = kRootNode;
+    for (NodeId n = 1; n < t->size(); ++n) {  // parents before children
+      const NodeId p = image[t->parent(n)];
+      NodeId m = u.FindChild(p, t->cell(n));
+      if (m == kNoNode) m = u.AddNode(p, t->cell(n));
+      image[n] = m;
+      u.enter_[m] += t->enter(n);
+      u.samples_[m] += t->samples(n);
+      u.visits_[m] += t->visits(n);
+    }
+    u.rays_ += t->rays();
+  }
+  u.last_child_.clear();
+  u.ComputeGenerations();
+  return u;
+}
+
 void CellTree::ComputeGenerations() {
   generation_.assign(size(), 0);
   std::vector<std::uint32_t> on_path(cell_count_, 0);

@@ -58,6 +58,7 @@ class CellTree {
 
  private:
   friend class CellTreeBuilder;
+  friend CellTree UnionTree(const std::vector<const CellTree*>& trees);
   CellTree();
   NodeId AddNode(NodeId parent, CellId cell);
   void ComputeGenerations();
@@ -71,6 +72,13 @@ class CellTree {
   CellId cell_count_ = 0;
   std::uint64_t rays_ = 0;
 };
+
+// The union of several trees (e.g. two consecutive frames'): a node for every distinct
+// root-to-node cell path of any of them, its enter, samples and visits summed, rays summed.
+// Every root-to-leaf path of each tree is a root-to-node path of the union, so a schedule
+// feasible for the union is feasible for each of them. Trees are merged in order: the
+// union of A and B numbers its nodes as a builder fed A's rays, then B's, would.
+CellTree UnionTree(const std::vector<const CellTree*>& trees);
 
 // maxGen(c) for every cell c < tree.cell_count(): the largest generation of a node of c
 // (0 for a cell without nodes).

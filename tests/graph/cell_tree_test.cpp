@@ -2,7 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "base/check.h"
+#include "graph/peel.h"
+#include "graph/schedule.h"
+#include "tests/graph/test_trees.h"
 
 namespace raycell {
 namespace {
@@ -171,6 +176,74 @@ TEST(CellTreeTest, ToStringListsNodesDepthFirst) {
             "CellTree(2 nodes)\n"
             "  cell 0 gen 1 enter 1 samples 3\n"
             "    cell 1 gen 1 enter 1 samples 4\n");
+}
+
+// Random ray trees (primary rays and rays spawned at a visit of an earlier ray of the same
+// tree), as testing::TestRay with parents indexing this list.
+std::vector<testing::TestRay> RandomRays(std::mt19937& rng, CellId cells, int rays) {
+  std::vector<testing::TestRay> out;
+  std::size_t tree_start = 0;
+  for (int i = 0; i < rays; ++i) {
+    testing::TestRay r;
+    const bool primary = out.empty() || rng() % 3 == 0;
+    if (primary) {
+      tree_start = out.size();
+      r.cells.push_back(CellId(rng() % cells));
+    } else {
+      r.parent = tree_start + rng() % (out.size() - tree_start);
+      r.spawn = std::uint32_t(rng() % out[r.parent].cells.size());
+      r.cells.push_back(out[r.parent].cells[r.spawn]);
+    }
+    for (int v = int(rng() % 5); v > 0; --v) {
+      CellId next;
+      do next = CellId(rng() % cells);
+      while (next == r.cells.back());
+      r.cells.push_back(next);
+    }
+    out.push_back(r);
+  }
+  return out;
+}
+
+void ExpectSameTree(const CellTree& a, const CellTree& b) {
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(a.rays(), b.rays());
+  EXPECT_EQ(a.cell_count(), b.cell_count());
+  for (NodeId n = 0; n < a.size(); ++n) {
+    EXPECT_EQ(a.cell(n), b.cell(n)) << n;
+    EXPECT_EQ(a.parent(n), b.parent(n)) << n;
+    EXPECT_EQ(a.enter(n), b.enter(n)) << n;
+    EXPECT_EQ(a.samples(n), b.samples(n)) << n;
+    EXPECT_EQ(a.visits(n), b.visits(n)) << n;
+    EXPECT_EQ(a.generation(n), b.generation(n)) << n;
+    EXPECT_EQ(a.first_child(n), b.first_child(n)) << n;
+    EXPECT_EQ(a.next_sibling(n), b.next_sibling(n)) << n;
+  }
+}
+
+// The union of two frames' trees is the tree of both frames' rays in one frame, and any
+// schedule feasible for the union is feasible for each.
+TEST(UnionTreeTest, EqualsTheTreeOfAllRaysAndItsSchedulesServeEach) {
+  std::mt19937 rng(11);
+  for (int round = 0; round < 200; ++round) {
+    const CellId cells = 2 + rng() % 6;
+    const auto a = RandomRays(rng, cells, 1 + int(rng() % 12));
+    const auto b = RandomRays(rng, cells, 1 + int(rng() % 12));
+    auto both = a;
+    for (testing::TestRay r : b) {
+      if (r.parent != kNoParent) r.parent += a.size();
+      both.push_back(r);
+    }
+    const CellTree ta = testing::TreeOf(testing::RaysOf(a, 2));
+    const CellTree tb = testing::TreeOf(testing::RaysOf(b, 2));
+    const CellTree u = UnionTree({&ta, &tb});
+    ExpectSameTree(u, testing::TreeOf(testing::RaysOf(both, 2)));
+    const std::vector<CellId> plan = Peel(u).schedule;
+    EXPECT_TRUE(IsFeasible(ta, plan));
+    EXPECT_TRUE(IsFeasible(tb, plan));
+  }
+  const CellTree empty = UnionTree({});
+  EXPECT_EQ(empty.node_count(), 0u);
 }
 
 }  // namespace
