@@ -31,28 +31,15 @@ ComponentId Simulator::Add(Component& component) {
   return ComponentId(components_.size() - 1);
 }
 
-std::uint64_t Simulator::Schedule(ComponentId target, SimTime delay, std::uint32_t kind,
-                                  std::uint64_t payload, std::int32_t priority) {
-  return ScheduleAt(target, now_ + delay, kind, payload, priority);
-}
-
-std::uint64_t Simulator::ScheduleAt(ComponentId target, SimTime when, std::uint32_t kind,
-                                    std::uint64_t payload, std::int32_t priority) {
-  RAYCELL_CHECK_LE(now_, when);  // no event in the past
-  RAYCELL_CHECK_LT(target, components_.size());
-  const std::uint64_t seq = next_seq_;
-  next_seq_ = CheckedAdd(next_seq_, 1);
-  queue_->Push(Event{when, priority, seq, target, kind, payload});
-  return seq;
-}
-
 RunStatus Simulator::Run(SimTime until) {
   stop_requested_ = false;
-  while (!queue_->Empty()) {
-    if (queue_->Top().time > until) {
+  const bool bounded = until != SimTime::Max();  // else no event can lie after `until`
+  while (pending_ != 0) {  // the queue's size, without a virtual call per event
+    if (bounded && queue_->Top().time > until) {
       now_ = until;
       return RunStatus::kReachedUntil;
     }
+    --pending_;
     Dispatch(queue_->Pop());
     if (stop_requested_) return RunStatus::kStopped;
   }

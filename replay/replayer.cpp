@@ -1,77 +1,206 @@
 #include "replay/replayer.h"
 
-#include <deque>
+#include <algorithm>
 #include <sstream>
 
 #include "base/check.h"
 #include "base/checked.h"
-#include "engine/simulator.h"
+#include "engine/simulator.h"  // SimulationStalled
 
 namespace raycell {
 namespace {
 
-enum EventKind : std::uint32_t { kIdle = 0, kFetched = 1, kUnitDone = 2 };
+// ---- Units ----------------------------------------------------------------------------
+// The core reads units through one of these: the packed breadth-first records when the
+// frame's values fit them (the usual case; queues then hold record indices), else the work
+// graph's columns (queues hold unit ids). Either way a unit x has samples, a cell, queued
+// rays and successors children_begin(x) .. children_end(x), the i-th being child(i).
 
-std::uint64_t Pack(std::uint32_t processor, UnitId unit) {
-  return (std::uint64_t{processor} << 32) | unit;
+struct PackedUnits {
+  const WorkGraph::Packed* p;
+  UnitId roots;
+  template <typename F>
+  void ForEachRoot(F f) const {
+    for (UnitId x = 0; x < roots; ++x) f(x);
+  }
+  std::uint64_t samples(UnitId x) const { return p[x].samples; }
+  CellId cell(UnitId x) const { return p[x].cell; }
+  std::uint64_t queued(UnitId x) const { return p[x].queued_rays; }
+  UnitId children_begin(UnitId x) const { return p[x].first_child; }
+  UnitId children_end(UnitId x) const { return p[x + 1].first_child; }
+  UnitId child(UnitId i) const { return i; }
+  // Starts loading what working x will read: its record, and (once that has arrived, so
+  // called later for the same x) its successors' records.
+  void PrefetchUnit(UnitId x) const { __builtin_prefetch(p + x); }
+  void PrefetchChildren(UnitId x) const { __builtin_prefetch(p + p[x].first_child); }
+};
+
+struct ColumnUnits {
+  const WorkGraph* w;
+  template <typename F>
+  void ForEachRoot(F f) const {
+    for (UnitId u : w->roots) f(u);
+  }
+  std::uint64_t samples(UnitId u) const { return w->samples[u]; }
+  CellId cell(UnitId u) const { return w->cell[u]; }
+  std::uint64_t queued(UnitId u) const { return w->queued_rays[u]; }
+  UnitId children_begin(UnitId u) const { return w->succ_begin[u]; }
+  UnitId children_end(UnitId u) const { return w->succ_begin[u + 1]; }
+  UnitId child(UnitId i) const { return w->succ[i]; }
+  void PrefetchUnit(UnitId) const {}
+  void PrefetchChildren(UnitId) const {}
+};
+
+// ---- Pending events -------------------------------------------------------------------
+// Each processor has at most one pending event: the end of its fetch, of its unit, or its
+// call for a cell (and none while it waits for work). So the pending set is one slot per
+// processor, and the next event is the slot with the least (time, seq): the engine's order
+// (Event: time, priority, seq; every replay event has priority 0). seq counts every event
+// scheduled, as the engine's does, so ties fall exactly as on the engine.
+
+enum class Kind : std::uint8_t { kNone, kIdle, kFetched, kUnitDone };
+
+struct Slot {
+  SimTime time;
+  std::uint64_t seq = UINT64_MAX;  // UINT64_MAX with time Max: nothing pending
+  UnitId unit = 0;
+  Kind kind = Kind::kNone;
+};
+
+bool SlotBefore(const Slot& a, const Slot& b) {
+  return a.time != b.time ? a.time < b.time : a.seq < b.seq;
 }
 
-struct ProcessorState {
-  std::optional<CellId> cell;   // locked and loaded while working
-  std::deque<UnitId> worklist;  // units of `cell` to work in this fetch
-  bool waiting = false;         // idle, no cell had work
+// A winner tree over the slots: the earliest slot in O(1), a slot changed in O(log P).
+class SlotTree {
+ public:
+  explicit SlotTree(std::uint32_t n) : slots_(n) {
+    while (leaves_ < n) leaves_ *= 2;
+    slots_.resize(leaves_);  // padding slots stay empty forever
+    for (auto& s : slots_) s.time = SimTime::Max();
+    tree_.assign(2 * leaves_, 0);
+    for (std::uint32_t i = 0; i < leaves_; ++i) tree_[leaves_ + i] = i;
+    for (std::uint32_t k = leaves_ - 1; k >= 1; --k) tree_[k] = Winner(k);
+  }
+  const Slot& slot(std::uint32_t i) const { return slots_[i]; }
+  // Slot i to be written in place, field by field (copying a whole slot just written would
+  // stall on store forwarding); Update(i) afterwards.
+  Slot& at(std::uint32_t i) { return slots_[i]; }
+  // The earliest slot's index; its kind is kNone when nothing is pending.
+  std::uint32_t top() const { return tree_[1]; }
+  void Update(std::uint32_t i) {
+    for (std::uint32_t k = (leaves_ + i) / 2; k >= 1; k /= 2) tree_[k] = Winner(k);
+  }
+
+ private:
+  std::uint32_t Winner(std::uint32_t k) const {
+    const std::uint32_t a = tree_[2 * k], b = tree_[2 * k + 1];
+    return SlotBefore(slots_[b], slots_[a]) ? b : a;
+  }
+  std::uint32_t leaves_ = 1;
+  std::vector<Slot> slots_;
+  std::vector<std::uint32_t> tree_;  // tree_[1] the root; slot i's leaf at leaves_ + i
+};
+
+// ---- The board ------------------------------------------------------------------------
+
+struct Processor {
+  std::optional<CellId> cell;    // locked and loaded while working; the last one after
+  std::vector<UnitId> worklist;  // units of `cell` to work in this fetch, from `head` on
+  std::size_t head = 0;
+  bool waiting = false;  // idle, no cell had work
   SimTime work, stall;
 };
 
-// The board: queues, processors and memory as one component; the processors' requests,
-// fetch completions and unit completions are its events.
-class Board : public Component {
+// The board of DESIGN.md §2: per-cell ray queues (flat arrays of unit ids), processors and
+// memory, run as the engine would run the same events (see SlotTree). A processor's unit is
+// worked by its own loop iteration, without a queue push and pop: while a processor works
+// the queued units of a cell, its next unit's end is compared with the other processors'
+// pending events only.
+template <typename Units>
+class Board {
  public:
-  Board(const WorkGraph& w, const std::vector<std::uint64_t>& footprints,
+  Board(const WorkGraph& w, Units units, const std::vector<std::uint64_t>& footprints,
         const ReplayConfig& config, Scheduler& scheduler, const MemoryHierarchy::Requests& futures)
       : w_(w),
+        u_(units),
         config_(config),
+        tps_(config.processors.time_per_sample),
         scheduler_(scheduler),
         memory_(config, footprints, futures),
         queues_(w.cells),
         queued_rays_(w.cells, 0),
         view_(w.cells, 0),
         locked_(w.cells, false),
-        processors_(config.processors.count) {
-    for (UnitId u : w.roots) Enqueue(u);
+        processors_(config.processors.count),
+        slots_(config.processors.count) {
+    u_.ForEachRoot([this](UnitId x) { Enqueue(x); });
   }
 
-  void Start(Simulator& sim) {
+  void Run() {
     for (std::uint32_t p = 0; p < processors_.size(); ++p) {
-      sim.Schedule(id_, SimTime::Zero(), kIdle, Pack(p, 0));
+      Schedule(p, SimTime::Zero(), Kind::kIdle);
+      slots_.Update(p);
     }
+    for (;;) {
+      const std::uint32_t p = slots_.top();
+      Slot& slot = slots_.at(p);
+      const Kind kind = slot.kind;
+      if (kind == Kind::kNone) break;
+      RAYCELL_CHECK_LE(now_, slot.time);  // time never goes backwards
+      now_ = slot.time;
+      const UnitId unit = slot.unit;
+      slot.time = SimTime::Max();  // handled; the handlers may schedule p's next event
+      slot.seq = UINT64_MAX;
+      slot.kind = Kind::kNone;
+      CheckedIncrement(events_);
+      ++events_since_progress_;
+      switch (kind) {
+        case Kind::kIdle:
+          OnIdle(p);
+          break;
+        case Kind::kFetched:
+          OnFetched(p);
+          break;
+        case Kind::kUnitDone:
+          OnUnitDone(p, unit);
+          break;
+        case Kind::kNone:
+          break;
+      }
+      slots_.Update(p);
+      if (events_since_progress_ >= kWatchdogEvents) Stall("events without progress");
+    }
+    if (done_ != w_.size()) Stall("no event pending while units remain");
   }
-  void set_id(ComponentId id) { id_ = id; }
 
-  void Handle(const Event& e, Simulator& sim) override {
-    const auto p = std::uint32_t(e.payload >> 32);
-    if (e.kind == kIdle) OnIdle(p, sim);
-    if (e.kind == kFetched) OnFetched(p, sim);
-    if (e.kind == kUnitDone) OnUnitDone(p, UnitId(e.payload & 0xffffffffu), sim);
-  }
-  std::string Name() const override { return "board"; }
-  bool HasWork() const override { return done_ < w_.size(); }
-  std::string DumpState() const override {
-    std::ostringstream s;
-    s << done_ << " of " << w_.size() << " units done; queued rays per cell:";
-    for (std::uint64_t q : queued_rays_) s << ' ' << q;
-    return s.str();
-  }
-
-  ReplayResult Result(SimTime end) const;
+  ReplayResult Result() const;
   const MemoryHierarchy& memory() const { return memory_; }
+  std::uint64_t events() const { return events_; }
 
  private:
+  // The engine's watchdog (SimulatorOptions::watchdog_events).
+  static constexpr std::uint64_t kWatchdogEvents = 10'000'000;
+  // How far ahead in a worklist units and their successors are prefetched.
+  static constexpr std::size_t kPrefetchUnit = 32, kPrefetchChildren = 12;
+
+  // Schedules processor p's next event. p has none pending: it is the processor being
+  // handled (its slot is brought up to date after the handler), or one that was waiting.
+  void Schedule(std::uint32_t p, SimTime when, Kind kind, UnitId unit = 0) {
+    Slot& s = slots_.at(p);
+    RAYCELL_CHECK(s.kind == Kind::kNone);
+    s.time = when;
+    s.seq = next_seq_++;
+    s.unit = unit;
+    s.kind = kind;
+  }
+
   void Enqueue(UnitId u) {
-    const CellId c = w_.cell[u];
+    const CellId c = u_.cell(u);
+    const std::uint64_t q = u_.queued(u);
     queues_[c].push_back(u);
-    queued_rays_[c] += w_.queued_rays[u];
-    queued_total_ += w_.queued_rays[u];
+    queued_rays_[c] += q;
+    queued_total_ += q;
     peak_queued_ = std::max(peak_queued_, queued_total_);
   }
 
@@ -81,114 +210,175 @@ class Board : public Component {
     return QueueView::Of(view_, processors_[p].cell);
   }
 
-  void OnIdle(std::uint32_t p, Simulator& sim) {
+  void OnIdle(std::uint32_t p) {
     const std::optional<CellId> c = scheduler_.Next(View(p));
     if (!c) {
       processors_[p].waiting = true;  // woken when work is released
+      ++waiting_;
       return;
     }
     RAYCELL_CHECK(!queues_[*c].empty() && !locked_[*c]);
     locked_[*c] = true;
     processors_[p].cell = *c;
-    const SimTime ready = memory_.Fetch(p, *c, sim.now());
-    processors_[p].stall = processors_[p].stall + (ready - sim.now());
-    sim.ScheduleAt(id_, ready, kFetched, Pack(p, 0));
+    const SimTime ready = memory_.Fetch(p, *c, now_);
+    processors_[p].stall = processors_[p].stall + (ready - now_);
+    Schedule(p, ready, Kind::kFetched);
   }
 
-  void TakeQueue(ProcessorState& ps) {
-    auto& q = queues_[*ps.cell];
-    for (UnitId u : q) {
-      ps.worklist.push_back(u);
-      queued_rays_[*ps.cell] -= w_.queued_rays[u];
-      queued_total_ -= w_.queued_rays[u];
+  // Moves the queue of p's cell to the end of its worklist: a swap of arrays when the
+  // worklist is used up, as it is whenever a queue is taken.
+  void TakeQueue(Processor& ps) {
+    const CellId c = *ps.cell;
+    std::vector<UnitId>& q = queues_[c];
+    if (q.empty()) return;
+    queued_total_ -= queued_rays_[c];
+    queued_rays_[c] = 0;
+    if (ps.head == ps.worklist.size()) {
+      ps.worklist.clear();
+      ps.head = 0;
+      ps.worklist.swap(q);
+    } else {
+      ps.worklist.insert(ps.worklist.end(), q.begin(), q.end());
+      q.clear();
     }
-    q.clear();
   }
 
-  void OnFetched(std::uint32_t p, Simulator& sim) {
+  void OnFetched(std::uint32_t p) {
     TakeQueue(processors_[p]);
     if (config_.processors.prefetch) {  // double buffering: the predicted next cell
       const std::optional<CellId> next = scheduler_.Peek(View(p));
-      if (next) memory_.Prefetch(p, *next, sim.now(), *processors_[p].cell);
+      if (next) memory_.Prefetch(p, *next, now_, *processors_[p].cell);
     }
-    StartNext(p, sim);
+    StartNext(p);
   }
 
-  void StartNext(std::uint32_t p, Simulator& sim) {
-    ProcessorState& ps = processors_[p];
-    if (ps.worklist.empty()) TakeQueue(ps);  // units that arrived while the cell was loaded
-    if (ps.worklist.empty()) {
+  void StartNext(std::uint32_t p) {
+    Processor& ps = processors_[p];
+    if (ps.head == ps.worklist.size()) TakeQueue(ps);  // units that arrived meanwhile
+    if (ps.head == ps.worklist.size()) {
       locked_[*ps.cell] = false;
-      sim.Schedule(id_, SimTime::Zero(), kIdle, Pack(p, 0));
+      Schedule(p, now_, Kind::kIdle);
       return;
     }
-    const UnitId u = ps.worklist.front();
-    ps.worklist.pop_front();
-    const SimTime dt = config_.processors.time_per_sample * w_.samples[u];
+    // The units a few places ahead are known: load them while this one is worked (the
+    // records are scattered over the frame, so each would otherwise be a cache miss).
+    if (ps.head + kPrefetchUnit < ps.worklist.size()) {
+      u_.PrefetchUnit(ps.worklist[ps.head + kPrefetchUnit]);
+    }
+    if (ps.head + kPrefetchChildren < ps.worklist.size()) {
+      u_.PrefetchChildren(ps.worklist[ps.head + kPrefetchChildren]);
+    }
+    const UnitId u = ps.worklist[ps.head++];
+    const SimTime dt = tps_ * u_.samples(u);
     ps.work = ps.work + dt;
-    sim.Schedule(id_, dt, kUnitDone, Pack(p, u));
+    Schedule(p, now_ + dt, Kind::kUnitDone, u);
   }
 
-  void OnUnitDone(std::uint32_t p, UnitId u, Simulator& sim) {
-    sim.NoteProgress();
+  void OnUnitDone(std::uint32_t p, UnitId u) {
+    events_since_progress_ = 0;
     ++done_;
-    CheckedIncrement(rays_, w_.rays_started[u]);
-    CheckedIncrement(segments_, w_.segments[u]);
-    CheckedIncrement(samples_, w_.samples[u]);
+    Processor& ps = processors_[p];
+    const CellId cell = *ps.cell;  // the unit's, as every unit of the worklist
     bool released = false;
-    for (UnitId i = w_.succ_begin[u]; i < w_.succ_begin[u + 1]; ++i) {
-      const UnitId s = w_.succ[i];
-      if (w_.cell[s] == w_.cell[u]) {
-        processors_[p].worklist.push_back(s);  // spawned in the loaded cell: worked now
+    for (UnitId i = u_.children_begin(u), end = u_.children_end(u); i < end; ++i) {
+      const UnitId s = u_.child(i);
+      if (u_.cell(s) == cell) {
+        ps.worklist.push_back(s);  // spawned in the loaded cell: worked now
       } else {
         Enqueue(s);
         released = true;
       }
     }
-    if (released) WakeWaiting(sim);
-    StartNext(p, sim);
+    if (released && waiting_ > 0) WakeWaiting();
+    StartNext(p);
   }
 
-  void WakeWaiting(Simulator& sim) {
+  void WakeWaiting() {
     for (std::uint32_t q = 0; q < processors_.size(); ++q) {
       if (!processors_[q].waiting) continue;
       processors_[q].waiting = false;
-      sim.Schedule(id_, SimTime::Zero(), kIdle, Pack(q, 0));
+      --waiting_;
+      Schedule(q, now_, Kind::kIdle);
+      slots_.Update(q);
     }
   }
 
+  [[noreturn]] void Stall(const std::string& reason) const {
+    std::ostringstream s;
+    s << "replay stalled: " << reason << " at " << now_ << " after " << events_ << " events; "
+      << done_ << " of " << w_.size() << " units done; queued rays per cell:";
+    for (std::uint64_t q : queued_rays_) s << ' ' << q;
+    throw SimulationStalled(s.str());
+  }
+
   const WorkGraph& w_;
+  Units u_;
   const ReplayConfig& config_;
+  SimTime tps_;
   Scheduler& scheduler_;
   MemoryHierarchy memory_;
   std::vector<std::vector<UnitId>> queues_;
   std::vector<std::uint64_t> queued_rays_, view_;
   std::vector<bool> locked_;
-  std::vector<ProcessorState> processors_;
-  ComponentId id_ = 0;
+  std::vector<Processor> processors_;
+  SlotTree slots_;
+  std::uint32_t waiting_ = 0;
+  SimTime now_;
+  std::uint64_t next_seq_ = 0, events_ = 0, events_since_progress_ = 0;
   std::uint64_t done_ = 0, queued_total_ = 0, peak_queued_ = 0;
-  std::uint64_t rays_ = 0, segments_ = 0, samples_ = 0;
 };
 
-ReplayResult Board::Result(SimTime end) const {
+template <typename Units>
+ReplayResult Board<Units>::Result() const {
   RAYCELL_CHECK_EQ(done_, std::uint64_t(w_.size()));
   ReplayResult r;
   r.levels = memory_.stats();
   r.fetches = r.levels[0].fetches;
-  r.time = end;
-  for (const ProcessorState& ps : processors_) {
+  r.time = now_;
+  for (const Processor& ps : processors_) {
     r.work = r.work + ps.work;
     r.stall = r.stall + ps.stall;
-    r.idle = r.idle + (end - ps.work - ps.stall);
+    r.idle = r.idle + (now_ - ps.work - ps.stall);
   }
-  const double capacity = double(end.picoseconds()) * double(processors_.size());
+  const double capacity = double(now_.picoseconds()) * double(processors_.size());
   r.utilisation = capacity > 0 ? double(r.work.picoseconds()) / capacity : 0.0;
   r.peak_queued_rays = peak_queued_;
   r.peak_queued_bytes = CheckedMul(peak_queued_, config_.processors.queue_record_bytes);
-  r.rays = rays_, r.segments = segments_, r.samples = samples_;
+  r.rays = w_.total_rays(), r.segments = w_.total_segments(), r.samples = w_.total_samples();
   r.prefetches = memory_.prefetches();
   r.prefetch_hits = memory_.prefetch_hits();
+  r.events = events_;
   return r;
+}
+
+bool UsesMin(const ReplayConfig& config) {
+  for (const LevelConfig& l : config.levels) {
+    if (l.replacement == LevelConfig::Replacement::kMin) return true;
+  }
+  return false;
+}
+
+template <typename Units>
+ReplayResult Replay(const WorkGraph& work, Units units,
+                    const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
+                    Scheduler& scheduler, const FrameInfo& frame, std::uint64_t bound) {
+  const bool min = UsesMin(config);
+  const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
+  MemoryHierarchy::Requests futures;
+  for (std::uint32_t pass = 1;; ++pass) {
+    scheduler.BeginFrame(frame);
+    Board<Units> board(work, units, footprints, config, scheduler, futures);
+    board.Run();
+    const bool converged = pass > 1 && !board.memory().diverged();
+    if (!min || converged || pass == max_passes) {
+      ReplayResult r = board.Result();
+      if (BoundHolds(config)) r.bound = bound;
+      r.passes = pass;
+      r.min_converged = !min || converged;
+      return r;
+    }
+    futures = board.memory().requests();
+  }
 }
 
 }  // namespace
@@ -199,21 +389,7 @@ bool BoundHolds(const ReplayConfig& config) {
          l0.capacity == 1;
 }
 
-namespace {
-
-bool UsesMin(const ReplayConfig& config) {
-  for (const LevelConfig& l : config.levels) {
-    if (l.replacement == LevelConfig::Replacement::kMin) return true;
-  }
-  return false;
-}
-
-}  // namespace
-
-ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
-                         const ReplayConfig& config, Scheduler& scheduler, const FrameInfo& frame,
-                         std::uint64_t bound) {
-  RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
+void CheckReplayable(const ReplayConfig& config) {
   const LevelConfig& cache = config.levels.front();
   if (config.processors.prefetch && cache.capacity_unit == LevelConfig::CapacityUnit::kCells &&
       cache.capacity < 2) {
@@ -222,27 +398,18 @@ ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>
         "buffering), but level '" +
         cache.name + "' holds " + FormatCapacity(cache));
   }
-  const bool min = UsesMin(config);
-  const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
-  MemoryHierarchy::Requests futures;
-  for (std::uint32_t pass = 1;; ++pass) {
-    scheduler.BeginFrame(frame);
-    Board board(work, footprints, config, scheduler, futures);
-    Simulator sim;
-    board.set_id(sim.Add(board));
-    board.Start(sim);
-    sim.Run();
-    const bool converged = pass > 1 && !board.memory().diverged();
-    if (!min || converged || pass == max_passes) {
-      ReplayResult r = board.Result(sim.now());
-      if (BoundHolds(config)) r.bound = bound;
-      r.events = sim.events_handled();
-      r.passes = pass;
-      r.min_converged = !min || converged;
-      return r;
-    }
-    futures = board.memory().requests();
+}
+
+ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
+                         const ReplayConfig& config, Scheduler& scheduler, const FrameInfo& frame,
+                         std::uint64_t bound) {
+  RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
+  CheckReplayable(config);
+  if (!work.packed.empty()) {
+    return Replay(work, PackedUnits{work.packed.data(), UnitId(work.roots.size())}, footprints,
+                  config, scheduler, frame, bound);
   }
+  return Replay(work, ColumnUnits{&work}, footprints, config, scheduler, frame, bound);
 }
 
 }  // namespace raycell

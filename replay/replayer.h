@@ -1,7 +1,15 @@
-// The GI-Cube replay of one frame (DESIGN.md §2) on the discrete-event engine: block
-// processors ask the scheduler for a cell, fetch it through the memory levels, and work
-// every unit queued there (ray segments or Cell Tree nodes, see work.h); finished units
-// release their successors into the per-cell queues.
+// The GI-Cube replay of one frame (DESIGN.md §2), a discrete-event model: block processors
+// ask the scheduler for a cell, fetch it through the memory levels, and work every unit
+// queued there (ray segments or Cell Tree nodes, see work.h); finished units release their
+// successors into the per-cell queues.
+//
+// The events are the engine's (engine/event.h: a processor's call for a cell, the end of its
+// fetch, the end of each unit), handled in the engine's order (time, priority, insertion
+// order), so the results are those of running them on engine/simulator.h, as the replay
+// did before (tests/replay/reference_replayer.cpp, checked equal field by field, `events`
+// included). But since a processor has at most one pending event, the pending set is one slot
+// per processor, not a general event queue, and a cell's queue is handed to the processor as
+// a flat array of unit ids that it works through in its own loop: a batch per fetch.
 #pragma once
 
 #include <cstdint>
@@ -49,5 +57,10 @@ ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>
 
 // Whether the maxGen bound holds for `config`: one processor whose cache holds one cell.
 bool BoundHolds(const ReplayConfig& config);
+
+// InputError when `config` cannot be replayed though it is valid as a configuration:
+// prefetch with a cache of fewer than two cells. ReplayFrame checks it; sweeps check every
+// combination before any work.
+void CheckReplayable(const ReplayConfig& config);
 
 }  // namespace raycell

@@ -19,6 +19,7 @@
 #include "base/parse.h"
 #include "engine/stats.h"
 #include "replay/driver.h"
+#include "replay/result_table.h"
 
 namespace raycell {
 namespace {
@@ -34,12 +35,6 @@ bool ParseSize(const std::string& s, std::size_t* out) {
   if (!TryParseUint(s, &v) || s.size() > 18) return false;
   *out = std::size_t(v);
   return true;
-}
-
-std::string Number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4f", v);
-  return buf;
 }
 
 std::string Hex(std::uint64_t v) {
@@ -183,7 +178,7 @@ class RowWriter {
 std::string ComputeRow(const TraceReader& reader, const SweepSpec& spec, std::size_t index) {
   const ReplayConfig config = CombinationConfig(spec.base, spec.varies, index);
   const TraceReplay replay = ReplayTrace(reader, spec.frame_indices, config);
-  return SweepRow(index, CombinationValues(spec.varies, index), replay.total);
+  return SweepRow(index, spec.varies, CombinationValues(spec.varies, index), replay.total);
 }
 
 void Work(const TraceReader& reader, const SweepSpec& spec, const std::vector<std::size_t>& todo,
@@ -414,27 +409,24 @@ std::string SweepComment(const SweepSpec& spec) {
   return s + kShardPart + JsonQuote(spec.shard.ToString()) + "\n";
 }
 
-std::string SweepHeader(const std::vector<Vary>& varies) {
-  std::string s = "index";
-  for (const Vary& v : varies) s += "," + CsvField(v.key);
-  return s +
-         ",fetches,bound,time_ps,work_ps,stall_ps,idle_ps,utilisation,peak_queued_rays,"
-         "peak_queued_bytes,rays,segments,samples\n";
+StatsTable SweepRowTable(std::size_t index, const std::vector<Vary>& varies,
+                         const std::vector<std::string>& values, const ReplayResult& total) {
+  RAYCELL_CHECK_EQ(values.size(), varies.size());
+  StatsTable t;
+  t.AddCount("index", index);
+  for (std::size_t k = 0; k < varies.size(); ++k) t.AddText(varies[k].key, values[k]);
+  AddResult(total, kSweepColumns, &t);
+  return t;
 }
 
-std::string SweepRow(std::size_t index, const std::vector<std::string>& values,
-                     const ReplayResult& r) {
-  std::string s = std::to_string(index);
-  for (const std::string& v : values) s += "," + CsvField(v);
-  const auto add = [&s](const std::string& field) { s += "," + field; };
-  add(std::to_string(r.fetches));
-  add(r.bound ? std::to_string(*r.bound) : "");
-  for (SimTime t : {r.time, r.work, r.stall, r.idle}) add(std::to_string(t.picoseconds()));
-  add(Number(r.utilisation));
-  for (std::uint64_t n : {r.peak_queued_rays, r.peak_queued_bytes, r.rays, r.segments, r.samples}) {
-    add(std::to_string(n));
-  }
-  return s + "\n";
+std::string SweepHeader(const std::vector<Vary>& varies) {
+  return ToCsvHeader(
+      SweepRowTable(0, varies, std::vector<std::string>(varies.size()), ReplayResult{}));
+}
+
+std::string SweepRow(std::size_t index, const std::vector<Vary>& varies,
+                     const std::vector<std::string>& values, const ReplayResult& total) {
+  return ToCsvRow(SweepRowTable(index, varies, values, total));
 }
 
 // ---- Running and merging -----------------------------------------------------------------

@@ -101,9 +101,10 @@ struct SweepOutcome {
 // The comment line (with '\n') and the CSV header line (with '\n') of `spec`.
 std::string SweepComment(const SweepSpec& spec);
 std::string SweepHeader(const std::vector<Vary>& varies);
-// One row: index, the combination's values, the totals.
-std::string SweepRow(std::size_t index, const std::vector<std::string>& values,
-                     const ReplayResult& total);
+// One row (with '\n'): index, the combination's values (one per Vary), the totals' columns
+// (replay/result_table.h, kSweepColumns).
+std::string SweepRow(std::size_t index, const std::vector<Vary>& varies,
+                     const std::vector<std::string>& values, const ReplayResult& total);
 // The combination indices `shard` owns, increasing.
 std::vector<std::size_t> ShardIndices(std::size_t combinations, const Shard& shard);
 

@@ -3,12 +3,15 @@
 #include <numeric>
 
 #include "base/check.h"
+#include "base/checked.h"
 
 namespace raycell {
 namespace {
 
 std::uint64_t Sum(const std::vector<std::uint64_t>& v) {
-  return std::accumulate(v.begin(), v.end(), std::uint64_t{0});
+  std::uint64_t sum = 0;
+  for (std::uint64_t x : v) CheckedIncrement(sum, x);
+  return sum;
 }
 
 // Fills succ from (unit, successor) pairs, keeping their order per unit.
@@ -31,9 +34,33 @@ void Resize(WorkGraph& w, std::size_t n) {
 
 }  // namespace
 
-std::uint64_t WorkGraph::total_samples() const { return Sum(samples); }
-std::uint64_t WorkGraph::total_segments() const { return Sum(segments); }
-std::uint64_t WorkGraph::total_rays() const { return Sum(rays_started); }
+// The totals and the packed units, once the columns are complete.
+void Finish(WorkGraph& w) {
+  w.totals = {Sum(w.samples), Sum(w.segments), Sum(w.rays_started)};
+  w.packed.clear();
+  for (std::size_t u = 0; u < w.size(); ++u) {
+    if (w.samples[u] > UINT32_MAX || w.queued_rays[u] > UINT32_MAX) return;  // columns, then
+  }
+  // Breadth first: entry i stands for unit order[i]; its successors get the next entries.
+  std::vector<UnitId> order(w.roots.begin(), w.roots.end());
+  order.reserve(w.size());
+  std::vector<std::uint32_t> first_child;
+  first_child.reserve(w.size() + 1);
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const UnitId u = order[i];
+    first_child.push_back(std::uint32_t(order.size()));
+    for (UnitId k = w.succ_begin[u]; k < w.succ_begin[u + 1]; ++k) order.push_back(w.succ[k]);
+    if (order.size() > w.size()) return;  // a unit reached twice: not a forest
+  }
+  if (order.size() != w.size()) return;  // some units unreachable
+  w.packed.resize(w.size() + 1);
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const UnitId u = order[i];
+    w.packed[i] = {w.cell[u], std::uint32_t(w.samples[u]), std::uint32_t(w.queued_rays[u]),
+                   first_child[i]};
+  }
+  w.packed.back() = {kNoCell, 0, 0, std::uint32_t(w.size())};
+}
 
 WorkGraph RaySegmentWork(const RayBatch& frame, CellId cells) {
   RAYCELL_CHECK_EQ(frame.first_id(), RayId{0});
@@ -62,6 +89,7 @@ WorkGraph RaySegmentWork(const RayBatch& frame, CellId cells) {
     }
   }
   BuildSuccessors(w, edges);
+  Finish(w);
   return w;
 }
 
@@ -87,6 +115,7 @@ WorkGraph NodeWork(const CellTree& tree, CellId cells) {
     }
   }
   BuildSuccessors(w, edges);
+  Finish(w);
   return w;
 }
 

@@ -28,10 +28,30 @@ struct WorkGraph {
   std::vector<UnitId> succ;                 //   succ_begin[u + 1])
   std::vector<UnitId> roots;                // ready when the frame starts
 
+  // What the replay core reads of a unit, packed in 16 bytes and laid out breadth first from
+  // the roots, so that a unit's successors are adjacent records: entry x's successors are
+  // entries first_child[x] .. first_child[x + 1], in succ's order, and the roots are entries
+  // 0 .. roots.size(). The core works on these entries; the unit ids they stand for do not
+  // matter to any result. size() + 1 entries (the last ends the successors of the one
+  // before); empty when some unit's samples or queued rays exceed 32 bits or some unit
+  // cannot be reached from the roots, and the core then reads the columns.
+  struct Packed {
+    CellId cell;
+    std::uint32_t samples;
+    std::uint32_t queued_rays;
+    std::uint32_t first_child;
+  };
+  std::vector<Packed> packed;
+
+  // Sums over the units.
+  struct Totals {
+    std::uint64_t samples = 0, segments = 0, rays = 0;
+  } totals;
+
   std::size_t size() const { return cell.size(); }
-  std::uint64_t total_samples() const;
-  std::uint64_t total_segments() const;
-  std::uint64_t total_rays() const;
+  std::uint64_t total_samples() const { return totals.samples; }
+  std::uint64_t total_segments() const { return totals.segments; }
+  std::uint64_t total_rays() const { return totals.rays; }
 };
 
 // Per ray segment: `frame` holds a whole frame (first_id 0), as TraceReader::LoadFrame

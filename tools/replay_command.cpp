@@ -13,6 +13,7 @@
 #include "engine/stats.h"
 #include "replay/config.h"
 #include "replay/driver.h"
+#include "replay/result_table.h"
 #include "scheduling/scheduler.h"
 #include "tools/commands.h"
 #include "tools/frames.h"
@@ -28,89 +29,66 @@ struct ReplayArgs {
   bool print_config = false, quiet = false;
 };
 
-std::string Ms(SimTime t) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3f", double(t.picoseconds()) * 1e-9);
-  return buf;
-}
+// Every output below prints the result's StatsTable (replay/result_table.h).
 
-std::string Number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4f", v);
-  return buf;
-}
-
-std::string Bound(const ReplayResult& r, const char* none) {
-  return r.bound ? std::to_string(*r.bound) : none;
-}
-
-void Json(const ReplayResult& r, bool with_frame, std::ostream& out) {
-  out << "{";
-  if (with_frame) out << "\"frame\":" << r.frame << ",";
-  out << "\"fetches\":" << r.fetches << ",\"bound\":" << Bound(r, "null")
-      << ",\"time_ps\":" << r.time.picoseconds() << ",\"work_ps\":" << r.work.picoseconds()
-      << ",\"stall_ps\":" << r.stall.picoseconds() << ",\"idle_ps\":" << r.idle.picoseconds()
-      << ",\"utilisation\":" << Number(r.utilisation)
-      << ",\"peak_queued_rays\":" << r.peak_queued_rays
-      << ",\"peak_queued_bytes\":" << r.peak_queued_bytes << ",\"rays\":" << r.rays
-      << ",\"segments\":" << r.segments << ",\"samples\":" << r.samples
-      << ",\"prefetches\":" << r.prefetches << ",\"prefetch_hits\":" << r.prefetch_hits
-      << ",\"min_converged\":" << (r.min_converged ? "true" : "false") << ",\"levels\":[";
-  for (std::size_t i = 0; i < r.levels.size(); ++i) {
-    out << (i ? "," : "") << "{\"name\":" << JsonQuote(r.levels[i].name)
-        << ",\"fetches\":" << r.levels[i].fetches << ",\"bytes\":" << r.levels[i].bytes << "}";
-  }
-  out << "]}";
+StatsTable FrameTable(const ReplayResult& r, const ResultColumns& columns) {
+  StatsTable t;
+  t.AddInt("frame", r.frame);
+  AddResult(r, columns, &t);
+  return t;
 }
 
 void PrintJson(const TraceReplay& t, std::ostream& out) {
   out << "{\"frames\":[";
   for (std::size_t i = 0; i < t.frames.size(); ++i) {
     out << (i ? ",\n" : "\n");
-    Json(t.frames[i], true, out);
+    PrintJsonLine(FrameTable(t.frames[i], kReplayJsonColumns), out);
   }
   out << "\n],\n\"total\":";
-  Json(t.total, false, out);
+  PrintJsonLine(ToStatsTable(t.total, kReplayJsonColumns), out);
   out << "}\n";
 }
 
-void CsvRow(const std::string& frame, const ReplayResult& r, std::ostream& out) {
-  out << frame << ',' << r.fetches << ',' << Bound(r, "") << ',' << r.time.picoseconds() << ','
-      << r.work.picoseconds() << ',' << r.stall.picoseconds() << ',' << r.idle.picoseconds() << ','
-      << Number(r.utilisation) << ',' << r.peak_queued_rays << ',' << r.peak_queued_bytes << ','
-      << r.rays << ',' << r.segments << ',' << r.samples;
-  for (const LevelStats& l : r.levels) out << ',' << l.fetches << ',' << l.bytes;
-  out << '\n';
-}
-
 void PrintCsv(const TraceReplay& t, std::ostream& out) {
-  out << "frame,fetches,bound,time_ps,work_ps,stall_ps,idle_ps,utilisation,peak_queued_rays,"
-         "peak_queued_bytes,rays,segments,samples";
-  for (const LevelStats& l : t.total.levels) {
-    out << ',' << CsvField(l.name + "_fetches") << ',' << CsvField(l.name + "_bytes");
-  }
-  out << '\n';
-  for (const ReplayResult& r : t.frames) CsvRow(std::to_string(r.frame), r, out);
-  CsvRow("total", t.total, out);
+  StatsTable total;
+  total.AddText("frame", "total");
+  AddResult(t.total, kReplayCsvColumns, &total);
+  PrintCsvHeader(total, out);
+  for (const ReplayResult& r : t.frames) PrintCsvRow(FrameTable(r, kReplayCsvColumns), out);
+  PrintCsvRow(total, out);
 }
 
-void TableRow(const std::string& frame, const ReplayResult& r, std::ostream& out) {
+std::string Ms(std::uint64_t ps) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", double(ps) * 1e-9);
+  return buf;
+}
+
+void TableRow(const std::string& frame, const StatsTable& t, std::ostream& out) {
+  const StatValue& bound = *t.Find("bound");
   char line[512];
   std::snprintf(line, sizeof line, "%8s %9llu %7s %12s %12s %12s %12s %6.1f%% %10llu %12llu\n",
-                frame.c_str(), (unsigned long long)r.fetches, Bound(r, "-").c_str(),
-                Ms(r.time).c_str(), Ms(r.work).c_str(), Ms(r.stall).c_str(), Ms(r.idle).c_str(),
-                100 * r.utilisation, (unsigned long long)r.peak_queued_rays,
-                (unsigned long long)r.segments);
+                frame.c_str(), (unsigned long long)t.Count("fetches"),
+                std::holds_alternative<NoValue>(bound) ? "-" : FormatValue(bound).c_str(),
+                Ms(t.Count("time_ps")).c_str(), Ms(t.Count("work_ps")).c_str(),
+                Ms(t.Count("stall_ps")).c_str(), Ms(t.Count("idle_ps")).c_str(),
+                100 * t.Real("utilisation"), (unsigned long long)t.Count("peak_queued_rays"),
+                (unsigned long long)t.Count("segments"));
   out << line;
 }
 
 void PrintTable(const TraceReplay& t, std::ostream& out) {
   out << "   frame   fetches   bound      time ms      work ms     stall ms      idle ms   util"
          " peak rays     segments\n";
-  for (const ReplayResult& r : t.frames) TableRow(std::to_string(r.frame), r, out);
-  TableRow("total", t.total, out);
+  for (const ReplayResult& r : t.frames) {
+    TableRow(std::to_string(r.frame), ToStatsTable(r, kReplayTableColumns), out);
+  }
+  const StatsTable total = ToStatsTable(t.total, kReplayTableColumns);
+  TableRow("total", total, out);
   out << "bytes fetched per level:";
-  for (const LevelStats& l : t.total.levels) out << " " << l.name << " " << l.bytes;
+  for (const StatsTable& l : std::get<StatTables>(*total.Find("levels"))) {
+    out << " " << FormatValue(*l.Find("name")) << " " << l.Count("bytes");
+  }
   out << "\n";
 }
 

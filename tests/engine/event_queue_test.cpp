@@ -5,7 +5,11 @@
 #include <algorithm>
 #include <cstdint>
 #include <random>
+#include <set>
+#include <utility>
 #include <vector>
+
+#include "engine/calendar_queue.h"
 
 namespace raycell {
 namespace {
@@ -28,7 +32,7 @@ std::vector<std::uint64_t> Drain(EventQueue& q) {
 // Every EventQueue implementation passes the same tests.
 template <typename Queue>
 class EventQueueTest : public ::testing::Test {};
-using Queues = ::testing::Types<BinaryHeapQueue, QuaternaryHeapQueue>;
+using Queues = ::testing::Types<BinaryHeapQueue, QuaternaryHeapQueue, CalendarQueue>;
 TYPED_TEST_SUITE(EventQueueTest, Queues);
 
 TYPED_TEST(EventQueueTest, EqualTimesOrderByPriorityThenInsertion) {
@@ -48,6 +52,7 @@ TYPED_TEST(EventQueueTest, EqualTimesOrderByPriorityThenInsertion) {
 TEST(EventQueue, Names) {
   EXPECT_EQ(BinaryHeapQueue().Name(), "binary-heap");
   EXPECT_EQ(QuaternaryHeapQueue().Name(), "4-ary-heap");
+  EXPECT_EQ(CalendarQueue().Name(), "calendar");
 }
 
 TEST(EventQueue, EventBeforeIsAStrictOrder) {
@@ -118,10 +123,87 @@ TYPED_TEST(EventQueueTest, InterleavedMatchesReference) {
   }
 }
 
+// Sizes that grow and shrink by orders of magnitude, spacings from 1 ps to 2^40 ps that
+// change while events are pending, events at SimTime::Max() and pushes before the last
+// pop: every pop is the minimum of what is pending.
+TYPED_TEST(EventQueueTest, ChangingSizesAndSpacingsMatchReference) {
+  std::mt19937_64 rng(4242);
+  TypeParam q;
+  std::multiset<std::pair<std::pair<std::uint64_t, std::int32_t>, std::uint64_t>> reference;
+  std::uint64_t seq = 0, now = 0;
+  auto push = [&](std::uint64_t t) {
+    const Event e = At(t, std::int32_t(rng() % 2), seq++);
+    q.Push(e);
+    reference.insert({{t, e.priority}, e.seq});
+  };
+  auto pop = [&] {
+    ASSERT_FALSE(reference.empty());
+    const Event e = q.Pop();
+    const auto expected = *reference.begin();
+    reference.erase(reference.begin());
+    ASSERT_EQ(e.seq, expected.second) << "at " << e.ToString();
+    now = e.time.picoseconds();
+  };
+  for (const unsigned spacing_log2 : {0u, 10u, 3u, 40u, 20u, 1u}) {
+    const std::uint64_t spacing = std::uint64_t{1} << spacing_log2;
+    const std::size_t target = 1 + rng() % 20'000;
+    while (reference.size() < target) {
+      const std::uint64_t delay = rng() % 4096 * spacing;
+      if (rng() % 8 == 0) {  // some in the past: just before now, or anywhere before it
+        push(rng() % 64 == 0 ? rng() % (now + 1) : now - std::min(now, rng() % 4096 * spacing));
+      } else {
+        push(now + std::min(delay, ~now));
+      }
+    }
+    if (spacing_log2 == 40) push(SimTime::Max().picoseconds());
+    for (std::size_t i = 0; i < target / 2; ++i) pop();
+    while (reference.size() > 3) pop();
+    ASSERT_EQ(q.Size(), reference.size());
+  }
+  while (!reference.empty()) pop();
+  EXPECT_TRUE(q.Empty());
+}
+
 TYPED_TEST(EventQueueTest, PopOnEmptyIsACheckFailure) {
   TypeParam q;
   EXPECT_DEATH(q.Pop(), "CHECK failed");
   EXPECT_DEATH(q.Top(), "CHECK failed");
+}
+
+// The calendar adapts its day to the events' spacing: after a hold at 1 ps spacing and one
+// at 2^20 ps, days are short and long respectively (about an event a day).
+TEST(CalendarQueue, DayLengthFollowsTheSpacing) {
+  for (const std::uint64_t spacing : {std::uint64_t{1}, std::uint64_t{1} << 20}) {
+    CalendarQueue q;
+    std::mt19937_64 rng(1);
+    std::uint64_t seq = 0;
+    for (; seq < 1000; ++seq) q.Push(At(seq * spacing, 0, seq));
+    for (int i = 0; i < 20'000; ++i) {
+      const Event e = q.Pop();
+      q.Push(At(e.time.picoseconds() + (500 + rng() % 1000) * spacing, 0, seq++));
+    }
+    EXPECT_GE(q.bucket_count(), 256u);
+    EXPECT_LE(q.day_length(), 8 * spacing) << spacing;
+    EXPECT_GE(q.day_length(), spacing / 2) << spacing;
+  }
+}
+
+// Events in pairs 1 ps apart, the pairs 2^12 ps apart: the median gap (1 ps) makes days far
+// too short, so pops would walk thousands of empty days; the queue lengthens them until a
+// pop walks a few (days of 2^10 ps or more).
+TEST(CalendarQueue, TooShortDaysAreLengthened) {
+  CalendarQueue q;
+  std::uint64_t seq = 0;
+  for (std::uint64_t pair = 0; pair < 500; ++pair) {
+    q.Push(At(pair << 12, 0, seq++));
+    q.Push(At((pair << 12) + 1, 0, seq++));
+  }
+  for (int i = 0; i < 40'000; ++i) {  // each pair, once popped, comes back 500 pairs later
+    const Event e = q.Pop();
+    q.Push(At(e.time.picoseconds() + (std::uint64_t{500} << 12), 0, seq++));
+  }
+  EXPECT_GE(q.day_length(), std::uint64_t{1} << 10);
+  EXPECT_EQ(q.Size(), 1000u);
 }
 
 }  // namespace

@@ -41,6 +41,41 @@ TEST(Simulator, DeliversInTimePriorityInsertionOrder) {
   EXPECT_EQ(sim.now(), SimTime::Nanoseconds(1));
 }
 
+// Ties in time and priority go in insertion order, whichever component scheduled them and
+// whenever: 64 events scheduled before the run at one time, then events each handler
+// schedules with no delay (after everything already pending at that time). A queue that
+// ordered by (time, priority) alone would hand equal events out in heap order.
+class TieLogger : public Component {
+ public:
+  explicit TieLogger(std::vector<std::uint64_t>* log) : log_(log) {}
+  void Handle(const Event& e, Simulator& sim) override {
+    sim.NoteProgress();
+    log_->push_back(e.payload);
+    if (e.payload < 64) sim.Schedule(e.target, SimTime::Zero(), 0, e.payload + 1000);
+  }
+  std::string Name() const override { return "ties"; }
+
+ private:
+  std::vector<std::uint64_t>* log_;
+};
+
+TEST(Simulator, EqualTimeAndPriorityGoInInsertionOrder) {
+  std::vector<std::uint64_t> log;
+  TieLogger a(&log), b(&log);
+  Simulator sim;
+  sim.Add(a);
+  sim.Add(b);
+  for (std::uint64_t i = 0; i < 64; ++i) {
+    sim.ScheduleAt(ComponentId(i % 2), SimTime::Picoseconds(7), 0, i);
+  }
+  sim.Run();
+  std::vector<std::uint64_t> expected;
+  for (std::uint64_t i = 0; i < 64; ++i) expected.push_back(i);
+  for (std::uint64_t i = 0; i < 64; ++i) expected.push_back(i + 1000);
+  EXPECT_EQ(log, expected);
+  EXPECT_EQ(sim.now(), SimTime::Picoseconds(7));
+}
+
 TEST(Simulator, RunUntilStopsAtTheLimitAndResumes) {
   std::vector<std::string> log;
   Recorder r(&log);

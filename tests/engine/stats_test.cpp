@@ -85,6 +85,48 @@ TEST(StatsPrinters, JsonEscapesControlsAndNonFinite) {
   EXPECT_EQ(ToText(StatsTable()), "");
 }
 
+// A replay-like table: fixed decimals, no value, a flag and a list of per-level tables, as
+// one JSON line (nested), CSV and text (flattened into NAME_KEY columns).
+StatsTable Levels() {
+  StatTables levels(2);
+  levels[0].AddText("name", "cache").AddCount("fetches", 3).AddCount("bytes", 300);
+  levels[1].AddText("name", "board").AddCount("fetches", 1).AddCount("bytes", 100);
+  StatsTable t;
+  t.AddInt("frame", -2)
+      .AddCount("fetches", 3)
+      .AddNone("bound")
+      .AddFixed("utilisation", 0.04044, 4)
+      .AddBool("converged", false)
+      .AddTables("levels", levels);
+  return t;
+}
+
+TEST(StatsPrinters, FixedNoneBoolAndNestedTables) {
+  const StatsTable t = Levels();
+  EXPECT_EQ(ToJsonLine(t),
+            "{\"frame\":-2,\"fetches\":3,\"bound\":null,\"utilisation\":0.0404,\"converged\":false,"
+            "\"levels\":[{\"name\":\"cache\",\"fetches\":3,\"bytes\":300},"
+            "{\"name\":\"board\",\"fetches\":1,\"bytes\":100}]}");
+  EXPECT_EQ(ToCsv(t),
+            "frame,fetches,bound,utilisation,converged,cache_fetches,cache_bytes,board_fetches,"
+            "board_bytes\n-2,3,,0.0404,false,3,300,1,100\n");
+  EXPECT_EQ(ToText(t),
+            "frame          -2\n"
+            "fetches        3\n"
+            "bound          -\n"
+            "utilisation    0.0404\n"
+            "converged      false\n"
+            "cache_fetches  3\n"
+            "cache_bytes    300\n"
+            "board_fetches  1\n"
+            "board_bytes    100\n");
+  EXPECT_EQ(ToJson(StatsTable().AddFixed("x", 2.5, 2).AddNone("y")),
+            "{\n  \"x\": 2.50,\n  \"y\": null\n}\n");
+  EXPECT_EQ(t.Count("fetches"), 3u);
+  EXPECT_EQ(t.Real("utilisation"), 0.04044);  // the value, not its printed form
+  EXPECT_EQ(ToCsvHeader(t) + ToCsvRow(t), ToCsv(t));
+}
+
 TEST(StatsTableDeathTest, DuplicateKeyIsACheckFailure) {
   StatsTable t;
   t.AddCount("x", 1);

@@ -4,15 +4,22 @@
 // component that reschedules itself through Simulator::Schedule), and the queue's share of
 // the loop's time (loop rate / bare-queue rate). Deterministic: splitmix64 from SEED.
 //
-// Usage: bench_engine_hold [MAX_N=1000000] [SEED=1]
+// Rates are events per second of this thread's CPU time (not wall time), which the other
+// processes of a shared machine disturb much less. Each queue is measured REPS times, the three
+// queues in turn (so that the load of a shared machine touches them alike), and the medians are
+// printed.
+//
+// Usage: bench_engine_hold [MAX_N=1000000] [SEED=1] [REPS=5] [MIN_N=100]
 #include <algorithm>
-#include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <string>
+#include <vector>
 
 #include "base/check.h"
+#include "engine/calendar_queue.h"
 #include "engine/event_queue.h"
 #include "engine/simulator.h"
 
@@ -30,8 +37,12 @@ struct SplitMix64 {
   SimTime Delay() { return SimTime::Picoseconds((*this)() % 2001); }
 };
 
-double Seconds(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+// CPU time of this thread: on a shared, loaded machine it counts only the time this thread
+// ran, where wall time would count the other processes' turns too.
+double CpuSeconds() {
+  timespec t;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
 }
 
 // Bare queue: N events, `warmup` untimed holds, then `ops` timed holds. Returns events/s.
@@ -49,9 +60,9 @@ double QueueHold(std::size_t n, std::uint64_t warmup, std::uint64_t ops, std::ui
     q.Push(Event{e.time + rng.Delay(), 0, seq++, 0, 0, 0});
   };
   for (std::uint64_t i = 0; i < warmup; ++i) hold();
-  const auto start = std::chrono::steady_clock::now();
+  const double start = CpuSeconds();
   for (std::uint64_t i = 0; i < ops; ++i) hold();
-  const double s = Seconds(start);
+  const double s = CpuSeconds() - start;
   *checksum = last.picoseconds();
   return double(ops) / s;
 }
@@ -86,23 +97,51 @@ double SimulatorHold(std::size_t n, std::uint64_t warmup, std::uint64_t ops, std
   };
   run_events(warmup);
   const std::uint64_t before = sim.events_handled();
-  const auto start = std::chrono::steady_clock::now();
+  const double start = CpuSeconds();
   run_events(ops);
-  const double s = Seconds(start);
+  const double s = CpuSeconds() - start;
   *checksum = sim.now().picoseconds();
   return double(sim.events_handled() - before) / s;
 }
 
+struct Rates {
+  std::vector<double> queue, engine;  // events/s, one per run
+};
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+// One run of each measurement for queue type Queue at size n.
 template <typename Queue>
-void Row(std::size_t n, std::uint64_t seed) {
+void Measure(std::size_t n, std::uint64_t seed, Rates* rates) {
   const std::uint64_t ops = std::max<std::uint64_t>(2'000'000, 4 * n);
   const std::uint64_t warmup = std::max<std::uint64_t>(100'000, n);
   std::uint64_t c1 = 0, c2 = 0;
-  const double queue = QueueHold<Queue>(n, warmup, ops, seed, &c1);
-  const double loop = SimulatorHold<Queue>(n, warmup, ops, seed, &c2);
+  rates->queue.push_back(QueueHold<Queue>(n, warmup, ops, seed, &c1));
+  rates->engine.push_back(SimulatorHold<Queue>(n, warmup, ops, seed, &c2));
   RAYCELL_CHECK_EQ(c1, c2);  // the same events in the same order: the same last time
-  std::printf("%-11s %10zu %10llu %14.2f %14.2f %10.1f %12.1f%%\n", Queue().Name().c_str(), n,
-              (unsigned long long)ops, queue / 1e6, loop / 1e6, 1e9 / loop, 100.0 * loop / queue);
+}
+
+void Print(const std::string& name, std::size_t n, const Rates& r) {
+  const double queue = Median(r.queue), loop = Median(r.engine);
+  std::printf("%-11s %10zu %5zu %14.2f %14.2f %10.1f %12.1f%%\n", name.c_str(), n, r.queue.size(),
+              queue / 1e6, loop / 1e6, 1e9 / loop, 100.0 * loop / queue);
+}
+
+// The three queues measured in turn, `reps` times, so that a change in the machine's load
+// touches all of them alike; medians printed.
+void Rows(std::size_t n, std::uint64_t seed, int reps) {
+  Rates binary, quaternary, calendar;
+  for (int i = 0; i < reps; ++i) {
+    Measure<BinaryHeapQueue>(n, seed, &binary);
+    Measure<QuaternaryHeapQueue>(n, seed, &quaternary);
+    Measure<CalendarQueue>(n, seed, &calendar);
+  }
+  Print(BinaryHeapQueue().Name(), n, binary);
+  Print(QuaternaryHeapQueue().Name(), n, quaternary);
+  Print(CalendarQueue().Name(), n, calendar);
 }
 
 }  // namespace
@@ -111,12 +150,12 @@ void Row(std::size_t n, std::uint64_t seed) {
 int main(int argc, char** argv) {
   const std::size_t max_n = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 1000'000;
   const std::uint64_t seed = argc > 2 ? std::strtoull(argv[2], nullptr, 10) : 1;
-  std::printf("hold model, delay uniform [0, 2000] ps, seed %llu\n", (unsigned long long)seed);
-  std::printf("%-11s %10s %10s %14s %14s %10s %13s\n", "queue", "N", "events", "queue Mev/s",
+  const int reps = argc > 3 ? std::atoi(argv[3]) : 5;
+  const std::size_t min_n = argc > 4 ? std::strtoull(argv[4], nullptr, 10) : 100;
+  std::printf("hold model, delay uniform [0, 2000] ps, seed %llu, median of %d runs\n",
+              (unsigned long long)seed, reps);
+  std::printf("%-11s %10s %5s %14s %14s %10s %13s\n", "queue", "N", "runs", "queue Mev/s",
               "engine Mev/s", "ns/event", "queue share");
-  for (std::size_t n = 100; n <= max_n; n *= 10) {
-    raycell::Row<raycell::BinaryHeapQueue>(n, seed);
-    raycell::Row<raycell::QuaternaryHeapQueue>(n, seed);
-  }
+  for (std::size_t n = min_n; n <= max_n; n *= 10) raycell::Rows(n, seed, std::max(1, reps));
   return 0;
 }

@@ -1,0 +1,143 @@
+// Per-segment replay speed: the batch core (replay/replayer.cpp) against the reference it
+// replaced (tests/replay/reference_replayer.cpp: one engine event per unit through the
+// Simulator's event queue), on the frames of a capture, for configurations that replay per
+// ray segment (more than one processor). Each frame is decoded and its work graph built
+// once, untimed; only ReplayFrame is timed, in CPU time of this thread (which a loaded,
+// shared machine disturbs far less than wall time). The two cores run in turn on every
+// frame, REPS times; the median of the per-rep totals is printed, and the results of the two
+// are checked equal.
+//
+// It lives with the reference it measures against (test-only code), and is built with the
+// tests but not run by them.
+//
+// Usage: build/tests/replay/bench_replay_core TRACE [FRAMES=all] [REPS=3] [CASE=all]
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "base/check.h"
+#include "graph/analysis.h"
+#include "replay/config.h"
+#include "replay/replayer.h"
+#include "replay/work.h"
+#include "scheduling/scheduler.h"
+#include "tests/replay/reference_replayer.h"
+#include "traces/trace_reader.h"
+
+namespace raycell {
+namespace {
+
+double CpuSeconds() {
+  timespec t;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
+struct Frame {
+  std::size_t index;
+  std::unique_ptr<CellTree> tree, previous;
+  WorkGraph work;
+};
+
+struct Case {
+  std::string label;
+  ReplayConfig config;
+};
+
+std::vector<Case> Cases() {
+  std::vector<Case> cases;
+  const auto add = [&](const std::string& label, const std::string& scheduler, int processors,
+                       const char* capacity, bool prefetch) {
+    ReplayConfig c = DefaultConfig();
+    ApplyOverride(c, "scheduler", scheduler);
+    ApplyOverride(c, "processors.count", std::to_string(processors));
+    ApplyOverride(c, "level.cache.capacity", capacity);
+    ApplyOverride(c, "processors.prefetch", prefetch ? "true" : "false");
+    ApplyOverride(c, "granularity", "ray");
+    cases.push_back({label, c});
+  };
+  add("celltree, 1 processor, 1 cell", "celltree", 1, "1 cell", false);
+  add("celltree, 2 processors, 2 cells", "celltree", 2, "2 cells", false);
+  add("maxwork, 4 processors, 4 cells, prefetch", "maxwork", 4, "4 cells", true);
+  add("random, 8 processors, 2 cells", "random", 8, "2 cells", false);
+  return cases;
+}
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+}  // namespace
+}  // namespace raycell
+
+int main(int argc, char** argv) {
+  using namespace raycell;
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: bench_replay_core TRACE [FRAMES=all] [REPS=3]\n");
+    return 2;
+  }
+  try {
+    const TraceReader reader = TraceReader::Open(argv[1]);
+    std::size_t frames = reader.frames().size();
+    if (argc > 2) frames = std::min<std::size_t>(frames, std::strtoull(argv[2], nullptr, 10));
+    const int reps = argc > 3 ? std::max(1, std::atoi(argv[3])) : 3;
+    const int only = argc > 4 ? std::atoi(argv[4]) : -1;  // one configuration, by number
+    const TraceHeader& h = reader.header();
+    std::vector<Frame> loaded;
+    std::uint64_t segments = 0;
+    for (std::size_t i = 0; i < frames; ++i) {
+      const RayBatch rays = reader.LoadFrame(i);
+      CellTreeBuilder builder;
+      builder.AddBatch(rays);
+      Frame f{i, std::make_unique<CellTree>(builder.Finish()), nullptr,
+              RaySegmentWork(rays, h.cell_count())};
+      if (i > 0) f.previous = std::make_unique<CellTree>(BuildFrameTree(reader, i - 1));
+      segments += f.work.total_segments();
+      loaded.push_back(std::move(f));
+    }
+    std::printf("%s: %zu frames, %llu segments per replay; CPU seconds, median of %d\n", argv[1],
+                frames, (unsigned long long)segments, reps);
+    std::printf("%-44s %10s %10s %12s %12s %8s\n", "configuration", "reference", "core",
+                "ref Mseg/s", "core Mseg/s", "speed-up");
+    const std::vector<Case> cases = Cases();
+    for (std::size_t k = 0; k < cases.size(); ++k) {
+      if (only >= 0 && std::size_t(only) != k) continue;
+      const Case& c = cases[k];
+      std::vector<double> ref_s, core_s;
+      for (int r = 0; r < reps; ++r) {
+        double ref = 0, core = 0;
+        for (const Frame& f : loaded) {
+          const FrameInfo info{f.index, f.tree.get(), f.previous.get(), h.cell_count()};
+          auto a = MakeScheduler(c.config.scheduler, c.config.seed);
+          auto b = MakeScheduler(c.config.scheduler, c.config.seed);
+          double t0 = CpuSeconds();
+          const ReplayResult x =
+              ReferenceReplayFrame(f.work, h.footprints, c.config, *a, info, Bound(*f.tree));
+          double t1 = CpuSeconds();
+          const ReplayResult y =
+              ReplayFrame(f.work, h.footprints, c.config, *b, info, Bound(*f.tree));
+          double t2 = CpuSeconds();
+          RAYCELL_CHECK_EQ(x.time, y.time);
+          RAYCELL_CHECK_EQ(x.fetches, y.fetches);
+          RAYCELL_CHECK_EQ(x.events, y.events);
+          ref += t1 - t0;
+          core += t2 - t1;
+        }
+        ref_s.push_back(ref);
+        core_s.push_back(core);
+      }
+      const double ref = Median(ref_s), core = Median(core_s);
+      std::printf("%-44s %10.3f %10.3f %12.1f %12.1f %7.1fx\n", c.label.c_str(), ref, core,
+                  double(segments) / ref / 1e6, double(segments) / core / 1e6, ref / core);
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_replay_core: %s\n", e.what());
+    return 2;
+  }
+  return 0;
+}

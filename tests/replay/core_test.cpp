@@ -1,0 +1,147 @@
+// The batch replay core (replay/replayer.cpp) against the reference replay it replaced
+// (tests/replay/reference_replayer.cpp, one engine event per unit through the Simulator's
+// event queue): every field of the result equal, `events` included, on random frames under
+// every scheduler, granularity and a wide range of configurations, ties in time included.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <sstream>
+
+#include "graph/cell_tree.h"
+#include "replay/config.h"
+#include "replay/replayer.h"
+#include "replay/work.h"
+#include "scheduling/scheduler.h"
+#include "tests/graph/test_trees.h"
+#include "tests/replay/random_frame.h"
+#include "tests/replay/reference_replayer.h"
+
+namespace raycell {
+namespace {
+
+// Every field, one per line, so that a difference names the field.
+std::string Describe(const ReplayResult& r) {
+  std::ostringstream s;
+  s << "frame " << r.frame << "\nfetches " << r.fetches << "\nbound "
+    << (r.bound ? std::to_string(*r.bound) : "-") << "\ntime " << r.time << "\nwork " << r.work
+    << "\nstall " << r.stall << "\nidle " << r.idle << "\nutilisation " << r.utilisation
+    << "\npeak rays " << r.peak_queued_rays << "\npeak bytes " << r.peak_queued_bytes << "\nrays "
+    << r.rays << "\nsegments " << r.segments << "\nsamples " << r.samples << "\nevents " << r.events
+    << "\nprefetches " << r.prefetches << "\nprefetch hits " << r.prefetch_hits << "\npasses "
+    << r.passes << "\nmin converged " << r.min_converged << "\n";
+  for (const LevelStats& l : r.levels) {
+    s << "level " << l.name << " fetches " << l.fetches << " bytes " << l.bytes << "\n";
+  }
+  return s.str();
+}
+
+const char* const kSchedulers[] = {"maxwork", "roundrobin", "random", "peel", "celltree"};
+
+LevelConfig::Replacement RandomReplacement(std::mt19937& rng) {
+  switch (rng() % 4) {
+    case 0:
+      return LevelConfig::Replacement::kFifo;
+    case 1:
+      return LevelConfig::Replacement::kMin;
+    default:
+      return LevelConfig::Replacement::kLru;
+  }
+}
+
+// A configuration drawn from everything the replay model varies: 1-8 processors, caches of
+// cells or bytes (some cells larger than a whole cache), prefetch, LRU/FIFO/MIN per level,
+// one to three levels, bandwidths from 1 MB/s to unlimited, latencies from 0, times per
+// sample from 1 ps, both granularities.
+ReplayConfig RandomConfig(std::mt19937& rng, const std::vector<std::uint64_t>& footprints) {
+  ReplayConfig c = DefaultConfig();
+  c.processors.count = 1 + rng() % 8;
+  c.processors.time_per_sample = SimTime::Picoseconds(1 + rng() % 3 * 5000);
+  c.processors.queue_record_bytes = 1 + rng() % 64;
+  c.seed = rng() % 5;
+  c.granularity =
+      rng() % 4 == 0 ? ReplayConfig::Granularity::kNode : ReplayConfig::Granularity::kRay;
+  c.levels.resize(1 + rng() % 3);
+  for (std::size_t i = 0; i < c.levels.size(); ++i) {
+    LevelConfig& l = c.levels[i];
+    l.name = "l" + std::to_string(i);
+    if (rng() % 3 == 0) {
+      l.capacity_unit = LevelConfig::CapacityUnit::kBytes;
+      l.capacity = footprints[rng() % footprints.size()] * (1 + rng() % 3);
+    } else {
+      l.capacity_unit = LevelConfig::CapacityUnit::kCells;
+      l.capacity = 1 + rng() % 5;
+    }
+    const char* bandwidths[] = {"unlimited", "1MB/s", "133MB/s", "1.6GB/s", "100GB/s"};
+    l.bandwidth_below = ParseBandwidth(bandwidths[rng() % 5], "test");
+    l.latency_below = SimTime::Picoseconds(rng() % 2 == 0 ? 0 : rng() % 100'000);
+    l.replacement = RandomReplacement(rng);
+  }
+  const LevelConfig& cache = c.levels[0];
+  const bool room_for_two =
+      cache.capacity_unit == LevelConfig::CapacityUnit::kBytes || cache.capacity >= 2;
+  c.processors.prefetch = room_for_two && rng() % 2 == 0;
+  return c;
+}
+
+TEST(ReplayCore, EqualsTheReferenceOnRandomFramesAndConfigs) {
+  std::mt19937 rng(2024);
+  int compared = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const CellId cells = 2 + rng() % 7;
+    const RayBatch rays = testing::RandomReplayFrame(rng, cells, 60);
+    const CellTree tree = testing::TreeOf(rays);
+    const CellTree previous = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 60));
+    std::vector<std::uint64_t> footprints(cells);
+    for (auto& f : footprints) f = 1 + rng() % 200'000;
+    const ReplayConfig base = RandomConfig(rng, footprints);
+    const FrameInfo info{std::size_t(trial % 3), &tree, trial % 2 ? &previous : nullptr, cells};
+    for (const char* name : kSchedulers) {
+      ReplayConfig config = base;
+      config.scheduler = name;
+      const WorkGraph w = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay
+                              ? RaySegmentWork(rays, cells)
+                              : NodeWork(tree, cells);
+      auto a = MakeScheduler(name, config.seed), b = MakeScheduler(name, config.seed);
+      const ReplayResult fast = ReplayFrame(w, footprints, config, *a, info, Bound(tree));
+      const ReplayResult reference =
+          ReferenceReplayFrame(w, footprints, config, *b, info, Bound(tree));
+      ASSERT_EQ(Describe(fast), Describe(reference))
+          << "trial " << trial << " scheduler " << name << "\n"
+          << ToToml(config);
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, 1500);
+}
+
+// Many processors on few cells: most of them wait, are woken together, and ask for cells at
+// the same instant; free fetches and zero-sample units put many events at one time.
+TEST(ReplayCore, EqualsTheReferenceWhenEventsTie) {
+  std::mt19937 rng(99);
+  for (int trial = 0; trial < 100; ++trial) {
+    const CellId cells = 2 + rng() % 3;
+    const RayBatch rays = testing::RandomReplayFrame(rng, cells, 80);
+    const CellTree tree = testing::TreeOf(rays);
+    const std::vector<std::uint64_t> footprints(cells, 4096);
+    ReplayConfig config = DefaultConfig();
+    config.granularity = ReplayConfig::Granularity::kRay;
+    config.processors.count = 2 + rng() % 7;
+    config.processors.time_per_sample = SimTime::Picoseconds(rng() % 2 ? 1 : 1000);
+    for (LevelConfig& l : config.levels) {
+      l.bandwidth_below = ParseBandwidth("unlimited", "test");
+      l.latency_below = SimTime::Zero();
+    }
+    const FrameInfo info{0, &tree, nullptr, cells};
+    for (const char* name : kSchedulers) {
+      config.scheduler = name;
+      const WorkGraph w = RaySegmentWork(rays, cells);
+      auto a = MakeScheduler(name, 1), b = MakeScheduler(name, 1);
+      ASSERT_EQ(Describe(ReplayFrame(w, footprints, config, *a, info, Bound(tree))),
+                Describe(ReferenceReplayFrame(w, footprints, config, *b, info, Bound(tree))))
+          << "trial " << trial << " scheduler " << name;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace raycell

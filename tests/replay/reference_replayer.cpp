@@ -1,0 +1,246 @@
+// The per-segment replay as it was before the batch core (replay/replayer.cpp): a Board
+// component on the engine's Simulator, one event per unit through the general event queue.
+// Test-only: the reference the fast core must equal exactly (tests/replay/core_test.cpp).
+#include "tests/replay/reference_replayer.h"
+
+#include <deque>
+#include <sstream>
+
+#include "base/check.h"
+#include "base/checked.h"
+#include "engine/simulator.h"
+
+namespace raycell {
+namespace {
+
+enum EventKind : std::uint32_t { kIdle = 0, kFetched = 1, kUnitDone = 2 };
+
+std::uint64_t Pack(std::uint32_t processor, UnitId unit) {
+  return (std::uint64_t{processor} << 32) | unit;
+}
+
+struct ProcessorState {
+  std::optional<CellId> cell;   // locked and loaded while working
+  std::deque<UnitId> worklist;  // units of `cell` to work in this fetch
+  bool waiting = false;         // idle, no cell had work
+  SimTime work, stall;
+};
+
+// The board: queues, processors and memory as one component; the processors' requests,
+// fetch completions and unit completions are its events.
+class Board : public Component {
+ public:
+  Board(const WorkGraph& w, const std::vector<std::uint64_t>& footprints,
+        const ReplayConfig& config, Scheduler& scheduler, const MemoryHierarchy::Requests& futures)
+      : w_(w),
+        config_(config),
+        scheduler_(scheduler),
+        memory_(config, footprints, futures),
+        queues_(w.cells),
+        queued_rays_(w.cells, 0),
+        view_(w.cells, 0),
+        locked_(w.cells, false),
+        processors_(config.processors.count) {
+    for (UnitId u : w.roots) Enqueue(u);
+  }
+
+  void Start(Simulator& sim) {
+    for (std::uint32_t p = 0; p < processors_.size(); ++p) {
+      sim.Schedule(id_, SimTime::Zero(), kIdle, Pack(p, 0));
+    }
+  }
+  void set_id(ComponentId id) { id_ = id; }
+
+  void Handle(const Event& e, Simulator& sim) override {
+    const auto p = std::uint32_t(e.payload >> 32);
+    if (e.kind == kIdle) OnIdle(p, sim);
+    if (e.kind == kFetched) OnFetched(p, sim);
+    if (e.kind == kUnitDone) OnUnitDone(p, UnitId(e.payload & 0xffffffffu), sim);
+  }
+  std::string Name() const override { return "board"; }
+  bool HasWork() const override { return done_ < w_.size(); }
+  std::string DumpState() const override {
+    std::ostringstream s;
+    s << done_ << " of " << w_.size() << " units done; queued rays per cell:";
+    for (std::uint64_t q : queued_rays_) s << ' ' << q;
+    return s.str();
+  }
+
+  ReplayResult Result(SimTime end) const;
+  const MemoryHierarchy& memory() const { return memory_; }
+
+ private:
+  void Enqueue(UnitId u) {
+    const CellId c = w_.cell[u];
+    queues_[c].push_back(u);
+    queued_rays_[c] += w_.queued_rays[u];
+    queued_total_ += w_.queued_rays[u];
+    peak_queued_ = std::max(peak_queued_, queued_total_);
+  }
+
+  // The queues a scheduler may choose from: cells being worked are not available.
+  QueueView View(std::uint32_t p) {
+    for (CellId c = 0; c < w_.cells; ++c) view_[c] = locked_[c] ? 0 : queued_rays_[c];
+    return QueueView::Of(view_, processors_[p].cell);
+  }
+
+  void OnIdle(std::uint32_t p, Simulator& sim) {
+    const std::optional<CellId> c = scheduler_.Next(View(p));
+    if (!c) {
+      processors_[p].waiting = true;  // woken when work is released
+      return;
+    }
+    RAYCELL_CHECK(!queues_[*c].empty() && !locked_[*c]);
+    locked_[*c] = true;
+    processors_[p].cell = *c;
+    const SimTime ready = memory_.Fetch(p, *c, sim.now());
+    processors_[p].stall = processors_[p].stall + (ready - sim.now());
+    sim.ScheduleAt(id_, ready, kFetched, Pack(p, 0));
+  }
+
+  void TakeQueue(ProcessorState& ps) {
+    auto& q = queues_[*ps.cell];
+    for (UnitId u : q) {
+      ps.worklist.push_back(u);
+      queued_rays_[*ps.cell] -= w_.queued_rays[u];
+      queued_total_ -= w_.queued_rays[u];
+    }
+    q.clear();
+  }
+
+  void OnFetched(std::uint32_t p, Simulator& sim) {
+    TakeQueue(processors_[p]);
+    if (config_.processors.prefetch) {  // double buffering: the predicted next cell
+      const std::optional<CellId> next = scheduler_.Peek(View(p));
+      if (next) memory_.Prefetch(p, *next, sim.now(), *processors_[p].cell);
+    }
+    StartNext(p, sim);
+  }
+
+  void StartNext(std::uint32_t p, Simulator& sim) {
+    ProcessorState& ps = processors_[p];
+    if (ps.worklist.empty()) TakeQueue(ps);  // units that arrived while the cell was loaded
+    if (ps.worklist.empty()) {
+      locked_[*ps.cell] = false;
+      sim.Schedule(id_, SimTime::Zero(), kIdle, Pack(p, 0));
+      return;
+    }
+    const UnitId u = ps.worklist.front();
+    ps.worklist.pop_front();
+    const SimTime dt = config_.processors.time_per_sample * w_.samples[u];
+    ps.work = ps.work + dt;
+    sim.Schedule(id_, dt, kUnitDone, Pack(p, u));
+  }
+
+  void OnUnitDone(std::uint32_t p, UnitId u, Simulator& sim) {
+    sim.NoteProgress();
+    ++done_;
+    CheckedIncrement(rays_, w_.rays_started[u]);
+    CheckedIncrement(segments_, w_.segments[u]);
+    CheckedIncrement(samples_, w_.samples[u]);
+    bool released = false;
+    for (UnitId i = w_.succ_begin[u]; i < w_.succ_begin[u + 1]; ++i) {
+      const UnitId s = w_.succ[i];
+      if (w_.cell[s] == w_.cell[u]) {
+        processors_[p].worklist.push_back(s);  // spawned in the loaded cell: worked now
+      } else {
+        Enqueue(s);
+        released = true;
+      }
+    }
+    if (released) WakeWaiting(sim);
+    StartNext(p, sim);
+  }
+
+  void WakeWaiting(Simulator& sim) {
+    for (std::uint32_t q = 0; q < processors_.size(); ++q) {
+      if (!processors_[q].waiting) continue;
+      processors_[q].waiting = false;
+      sim.Schedule(id_, SimTime::Zero(), kIdle, Pack(q, 0));
+    }
+  }
+
+  const WorkGraph& w_;
+  const ReplayConfig& config_;
+  Scheduler& scheduler_;
+  MemoryHierarchy memory_;
+  std::vector<std::vector<UnitId>> queues_;
+  std::vector<std::uint64_t> queued_rays_, view_;
+  std::vector<bool> locked_;
+  std::vector<ProcessorState> processors_;
+  ComponentId id_ = 0;
+  std::uint64_t done_ = 0, queued_total_ = 0, peak_queued_ = 0;
+  std::uint64_t rays_ = 0, segments_ = 0, samples_ = 0;
+};
+
+ReplayResult Board::Result(SimTime end) const {
+  RAYCELL_CHECK_EQ(done_, std::uint64_t(w_.size()));
+  ReplayResult r;
+  r.levels = memory_.stats();
+  r.fetches = r.levels[0].fetches;
+  r.time = end;
+  for (const ProcessorState& ps : processors_) {
+    r.work = r.work + ps.work;
+    r.stall = r.stall + ps.stall;
+    r.idle = r.idle + (end - ps.work - ps.stall);
+  }
+  const double capacity = double(end.picoseconds()) * double(processors_.size());
+  r.utilisation = capacity > 0 ? double(r.work.picoseconds()) / capacity : 0.0;
+  r.peak_queued_rays = peak_queued_;
+  r.peak_queued_bytes = CheckedMul(peak_queued_, config_.processors.queue_record_bytes);
+  r.rays = rays_, r.segments = segments_, r.samples = samples_;
+  r.prefetches = memory_.prefetches();
+  r.prefetch_hits = memory_.prefetch_hits();
+  return r;
+}
+
+}  // namespace
+
+namespace {
+
+bool UsesMin(const ReplayConfig& config) {
+  for (const LevelConfig& l : config.levels) {
+    if (l.replacement == LevelConfig::Replacement::kMin) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+ReplayResult ReferenceReplayFrame(const WorkGraph& work,
+                                  const std::vector<std::uint64_t>& footprints,
+                                  const ReplayConfig& config, Scheduler& scheduler,
+                                  const FrameInfo& frame, std::uint64_t bound) {
+  RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
+  const LevelConfig& cache = config.levels.front();
+  if (config.processors.prefetch && cache.capacity_unit == LevelConfig::CapacityUnit::kCells &&
+      cache.capacity < 2) {
+    throw InputError(
+        "processors.prefetch = true needs a cache that holds two cells (double "
+        "buffering), but level '" +
+        cache.name + "' holds " + FormatCapacity(cache));
+  }
+  const bool min = UsesMin(config);
+  const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
+  MemoryHierarchy::Requests futures;
+  for (std::uint32_t pass = 1;; ++pass) {
+    scheduler.BeginFrame(frame);
+    Board board(work, footprints, config, scheduler, futures);
+    Simulator sim;
+    board.set_id(sim.Add(board));
+    board.Start(sim);
+    sim.Run();
+    const bool converged = pass > 1 && !board.memory().diverged();
+    if (!min || converged || pass == max_passes) {
+      ReplayResult r = board.Result(sim.now());
+      if (BoundHolds(config)) r.bound = bound;
+      r.events = sim.events_handled();
+      r.passes = pass;
+      r.min_converged = !min || converged;
+      return r;
+    }
+    futures = board.memory().requests();
+  }
+}
+
+}  // namespace raycell
