@@ -400,6 +400,7 @@ std::vector<std::size_t> ShardIndices(std::size_t combinations, const Shard& sha
 
 std::string SweepComment(const SweepSpec& spec) {
   std::string s = kCommentStart;
+  s += "schema=" + JsonQuote("raycell-sweep/1") + " ";
   s += "trace=" + JsonQuote(spec.trace);
   s += " config=" + JsonQuote(spec.config.empty() ? "defaults" : spec.config);
   s += " config_hash=" + ConfigHash(spec.base);

@@ -8,7 +8,8 @@
 //
 // The output file starts with a comment line that names the sweep exactly, then the header:
 //
-//   # raycell sweep trace="a.rct" config="gicube.toml" config_hash=... vary="scheduler=..."
+//   # raycell sweep schema="raycell-sweep/1" trace="a.rct" config="gicube.toml" config_hash=...
+//     vary="scheduler=..."
 //     frames="all" combinations=6 shard="all"                       (one line)
 //   index,scheduler,processors.count,fetches,bound,time_ps,work_ps,stall_ps,idle_ps,
 //     utilisation,peak_queued_rays,peak_queued_bytes,rays,segments,samples

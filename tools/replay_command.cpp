@@ -39,7 +39,7 @@ StatsTable FrameTable(const ReplayResult& r, const ResultColumns& columns) {
 }
 
 void PrintJson(const TraceReplay& t, std::ostream& out) {
-  out << "{\"frames\":[";
+  out << "{\"schema\":\"raycell-replay/1\",\"frames\":[";
   for (std::size_t i = 0; i < t.frames.size(); ++i) {
     out << (i ? ",\n" : "\n");
     PrintJsonLine(FrameTable(t.frames[i], kReplayJsonColumns), out);

@@ -213,7 +213,7 @@ TEST_F(SweepTest, RowsEqualSingleReplaysWhateverTheJobs) {
     expected += ExpectedRow(i, CombinationValues(spec.varies, i), r.total);
   }
   EXPECT_EQ(one, expected);
-  EXPECT_EQ(one.rfind("# raycell sweep trace=", 0), 0u);
+  EXPECT_EQ(one.rfind("# raycell sweep schema=\"raycell-sweep/1\" trace=", 0), 0u);
   EXPECT_NE(one.find("\n0,maxwork,1,1 cell,"), std::string::npos);
   EXPECT_NE(one.find("\n11,peel,2,2 cells,"), std::string::npos);
 }
