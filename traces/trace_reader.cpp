@@ -18,18 +18,17 @@
 #include <utility>
 
 #include "base/check.h"
+#include "traces/columns.h"
+#include "traces/format.h"
+#include "traces/frame_checksum.h"
 #include "traces/trace.capnp.h"
-#include "traces/trace_writer.h"
 
 namespace raycell {
 namespace {
 
 // Bad bytes found while decoding; turned into an InputError naming the file and the part
 // of it (header, frame, index) by Guarded() below.
-class BadData : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+using BadData = BadTraceData;
 
 std::string Str(std::uint64_t v) { return std::to_string(v); }
 
@@ -284,93 +283,6 @@ TraceHeader ReadHeader(const FileIn& file, std::uint64_t& length) {
 }
 
 // ---- Batches -----------------------------------------------------------------------------
-
-// Reads a Column value by value, checking its escapes and that it has as many values as
-// the decoding asks for.
-class ColumnReader {
- public:
-  ColumnReader(schema::Column::Reader c, const char* name)
-      : narrow_(c.getNarrow()), wide_(c.getWide()), name_(name) {}
-  // Also checks that the column has exactly `expected` values.
-  ColumnReader(schema::Column::Reader c, std::size_t expected, const char* name)
-      : ColumnReader(c, name) {
-    if (narrow_.size() != expected) {
-      throw BadData(std::string("column ") + name + " has " + Str(narrow_.size()) +
-                    " values, expected " + Str(expected));
-    }
-  }
-  bool AtEnd() const { return next_ == narrow_.size(); }
-  std::uint64_t Next() {
-    const std::uint64_t v = Peek();
-    wide_next_ += narrow_[next_] == 255;
-    ++next_;
-    return v;
-  }
-  // The next value, left unread.
-  std::uint64_t Peek() const {
-    if (AtEnd()) throw BadData(std::string("column ") + name_ + ": too few values");
-    const std::uint8_t b = narrow_[next_];
-    if (b < 255) return b;
-    if (wide_next_ == wide_.size()) throw BadData(std::string("column ") + name_ + ": bad escape");
-    return wide_[wide_next_];
-  }
-  void Finish() const {
-    if (!AtEnd() || wide_next_ != wide_.size()) {
-      throw BadData(std::string("column ") + name_ + ": extra values");
-    }
-  }
-  const char* name() const { return name_; }
-
- private:
-  capnp::List<std::uint8_t>::Reader narrow_;
-  capnp::List<std::uint64_t>::Reader wide_;
-  const char* name_;
-  unsigned next_ = 0, wide_next_ = 0;
-};
-
-// Reads a zero-run coded Column (see "Samples" in trace.capnp).
-class ZeroRunColumnReader {
- public:
-  ZeroRunColumnReader(schema::Column::Reader c, const char* name) : column_(c, name) {}
-  std::uint64_t Next() {
-    if (zeros_ > 0) {
-      --zeros_;
-      return 0;
-    }
-    std::uint64_t v = column_.Next();
-    if (v >= 2) return v - 1;
-    // A run of zeros: bijective base-2 digits, least significant first, up to a value >= 2.
-    std::uint64_t run = 0;
-    for (int digit = 0;; ++digit) {
-      if (digit == 40) throw BadData(std::string("column ") + column_.name() + ": bad zero run");
-      run += (v + 1) << digit;
-      if (column_.AtEnd() || column_.Peek() >= 2) break;
-      v = column_.Next();
-    }
-    zeros_ = run - 1;
-    return 0;
-  }
-  void Finish() const {
-    if (zeros_ > 0) throw BadData(std::string("column ") + column_.name() + ": extra values");
-    column_.Finish();
-  }
-
- private:
-  ColumnReader column_;
-  std::uint64_t zeros_ = 0;  // zeros of the current run not yet returned
-};
-
-std::int64_t UnZigZag(std::uint64_t code) {
-  return static_cast<std::int64_t>(code >> 1) ^ -static_cast<std::int64_t>(code & 1);
-}
-
-// previous + unzigzag(code), which must fit a uint32.
-std::uint32_t ApplyDelta(std::uint64_t previous, std::uint64_t code, const char* what) {
-  if (code > (std::uint64_t{1} << 34)) throw BadData(std::string("bad ") + what + " delta");
-  const std::int64_t v = static_cast<std::int64_t>(previous) + UnZigZag(code);
-  if (v < 0 || v > std::int64_t{0xFFFFFFFF}) throw BadData(std::string("bad ") + what + " delta");
-  return static_cast<std::uint32_t>(v);
-}
 
 struct BatchColumns {
   capnp::List<std::uint8_t>::Reader heads;

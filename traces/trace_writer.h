@@ -3,9 +3,7 @@
 // the capture. The file is written to `path + ".tmp"` and renamed to `path` by Finish();
 // each frame is flushed to the .tmp as a complete zstd frame at EndFrame(), so an
 // interrupted capture leaves a .tmp whose finished frames TraceReader can still read.
-//
-// Also here: the pieces of the format that writer and reader share (limits, magic numbers,
-// the frame checksum; the hash itself is base/hash.h).
+// The format's constants and limits are in traces/format.h.
 #pragma once
 
 #include <cstddef>
@@ -13,58 +11,12 @@
 #include <memory>
 #include <string>
 
-#include "base/hash.h"
+#include "traces/format.h"
+#include "traces/frame_checksum.h"
 #include "traces/ray_batch.h"
 #include "traces/trace_header.h"
 
 namespace raycell {
-
-// ---- Shared format constants -------------------------------------------------------------
-
-// Magic of the skippable zstd frame that holds the index.
-inline constexpr std::uint32_t kTraceIndexMagic = 0x184D2A5B;
-// Last 8 bytes of a complete trace file.
-inline constexpr char kTraceIndexTag[9] = "RCTINDEX";
-// Trailer after the index message: hash, message length, tag.
-inline constexpr std::size_t kTraceTrailerBytes = 24;
-// Largest Cap'n Proto message the reader accepts, and the writer ever writes.
-inline constexpr std::size_t kTraceMaxMessageBytes = std::size_t{64} << 20;
-// Highest zstd level the writer accepts (keeps the window within kTraceMaxWindowLog).
-inline constexpr int kTraceMaxZstdLevel = 19;
-inline constexpr int kTraceMaxWindowLog = 25;
-// Most rays and visits in one batch message, and visits of one ray (see "Limits" in
-// trace.capnp). They bound the reader's memory whatever the file says.
-inline constexpr std::size_t kTraceMaxBatchRays = std::size_t{1} << 22;
-inline constexpr std::size_t kTraceMaxBatchVisits = std::size_t{1} << 25;
-inline constexpr std::size_t kTraceMaxRayVisits = std::size_t{1} << 20;
-
-// Ray head byte (see "Ray heads" in trace.capnp).
-inline constexpr unsigned kHeadKindMask = 0x03;
-inline constexpr unsigned kHeadParentShift = 2;  // 2-bit parent code
-inline constexpr unsigned kHeadSpawnShift = 4;   // 2-bit spawn code
-inline constexpr unsigned kHeadNewPath = 0x40;
-inline constexpr unsigned kHeadNewPixel = 0x80;
-inline constexpr unsigned kParentIsLastNonShadow = 0;
-inline constexpr unsigned kParentOfPreviousRay = 1;
-inline constexpr unsigned kParentExplicit = 2;
-inline constexpr unsigned kSpawnExplicit = 3;
-
-// Running totals and checksum of one frame's rays, fed ray by ray in id order. Writer and
-// reader both use it, so the checksum does not depend on how rays were split into batches.
-class FrameAccumulator {
- public:
-  FrameAccumulator(std::int32_t frame, bool store_t);
-  void AddRay(const RayView& ray);
-  // Totals so far; offset and length are left 0.
-  FrameSummary Summary() const;
-  std::uint64_t rays() const { return summary_.rays; }
-  std::uint64_t visits() const { return summary_.visits; }
-
- private:
-  FrameSummary summary_;
-  bool store_t_;
-  Hash64 hash_;
-};
 
 // ---- Writer ------------------------------------------------------------------------------
 
