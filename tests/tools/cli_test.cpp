@@ -31,11 +31,10 @@ Result Raycell(const std::string& args) {
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
 }
 
+// This process's folder for the tests' files (made once, emptied when made).
 std::filesystem::path Dir() {
-  const auto d =
-      std::filesystem::temp_directory_path() / ("raycell_cli_" + std::to_string(getpid()));
-  std::filesystem::create_directories(d);
-  return d;
+  static const std::filesystem::path dir = raycell::testing::TempDir("cli");
+  return dir;
 }
 
 // Two rays with paths A B and B A (cells 0 and 1): bound 2, Peel 3, optimum 3.

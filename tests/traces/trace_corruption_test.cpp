@@ -23,6 +23,7 @@
 #include "base/check.h"
 #include "tests/test_util.h"
 #include "tests/traces/trace_format.h"
+#include "tests/traces/trace_test_util.h"
 #include "traces/trace.capnp.h"
 #include "traces/trace_reader.h"
 #include "traces/trace_writer.h"
@@ -60,47 +61,13 @@ class Watchdog {
 std::string TempPath(const std::string& name) { return testing::TempPath("corrupt", name); }
 
 using testing::Head;
+using testing::RandomFrame;
 using testing::ReadBytes;
-
-void WriteBytes(const std::string& path, const std::string& bytes) {
-  std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), bytes.size());
-}
+using testing::TestHeader;
+using testing::WriteBytes;
 
 bool Contains(const std::string& text, const std::string& what) {
   return text.find(what) != std::string::npos;
-}
-
-TraceHeader MakeHeader() {
-  TraceHeader h;
-  h.producer = "raycell test";
-  h.scene = "corruption";
-  h.cells = {2, 2, 2};
-  h.footprints.assign(8, 4096);
-  h.settings.store_t = true;
-  return h;
-}
-
-// Valid random rays (parents earlier with visits, spawn inside them, 8 cells).
-RayBatch RandomFrame(std::mt19937_64& rng, std::size_t rays) {
-  RayBatch b(true);
-  for (std::size_t i = 0; i < rays; ++i) {
-    RayId parent = kNoParent;
-    std::uint32_t spawn = 0;
-    if (i > 0 && rng() % 4 != 0) {
-      parent = i - 1 - rng() % std::min<std::size_t>(i, 30);
-      const std::size_t n = b.ray(parent).visit_count;
-      if (n == 0) parent = kNoParent;
-      if (n > 0) spawn = static_cast<std::uint32_t>(rng() % n);
-    }
-    b.BeginRay(parent == kNoParent ? RayKind::kPrimary : RayKind::kShadow, parent, spawn,
-               rng() % 64, rng() % 64);
-    std::uint32_t cell = rng() % 8;
-    for (int v = 0, n = static_cast<int>(rng() % 4); v < n; ++v) {
-      b.AddVisit(cell, rng() % 300, static_cast<float>(v), static_cast<float>(v) + 0.5f);
-      cell = (cell + 1 + rng() % 7) % 8;
-    }
-  }
-  return b;
 }
 
 struct Reference {
@@ -118,9 +85,9 @@ Reference MakeReference(const std::string& name, std::size_t rays, std::size_t b
   std::mt19937_64 rng(rays);
   TraceWriterOptions options;
   options.max_batch_rays = batch_rays;
-  TraceWriter w = TraceWriter::Create(ref.path, MakeHeader(), options);
+  TraceWriter w = TraceWriter::Create(ref.path, TestHeader({2, 2, 2}, true), options);
   for (int f = 0; f < 4; ++f) {
-    ref.frames.push_back(f == 2 ? RayBatch(true) : RandomFrame(rng, rays));
+    ref.frames.push_back(f == 2 ? RayBatch(true) : RandomFrame(rng, rays, true, 8, 3));
     w.BeginFrame(20 + f);
     w.Append(ref.frames.back());
     ref.summaries.push_back(w.EndFrame());
