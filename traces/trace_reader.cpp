@@ -737,6 +737,7 @@ struct TraceReader::Impl {
   std::uint64_t header_length = 0;
   std::vector<FrameSummary> frames;
   std::string warning;
+  std::uint64_t readable_end = 0;
 
   explicit Impl(const std::string& p) : path(p), file(p) {}
 
@@ -751,9 +752,11 @@ struct TraceReader::Impl {
       frames = Guarded(
           path, [] { return std::string("index"); },
           [&] { return ReadIndex(file, header_length); });
+      readable_end = file.size();
     } catch (const InputError& e) {
       std::string stop;
       frames = Scan(stop);
+      readable_end = frames.empty() ? header_length : frames.back().offset + frames.back().length;
       warning = std::string(e.what()) + "; scanned the file instead and kept " +
                 Str(frames.size()) + " complete frame(s)" +
                 (stop.empty() ? "" : "; the scan stopped at " + stop);
@@ -809,6 +812,7 @@ const TraceHeader& TraceReader::header() const { return impl_->header; }
 const std::vector<FrameSummary>& TraceReader::frames() const { return impl_->frames; }
 const std::string& TraceReader::warning() const { return impl_->warning; }
 std::uint64_t TraceReader::file_size() const { return impl_->file.size(); }
+std::uint64_t TraceReader::readable_end() const { return impl_->readable_end; }
 
 void TraceReader::ForEachBatch(std::size_t frame_index, const BatchFn& fn) const {
   const FrameSummary& s = impl_->Frame(frame_index);
