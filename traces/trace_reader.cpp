@@ -234,37 +234,53 @@ CameraKey ToCamera(schema::Camera::Reader c) {
   return k;
 }
 
-void CheckHeader(const TraceHeader& h) {
+// The header's fields as read, checked against the format's limits (footprints not yet:
+// version 2 stores them in the records after the header).
+TraceHeader ToHeader(schema::Header::Reader r) {
+  TraceHeader h;
+  h.format_version = r.getFormatVersion();
   if (h.format_version < 1 || h.format_version > kTraceFormatVersion) {
     throw BadData("format version " + Str(h.format_version) + " is not supported (this reader " +
                   "reads 1.." + Str(kTraceFormatVersion) + ")");
   }
-  std::uint64_t cells = 1;
-  for (std::uint32_t n : h.cells) cells *= n <= (1u << 10) ? n : 0;
-  if (cells == 0 || cells > (std::uint64_t{1} << 30)) {
-    throw BadData("bad cell grid " + Str(h.cells[0]) + "x" + Str(h.cells[1]) + "x" +
-                  Str(h.cells[2]));
-  }
-  if (h.footprints.size() != cells) {
-    throw BadData(Str(h.footprints.size()) + " footprints for " + Str(cells) + " cells");
-  }
-}
-
-TraceHeader ToHeader(schema::Header::Reader r) {
-  TraceHeader h;
-  h.format_version = r.getFormatVersion();
   h.producer = ToStd(r.getProducer());
   h.scene = ToStd(r.getScene());
   for (auto g : r.getGrids()) h.grids.push_back(ToGrid(g));
   h.box_min = ToVec3(r.getBoxMin());
   h.box_max = ToVec3(r.getBoxMax());
   h.cells = {r.getCellsX(), r.getCellsY(), r.getCellsZ()};
-  for (std::uint64_t f : r.getFootprints()) h.footprints.push_back(f);
   h.footprint_mode = ToStd(r.getFootprintMode());
   for (auto c : r.getCameras()) h.cameras.push_back(ToCamera(c));
   h.settings = ToSettings(r.getSettings());
-  CheckHeader(h);
+  const std::string problem = TraceHeaderProblem(h);
+  if (!problem.empty()) throw BadData(problem);
+  const auto footprints = r.getFootprints();
+  if (h.format_version >= 2 && footprints.size() != 0) {
+    throw BadData("version 2 header with footprints in it");
+  }
+  for (std::uint64_t f : footprints) h.footprints.push_back(f);
   return h;
+}
+
+// Appends the footprints of one `footprints` record (version 2) to `out`, which holds those
+// of the records before it; at most `cells` in all.
+void AppendFootprints(schema::Footprints::Reader r, std::uint64_t cells,
+                      std::vector<std::uint64_t>& out) {
+  if (r.getFirstCell() != out.size()) {
+    throw BadData("footprints record starts at cell " + Str(r.getFirstCell()) + ", expected " +
+                  Str(out.size()));
+  }
+  ColumnReader values(r.getValues(), "footprint values");
+  ColumnReader runs(r.getRuns(), r.getValues().getNarrow().size(), "footprint runs");
+  if (values.AtEnd()) throw BadData("footprints record without runs");
+  while (!values.AtEnd()) {
+    const std::uint64_t value = values.Next(), run = runs.Next();
+    if (run >= cells - out.size())
+      throw BadData("footprints for more than " + Str(cells) + " cells");
+    out.insert(out.end(), run + 1, value);
+  }
+  values.Finish();
+  runs.Finish();
 }
 
 // Decodes the header frame at offset 0; returns the header and sets `length`.
@@ -272,12 +288,26 @@ TraceHeader ReadHeader(const FileIn& file, std::uint64_t& length) {
   ZstdFrameReader in(file, 0, file.size());
   kj::Array<capnp::word> words;
   if (!ReadMessage(in, words)) throw BadData("empty header frame");
-  capnp::FlatArrayMessageReader message(words, MessageOptions());
-  const auto record = message.getRoot<schema::Record>();
-  if (record.which() != schema::Record::HEADER) throw BadData("first record is not a header");
-  TraceHeader header = ToHeader(record.getHeader());
-  char extra;
-  if (in.Read(&extra, 1) != 0) throw BadData("more than one message in the header frame");
+  TraceHeader header;
+  {
+    capnp::FlatArrayMessageReader message(words, MessageOptions());
+    const auto record = message.getRoot<schema::Record>();
+    if (record.which() != schema::Record::HEADER) throw BadData("first record is not a header");
+    header = ToHeader(record.getHeader());
+  }
+  const std::uint64_t cells = TraceCellCount(header.cells);
+  while (ReadMessage(in, words)) {
+    if (header.format_version < 2) throw BadData("more than one message in the header frame");
+    capnp::FlatArrayMessageReader message(words, MessageOptions());
+    const auto record = message.getRoot<schema::Record>();
+    if (record.which() != schema::Record::FOOTPRINTS) {
+      throw BadData("a record other than footprints after the header");
+    }
+    AppendFootprints(record.getFootprints(), cells, header.footprints);
+  }
+  if (header.footprints.size() != cells) {
+    throw BadData(Str(header.footprints.size()) + " footprints for " + Str(cells) + " cells");
+  }
   length = in.consumed();
   return header;
 }
@@ -696,10 +726,14 @@ FrameSummary ToSummary(schema::IndexEntry::Reader e) {
   return s;
 }
 
-std::vector<FrameSummary> ToSummaries(schema::Index::Reader index, std::uint64_t header_length,
-                                      std::uint64_t index_offset) {
-  if (index.getFormatVersion() != kTraceFormatVersion || index.getHeaderLength() != header_length) {
+std::vector<FrameSummary> ToSummaries(schema::Index::Reader index, const TraceHeader& header,
+                                      std::uint64_t header_length, std::uint64_t index_offset) {
+  if (index.getFormatVersion() != header.format_version ||
+      index.getHeaderLength() != header_length) {
     throw BadData("damaged: version or header length disagrees with the header");
+  }
+  if (index.getFrames().size() > kTraceMaxFrames) {
+    throw BadData("damaged: more than " + Str(kTraceMaxFrames) + " frames");
   }
   std::vector<FrameSummary> frames;
   std::uint64_t next = header_length;
@@ -715,7 +749,8 @@ std::vector<FrameSummary> ToSummaries(schema::Index::Reader index, std::uint64_t
   return frames;
 }
 
-std::vector<FrameSummary> ReadIndex(const FileIn& file, std::uint64_t header_length) {
+std::vector<FrameSummary> ReadIndex(const FileIn& file, const TraceHeader& header,
+                                    std::uint64_t header_length) {
   const IndexLocation where(file, header_length);
   auto words = kj::heapArray<capnp::word>(where.length / 8);
   file.ReadAt(where.frame_offset + 8, words.begin(), where.length);
@@ -723,7 +758,7 @@ std::vector<FrameSummary> ReadIndex(const FileIn& file, std::uint64_t header_len
   hash.AddBytes(words.begin(), where.length);
   if (hash.Finish() != where.hash) throw BadData("damaged: checksum mismatch");
   capnp::FlatArrayMessageReader message(words, MessageOptions());
-  return ToSummaries(message.getRoot<schema::Index>(), header_length, where.frame_offset);
+  return ToSummaries(message.getRoot<schema::Index>(), header, header_length, where.frame_offset);
 }
 
 }  // namespace
@@ -751,7 +786,7 @@ struct TraceReader::Impl {
     try {
       frames = Guarded(
           path, [] { return std::string("index"); },
-          [&] { return ReadIndex(file, header_length); });
+          [&] { return ReadIndex(file, header, header_length); });
       readable_end = file.size();
     } catch (const InputError& e) {
       std::string stop;

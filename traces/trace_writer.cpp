@@ -298,8 +298,9 @@ void FillCameras(capnp::List<schema::Camera>::Builder out, const std::vector<Cam
   }
 }
 
+// The header message; the footprints follow in footprints records.
 void FillHeader(schema::Header::Builder out, const TraceHeader& h) {
-  out.setFormatVersion(h.format_version);
+  out.setFormatVersion(kTraceFormatVersion);
   out.setProducer(h.producer);
   out.setScene(h.scene);
   FillGrids(out.initGrids(static_cast<unsigned>(h.grids.size())), h.grids);
@@ -308,12 +309,32 @@ void FillHeader(schema::Header::Builder out, const TraceHeader& h) {
   out.setCellsX(h.cells[0]);
   out.setCellsY(h.cells[1]);
   out.setCellsZ(h.cells[2]);
-  auto footprints = out.initFootprints(static_cast<unsigned>(h.footprints.size()));
-  for (unsigned i = 0; i < h.footprints.size(); ++i) footprints.set(i, h.footprints[i]);
   out.setFootprintMode(h.footprint_mode);
   FillCameras(out.initCameras(static_cast<unsigned>(h.cameras.size())), h.cameras);
   FillSettings(out.initSettings(), h.settings);
 }
+
+// Footprints of cells [first, end) as runs of equal values, into a footprints record.
+class FootprintRecord {
+ public:
+  explicit FootprintRecord(std::uint64_t first) : first_(first) {}
+  void Add(std::uint64_t value, std::uint64_t run) {
+    values_.Add(value);
+    runs_.Add(run - 1);
+    ++count_;
+  }
+  std::size_t runs() const { return count_; }
+  void Fill(schema::Footprints::Builder out) const {
+    out.setFirstCell(first_);
+    values_.Fill(out.initValues());
+    runs_.Fill(out.initRuns());
+  }
+
+ private:
+  std::uint64_t first_;
+  ColumnBuilder values_, runs_;
+  std::size_t count_ = 0;
+};
 
 void FillKindCounts(capnp::List<std::uint64_t>::Builder out, const FrameSummary& s) {
   for (unsigned k = 0; k < s.rays_by_kind.size(); ++k) out.set(k, s.rays_by_kind[k]);
@@ -411,8 +432,25 @@ struct TraceWriter::Impl {
     capnp::MallocMessageBuilder message;
     FillHeader(message.initRoot<schema::Record>().initHeader(), header);
     WriteRecord(message);
+    WriteFootprints();
     sink.EndFrame();
     header_length = file.bytes();
+  }
+
+  // The footprints as records of at most options.footprint_runs_per_record runs.
+  void WriteFootprints() {
+    const std::vector<std::uint64_t>& f = header.footprints;
+    FootprintRecord record(0);
+    for (std::size_t begin = 0, end; begin < f.size(); begin = end) {
+      for (end = begin + 1; end < f.size() && f[end] == f[begin];) ++end;
+      record.Add(f[begin], end - begin);
+      if (record.runs() == options.footprint_runs_per_record || end == f.size()) {
+        capnp::MallocMessageBuilder message;
+        record.Fill(message.initRoot<schema::Record>().initFootprints());
+        WriteRecord(message);
+        record = FootprintRecord(end);
+      }
+    }
   }
 
   void FlushPending() {
@@ -466,7 +504,12 @@ TraceWriter TraceWriter::Create(const std::string& path, const TraceHeader& head
     throw InputError(path + ": zstd level " + std::to_string(level) + " is not in 1.." +
                      std::to_string(kTraceMaxZstdLevel));
   }
+  const std::string problem = TraceHeaderProblem(header);
+  if (!problem.empty()) throw InputError(path + ": " + problem);
   RAYCELL_CHECK(options.max_batch_rays > 0 && options.max_batch_visits > 0);
+  RAYCELL_CHECK(options.footprint_runs_per_record > 0 &&
+                options.footprint_runs_per_record <= kTraceFootprintRunsPerRecord);
+  RAYCELL_CHECK_LE(options.max_frames, kTraceMaxFrames);
   RAYCELL_CHECK_LE(options.max_batch_rays, kTraceMaxBatchRays);
   RAYCELL_CHECK_LE(options.max_batch_visits, kTraceMaxBatchVisits - kTraceMaxRayVisits);
   RAYCELL_CHECK_EQ(header.footprints.size(), std::size_t{header.cell_count()});
@@ -485,6 +528,10 @@ TraceWriter TraceWriter::Create(const std::string& path, const TraceHeader& head
 void TraceWriter::BeginFrame(std::int32_t frame) {
   Impl& w = *impl_;
   RAYCELL_CHECK(!w.in_frame && !w.finished);
+  if (w.frames.size() >= w.options.max_frames) {
+    throw InputError(w.path + ": more than " + std::to_string(w.options.max_frames) +
+                     " frames, the trace format's limit (kTraceMaxFrames)");
+  }
   w.in_frame = true;
   w.frame = FrameAccumulator(frame, w.header.settings.store_t);
   w.frame_offset = w.file.bytes();

@@ -27,13 +27,19 @@ struct TraceWriterOptions {
   // A batch also ends once it holds this many visits (at most kTraceMaxBatchVisits -
   // kTraceMaxRayVisits).
   std::size_t max_batch_visits = std::size_t{1} << 20;
+  // Runs of equal footprints per footprints record (at most kTraceFootprintRunsPerRecord).
+  std::size_t footprint_runs_per_record = kTraceFootprintRunsPerRecord;
+  // Most frames in the file (at most kTraceMaxFrames; lower only to test the limit).
+  std::size_t max_frames = kTraceMaxFrames;
 };
 
 class TraceWriter {
  public:
-  // Opens `path + ".tmp"` and writes the header. The zstd level is
-  // header.settings.zstd_level (1..19); visits carry t when header.settings.store_t.
-  // Throws InputError naming the path when the file cannot be written.
+  // Opens `path + ".tmp"` and writes the header (format version kTraceFormatVersion, whatever
+  // header.format_version says). The zstd level is header.settings.zstd_level (1..19); visits
+  // carry t when header.settings.store_t. Throws InputError naming the path when the file
+  // cannot be written or the header exceeds a limit of the format (TraceHeaderProblem in
+  // traces/format.h), before anything is written.
   static TraceWriter Create(const std::string& path, const TraceHeader& header,
                             const TraceWriterOptions& options = {});
   // As above with header.settings.zstd_level replaced by `zstd_level`.
@@ -44,7 +50,8 @@ class TraceWriter {
   // Without Finish(), closes and leaves the .tmp file (holding every ended frame).
   ~TraceWriter();
 
-  // Starts frame number `frame` (a camera's frame number, e.g. 150).
+  // Starts frame number `frame` (a camera's frame number, e.g. 150). InputError when the file
+  // already has kTraceMaxFrames (options.max_frames) frames.
   void BeginFrame(std::int32_t frame);
   // Appends rays to the current frame. `rays.first_id()` must equal the number of rays
   // appended to this frame so far (ids are frame-local and continue across calls); parents

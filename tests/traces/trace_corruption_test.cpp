@@ -60,6 +60,7 @@ class Watchdog {
 
 std::string TempPath(const std::string& name) { return testing::TempPath("corrupt", name); }
 
+using testing::ErrorOf;
 using testing::Head;
 using testing::RandomFrame;
 using testing::ReadBytes;
@@ -524,6 +525,99 @@ TEST_F(InvalidContentTest, FrameEndMustMatchTheRays) {
       "1 shadow), 3 visits, 18 samples",
       s);
   ExpectRejected({GoodBatch()}, "without a frameEnd record", std::nullopt);
+}
+
+// ---- Well-formed header frames with invalid content --------------------------------------
+
+std::string HeaderMessage(std::uint32_t version, std::array<std::uint32_t, 3> cells,
+                          const std::vector<std::uint64_t>& footprints_in_header = {}) {
+  capnp::MallocMessageBuilder message;
+  auto out = message.initRoot<schema::Record>().initHeader();
+  out.setFormatVersion(version);
+  out.setCellsX(cells[0]);
+  out.setCellsY(cells[1]);
+  out.setCellsZ(cells[2]);
+  auto f = out.initFootprints(static_cast<unsigned>(footprints_in_header.size()));
+  for (unsigned i = 0; i < footprints_in_header.size(); ++i) f.set(i, footprints_in_header[i]);
+  out.initSettings().setZstdLevel(3);
+  return Flat(message);
+}
+
+std::string FootprintsMessage(std::uint64_t first, const std::vector<std::uint64_t>& values,
+                              const std::vector<std::uint64_t>& runs) {
+  capnp::MallocMessageBuilder message;
+  auto out = message.initRoot<schema::Record>().initFootprints();
+  out.setFirstCell(first);
+  FillColumn(out.initValues(), values);
+  FillColumn(out.initRuns(), runs);
+  return Flat(message);
+}
+
+class InvalidHeaderTest : public ::testing::Test {
+ protected:
+  void TearDown() override { std::remove(path_.c_str()); }
+
+  // A file of one header frame holding `messages`, and no frames.
+  std::string Open(const std::string& messages) {
+    WriteBytes(path_, ZstdFrame(messages));
+    return ErrorOf([&] { TraceReader::Open(path_); });
+  }
+  void ExpectRejected(const std::string& messages, const std::string& reason) {
+    EXPECT_EQ(Open(messages), path_ + ": header: " + reason);
+  }
+
+  std::string path_ = TempPath("crafted_header.rct");
+};
+
+TEST_F(InvalidHeaderTest, CraftedGoodHeadersRead) {
+  EXPECT_EQ(Open(HeaderMessage(2, {2, 2, 2}) + FootprintsMessage(0, {300, 0}, {2, 4})), "");
+  EXPECT_EQ(TraceReader::Open(path_).header().footprints,
+            (std::vector<std::uint64_t>{300, 300, 300, 0, 0, 0, 0, 0}));
+  EXPECT_EQ(Open(HeaderMessage(2, {2, 2, 2}) + FootprintsMessage(0, {1}, {2}) +
+                 FootprintsMessage(3, {2}, {4})),
+            "");
+  EXPECT_EQ(TraceReader::Open(path_).header().footprints,
+            (std::vector<std::uint64_t>{1, 1, 1, 2, 2, 2, 2, 2}));
+  EXPECT_EQ(Open(HeaderMessage(1, {2, 1, 1}, {5, 6})), "");
+  EXPECT_EQ(TraceReader::Open(path_).header().footprints, (std::vector<std::uint64_t>{5, 6}));
+}
+
+TEST_F(InvalidHeaderTest, FootprintRecordsMustCoverTheCellsOnce) {
+  const std::string header = HeaderMessage(2, {2, 2, 2});
+  ExpectRejected(header, "0 footprints for 8 cells");
+  ExpectRejected(header + FootprintsMessage(0, {5}, {3}), "4 footprints for 8 cells");
+  ExpectRejected(header + FootprintsMessage(0, {5}, {8}), "footprints for more than 8 cells");
+  ExpectRejected(header + FootprintsMessage(0, {5, 6}, {3, 3}) + FootprintsMessage(8, {1}, {0}),
+                 "footprints for more than 8 cells");
+  ExpectRejected(header + FootprintsMessage(0, {5}, {3}) + FootprintsMessage(5, {6}, {2}),
+                 "footprints record starts at cell 5, expected 4");
+  ExpectRejected(header + FootprintsMessage(0, {5, 6}, {7}),
+                 "column footprint runs has 1 values, expected 2");
+  ExpectRejected(header + FootprintsMessage(0, {}, {}), "footprints record without runs");
+  ExpectRejected(header + FootprintsMessage(0, {5}, {std::uint64_t{1} << 63}),
+                 "footprints for more than 8 cells");
+  ExpectRejected(HeaderMessage(2, {2, 2, 2}, {1, 1, 1, 1, 1, 1, 1, 1}),
+                 "version 2 header with footprints in it");
+  ExpectRejected(header + FootprintsMessage(0, {5}, {7}) + BatchMessage(GoodBatch()),
+                 "a record other than footprints after the header");
+}
+
+TEST_F(InvalidHeaderTest, VersionsAndLimitsAreChecked) {
+  ExpectRejected(HeaderMessage(1, {2, 1, 1}, {5, 6}) + FootprintsMessage(0, {5}, {1}),
+                 "more than one message in the header frame");
+  ExpectRejected(HeaderMessage(1, {2, 1, 1}, {5}), "1 footprints for 2 cells");
+  ExpectRejected(HeaderMessage(3, {2, 1, 1}),
+                 "format version 3 is not supported (this reader "
+                 "reads 1..2)");
+  ExpectRejected(HeaderMessage(0, {2, 1, 1}),
+                 "format version 0 is not supported (this reader "
+                 "reads 1..2)");
+  // A grid beyond the limit is refused before anything is allocated for its cells.
+  ExpectRejected(HeaderMessage(2, {4096, 4096, 4096}) + FootprintsMessage(0, {5}, {0}),
+                 "cell grid 4096x4096x4096 = 68719476736 cells exceeds the trace format's limit "
+                 "of 16777216 cells (kTraceMaxCells, e.g. 256x256x256)");
+  ExpectRejected(HeaderMessage(2, {2, 0, 2}),
+                 "cell grid 2x0x2: every dimension must be at least 1");
 }
 
 }  // namespace
