@@ -6,6 +6,8 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "base/check.h"
 #include "base/parse.h"
@@ -66,25 +68,61 @@ void PrintCameras(const TraceHeader& h, std::ostream& out) {
   }
 }
 
+// What Open() could not read, when it scanned instead of reading the index: the index and
+// the bytes after the last intact frame, with the reader's reason.
+std::string Unreadable(const TraceReader& r) {
+  std::string lost = "the index";
+  const std::uint64_t begin = r.readable_end(), end = r.file_size();
+  if (begin < end) {
+    const std::size_t n = r.frames().size();
+    const std::string after = n == 0 ? "the header"
+                                     : "the last intact frame (frame " +
+                                           std::to_string(r.frames()[n - 1].frame) + ", #" +
+                                           std::to_string(n - 1) + ")";
+    lost += " and bytes " + std::to_string(begin) + ".." + std::to_string(end) + " (" +
+            std::to_string(end - begin) + " bytes) after " + after;
+  }
+  return lost + " are unreadable: " + r.warning();
+}
+
 // Reads and checks every frame (zstd and frame checksums, content), streaming, and reports
-// the read speed.
+// the read speed. Any damage fails the verification (InputError, exit 2) after every frame
+// was tried: a missing or damaged index, bytes that are not part of an intact frame, a bad
+// frame. (The other commands warn and use the intact frames.)
 void RunVerify(const TraceArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
-  const TraceReader r = OpenWithWarning(a.file);
+  const TraceReader r = TraceReader::Open(a.file);
+  std::vector<std::string> damage;
+  if (!r.warning().empty()) damage.push_back(Unreadable(r));
   std::uint64_t rays = 0, visits = 0;
+  std::size_t verified = 0;
   for (std::size_t i = 0; i < r.frames().size(); ++i) {
-    std::uint64_t frame_visits = 0;
-    r.ForEachBatch(i, [&](const RayBatch& b) {
-      rays += b.size();
-      frame_visits += b.visit_count();
-    });
+    std::uint64_t frame_rays = 0, frame_visits = 0;
+    try {
+      r.ForEachBatch(i, [&](const RayBatch& b) {
+        frame_rays += b.size();
+        frame_visits += b.visit_count();
+      });
+    } catch (const InputError& e) {
+      std::cout << "frame " << r.frames()[i].frame << ": DAMAGED\n";
+      damage.push_back(e.what());
+      continue;
+    }
+    rays += frame_rays;
     visits += frame_visits;
+    ++verified;
     std::cout << "frame " << r.frames()[i].frame << ": ok, " << frame_visits << " visits\n";
   }
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::cout << std::fixed << std::setprecision(3) << r.frames().size() << " frame(s), " << rays
-            << " rays, " << visits << " visits verified in " << s << " s (" << std::setprecision(1)
+  std::cout << std::fixed << std::setprecision(3) << verified << " frame(s), " << rays << " rays, "
+            << visits << " visits verified in " << s << " s (" << std::setprecision(1)
             << visits / std::max(s, 1e-9) / 1e6 << " M visits/s)\n";
+  std::cout.flush();
+  if (damage.empty()) return;
+  std::string message =
+      a.file + ": verification failed (" + std::to_string(damage.size()) + " problem(s)): ";
+  for (std::size_t i = 0; i < damage.size(); ++i) message += (i ? "; " : "") + damage[i];
+  throw InputError(message);
 }
 
 struct ImportArgs {
@@ -181,7 +219,10 @@ void AddTraceCommand(CLI::App& app) {
 
   auto verify = std::make_shared<TraceArgs>();
   CLI::App* v = trace->add_subcommand(
-      "verify", "Read every frame, check checksums and content, and report the read speed.");
+      "verify",
+      "Read every frame, check checksums and content, and report the read speed. Exits 2 on "
+      "any damage (a missing or damaged index, a truncated file, a bad frame), naming what is "
+      "lost; the other commands warn and use the intact frames instead.");
   v->add_option("FILE", verify->file, "trace file")->required();
   v->callback([verify] { RunVerify(*verify); });
 

@@ -1,7 +1,11 @@
-# raycell trace file schema, format version 1 (DESIGN.md §3 "The trace").
+# raycell trace file schema, format version 2 (DESIGN.md §3 "The trace"). The format's
+# constants and limits are in traces/format.h.
 #
 # A trace file (".rct") is a sequence of zstd frames:
-#   1. one zstd frame holding one Record message whose union is `header`;
+#   1. one zstd frame holding one Record message whose union is `header`, then one or more
+#      Records `footprints` holding the cells' footprints in cell order (at most 2^20 runs
+#      each, so a grid of 2^24 cells fits however its footprints vary). Version 1 files have
+#      the footprints in Header.footprints and no `footprints` records;
 #   2. per captured frame, one zstd frame holding one or more Record messages whose union
 #      is `batch` (by default at most 65536 rays and about 2^20 visits each, so every message
 #      stays far below Cap'n Proto's 64 MiB traversal limit), then exactly one Record
@@ -62,7 +66,9 @@
 # significant first, digit 1 as the value 0 and digit 2 as the value 1; any other residual r
 # is written as r + 1. A run ends at the first value >= 2 or at the end of the column. For
 # example the residuals 0 0 0 5 0 are written 0 0 6 0 (3 = 1 + 1*2).
-# Limits. A batch holds at most 2^22 rays and 2^25 visits; a ray at most 2^20 visits.
+# Limits. A batch holds at most 2^22 rays and 2^25 visits; a ray at most 2^20 visits. A file
+# has at most 2^24 cells (nx*ny*nz), 2^18 frames (cameras, index entries), 1024 grids, and
+# 4096 bytes in each text field.
 #
 # Checksums. hash64 is raycell's 64-bit word hash (Hash64 in traces/trace_writer.h):
 #   h = seed; for each 64-bit word w: h = rotl64(h ^ (w * P2), 31) * P1;
@@ -81,8 +87,9 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("raycell::schema");
 
-const formatVersion :UInt32 = 1;
+const formatVersion :UInt32 = 2;
 # The format version this schema describes; Header.formatVersion of files written with it.
+# Version 1 differs only in where the footprints are (Header.footprints).
 
 # Every message of the file has this root, so one `capnp decode` reads the whole file.
 struct Record {
@@ -93,6 +100,8 @@ struct Record {
     # A run of consecutive rays of one frame.
     frameEnd @2 :FrameEnd;
     # Last message of each frame's zstd frame.
+    footprints @3 :Footprints;
+    # Cell footprints, after the header in its zstd frame (version 2).
   }
 }
 
@@ -173,13 +182,28 @@ struct Header {
   cellsZ @8 :UInt32;
   # Number of cells along z (nz).
   footprints @9 :List(UInt64);
-  # Bytes a processor loads to work in each cell, indexed by cell; nx*ny*nz entries.
+  # Version 1: bytes a processor loads to work in each cell, indexed by cell; nx*ny*nz
+  # entries. Version 2: empty; the footprints are in `footprints` records.
   footprintMode @10 :Text;
   # How footprints were computed: "sparse" (allocated leaves) or "dense" (all voxels).
   cameras @11 :List(Camera);
   # The camera of every frame, in frame order.
   settings @12 :Settings;
   # Renderer settings of the capture.
+}
+
+# Footprints of consecutive cells (version 2): the records after the header cover cells
+# 0..nx*ny*nz-1 in order, each continuing where the previous one ended, as runs of cells with
+# equal footprints (empty cells, footprint 0, come in long runs). A record has at most 2^20
+# runs.
+struct Footprints {
+  firstCell @0 :UInt64;
+  # The record's first cell: the number of cells the records before it cover.
+  values @1 :Column;
+  # Per run, in cell order: the footprint of its cells, the bytes a processor loads to work
+  # in one of them.
+  runs @2 :Column;
+  # Per run: its number of cells minus 1 (as many values as `values`).
 }
 
 # One integer column: value i is narrow[i] when narrow[i] < 255; narrow[i] == 255 is an

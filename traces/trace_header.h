@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-namespace raycell {
+#include "traces/format.h"
 
-inline constexpr std::uint32_t kTraceFormatVersion = 1;
+namespace raycell {
 
 struct Vec3d {
   double x = 0, y = 0, z = 0;

@@ -18,18 +18,17 @@
 #include <utility>
 
 #include "base/check.h"
+#include "traces/columns.h"
+#include "traces/format.h"
+#include "traces/frame_checksum.h"
 #include "traces/trace.capnp.h"
-#include "traces/trace_writer.h"
 
 namespace raycell {
 namespace {
 
 // Bad bytes found while decoding; turned into an InputError naming the file and the part
 // of it (header, frame, index) by Guarded() below.
-class BadData : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+using BadData = BadTraceData;
 
 std::string Str(std::uint64_t v) { return std::to_string(v); }
 
@@ -235,37 +234,53 @@ CameraKey ToCamera(schema::Camera::Reader c) {
   return k;
 }
 
-void CheckHeader(const TraceHeader& h) {
+// The header's fields as read, checked against the format's limits (footprints not yet:
+// version 2 stores them in the records after the header).
+TraceHeader ToHeader(schema::Header::Reader r) {
+  TraceHeader h;
+  h.format_version = r.getFormatVersion();
   if (h.format_version < 1 || h.format_version > kTraceFormatVersion) {
     throw BadData("format version " + Str(h.format_version) + " is not supported (this reader " +
                   "reads 1.." + Str(kTraceFormatVersion) + ")");
   }
-  std::uint64_t cells = 1;
-  for (std::uint32_t n : h.cells) cells *= n <= (1u << 10) ? n : 0;
-  if (cells == 0 || cells > (std::uint64_t{1} << 30)) {
-    throw BadData("bad cell grid " + Str(h.cells[0]) + "x" + Str(h.cells[1]) + "x" +
-                  Str(h.cells[2]));
-  }
-  if (h.footprints.size() != cells) {
-    throw BadData(Str(h.footprints.size()) + " footprints for " + Str(cells) + " cells");
-  }
-}
-
-TraceHeader ToHeader(schema::Header::Reader r) {
-  TraceHeader h;
-  h.format_version = r.getFormatVersion();
   h.producer = ToStd(r.getProducer());
   h.scene = ToStd(r.getScene());
   for (auto g : r.getGrids()) h.grids.push_back(ToGrid(g));
   h.box_min = ToVec3(r.getBoxMin());
   h.box_max = ToVec3(r.getBoxMax());
   h.cells = {r.getCellsX(), r.getCellsY(), r.getCellsZ()};
-  for (std::uint64_t f : r.getFootprints()) h.footprints.push_back(f);
   h.footprint_mode = ToStd(r.getFootprintMode());
   for (auto c : r.getCameras()) h.cameras.push_back(ToCamera(c));
   h.settings = ToSettings(r.getSettings());
-  CheckHeader(h);
+  const std::string problem = TraceHeaderProblem(h);
+  if (!problem.empty()) throw BadData(problem);
+  const auto footprints = r.getFootprints();
+  if (h.format_version >= 2 && footprints.size() != 0) {
+    throw BadData("version 2 header with footprints in it");
+  }
+  for (std::uint64_t f : footprints) h.footprints.push_back(f);
   return h;
+}
+
+// Appends the footprints of one `footprints` record (version 2) to `out`, which holds those
+// of the records before it; at most `cells` in all.
+void AppendFootprints(schema::Footprints::Reader r, std::uint64_t cells,
+                      std::vector<std::uint64_t>& out) {
+  if (r.getFirstCell() != out.size()) {
+    throw BadData("footprints record starts at cell " + Str(r.getFirstCell()) + ", expected " +
+                  Str(out.size()));
+  }
+  ColumnReader values(r.getValues(), "footprint values");
+  ColumnReader runs(r.getRuns(), r.getValues().getNarrow().size(), "footprint runs");
+  if (values.AtEnd()) throw BadData("footprints record without runs");
+  while (!values.AtEnd()) {
+    const std::uint64_t value = values.Next(), run = runs.Next();
+    if (run >= cells - out.size())
+      throw BadData("footprints for more than " + Str(cells) + " cells");
+    out.insert(out.end(), run + 1, value);
+  }
+  values.Finish();
+  runs.Finish();
 }
 
 // Decodes the header frame at offset 0; returns the header and sets `length`.
@@ -273,104 +288,31 @@ TraceHeader ReadHeader(const FileIn& file, std::uint64_t& length) {
   ZstdFrameReader in(file, 0, file.size());
   kj::Array<capnp::word> words;
   if (!ReadMessage(in, words)) throw BadData("empty header frame");
-  capnp::FlatArrayMessageReader message(words, MessageOptions());
-  const auto record = message.getRoot<schema::Record>();
-  if (record.which() != schema::Record::HEADER) throw BadData("first record is not a header");
-  TraceHeader header = ToHeader(record.getHeader());
-  char extra;
-  if (in.Read(&extra, 1) != 0) throw BadData("more than one message in the header frame");
+  TraceHeader header;
+  {
+    capnp::FlatArrayMessageReader message(words, MessageOptions());
+    const auto record = message.getRoot<schema::Record>();
+    if (record.which() != schema::Record::HEADER) throw BadData("first record is not a header");
+    header = ToHeader(record.getHeader());
+  }
+  const std::uint64_t cells = TraceCellCount(header.cells);
+  while (ReadMessage(in, words)) {
+    if (header.format_version < 2) throw BadData("more than one message in the header frame");
+    capnp::FlatArrayMessageReader message(words, MessageOptions());
+    const auto record = message.getRoot<schema::Record>();
+    if (record.which() != schema::Record::FOOTPRINTS) {
+      throw BadData("a record other than footprints after the header");
+    }
+    AppendFootprints(record.getFootprints(), cells, header.footprints);
+  }
+  if (header.footprints.size() != cells) {
+    throw BadData(Str(header.footprints.size()) + " footprints for " + Str(cells) + " cells");
+  }
   length = in.consumed();
   return header;
 }
 
 // ---- Batches -----------------------------------------------------------------------------
-
-// Reads a Column value by value, checking its escapes and that it has as many values as
-// the decoding asks for.
-class ColumnReader {
- public:
-  ColumnReader(schema::Column::Reader c, const char* name)
-      : narrow_(c.getNarrow()), wide_(c.getWide()), name_(name) {}
-  // Also checks that the column has exactly `expected` values.
-  ColumnReader(schema::Column::Reader c, std::size_t expected, const char* name)
-      : ColumnReader(c, name) {
-    if (narrow_.size() != expected) {
-      throw BadData(std::string("column ") + name + " has " + Str(narrow_.size()) +
-                    " values, expected " + Str(expected));
-    }
-  }
-  bool AtEnd() const { return next_ == narrow_.size(); }
-  std::uint64_t Next() {
-    const std::uint64_t v = Peek();
-    wide_next_ += narrow_[next_] == 255;
-    ++next_;
-    return v;
-  }
-  // The next value, left unread.
-  std::uint64_t Peek() const {
-    if (AtEnd()) throw BadData(std::string("column ") + name_ + ": too few values");
-    const std::uint8_t b = narrow_[next_];
-    if (b < 255) return b;
-    if (wide_next_ == wide_.size()) throw BadData(std::string("column ") + name_ + ": bad escape");
-    return wide_[wide_next_];
-  }
-  void Finish() const {
-    if (!AtEnd() || wide_next_ != wide_.size()) {
-      throw BadData(std::string("column ") + name_ + ": extra values");
-    }
-  }
-  const char* name() const { return name_; }
-
- private:
-  capnp::List<std::uint8_t>::Reader narrow_;
-  capnp::List<std::uint64_t>::Reader wide_;
-  const char* name_;
-  unsigned next_ = 0, wide_next_ = 0;
-};
-
-// Reads a zero-run coded Column (see "Samples" in trace.capnp).
-class ZeroRunColumnReader {
- public:
-  ZeroRunColumnReader(schema::Column::Reader c, const char* name) : column_(c, name) {}
-  std::uint64_t Next() {
-    if (zeros_ > 0) {
-      --zeros_;
-      return 0;
-    }
-    std::uint64_t v = column_.Next();
-    if (v >= 2) return v - 1;
-    // A run of zeros: bijective base-2 digits, least significant first, up to a value >= 2.
-    std::uint64_t run = 0;
-    for (int digit = 0;; ++digit) {
-      if (digit == 40) throw BadData(std::string("column ") + column_.name() + ": bad zero run");
-      run += (v + 1) << digit;
-      if (column_.AtEnd() || column_.Peek() >= 2) break;
-      v = column_.Next();
-    }
-    zeros_ = run - 1;
-    return 0;
-  }
-  void Finish() const {
-    if (zeros_ > 0) throw BadData(std::string("column ") + column_.name() + ": extra values");
-    column_.Finish();
-  }
-
- private:
-  ColumnReader column_;
-  std::uint64_t zeros_ = 0;  // zeros of the current run not yet returned
-};
-
-std::int64_t UnZigZag(std::uint64_t code) {
-  return static_cast<std::int64_t>(code >> 1) ^ -static_cast<std::int64_t>(code & 1);
-}
-
-// previous + unzigzag(code), which must fit a uint32.
-std::uint32_t ApplyDelta(std::uint64_t previous, std::uint64_t code, const char* what) {
-  if (code > (std::uint64_t{1} << 34)) throw BadData(std::string("bad ") + what + " delta");
-  const std::int64_t v = static_cast<std::int64_t>(previous) + UnZigZag(code);
-  if (v < 0 || v > std::int64_t{0xFFFFFFFF}) throw BadData(std::string("bad ") + what + " delta");
-  return static_cast<std::uint32_t>(v);
-}
 
 struct BatchColumns {
   capnp::List<std::uint8_t>::Reader heads;
@@ -784,10 +726,14 @@ FrameSummary ToSummary(schema::IndexEntry::Reader e) {
   return s;
 }
 
-std::vector<FrameSummary> ToSummaries(schema::Index::Reader index, std::uint64_t header_length,
-                                      std::uint64_t index_offset) {
-  if (index.getFormatVersion() != kTraceFormatVersion || index.getHeaderLength() != header_length) {
+std::vector<FrameSummary> ToSummaries(schema::Index::Reader index, const TraceHeader& header,
+                                      std::uint64_t header_length, std::uint64_t index_offset) {
+  if (index.getFormatVersion() != header.format_version ||
+      index.getHeaderLength() != header_length) {
     throw BadData("damaged: version or header length disagrees with the header");
+  }
+  if (index.getFrames().size() > kTraceMaxFrames) {
+    throw BadData("damaged: more than " + Str(kTraceMaxFrames) + " frames");
   }
   std::vector<FrameSummary> frames;
   std::uint64_t next = header_length;
@@ -803,7 +749,8 @@ std::vector<FrameSummary> ToSummaries(schema::Index::Reader index, std::uint64_t
   return frames;
 }
 
-std::vector<FrameSummary> ReadIndex(const FileIn& file, std::uint64_t header_length) {
+std::vector<FrameSummary> ReadIndex(const FileIn& file, const TraceHeader& header,
+                                    std::uint64_t header_length) {
   const IndexLocation where(file, header_length);
   auto words = kj::heapArray<capnp::word>(where.length / 8);
   file.ReadAt(where.frame_offset + 8, words.begin(), where.length);
@@ -811,7 +758,7 @@ std::vector<FrameSummary> ReadIndex(const FileIn& file, std::uint64_t header_len
   hash.AddBytes(words.begin(), where.length);
   if (hash.Finish() != where.hash) throw BadData("damaged: checksum mismatch");
   capnp::FlatArrayMessageReader message(words, MessageOptions());
-  return ToSummaries(message.getRoot<schema::Index>(), header_length, where.frame_offset);
+  return ToSummaries(message.getRoot<schema::Index>(), header, header_length, where.frame_offset);
 }
 
 }  // namespace
@@ -825,6 +772,7 @@ struct TraceReader::Impl {
   std::uint64_t header_length = 0;
   std::vector<FrameSummary> frames;
   std::string warning;
+  std::uint64_t readable_end = 0;
 
   explicit Impl(const std::string& p) : path(p), file(p) {}
 
@@ -838,10 +786,12 @@ struct TraceReader::Impl {
     try {
       frames = Guarded(
           path, [] { return std::string("index"); },
-          [&] { return ReadIndex(file, header_length); });
+          [&] { return ReadIndex(file, header, header_length); });
+      readable_end = file.size();
     } catch (const InputError& e) {
       std::string stop;
       frames = Scan(stop);
+      readable_end = frames.empty() ? header_length : frames.back().offset + frames.back().length;
       warning = std::string(e.what()) + "; scanned the file instead and kept " +
                 Str(frames.size()) + " complete frame(s)" +
                 (stop.empty() ? "" : "; the scan stopped at " + stop);
@@ -897,6 +847,7 @@ const TraceHeader& TraceReader::header() const { return impl_->header; }
 const std::vector<FrameSummary>& TraceReader::frames() const { return impl_->frames; }
 const std::string& TraceReader::warning() const { return impl_->warning; }
 std::uint64_t TraceReader::file_size() const { return impl_->file.size(); }
+std::uint64_t TraceReader::readable_end() const { return impl_->readable_end; }
 
 void TraceReader::ForEachBatch(std::size_t frame_index, const BatchFn& fn) const {
   const FrameSummary& s = impl_->Frame(frame_index);

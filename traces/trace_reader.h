@@ -45,6 +45,10 @@ class TraceReader {
   // Empty when the index was read; otherwise why it was not and what the scan recovered.
   const std::string& warning() const;
   std::uint64_t file_size() const;
+  // Where the part of the file Open() could read ends: file_size() when the index was read;
+  // otherwise the end of the last complete, valid frame the scan kept (or of the header).
+  // What follows (a partial or damaged frame, the frames after it, the index) was not read.
+  std::uint64_t readable_end() const;
 
   // Calls `fn` with each batch of frame `frame_index` (an index into frames()) in ray order.
   // Batch ray ids are frame-local; parents may point into earlier batches. Only one batch is

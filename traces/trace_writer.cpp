@@ -18,47 +18,10 @@
 
 #include "base/check.h"
 #include "base/file.h"
+#include "traces/columns.h"
 #include "traces/trace.capnp.h"
 
 namespace raycell {
-
-// ---- FrameAccumulator ------------------------------------------------------------------
-
-FrameAccumulator::FrameAccumulator(std::int32_t frame, bool store_t) : store_t_(store_t) {
-  summary_.frame = frame;
-}
-
-namespace {
-std::uint64_t FloatBits(float f) {
-  std::uint32_t u;
-  std::memcpy(&u, &f, sizeof u);
-  return u;
-}
-}  // namespace
-
-void FrameAccumulator::AddRay(const RayView& r) {
-  hash_.Add(static_cast<std::uint64_t>(r.kind));
-  hash_.Add(r.parent);
-  hash_.Add(r.spawn);
-  hash_.Add(r.pixel_x);
-  hash_.Add(r.pixel_y);
-  hash_.Add(r.visit_count);
-  for (std::size_t i = 0; i < r.visit_count; ++i) {
-    hash_.Add(r.cells[i]);
-    hash_.Add(r.samples[i]);
-    if (store_t_) hash_.Add(FloatBits(r.t_enter[i]) << 32 | FloatBits(r.t_exit[i]));
-    summary_.samples += r.samples[i];
-  }
-  ++summary_.rays;
-  ++summary_.rays_by_kind[static_cast<int>(r.kind)];
-  summary_.visits += r.visit_count;
-}
-
-FrameSummary FrameAccumulator::Summary() const {
-  FrameSummary s = summary_;
-  s.checksum = hash_.Finish();
-  return s;
-}
 
 namespace {
 
@@ -147,67 +110,6 @@ class ZstdSink : public kj::OutputStream {
 };
 
 // ---- Encoding ----------------------------------------------------------------------------
-
-std::uint64_t ZigZag(std::int64_t v) {
-  return (static_cast<std::uint64_t>(v) << 1) ^ static_cast<std::uint64_t>(v >> 63);
-}
-
-std::int64_t Delta(std::uint64_t value, std::uint64_t previous) {
-  return static_cast<std::int64_t>(value - previous);
-}
-
-// A Column being built: narrow bytes with 255 escaping into `wide`.
-class ColumnBuilder {
- public:
-  void Add(std::uint64_t v) {
-    if (v < 255) {
-      narrow_.push_back(static_cast<std::uint8_t>(v));
-    } else {
-      narrow_.push_back(255);
-      wide_.push_back(v);
-    }
-  }
-  void Fill(schema::Column::Builder column) const {
-    auto narrow = column.initNarrow(static_cast<unsigned>(narrow_.size()));
-    for (unsigned i = 0; i < narrow_.size(); ++i) narrow.set(i, narrow_[i]);
-    auto wide = column.initWide(static_cast<unsigned>(wide_.size()));
-    for (unsigned i = 0; i < wide_.size(); ++i) wide.set(i, wide_[i]);
-  }
-  std::size_t bytes() const { return narrow_.size() + 8 * wide_.size(); }
-
- private:
-  std::vector<std::uint8_t> narrow_;
-  std::vector<std::uint64_t> wide_;
-};
-
-// A zero-run coded Column (see "Samples" in trace.capnp): a run of n zeros is written as
-// the digits of n in bijective base 2 (digit 1 -> 0, digit 2 -> 1, least significant
-// first), any other value v as v + 1.
-class ZeroRunColumnBuilder {
- public:
-  void Add(std::uint64_t v) {
-    if (v == 0) {
-      ++zeros_;
-      return;
-    }
-    FlushZeros();
-    column_.Add(v + 1);
-  }
-  // Ends the column; call once, before Fill().
-  void Finish() { FlushZeros(); }
-  void Fill(schema::Column::Builder column) const { column_.Fill(column); }
-  std::size_t bytes() const { return column_.bytes(); }
-
- private:
-  void FlushZeros() {
-    // Odd n: digit 1, n -> (n - 1) / 2; even n: digit 2, n -> (n - 2) / 2 == (n - 1) / 2.
-    for (std::uint64_t n = zeros_; n > 0; n = (n - 1) / 2) column_.Add((n & 1) ? 0 : 1);
-    zeros_ = 0;
-  }
-
-  ColumnBuilder column_;
-  std::uint64_t zeros_ = 0;
-};
 
 // Heads run-length coded: one byte per run of equal heads, and the run's length - 1.
 class HeadRunBuilder {
@@ -396,8 +298,9 @@ void FillCameras(capnp::List<schema::Camera>::Builder out, const std::vector<Cam
   }
 }
 
+// The header message; the footprints follow in footprints records.
 void FillHeader(schema::Header::Builder out, const TraceHeader& h) {
-  out.setFormatVersion(h.format_version);
+  out.setFormatVersion(kTraceFormatVersion);
   out.setProducer(h.producer);
   out.setScene(h.scene);
   FillGrids(out.initGrids(static_cast<unsigned>(h.grids.size())), h.grids);
@@ -406,12 +309,32 @@ void FillHeader(schema::Header::Builder out, const TraceHeader& h) {
   out.setCellsX(h.cells[0]);
   out.setCellsY(h.cells[1]);
   out.setCellsZ(h.cells[2]);
-  auto footprints = out.initFootprints(static_cast<unsigned>(h.footprints.size()));
-  for (unsigned i = 0; i < h.footprints.size(); ++i) footprints.set(i, h.footprints[i]);
   out.setFootprintMode(h.footprint_mode);
   FillCameras(out.initCameras(static_cast<unsigned>(h.cameras.size())), h.cameras);
   FillSettings(out.initSettings(), h.settings);
 }
+
+// Footprints of cells [first, end) as runs of equal values, into a footprints record.
+class FootprintRecord {
+ public:
+  explicit FootprintRecord(std::uint64_t first) : first_(first) {}
+  void Add(std::uint64_t value, std::uint64_t run) {
+    values_.Add(value);
+    runs_.Add(run - 1);
+    ++count_;
+  }
+  std::size_t runs() const { return count_; }
+  void Fill(schema::Footprints::Builder out) const {
+    out.setFirstCell(first_);
+    values_.Fill(out.initValues());
+    runs_.Fill(out.initRuns());
+  }
+
+ private:
+  std::uint64_t first_;
+  ColumnBuilder values_, runs_;
+  std::size_t count_ = 0;
+};
 
 void FillKindCounts(capnp::List<std::uint64_t>::Builder out, const FrameSummary& s) {
   for (unsigned k = 0; k < s.rays_by_kind.size(); ++k) out.set(k, s.rays_by_kind[k]);
@@ -509,8 +432,25 @@ struct TraceWriter::Impl {
     capnp::MallocMessageBuilder message;
     FillHeader(message.initRoot<schema::Record>().initHeader(), header);
     WriteRecord(message);
+    WriteFootprints();
     sink.EndFrame();
     header_length = file.bytes();
+  }
+
+  // The footprints as records of at most options.footprint_runs_per_record runs.
+  void WriteFootprints() {
+    const std::vector<std::uint64_t>& f = header.footprints;
+    FootprintRecord record(0);
+    for (std::size_t begin = 0, end; begin < f.size(); begin = end) {
+      for (end = begin + 1; end < f.size() && f[end] == f[begin];) ++end;
+      record.Add(f[begin], end - begin);
+      if (record.runs() == options.footprint_runs_per_record || end == f.size()) {
+        capnp::MallocMessageBuilder message;
+        record.Fill(message.initRoot<schema::Record>().initFootprints());
+        WriteRecord(message);
+        record = FootprintRecord(end);
+      }
+    }
   }
 
   void FlushPending() {
@@ -564,7 +504,12 @@ TraceWriter TraceWriter::Create(const std::string& path, const TraceHeader& head
     throw InputError(path + ": zstd level " + std::to_string(level) + " is not in 1.." +
                      std::to_string(kTraceMaxZstdLevel));
   }
+  const std::string problem = TraceHeaderProblem(header);
+  if (!problem.empty()) throw InputError(path + ": " + problem);
   RAYCELL_CHECK(options.max_batch_rays > 0 && options.max_batch_visits > 0);
+  RAYCELL_CHECK(options.footprint_runs_per_record > 0 &&
+                options.footprint_runs_per_record <= kTraceFootprintRunsPerRecord);
+  RAYCELL_CHECK_LE(options.max_frames, kTraceMaxFrames);
   RAYCELL_CHECK_LE(options.max_batch_rays, kTraceMaxBatchRays);
   RAYCELL_CHECK_LE(options.max_batch_visits, kTraceMaxBatchVisits - kTraceMaxRayVisits);
   RAYCELL_CHECK_EQ(header.footprints.size(), std::size_t{header.cell_count()});
@@ -583,6 +528,10 @@ TraceWriter TraceWriter::Create(const std::string& path, const TraceHeader& head
 void TraceWriter::BeginFrame(std::int32_t frame) {
   Impl& w = *impl_;
   RAYCELL_CHECK(!w.in_frame && !w.finished);
+  if (w.frames.size() >= w.options.max_frames) {
+    throw InputError(w.path + ": more than " + std::to_string(w.options.max_frames) +
+                     " frames, the trace format's limit (kTraceMaxFrames)");
+  }
   w.in_frame = true;
   w.frame = FrameAccumulator(frame, w.header.settings.store_t);
   w.frame_offset = w.file.bytes();

@@ -3,9 +3,7 @@
 // the capture. The file is written to `path + ".tmp"` and renamed to `path` by Finish();
 // each frame is flushed to the .tmp as a complete zstd frame at EndFrame(), so an
 // interrupted capture leaves a .tmp whose finished frames TraceReader can still read.
-//
-// Also here: the pieces of the format that writer and reader share (limits, magic numbers,
-// the frame checksum; the hash itself is base/hash.h).
+// The format's constants and limits are in traces/format.h.
 #pragma once
 
 #include <cstddef>
@@ -13,58 +11,12 @@
 #include <memory>
 #include <string>
 
-#include "base/hash.h"
+#include "traces/format.h"
+#include "traces/frame_checksum.h"
 #include "traces/ray_batch.h"
 #include "traces/trace_header.h"
 
 namespace raycell {
-
-// ---- Shared format constants -------------------------------------------------------------
-
-// Magic of the skippable zstd frame that holds the index.
-inline constexpr std::uint32_t kTraceIndexMagic = 0x184D2A5B;
-// Last 8 bytes of a complete trace file.
-inline constexpr char kTraceIndexTag[9] = "RCTINDEX";
-// Trailer after the index message: hash, message length, tag.
-inline constexpr std::size_t kTraceTrailerBytes = 24;
-// Largest Cap'n Proto message the reader accepts, and the writer ever writes.
-inline constexpr std::size_t kTraceMaxMessageBytes = std::size_t{64} << 20;
-// Highest zstd level the writer accepts (keeps the window within kTraceMaxWindowLog).
-inline constexpr int kTraceMaxZstdLevel = 19;
-inline constexpr int kTraceMaxWindowLog = 25;
-// Most rays and visits in one batch message, and visits of one ray (see "Limits" in
-// trace.capnp). They bound the reader's memory whatever the file says.
-inline constexpr std::size_t kTraceMaxBatchRays = std::size_t{1} << 22;
-inline constexpr std::size_t kTraceMaxBatchVisits = std::size_t{1} << 25;
-inline constexpr std::size_t kTraceMaxRayVisits = std::size_t{1} << 20;
-
-// Ray head byte (see "Ray heads" in trace.capnp).
-inline constexpr unsigned kHeadKindMask = 0x03;
-inline constexpr unsigned kHeadParentShift = 2;  // 2-bit parent code
-inline constexpr unsigned kHeadSpawnShift = 4;   // 2-bit spawn code
-inline constexpr unsigned kHeadNewPath = 0x40;
-inline constexpr unsigned kHeadNewPixel = 0x80;
-inline constexpr unsigned kParentIsLastNonShadow = 0;
-inline constexpr unsigned kParentOfPreviousRay = 1;
-inline constexpr unsigned kParentExplicit = 2;
-inline constexpr unsigned kSpawnExplicit = 3;
-
-// Running totals and checksum of one frame's rays, fed ray by ray in id order. Writer and
-// reader both use it, so the checksum does not depend on how rays were split into batches.
-class FrameAccumulator {
- public:
-  FrameAccumulator(std::int32_t frame, bool store_t);
-  void AddRay(const RayView& ray);
-  // Totals so far; offset and length are left 0.
-  FrameSummary Summary() const;
-  std::uint64_t rays() const { return summary_.rays; }
-  std::uint64_t visits() const { return summary_.visits; }
-
- private:
-  FrameSummary summary_;
-  bool store_t_;
-  Hash64 hash_;
-};
 
 // ---- Writer ------------------------------------------------------------------------------
 
@@ -75,13 +27,19 @@ struct TraceWriterOptions {
   // A batch also ends once it holds this many visits (at most kTraceMaxBatchVisits -
   // kTraceMaxRayVisits).
   std::size_t max_batch_visits = std::size_t{1} << 20;
+  // Runs of equal footprints per footprints record (at most kTraceFootprintRunsPerRecord).
+  std::size_t footprint_runs_per_record = kTraceFootprintRunsPerRecord;
+  // Most frames in the file (at most kTraceMaxFrames; lower only to test the limit).
+  std::size_t max_frames = kTraceMaxFrames;
 };
 
 class TraceWriter {
  public:
-  // Opens `path + ".tmp"` and writes the header. The zstd level is
-  // header.settings.zstd_level (1..19); visits carry t when header.settings.store_t.
-  // Throws InputError naming the path when the file cannot be written.
+  // Opens `path + ".tmp"` and writes the header (format version kTraceFormatVersion, whatever
+  // header.format_version says). The zstd level is header.settings.zstd_level (1..19); visits
+  // carry t when header.settings.store_t. Throws InputError naming the path when the file
+  // cannot be written or the header exceeds a limit of the format (TraceHeaderProblem in
+  // traces/format.h), before anything is written.
   static TraceWriter Create(const std::string& path, const TraceHeader& header,
                             const TraceWriterOptions& options = {});
   // As above with header.settings.zstd_level replaced by `zstd_level`.
@@ -92,7 +50,8 @@ class TraceWriter {
   // Without Finish(), closes and leaves the .tmp file (holding every ended frame).
   ~TraceWriter();
 
-  // Starts frame number `frame` (a camera's frame number, e.g. 150).
+  // Starts frame number `frame` (a camera's frame number, e.g. 150). InputError when the file
+  // already has kTraceMaxFrames (options.max_frames) frames.
   void BeginFrame(std::int32_t frame);
   // Appends rays to the current frame. `rays.first_id()` must equal the number of rays
   // appended to this frame so far (ids are frame-local and continue across calls); parents

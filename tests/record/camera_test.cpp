@@ -8,6 +8,7 @@
 #include <fstream>
 
 #include "base/check.h"
+#include "tests/test_util.h"
 
 namespace raycell {
 namespace {
@@ -38,7 +39,7 @@ TEST(CameraPath, DefaultFramingSeesTheWholeBox) {
 }
 
 TEST(CameraPath, KeyFramesInterpolateAndBadLinesNameTheLine) {
-  const auto dir = std::filesystem::temp_directory_path();
+  const auto dir = testing::TempDir("camera");
   const auto good = (dir / "raycell_keys_good.txt").string();
   std::ofstream(good) << "# frame eye target fov\n0 0 0 10 0 0 0 40\n10 10 0 10 0 0 0 60\n";
   CameraPathSpec spec;

@@ -1,4 +1,5 @@
-// Helpers shared by the recorder's tests: temporary folders and small recordings.
+// Helpers shared by the recorder's tests: small recordings (temporary folders: TempDir in
+// tests/test_util.h).
 #pragma once
 
 #include <gtest/gtest.h>
@@ -13,14 +14,6 @@
 #include "traces/record/recorder.h"
 
 namespace raycell::testing {
-
-inline std::filesystem::path TempDir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("raycell_test_" + name + "_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
-}
 
 inline std::string ReadBytes(const std::filesystem::path& p) {
   return raycell::testing::ReadBytes(p.string());

@@ -22,7 +22,11 @@ namespace {
 using raycell::testing::Raycell;
 using raycell::testing::Result;
 
-std::filesystem::path Dir() { return raycell::testing::CliDir("cli"); }
+// This process's folder for the tests' files (made once, emptied when made).
+std::filesystem::path Dir() {
+  static const std::filesystem::path dir = raycell::testing::TempDir("cli");
+  return dir;
+}
 
 // Two rays with paths A B and B A (cells 0 and 1): bound 2, Peel 3, optimum 3.
 TEST(Cli, AnalyzePathsOfTwoCrossingRays) {

@@ -23,6 +23,7 @@
 #include "base/check.h"
 #include "tests/test_util.h"
 #include "tests/traces/trace_format.h"
+#include "tests/traces/trace_test_util.h"
 #include "traces/trace.capnp.h"
 #include "traces/trace_reader.h"
 #include "traces/trace_writer.h"
@@ -59,48 +60,15 @@ class Watchdog {
 
 std::string TempPath(const std::string& name) { return testing::TempPath("corrupt", name); }
 
+using testing::ErrorOf;
 using testing::Head;
+using testing::RandomFrame;
 using testing::ReadBytes;
-
-void WriteBytes(const std::string& path, const std::string& bytes) {
-  std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), bytes.size());
-}
+using testing::TestHeader;
+using testing::WriteBytes;
 
 bool Contains(const std::string& text, const std::string& what) {
   return text.find(what) != std::string::npos;
-}
-
-TraceHeader MakeHeader() {
-  TraceHeader h;
-  h.producer = "raycell test";
-  h.scene = "corruption";
-  h.cells = {2, 2, 2};
-  h.footprints.assign(8, 4096);
-  h.settings.store_t = true;
-  return h;
-}
-
-// Valid random rays (parents earlier with visits, spawn inside them, 8 cells).
-RayBatch RandomFrame(std::mt19937_64& rng, std::size_t rays) {
-  RayBatch b(true);
-  for (std::size_t i = 0; i < rays; ++i) {
-    RayId parent = kNoParent;
-    std::uint32_t spawn = 0;
-    if (i > 0 && rng() % 4 != 0) {
-      parent = i - 1 - rng() % std::min<std::size_t>(i, 30);
-      const std::size_t n = b.ray(parent).visit_count;
-      if (n == 0) parent = kNoParent;
-      if (n > 0) spawn = static_cast<std::uint32_t>(rng() % n);
-    }
-    b.BeginRay(parent == kNoParent ? RayKind::kPrimary : RayKind::kShadow, parent, spawn,
-               rng() % 64, rng() % 64);
-    std::uint32_t cell = rng() % 8;
-    for (int v = 0, n = static_cast<int>(rng() % 4); v < n; ++v) {
-      b.AddVisit(cell, rng() % 300, static_cast<float>(v), static_cast<float>(v) + 0.5f);
-      cell = (cell + 1 + rng() % 7) % 8;
-    }
-  }
-  return b;
 }
 
 struct Reference {
@@ -118,9 +86,9 @@ Reference MakeReference(const std::string& name, std::size_t rays, std::size_t b
   std::mt19937_64 rng(rays);
   TraceWriterOptions options;
   options.max_batch_rays = batch_rays;
-  TraceWriter w = TraceWriter::Create(ref.path, MakeHeader(), options);
+  TraceWriter w = TraceWriter::Create(ref.path, TestHeader({2, 2, 2}, true), options);
   for (int f = 0; f < 4; ++f) {
-    ref.frames.push_back(f == 2 ? RayBatch(true) : RandomFrame(rng, rays));
+    ref.frames.push_back(f == 2 ? RayBatch(true) : RandomFrame(rng, rays, true, 8, 3));
     w.BeginFrame(20 + f);
     w.Append(ref.frames.back());
     ref.summaries.push_back(w.EndFrame());
@@ -557,6 +525,99 @@ TEST_F(InvalidContentTest, FrameEndMustMatchTheRays) {
       "1 shadow), 3 visits, 18 samples",
       s);
   ExpectRejected({GoodBatch()}, "without a frameEnd record", std::nullopt);
+}
+
+// ---- Well-formed header frames with invalid content --------------------------------------
+
+std::string HeaderMessage(std::uint32_t version, std::array<std::uint32_t, 3> cells,
+                          const std::vector<std::uint64_t>& footprints_in_header = {}) {
+  capnp::MallocMessageBuilder message;
+  auto out = message.initRoot<schema::Record>().initHeader();
+  out.setFormatVersion(version);
+  out.setCellsX(cells[0]);
+  out.setCellsY(cells[1]);
+  out.setCellsZ(cells[2]);
+  auto f = out.initFootprints(static_cast<unsigned>(footprints_in_header.size()));
+  for (unsigned i = 0; i < footprints_in_header.size(); ++i) f.set(i, footprints_in_header[i]);
+  out.initSettings().setZstdLevel(3);
+  return Flat(message);
+}
+
+std::string FootprintsMessage(std::uint64_t first, const std::vector<std::uint64_t>& values,
+                              const std::vector<std::uint64_t>& runs) {
+  capnp::MallocMessageBuilder message;
+  auto out = message.initRoot<schema::Record>().initFootprints();
+  out.setFirstCell(first);
+  FillColumn(out.initValues(), values);
+  FillColumn(out.initRuns(), runs);
+  return Flat(message);
+}
+
+class InvalidHeaderTest : public ::testing::Test {
+ protected:
+  void TearDown() override { std::remove(path_.c_str()); }
+
+  // A file of one header frame holding `messages`, and no frames.
+  std::string Open(const std::string& messages) {
+    WriteBytes(path_, ZstdFrame(messages));
+    return ErrorOf([&] { TraceReader::Open(path_); });
+  }
+  void ExpectRejected(const std::string& messages, const std::string& reason) {
+    EXPECT_EQ(Open(messages), path_ + ": header: " + reason);
+  }
+
+  std::string path_ = TempPath("crafted_header.rct");
+};
+
+TEST_F(InvalidHeaderTest, CraftedGoodHeadersRead) {
+  EXPECT_EQ(Open(HeaderMessage(2, {2, 2, 2}) + FootprintsMessage(0, {300, 0}, {2, 4})), "");
+  EXPECT_EQ(TraceReader::Open(path_).header().footprints,
+            (std::vector<std::uint64_t>{300, 300, 300, 0, 0, 0, 0, 0}));
+  EXPECT_EQ(Open(HeaderMessage(2, {2, 2, 2}) + FootprintsMessage(0, {1}, {2}) +
+                 FootprintsMessage(3, {2}, {4})),
+            "");
+  EXPECT_EQ(TraceReader::Open(path_).header().footprints,
+            (std::vector<std::uint64_t>{1, 1, 1, 2, 2, 2, 2, 2}));
+  EXPECT_EQ(Open(HeaderMessage(1, {2, 1, 1}, {5, 6})), "");
+  EXPECT_EQ(TraceReader::Open(path_).header().footprints, (std::vector<std::uint64_t>{5, 6}));
+}
+
+TEST_F(InvalidHeaderTest, FootprintRecordsMustCoverTheCellsOnce) {
+  const std::string header = HeaderMessage(2, {2, 2, 2});
+  ExpectRejected(header, "0 footprints for 8 cells");
+  ExpectRejected(header + FootprintsMessage(0, {5}, {3}), "4 footprints for 8 cells");
+  ExpectRejected(header + FootprintsMessage(0, {5}, {8}), "footprints for more than 8 cells");
+  ExpectRejected(header + FootprintsMessage(0, {5, 6}, {3, 3}) + FootprintsMessage(8, {1}, {0}),
+                 "footprints for more than 8 cells");
+  ExpectRejected(header + FootprintsMessage(0, {5}, {3}) + FootprintsMessage(5, {6}, {2}),
+                 "footprints record starts at cell 5, expected 4");
+  ExpectRejected(header + FootprintsMessage(0, {5, 6}, {7}),
+                 "column footprint runs has 1 values, expected 2");
+  ExpectRejected(header + FootprintsMessage(0, {}, {}), "footprints record without runs");
+  ExpectRejected(header + FootprintsMessage(0, {5}, {std::uint64_t{1} << 63}),
+                 "footprints for more than 8 cells");
+  ExpectRejected(HeaderMessage(2, {2, 2, 2}, {1, 1, 1, 1, 1, 1, 1, 1}),
+                 "version 2 header with footprints in it");
+  ExpectRejected(header + FootprintsMessage(0, {5}, {7}) + BatchMessage(GoodBatch()),
+                 "a record other than footprints after the header");
+}
+
+TEST_F(InvalidHeaderTest, VersionsAndLimitsAreChecked) {
+  ExpectRejected(HeaderMessage(1, {2, 1, 1}, {5, 6}) + FootprintsMessage(0, {5}, {1}),
+                 "more than one message in the header frame");
+  ExpectRejected(HeaderMessage(1, {2, 1, 1}, {5}), "1 footprints for 2 cells");
+  ExpectRejected(HeaderMessage(3, {2, 1, 1}),
+                 "format version 3 is not supported (this reader "
+                 "reads 1..2)");
+  ExpectRejected(HeaderMessage(0, {2, 1, 1}),
+                 "format version 0 is not supported (this reader "
+                 "reads 1..2)");
+  // A grid beyond the limit is refused before anything is allocated for its cells.
+  ExpectRejected(HeaderMessage(2, {4096, 4096, 4096}) + FootprintsMessage(0, {5}, {0}),
+                 "cell grid 4096x4096x4096 = 68719476736 cells exceeds the trace format's limit "
+                 "of 16777216 cells (kTraceMaxCells, e.g. 256x256x256)");
+  ExpectRejected(HeaderMessage(2, {2, 0, 2}),
+                 "cell grid 2x0x2: every dimension must be at least 1");
 }
 
 }  // namespace

@@ -1,14 +1,12 @@
 // Trace files written and read back: round trips, the index, the .tmp/rename protocol,
-// determinism, `capnp decode` compatibility, JSONL and info output, and the size of a
-// realistic trace (DESIGN.md §3: at most 0.3 bytes per visit at zstd level 3).
+// determinism, `capnp decode` compatibility, JSONL and info output. (The size of a realistic
+// trace is a benchmark: tools/bench/trace_size.cpp.)
 #include <capnp/serialize.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 #include <zstd.h>
 
 #include <algorithm>
-#include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -23,6 +21,7 @@
 #include "tests/test_util.h"
 #include "tests/traces/trace_format.h"
 #include "traces/jsonl.h"
+#include "tests/traces/trace_test_util.h"
 #include "traces/trace.capnp.h"
 #include "traces/trace_inspect.h"
 #include "traces/trace_reader.h"
@@ -36,56 +35,9 @@ std::string TempPath(const std::string& name) { return testing::TempPath("io", n
 bool Exists(const std::string& path) { return std::ifstream(path).good(); }
 
 using testing::Head;
+using testing::RandomFrame;
 using testing::ReadBytes;
-
-TraceHeader MakeHeader(bool store_t, std::array<std::uint32_t, 3> cells = {3, 3, 3}) {
-  TraceHeader h;
-  h.producer = "raycell test";
-  h.scene = "builtin:smoke";
-  h.grids = {{"density", "fog", "builtin", 0.5, 1234}, {"surface", "surface", "a.vdb", 0.25, 77}};
-  h.box_min = {-1, -2, -3};
-  h.box_max = {4, 5, 6.5};
-  h.cells = cells;
-  for (std::uint32_t c = 0; c < h.cell_count(); ++c) h.footprints.push_back(1000 * c + 7);
-  h.footprint_mode = "sparse";
-  for (int f = 0; f < 4; ++f)
-    h.cameras.push_back({10 + f, {1, 2, 3.0 + f}, {0, 0, 0}, {0, 1, 0}, 40});
-  h.settings.store_t = store_t;
-  h.settings.single_precision = !store_t;  // both values round-trip
-  h.settings.width = 320;
-  h.settings.height = 200;
-  return h;
-}
-
-// Valid random rays: parents earlier (mostly close, sometimes far), spawns inside the
-// parent's visits, consecutive visits in different cells, some values big enough to need
-// escapes.
-RayBatch RandomFrame(std::mt19937_64& rng, std::size_t rays, bool store_t,
-                     std::uint32_t cell_count) {
-  RayBatch b(store_t);
-  std::uniform_real_distribution<float> t(0.f, 100.f);
-  for (std::size_t i = 0; i < rays; ++i) {
-    RayId parent = kNoParent;
-    std::uint32_t spawn = 0;
-    if (i > 0 && rng() % 5 != 0) {
-      parent = rng() % 10 == 0 ? rng() % i : i - 1 - rng() % std::min<std::size_t>(i, 40);
-      const std::size_t n = b.ray(parent).visit_count;
-      if (n == 0) parent = kNoParent;
-      if (n > 0) spawn = static_cast<std::uint32_t>(rng() % n);
-    }
-    const RayKind kind = parent == kNoParent ? RayKind::kPrimary : RayKind(1 + rng() % 3);
-    const std::uint32_t big = rng() % 50 == 0 ? 100000 : 0;
-    b.BeginRay(kind, parent, spawn, big + rng() % 320, rng() % 200);
-    std::uint32_t cell = rng() % cell_count;
-    for (int v = 0, n = static_cast<int>(rng() % 6); v < n; ++v) {
-      const std::uint32_t samples =
-          rng() % 20 == 0 ? static_cast<std::uint32_t>(rng()) : rng() % 200;
-      b.AddVisit(cell, samples, t(rng), t(rng));
-      cell = (cell + 1 + rng() % (cell_count - 1)) % cell_count;
-    }
-  }
-  return b;
-}
+using testing::TestHeader;
 
 struct Frame {
   std::int32_t number;
@@ -157,7 +109,7 @@ class RoundTripTest : public ::testing::TestWithParam<bool> {};
 TEST_P(RoundTripTest, WhatIsReadEqualsWhatWasWritten) {
   const bool store_t = GetParam();
   const std::string path = TempPath(store_t ? "rt_t.rct" : "rt.rct");
-  const TraceHeader header = MakeHeader(store_t);
+  const TraceHeader header = TestHeader({3, 3, 3}, store_t);
   const std::vector<Frame> frames = RandomFrames(store_t, 1);
   TraceWriterOptions options;
   options.max_batch_rays = 1000;
@@ -191,7 +143,7 @@ TEST(TraceIoTest, ForEachBatchStreamsBatchesOfBoundedSize) {
   TraceWriterOptions options;
   options.max_batch_rays = 700;
   options.max_batch_visits = 1500;
-  WriteTrace(path, MakeHeader(false), frames, options);
+  WriteTrace(path, TestHeader({3, 3, 3}, false), frames, options);
   const TraceReader reader = TraceReader::Open(path);
   RayBatch joined(false);
   std::size_t batches = 0;
@@ -213,13 +165,13 @@ TEST(TraceIoTest, ForEachBatchStreamsBatchesOfBoundedSize) {
 TEST(TraceIoTest, OpensAFrameThroughTheIndexWithoutDecodingOthers) {
   const std::string path = TempPath("direct.rct");
   const std::vector<Frame> frames = RandomFrames(false, 3);
-  const std::vector<FrameSummary> written = WriteTrace(path, MakeHeader(false), frames);
+  const std::vector<FrameSummary> written = WriteTrace(path, TestHeader({3, 3, 3}, false), frames);
   // Wreck frame 11's bytes: frame 13 must still open through the index.
   std::string bytes = ReadBytes(path);
   for (std::uint64_t i = written[1].offset + 8; i < written[1].offset + written[1].length; ++i) {
     bytes[i] = static_cast<char>(bytes[i] ^ 0x5A);
   }
-  std::ofstream(path, std::ios::binary).write(bytes.data(), bytes.size());
+  testing::WriteBytes(path, bytes);
   const TraceReader reader = TraceReader::Open(path);
   EXPECT_EQ(reader.warning(), "");
   EXPECT_EQ(reader.LoadFrame(3), frames[3].rays);
@@ -239,7 +191,7 @@ TEST(TraceIoTest, WritesToTmpAndRenamesOnFinish) {
   const std::vector<Frame> frames = RandomFrames(true, 4);
   std::remove(path.c_str());
   {
-    TraceWriter w = TraceWriter::Create(path, MakeHeader(true));
+    TraceWriter w = TraceWriter::Create(path, TestHeader({3, 3, 3}, true));
     EXPECT_TRUE(Exists(path + ".tmp"));
     WriteFrames(w, {frames[0], frames[1]}, 5);
     EXPECT_FALSE(Exists(path));
@@ -257,7 +209,7 @@ TEST(TraceIoTest, InterruptedCaptureLeavesReadableTmp) {
   std::mt19937_64 rng(6);
   const RayBatch big = RandomFrame(rng, 200000, false, 27);
   {
-    TraceWriter w = TraceWriter::Create(path, MakeHeader(false));
+    TraceWriter w = TraceWriter::Create(path, TestHeader({3, 3, 3}, false));
     WriteFrames(w, {frames[0], frames[1]}, 5);
     w.BeginFrame(99);
     w.Append(big);  // the unfinished frame leaves a partial zstd frame behind
@@ -278,7 +230,7 @@ TEST(TraceIoTest, TmpWithOnlyFinishedFramesReadsWithWarning) {
   const std::string path = TempPath("finished_only.rct");
   const std::vector<Frame> frames = RandomFrames(false, 7);
   {
-    TraceWriter w = TraceWriter::Create(path, MakeHeader(false));
+    TraceWriter w = TraceWriter::Create(path, TestHeader({3, 3, 3}, false));
     WriteFrames(w, frames, 5);
   }
   const TraceReader reader = TraceReader::Open(path + ".tmp");
@@ -291,8 +243,8 @@ TEST(TraceIoTest, TmpWithOnlyFinishedFramesReadsWithWarning) {
 TEST(TraceIoTest, SameDataGivesByteIdenticalFiles) {
   const std::vector<Frame> frames = RandomFrames(true, 8);
   const std::string a = TempPath("same_a.rct"), b = TempPath("same_b.rct");
-  WriteTrace(a, MakeHeader(true), frames);
-  WriteTrace(b, MakeHeader(true), frames);
+  WriteTrace(a, TestHeader({3, 3, 3}, true), frames);
+  WriteTrace(b, TestHeader({3, 3, 3}, true), frames);
   const std::string bytes = ReadBytes(a);
   EXPECT_GT(bytes.size(), 1000u);
   EXPECT_TRUE(bytes == ReadBytes(b));
@@ -314,7 +266,7 @@ TEST(TraceIoTest, ZstdAndCapnpDecodeTheWholeFile) {
   const std::vector<Frame> frames = RandomFrames(false, 9);
   TraceWriterOptions options;
   options.max_batch_rays = 1000;
-  WriteTrace(path, MakeHeader(false), frames, options);
+  WriteTrace(path, TestHeader({3, 3, 3}, false), frames, options);
   std::size_t batches = 0;
   const TraceReader reader = TraceReader::Open(path);
   for (std::size_t k = 0; k < frames.size(); ++k) {
@@ -327,8 +279,11 @@ TEST(TraceIoTest, ZstdAndCapnpDecodeTheWholeFile) {
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   const std::string text = ReadBytes(out);
   // --short prints one message per line.
-  EXPECT_EQ(CountOccurrences(text, "\n"), 1 + batches + frames.size()) << text.substr(0, 300);
-  EXPECT_EQ(text.rfind("(header = (formatVersion = 1, producer = \"raycell test\"", 0), 0u);
+  EXPECT_EQ(CountOccurrences(text, "\n"), 2 + batches + frames.size()) << text.substr(0, 300);
+  EXPECT_EQ(text.rfind("(header = (formatVersion = 2, producer = \"raycell test\"", 0), 0u);
+  // The 27 footprints 7, 1007, 2007, ... in one record of 27 runs of one cell.
+  EXPECT_EQ(CountOccurrences(text, "\n(footprints = (firstCell = 0, values = (narrow = [7, 255, "),
+            1u);
   EXPECT_EQ(CountOccurrences(text, "\n(batch = (frame = "), batches);
   EXPECT_EQ(CountOccurrences(text, "\n(frameEnd = (frame = "), frames.size());
   EXPECT_EQ(batches, 1u + 9u + 0u + 3u);
@@ -360,7 +315,7 @@ const char kHandMadeJsonl[] =
 
 TEST(TraceIoTest, JsonlOfAHandMadeFrameIsExact) {
   const std::string path = TempPath("jsonl.rct");
-  WriteTrace(path, MakeHeader(false), {{150, HandMadeFrame()}});
+  WriteTrace(path, TestHeader({3, 3, 3}, false), {{150, HandMadeFrame()}});
   const TraceReader reader = TraceReader::Open(path);
   std::ostringstream all, one;
   WriteJsonl(reader, std::nullopt, all);
@@ -372,7 +327,7 @@ TEST(TraceIoTest, JsonlOfAHandMadeFrameIsExact) {
 
 TEST(TraceIoTest, JsonlOfSeveralFramesStartsWithTheFrameNumber) {
   const std::string path = TempPath("jsonl2.rct");
-  WriteTrace(path, MakeHeader(false), {{150, HandMadeFrame()}, {151, HandMadeFrame()}});
+  WriteTrace(path, TestHeader({3, 3, 3}, false), {{150, HandMadeFrame()}, {151, HandMadeFrame()}});
   const TraceReader reader = TraceReader::Open(path);
   std::ostringstream all, second;
   WriteJsonl(reader, std::nullopt, all);
@@ -389,12 +344,12 @@ TEST(TraceIoTest, JsonlOfSeveralFramesStartsWithTheFrameNumber) {
 
 TEST(TraceIoTest, PrintInfoShowsHeaderFramesAndTotals) {
   const std::string path = TempPath("info.rct");
-  WriteTrace(path, MakeHeader(false), RandomFrames(false, 10));
+  WriteTrace(path, TestHeader({3, 3, 3}, false), RandomFrames(false, 10));
   const TraceReader reader = TraceReader::Open(path);
   std::ostringstream out;
   PrintInfo(reader, "info.rct", out);
   const std::string text = out.str();
-  for (const char* want : {"format version: 1", "producer:       raycell test", "builtin:smoke",
+  for (const char* want : {"format version: 2", "producer:       raycell test", "builtin:smoke",
                            "density (fog, builtin", "3x3x3 = 27 cells", "sparse", "320x200",
                            "shadow", "refraction", "total", "naive uncompressed", "ratio:"}) {
     EXPECT_NE(text.find(want), std::string::npos) << want << "\n" << text;
@@ -408,10 +363,10 @@ TEST(TraceIoTest, PrintInfoShowsHeaderFramesAndTotals) {
 
 TEST(TraceIoTest, FileWithoutFrames) {
   const std::string path = TempPath("no_frames.rct");
-  WriteTrace(path, MakeHeader(true), {});
+  WriteTrace(path, TestHeader({3, 3, 3}, true), {});
   const TraceReader reader = TraceReader::Open(path);
   EXPECT_EQ(reader.warning(), "");
-  EXPECT_EQ(reader.header(), MakeHeader(true));
+  EXPECT_EQ(reader.header(), TestHeader({3, 3, 3}, true));
   EXPECT_TRUE(reader.frames().empty());
   std::ostringstream out;
   WriteJsonl(reader, std::nullopt, out);
@@ -427,9 +382,10 @@ TEST(TraceIoTest, ErrorsNameTheFile) {
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()).rfind(path + ": cannot open", 0), 0u) << e.what();
   }
-  EXPECT_THROW(TraceWriter::Create(TempPath("no_such_dir/x.rct"), MakeHeader(false)), InputError);
+  EXPECT_THROW(TraceWriter::Create(TempPath("no_such_dir/x.rct"), TestHeader({3, 3, 3}, false)),
+               InputError);
   const std::string ok = TempPath("errors.rct");
-  WriteTrace(ok, MakeHeader(false), RandomFrames(false, 11));
+  WriteTrace(ok, TestHeader({3, 3, 3}, false), RandomFrames(false, 11));
   const TraceReader reader = TraceReader::Open(ok);
   EXPECT_THROW(reader.LoadFrame(4), InputError);
   std::remove(ok.c_str());
@@ -493,7 +449,7 @@ TEST(TraceIoTest, SiblingRaysEncodeToRunsOfEqualHeads) {
   const std::string path = TempPath("siblings.rct");
   const RayBatch frame = SiblingFrame();
   const std::vector<FrameSummary> written =
-      WriteTrace(path, MakeHeader(false, {3, 3, 2}), {{0, frame}});
+      WriteTrace(path, TestHeader({3, 3, 2}, false), {{0, frame}});
   EXPECT_EQ(TraceReader::Open(path).LoadFrame(0), frame);
 
   const kj::Array<capnp::word> words = FrameMessages(path, written[0]);
@@ -534,133 +490,6 @@ TEST(TraceIoTest, SiblingRaysEncodeToRunsOfEqualHeads) {
                 14, 3,           // ray 41: 2 against 9 -> zigzag(-7) = 13; 2 (ray 40 has 1 visit)
                 1,  1, 0, 0,     // rays 42..50: 18 zeros = 2 + 2*2 + 1*4 + 1*8
             }));
-  std::remove(path.c_str());
-}
-
-// ---- Size of a realistic trace -----------------------------------------------------------
-
-struct V3 {
-  double x, y, z;
-  V3 operator+(const V3& o) const { return {x + o.x, y + o.y, z + o.z}; }
-  V3 operator*(double s) const { return {x * s, y * s, z * s}; }
-};
-
-V3 Normalized(V3 v) { return v * (1 / std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z)); }
-
-// A synthetic capture shaped like vdb_render's: a 96-voxel cube split into 3x3x3 cells, one
-// primary ray per pixel of a 256x256 image marching with step 1 for a smoothly varying
-// number of samples (early termination), and at each primary sample a shadow ray towards a
-// directional light marching with step 3 to the box exit. Samples per visit are counted.
-class SyntheticScene {
- public:
-  RayBatch Frame(int size, bool store_t) const {
-    RayBatch b(store_t);
-    for (int y = 0; y < size; ++y) {
-      for (int x = 0; x < size; ++x) PrimaryWithShadows(x, y, size, b);
-    }
-    return b;
-  }
-
- private:
-  static constexpr double kN = 96, kCell = 32;
-
-  int CellOf(V3 p) const {
-    auto c = [](double v) { return std::clamp(static_cast<int>(v / kCell), 0, 2); };
-    return c(p.x) + 3 * (c(p.y) + 3 * c(p.z));
-  }
-  bool Inside(V3 p) const {
-    return p.x >= 0 && p.y >= 0 && p.z >= 0 && p.x < kN && p.y < kN && p.z < kN;
-  }
-
-  // Marches from p along d; appends visits and returns the visit index of each sample.
-  std::vector<std::uint32_t> March(V3 p, V3 d, double step, int max_samples, RayBatch& b,
-                                   std::vector<V3>* points) const {
-    std::vector<std::uint32_t> visit_of_sample;
-    int last = -1;
-    const std::size_t first = b.visit_count();
-    for (int i = 0; i < max_samples; ++i) {
-      const V3 q = p + d * (step * i);
-      if (!Inside(q)) break;
-      const int c = CellOf(q);
-      if (c != last) b.AddVisit(c, 0, static_cast<float>(step * i), static_cast<float>(step * i));
-      b.AddSamplesToLastVisit(1);
-      last = c;
-      visit_of_sample.push_back(static_cast<std::uint32_t>(b.visit_count() - first - 1));
-      if (points) points->push_back(q);
-    }
-    return visit_of_sample;
-  }
-
-  void PrimaryWithShadows(int x, int y, int size, RayBatch& b) const {
-    const V3 eye{kN * 0.5, kN * 0.55, -3 * kN};
-    const V3 target{kN * (0.02 + 0.96 * (x + 0.5) / size), kN * (0.02 + 0.96 * (y + 0.5) / size),
-                    0};
-    const V3 d = Normalized(target + eye * -1);
-    const V3 entry = eye + d * (-eye.z / d.z + 1e-6);
-    const int budget = static_cast<int>(62 + 18 * std::sin(x * 0.05) * std::cos(y * 0.037) +
-                                        8 * std::sin((x + y) * 0.11));
-    const RayId id = b.size();
-    b.BeginRay(RayKind::kPrimary, kNoParent, 0, x, y);
-    std::vector<V3> points;
-    const std::vector<std::uint32_t> spawn = March(entry, d, 1.0, budget, b, &points);
-    const V3 light = Normalized({0.35, 0.5, -1});
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      b.BeginRay(RayKind::kShadow, id, spawn[i], x, y);
-      March(points[i], light, 3.0, 1000, b, nullptr);
-    }
-  }
-};
-
-double BytesPerVisit(const std::string& path, const RayBatch& frame, const TraceHeader& header) {
-  TraceWriter w = TraceWriter::Create(path, header);
-  w.BeginFrame(0);
-  w.Append(frame);
-  const FrameSummary s = w.EndFrame();
-  w.Finish();
-  return static_cast<double>(s.length) / static_cast<double>(s.visits);
-}
-
-TEST(TraceIoTest, RealisticTraceTakesAtMost0_3BytesPerVisit) {
-  const std::string path = TempPath("size.rct");
-  const RayBatch frame = SyntheticScene().Frame(256, false);
-  std::uint64_t primary_visits = 0, shadows = 0, max_samples = 0;
-  for (std::size_t i = 0; i < frame.size(); ++i) {
-    const RayView r = frame.ray(i);
-    if (r.is_primary()) primary_visits += r.visit_count;
-    shadows += !r.is_primary();
-    for (std::size_t v = 0; v < r.visit_count; ++v) {
-      max_samples = std::max<std::uint64_t>(max_samples, r.samples[v]);
-    }
-  }
-  const auto t0 = std::chrono::steady_clock::now();
-  const double bpv = BytesPerVisit(path, frame, MakeHeader(false));
-  const auto t1 = std::chrono::steady_clock::now();
-  EXPECT_TRUE(TraceReader::Open(path).LoadFrame(0) == frame);
-  const auto t2 = std::chrono::steady_clock::now();
-  std::printf("write %.2f s, read and verify %.2f s\n",
-              std::chrono::duration<double>(t1 - t0).count(),
-              std::chrono::duration<double>(t2 - t1).count());
-  std::printf(
-      "synthetic frame: %zu rays (%.1f shadow rays per primary), %zu visits "
-      "(%.2f per primary, %.2f per shadow ray), samples <= %llu\n",
-      frame.size(), shadows / 65536.0, frame.visit_count(), primary_visits / 65536.0,
-      (frame.visit_count() - primary_visits) / static_cast<double>(shadows),
-      static_cast<unsigned long long>(max_samples));
-  std::printf("zstd level 3: %.4f bytes per visit\n", bpv);
-  EXPECT_LE(bpv, 0.3);
-
-  // For the record: the same rays with samples replaced by independent uniform 1..40 draws
-  // (no spatial coherence, so incompressible beyond their ~5.3 bits of entropy).
-  std::mt19937_64 rng(12);
-  RayBatch noisy(false);
-  for (std::size_t i = 0; i < frame.size(); ++i) {
-    const RayView r = frame.ray(i);
-    noisy.BeginRay(r.kind, r.parent, r.spawn, r.pixel_x, r.pixel_y);
-    for (std::size_t v = 0; v < r.visit_count; ++v)
-      noisy.AddVisit(r.cells[v], 1 + rng() % 40, 0, 0);
-  }
-  std::printf("same rays, uniform random samples 1..40: %.4f bytes per visit\n",
-              BytesPerVisit(path, noisy, MakeHeader(false)));
   std::remove(path.c_str());
 }
 

@@ -1,0 +1,162 @@
+// `raycell trace verify` fails (exit 2, naming what is lost) on any damage, while the
+// commands that read (`trace cat`, `replay`, `analyze`) warn and use the intact frames.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <string>
+
+#include "tests/test_util.h"
+#include "traces/trace_reader.h"
+
+namespace raycell {
+namespace {
+
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+Result Raycell(const std::string& args) {
+  const std::string err_file = testing::TempPath("trace_cmd", "stderr.txt");
+  const std::string cmd = std::string(RAYCELL_BINARY) + " " + args + " 2>'" + err_file + "'";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buf;
+  for (std::size_t n; (n = fread(buf.data(), 1, buf.size(), p)) > 0;) out.append(buf.data(), n);
+  const int status = pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out, testing::ReadBytes(err_file)};
+}
+
+bool Contains(const std::string& text, const std::string& what) {
+  return text.find(what) != std::string::npos;
+}
+
+std::size_t Lines(const std::string& text, const std::string& prefix) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < text.size(); i = text.find('\n', i) + 1) {
+    n += text.compare(i, prefix.size(), prefix) == 0;
+    if (text.find('\n', i) == std::string::npos) break;
+  }
+  return n;
+}
+
+class TraceCommandTest : public ::testing::Test {
+ protected:
+  // A 3-frame capture of the built-in scene (frames 0, 1, 2), recorded once.
+  static void SetUpTestSuite() {
+    dir_ = new std::string(testing::TempDir("trace_cmd").string());
+    const Result r = Raycell("record --res 16x16 --orbit 3:30 --no-images --quiet --out " + Good());
+    ASSERT_EQ(r.code, 0) << r.err;
+    const TraceReader reader = TraceReader::Open(Good());
+    frames_ = new std::vector<FrameSummary>(reader.frames());
+    bytes_ = new std::string(testing::ReadBytes(Good()));
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    delete frames_;
+    delete bytes_;
+  }
+  static std::string Good() { return *dir_ + "/good.rct"; }
+  static const FrameSummary& Frame(int k) { return (*frames_)[k]; }
+
+  // Writes `bytes` to a damaged copy and returns its path.
+  std::string Damaged(const std::string& bytes) {
+    const std::string path = *dir_ + "/damaged.rct";
+    testing::WriteBytes(path, bytes);
+    return path;
+  }
+
+  static std::string* dir_;
+  static std::vector<FrameSummary>* frames_;
+  static std::string* bytes_;
+};
+
+std::string* TraceCommandTest::dir_ = nullptr;
+std::vector<FrameSummary>* TraceCommandTest::frames_ = nullptr;
+std::string* TraceCommandTest::bytes_ = nullptr;
+
+TEST_F(TraceCommandTest, VerifyPassesAnIntactFile) {
+  ASSERT_EQ(frames_->size(), 3u);
+  const Result r = Raycell("trace verify " + Good());
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
+  EXPECT_EQ(Lines(r.out, "frame "), 3u) << r.out;
+  EXPECT_TRUE(Contains(r.out, "3 frame(s), ")) << r.out;
+  EXPECT_EQ(r.err, "");
+}
+
+TEST_F(TraceCommandTest, VerifyFailsATruncatedFileNamingWhatIsLost) {
+  // Cut 10 bytes into frame 2: frames 0 and 1 are intact, frame 2 and the index are lost.
+  const std::uint64_t cut = Frame(2).offset + 10;
+  const std::string path = Damaged(bytes_->substr(0, cut));
+  const Result r = Raycell("trace verify " + path);
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_TRUE(Contains(r.out, "frame 0: ok")) << r.out;
+  EXPECT_TRUE(Contains(r.out, "frame 1: ok")) << r.out;
+  EXPECT_FALSE(Contains(r.out, "frame 2: ok")) << r.out;
+  EXPECT_TRUE(Contains(r.err, "raycell: error: " + path + ": verification failed")) << r.err;
+  EXPECT_TRUE(Contains(r.err, "the index and bytes " + std::to_string(Frame(2).offset) + ".." +
+                                  std::to_string(cut) + " (10 bytes) after the last intact " +
+                                  "frame (frame 1, #1) are unreadable"))
+      << r.err;
+  EXPECT_TRUE(Contains(r.err, "index: missing")) << r.err;
+  EXPECT_TRUE(
+      Contains(r.err, "frame #2 (offset " + std::to_string(Frame(2).offset) + "): truncated"))
+      << r.err;
+}
+
+TEST_F(TraceCommandTest, VerifyFailsAFileWithoutItsIndex) {
+  // Every frame complete, only the index cut off (as an interrupted capture's .tmp).
+  const std::string path = Damaged(bytes_->substr(0, Frame(2).offset + Frame(2).length));
+  const Result r = Raycell("trace verify " + path);
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_EQ(Lines(r.out, "frame "), 3u) << r.out;
+  EXPECT_TRUE(Contains(r.err, "the index are unreadable: " + path + ": index: missing")) << r.err;
+}
+
+TEST_F(TraceCommandTest, VerifyFailsADamagedIndexOrFrame) {
+  std::string bytes = *bytes_;
+  bytes[bytes.size() - 40] ^= 0x10;  // inside the index message
+  Result r = Raycell("trace verify " + Damaged(bytes));
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_TRUE(Contains(r.err, "index: damaged: checksum mismatch")) << r.err;
+  EXPECT_EQ(Lines(r.out, "frame "), 3u) << r.out;  // the scan still finds every frame
+
+  bytes = *bytes_;
+  bytes[Frame(1).offset + Frame(1).length / 2] ^= 0x10;  // inside frame 1; the index is intact
+  const std::string path = Damaged(bytes);
+  r = Raycell("trace verify " + path);
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_TRUE(Contains(r.out, "frame 0: ok")) << r.out;
+  EXPECT_TRUE(Contains(r.out, "frame 1: DAMAGED")) << r.out;
+  EXPECT_TRUE(Contains(r.out, "frame 2: ok")) << r.out;  // the others are still checked
+  EXPECT_TRUE(Contains(r.err, "(1 problem(s)): " + path + ": frame 1 (#1, offset ")) << r.err;
+}
+
+TEST_F(TraceCommandTest, ReadingCommandsWarnAndUseTheIntactFrames) {
+  const std::string path = Damaged(bytes_->substr(0, Frame(2).offset + 10));
+  const Result all = Raycell("trace cat " + Good());
+  ASSERT_EQ(all.code, 0) << all.err;
+  const std::size_t rays01 = Lines(all.out, "{\"frame\":0,") + Lines(all.out, "{\"frame\":1,");
+  ASSERT_EQ(rays01, Frame(0).rays + Frame(1).rays);
+
+  const Result cat = Raycell("trace cat " + path);
+  EXPECT_EQ(cat.code, 0) << cat.err;
+  EXPECT_TRUE(Contains(cat.err, "raycell: warning: " + path + ": index: missing")) << cat.err;
+  EXPECT_EQ(Lines(cat.out, "{\"frame\":"), rays01);
+  EXPECT_EQ(Lines(cat.out, "{\"frame\":2,"), 0u);
+
+  for (const std::string command : {"replay", "analyze"}) {
+    const Result r = Raycell(command + " " + path);
+    EXPECT_EQ(r.code, 0) << command << ": " << r.err;
+    EXPECT_TRUE(Contains(r.err, "raycell: warning: " + path + ": index: missing"))
+        << command << ": " << r.err;
+    EXPECT_EQ(Lines(r.out, "       0 "), 1u) << command << ": " << r.out;
+    EXPECT_EQ(Lines(r.out, "       1 "), 1u) << command << ": " << r.out;
+    EXPECT_EQ(Lines(r.out, "       2 "), 0u) << command << ": " << r.out;
+  }
+}
+
+}  // namespace
+}  // namespace raycell

@@ -1,0 +1,85 @@
+// The trace format's constants, shared by the writer and the reader (DESIGN.md §3; the format
+// itself is documented field by field in traces/trace.capnp): the format version, magic
+// numbers, the layout of a ray's head byte, and every limit of the format. A limit here is
+// what the reader accepts; the writer refuses, up front and with a message naming the limit,
+// whatever the reader could not read.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace raycell {
+
+struct TraceHeader;
+
+// ---- Version and magic numbers -----------------------------------------------------------
+
+// The format version this code writes (Header.formatVersion); it reads 1..this. Version 2
+// moved the footprints out of the header message into `footprints` records (so that grids
+// of millions of cells fit); see trace.capnp.
+inline constexpr std::uint32_t kTraceFormatVersion = 2;
+// Magic of the skippable zstd frame that holds the index.
+inline constexpr std::uint32_t kTraceIndexMagic = 0x184D2A5B;
+// Last 8 bytes of a complete trace file.
+inline constexpr char kTraceIndexTag[9] = "RCTINDEX";
+// Trailer after the index message: hash, message length, tag.
+inline constexpr std::size_t kTraceTrailerBytes = 24;
+
+// ---- Limits ------------------------------------------------------------------------------
+
+// Largest Cap'n Proto message the reader accepts, and the writer ever writes.
+inline constexpr std::size_t kTraceMaxMessageBytes = std::size_t{64} << 20;
+// Highest zstd level the writer accepts (keeps the window within kTraceMaxWindowLog).
+inline constexpr int kTraceMaxZstdLevel = 19;
+inline constexpr int kTraceMaxWindowLog = 25;
+// Most rays and visits in one batch message, and visits of one ray (see "Limits" in
+// trace.capnp). They bound the reader's memory whatever the file says.
+inline constexpr std::size_t kTraceMaxBatchRays = std::size_t{1} << 22;
+inline constexpr std::size_t kTraceMaxBatchVisits = std::size_t{1} << 25;
+inline constexpr std::size_t kTraceMaxRayVisits = std::size_t{1} << 20;
+
+// The largest cell grid: nx*ny*nz at most 2^24 cells (256x256x256; any shape, e.g.
+// 4096x4096x1). Its footprints take 128 MiB in memory (8 bytes per cell) in every program
+// that opens the trace, and up to 16 footprint records in the file.
+inline constexpr std::uint64_t kTraceMaxCells = std::uint64_t{1} << 24;
+// Runs of equal footprints per `footprints` record (at most 18 MiB per message).
+inline constexpr std::size_t kTraceFootprintRunsPerRecord = std::size_t{1} << 20;
+// Most frames in a file: cameras in the header and entries in the index (each message then
+// stays below 30 MiB).
+inline constexpr std::size_t kTraceMaxFrames = std::size_t{1} << 18;
+// Most grids in the header, and bytes in each text field (producer, scene, footprint mode,
+// grid names, roles and sources; the scene is a path, at most PATH_MAX).
+inline constexpr std::size_t kTraceMaxGrids = 1024;
+inline constexpr std::size_t kTraceMaxTextBytes = 4096;
+
+// nx*ny*nz without overflow.
+constexpr std::uint64_t TraceCellCount(const std::array<std::uint32_t, 3>& cells) {
+  return std::uint64_t{cells[0]} * cells[1] * cells[2];
+}
+// Why a cell grid cannot be stored (every dimension at least 1, at most kTraceMaxCells
+// cells), e.g. "cell grid 1000x1000x1000 = 1000000000 cells exceeds the trace format's limit
+// of 16777216 cells (kTraceMaxCells, e.g. 256x256x256)"; empty when it can.
+std::string TraceCellGridProblem(const std::array<std::uint32_t, 3>& cells);
+// Why a header cannot be stored: its cell grid, more than kTraceMaxFrames cameras or
+// kTraceMaxGrids grids, a text longer than kTraceMaxTextBytes; empty when it can. (The
+// writer also requires one footprint per cell, a caller's invariant.)
+std::string TraceHeaderProblem(const TraceHeader& header);
+// Throws InputError "WHAT: PROBLEM" when TraceCellGridProblem is not empty: the up-front
+// check of a --cells option, e.g. CheckTraceCellGrid(cells, "--cells '1000x1000x1000'").
+void CheckTraceCellGrid(const std::array<std::uint32_t, 3>& cells, const std::string& what);
+
+// ---- Ray head byte (see "Ray heads" in trace.capnp) --------------------------------------
+
+inline constexpr unsigned kHeadKindMask = 0x03;
+inline constexpr unsigned kHeadParentShift = 2;  // 2-bit parent code
+inline constexpr unsigned kHeadSpawnShift = 4;   // 2-bit spawn code
+inline constexpr unsigned kHeadNewPath = 0x40;
+inline constexpr unsigned kHeadNewPixel = 0x80;
+inline constexpr unsigned kParentIsLastNonShadow = 0;
+inline constexpr unsigned kParentOfPreviousRay = 1;
+inline constexpr unsigned kParentExplicit = 2;
+inline constexpr unsigned kSpawnExplicit = 3;
+
+}  // namespace raycell
