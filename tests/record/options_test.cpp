@@ -66,11 +66,17 @@ class RecordLimits : public ::testing::Test {
 };
 
 TEST_F(RecordLimits, CellsBeyondTheTraceFormatsLimitAreRefusedBeforeTheSceneIsRead) {
-  ExpectRefused([](RecordOptions& o) { o.cells = {1000, 1000, 1000}; },
-                {"--cells 1000x1000x1000", "1000000000 cells",
-                 "limit of " + std::to_string(kMaxCaptureCells)});
-  ExpectRefused([](RecordOptions& o) { o.cells = {2048, 2048, 2}; },
-                {"--cells 2048x2048x2", std::to_string(kMaxCaptureCells)});
+  ExpectRefused(
+      [](RecordOptions& o) {
+        o.cells = {1000, 1000, 1000};
+      },
+      {"--cells 1000x1000x1000", "1000000000 cells",
+       "limit of " + std::to_string(kMaxCaptureCells)});
+  ExpectRefused(
+      [](RecordOptions& o) {
+        o.cells = {2048, 2048, 2};
+      },
+      {"--cells 2048x2048x2", std::to_string(kMaxCaptureCells)});
   ExpectAccepted([](RecordOptions& o) { o.cells = {2048, 2048, 1}; });  // exactly the limit
   ExpectRefused([](RecordOptions& o) { o.cells = {0, 2, 2}; }, {"--cells"});
 }
@@ -176,8 +182,7 @@ TEST(RecordMaterials, BadMaterialsAndLightsNameTheOptionKeyAndRange) {
   EXPECT_NE(message(s).find("grid 'cloud' is not rendered (choose it with --grid cloud"),
             std::string::npos)
       << message(s);
-  for (const auto& [text, expected] :
-       std::vector<std::pair<std::string, std::string>>{
+  for (const auto& [text, expected] : std::vector<std::pair<std::string, std::string>>{
            {"dir:0,0,0", "--light 'dir:0,0,0': direction must not be zero"},
            {"spot:1,1,1", "expected dir:X,Y,Z[:R,G,B] or point:X,Y,Z[:R,G,B]"},
            {"dir:0,1,0:2e30", "must be at most 1e+30"},

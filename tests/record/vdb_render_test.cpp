@@ -120,8 +120,9 @@ ImageDiff AgainstVdbRender(const std::string& vdb, const std::string& name) {
       std::to_string(cam.fov_deg) + " -translate " + Triple(cam.eye) + " -lookat " +
       Triple(cam.target) + " -up " + Triple(cam.up) + " > /dev/null 2>&1";
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  const ImageDiff d = Compare(ReadPng((dir / "img" / "frame_0000.png").string(), PngEncoding::kLinear),
-                              ReadPng(vr_png, PngEncoding::kLinear));
+  const ImageDiff d =
+      Compare(ReadPng((dir / "img" / "frame_0000.png").string(), PngEncoding::kLinear),
+              ReadPng(vr_png, PngEncoding::kLinear));
   std::cout << name << ": raycell vs vdb_render, linear 64x64: RMSE " << d.rmse
             << ", largest channel difference " << d.max_abs << ", mean " << d.mean << " vs "
             << d.mean_other << " (ratio " << d.mean / d.mean_other << ")\n";

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Capture at scale: `raycell record` of the built-in scene at large image sizes in several
-# cell grids, then `raycell analyze` and `raycell replay` of each capture. Prints each step's
+# cell grids, then `raycell analyze` and `raycell replay` (default granularity, which is per
+# Cell Tree node with one processor, and per ray segment) of each capture. Prints each step's
 # wall time and peak memory (maximum resident set size, from /usr/bin/time -v), and the
 # capture's rays, visits and bytes. Every step runs under `nice` (shared machines).
 #
@@ -29,12 +30,12 @@ run() {
   local wall rss
   wall=$(awk -F': ' '/Elapsed \(wall clock\)/ {print $2}' "$out/time.txt")
   rss=$(awk -F': ' '/Maximum resident set size/ {print $2}' "$out/time.txt")
-  printf '| %-28s | %10s | %8.0f |\n' "$label" "$wall" "$(echo "$rss / 1024" | bc -l)"
+  printf '| %-36s | %10s | %8.0f |\n' "$label" "$wall" "$(echo "$rss / 1024" | bc -l)"
 }
 
 echo "built-in scene, $threads thread(s), nice; $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg)"
-printf '| %-28s | %10s | %8s |\n' "step" "wall m:s" "peak MiB"
-printf '|%s|%s|%s|\n' "------------------------------" "------------" "----------"
+printf '| %-36s | %10s | %8s |\n' "step" "wall m:s" "peak MiB"
+printf '|%s|%s|%s|\n' "--------------------------------------" "------------" "----------"
 for size in $sizes; do
   for cells in $grids; do
     trace="$out/builtin_${size}_${cells}.rct"
@@ -43,6 +44,8 @@ for size in $sizes; do
     info=$("$raycell" trace info "$trace" | grep -E "^ +total" || true)
     run "analyze ${size}x${size} $cells" "$raycell" analyze "$trace" --format csv --quiet
     run "replay ${size}x${size} $cells" "$raycell" replay "$trace" --format csv --quiet
+    run "replay per ray ${size}x${size} $cells" "$raycell" replay "$trace" --granularity ray \
+      --format csv --quiet
     echo "|   capture: ${info# } |"
   done
 done

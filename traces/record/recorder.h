@@ -29,8 +29,9 @@ inline constexpr std::uint64_t kMaxCaptureFrames = 100000;
 // Pixels of one frame: the image is held in memory as linear RGB doubles, 24 bytes a pixel
 // (1.5 GiB at the limit, 8192x8192).
 inline constexpr std::uint64_t kMaxPixels = std::uint64_t{1} << 26;
-// Primary rays of one frame (pixels x samples per pixel): a frame is analysed and replayed
-// in memory (BENCHMARKS.md "Capture at scale" measures the bytes per ray of each step).
+// Primary rays of one frame (pixels x samples per pixel): 16 times the 2048x2048 capture of
+// BENCHMARKS.md "Capture at scale" (17 M rays, 92 M visits in 8x8x8 cells). Recording and
+// analysing stream a frame; replaying it per ray segment holds it in memory (6 GiB there).
 inline constexpr std::uint64_t kMaxPrimaryRays = std::uint64_t{1} << 26;
 inline constexpr int kMaxThreads = 1024;
 
