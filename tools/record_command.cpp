@@ -29,7 +29,7 @@ Vec3d ParseVec(const std::string& text, const std::string& option) {
 struct RecordArgs {
   RecordOptions opt;
   std::string frames, cells = "2x2x2", res = "256x256", orbit, eye, target, up = "0,1,0",
-                      precision = "double";
+                      precision = "double", image_encoding = "srgb";
   std::vector<std::string> lights;
   bool no_images = false, quiet = false;
 };
@@ -67,6 +67,7 @@ void Run(RecordArgs& a) {
   if (!a.target.empty()) o.camera.target = ParseVec(a.target, "--target");
   o.camera.up = ParseVec(a.up, "--up");
   o.settings.single_precision = a.precision == "single";
+  o.image_encoding = ParsePngEncoding(a.image_encoding, "--image-encoding");
   if (a.no_images) o.images_dir.clear();
   o.progress = !a.quiet;
   o.cancel = &g_cancel;
@@ -91,6 +92,10 @@ void AddRecordCommand(CLI::App& app) {
       "Writes one trace file (zstd frames of Cap'n Proto messages, see traces/trace.capnp)\n"
       "and one PNG per frame. With no options it records frame 0 of the built-in scene\n"
       "(fog, a mirror sphere and a glass icosahedron) at 256x256 in 2x2x2 cells.\n"
+      "Fog is rendered as vdb_render renders it (same steps, cutoff, light, absorption,\n"
+      "scattering and gain give the same radiance, and the same grid of a file by default).\n"
+      "PNGs are sRGB-encoded for display (vdb_render writes linear values, which look\n"
+      "darker): compare with vdb_render's images after --image-encoding linear.\n"
       "A ray's visits are the non-empty cells its path crosses, each with the volume samples\n"
       "taken there; empty cells (footprint 0) are crossed without work and never recorded.\n"
       "Ctrl-C stops the capture; the finished frames stay readable in OUT.tmp.\n\n"
@@ -102,14 +107,28 @@ void AddRecordCommand(CLI::App& app) {
                   "builtin, a .vdb file (fog volumes and level sets), or a printf pattern of "
                   "one file per frame, e.g. fluid_data_%04d.vdb with --frames 150..155")
       ->capture_default_str();
-  cmd->add_option("--frames", args->frames, "frame numbers A..B (inclusive), default 0");
-  cmd->add_option("--cells", args->cells, "cell grid NXxNYxNZ splitting the scene box")
+  cmd->add_option("--grid", o.scene.grids,
+                  "render this float grid of the file, repeatable; default: the first float "
+                  "grid (as vdb_render and its -name), every grid of the built-in scene");
+  cmd->add_flag("--all-grids", o.scene.all_grids,
+                "render every float grid of the file (fog volumes add up)");
+  cmd->add_option("--frames", args->frames,
+                  "frame numbers A..B (inclusive), default 0; at most " +
+                      std::to_string(kMaxCaptureFrames) + " frames");
+  cmd->add_option("--cells", args->cells,
+                  "cell grid NXxNYxNZ splitting the scene box; at most " +
+                      std::to_string(kMaxCaptureCells) + " cells")
       ->capture_default_str();
-  cmd->add_option("--res", args->res, "image size WxH (the paper: 256x256)")->capture_default_str();
-  cmd->add_option("--spp", o.settings.spp, "samples (primary rays) per pixel")
+  cmd->add_option("--res", args->res,
+                  "image size WxH (the paper: 256x256); at most " + std::to_string(kMaxPixels) +
+                      " pixels (8192x8192)")
+      ->capture_default_str();
+  cmd->add_option("--spp", o.settings.spp,
+                  "samples (primary rays) per pixel, 1..4096; pixels x spp at most " +
+                      std::to_string(kMaxPrimaryRays))
       ->capture_default_str();
   cmd->add_option("--max-depth", o.settings.max_depth,
-                  "reflection/refraction generations; shadow rays are cast at every depth")
+                  "reflection/refraction generations, 0..16; shadow rays are cast at every depth")
       ->capture_default_str();
   cmd->add_option("--step", o.settings.primary_step,
                   "primary-ray step in voxels (vdb_render's -step)")
@@ -139,7 +158,9 @@ void AddRecordCommand(CLI::App& app) {
   cmd->add_option("--eye", args->eye, "camera position X,Y,Z (default: frames the scene box)");
   cmd->add_option("--target", args->target, "point the camera looks at (default: box centre)");
   cmd->add_option("--up", args->up, "camera up vector")->capture_default_str();
-  cmd->add_option("--fov", o.camera.fov_deg, "vertical field of view, degrees")
+  cmd->add_option("--fov", o.camera.fov_deg,
+                  "vertical field of view, degrees in (0, 180) (vdb_render's -fov is the "
+                  "horizontal one: equal for square images)")
       ->capture_default_str();
   cmd->add_option("--orbit", args->orbit,
                   "camera path: DEGREES turned about the up axis over the frames, or "
@@ -153,13 +174,17 @@ void AddRecordCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--out", o.out, "trace file to write")->capture_default_str();
   cmd->add_option("--images", o.images_dir, "folder for frame_NNNN.png")->capture_default_str();
+  cmd->add_option("--image-encoding", args->image_encoding,
+                  "PNG values: srgb (for display, tagged sRGB) or linear (radiance x 255, "
+                  "tagged gamma 1.0, comparable with vdb_render's PNGs)")
+      ->capture_default_str();
   cmd->add_flag("--no-images", args->no_images, "do not write images");
   cmd->add_flag("--store-t", o.settings.store_t,
                 "also store each visit's t_enter/t_exit (larger traces)");
   cmd->add_option("--zstd-level", o.settings.zstd_level, "zstd compression level 1..19")
       ->capture_default_str();
   cmd->add_option("--threads", o.threads,
-                  "rendering threads, 0 = all cores (the trace is the "
+                  "rendering threads, 0..1024, 0 = all cores (the trace is the "
                   "same byte for byte whatever this is)")
       ->capture_default_str();
   cmd->add_flag("--quiet", args->quiet, "no progress bar");

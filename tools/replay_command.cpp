@@ -29,6 +29,27 @@ struct ReplayArgs {
   bool print_config = false, quiet = false;
 };
 
+// Largest processors x cells of a replay. The memory model keeps, per processor and cell, an
+// arrival time (8 bytes) and a prefetch flag: 1 GiB at this limit (e.g. 8 processors at
+// 256x256x256 cells). Checked when the trace is opened, before any frame is read.
+constexpr std::uint64_t kMaxProcessorCells = std::uint64_t{1} << 27;
+
+void CheckModelSize(const TraceHeader& h, const ReplayConfig& c) {
+  const std::uint64_t n = std::uint64_t{c.processors.count} * h.cell_count();
+  if (n > kMaxProcessorCells) {
+    throw InputError("processors.count " + std::to_string(c.processors.count) + " x " +
+                     std::to_string(h.cell_count()) + " cells of the trace = " + std::to_string(n) +
+                     " exceeds the limit of " + std::to_string(kMaxProcessorCells) +
+                     " (the memory model keeps 8 bytes per processor and cell)");
+  }
+}
+
+std::string Ms(SimTime t) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", double(t.picoseconds()) * 1e-9);
+  return buf;
+}
+
 // Every output below prints the result's StatsTable (replay/result_table.h).
 
 StatsTable FrameTable(const ReplayResult& r, const ResultColumns& columns) {
@@ -123,10 +144,11 @@ void Run(const ReplayArgs& a) {
   if (a.format != "table" && a.format != "json" && a.format != "csv") {
     throw InputError("--format '" + a.format + "': expected table, json or csv");
   }
+  if (a.sample < 1) throw InputError("--sample: must be at least 1");
   const TraceReader reader = TraceReader::Open(a.trace);
+  CheckModelSize(reader.header(), config);
   if (!reader.warning().empty()) std::cerr << "raycell: warning: " << reader.warning() << "\n";
   Progress progress(!a.quiet);
-  if (a.sample < 1) throw InputError("--sample: must be at least 1");
   const TraceReplay t = ReplayTrace(
       reader, SelectFrameRange(reader, a.frames), config,
       [&](double f) { progress.Update(f, "replaying"); }, a.sample);

@@ -24,6 +24,8 @@
 namespace raycell {
 namespace {
 
+using testing::Compare;
+using testing::ImageDiff;
 using testing::SmallBuiltin;
 using testing::TempDir;
 
@@ -64,7 +66,7 @@ Capture RecordOne(const std::filesystem::path& dir, const std::string& scene,
   Record(o, log);
   const TraceReader r = TraceReader::Open(o.out);
   r.LoadFrame(0);  // every ray and visit reads back and validates
-  return {ReadPng((dir / "img" / "frame_0000.png").string()), r.frames().at(0)};
+  return {ReadPng((dir / "img" / "frame_0000.png").string(), PngEncoding::kSrgb), r.frames().at(0)};
 }
 
 double MaxChannel(const Image& img) {
@@ -87,14 +89,17 @@ TEST(Stability, ZeroAndNegativeDensitiesRenderBlackAndStillRecordVisits) {
 
 TEST(Stability, ExtremeDensitiesStayFinite) {
   const auto dir = TempDir("extreme");
-  // An opaque ball: each primary ray ends at its first sample in it, after one shadow ray
-  // (which ends at its own first sample), so there are at most as many shadow rays as
-  // primary rays, and the in-scattered light is that of a zero-thickness layer: black.
+  // An opaque ball: each primary ray ends at its first sample in it, after one shadow ray,
+  // so there are at most as many shadow rays as primary rays. That sample scatters all the
+  // light its shadow ray brings: at most albedo x light = 1.5 / 1.6 x 0.7 = 0.65625 (plus
+  // half an 8-bit sRGB step, 0.0043 there), and that much where the shadow ray, which starts
+  // a shadow step further on, leaves the ball at once (the lit side).
   const Capture dense = RecordOne(dir, FogBall(dir, "dense", std::numeric_limits<float>::max()));
   const auto& kinds = dense.frame.rays_by_kind;
   EXPECT_GT(kinds[int(RayKind::kShadow)], 0u);
   EXPECT_LE(kinds[int(RayKind::kShadow)], kinds[int(RayKind::kPrimary)]);
-  EXPECT_EQ(MaxChannel(dense.image), 0.0);
+  EXPECT_LE(MaxChannel(dense.image), 0.65625 + 0.0043);
+  EXPECT_GT(MaxChannel(dense.image), 0.65625 - 0.0043);
   const Capture thin = RecordOne(dir, FogBall(dir, "thin", std::numeric_limits<float>::min()));
   EXPECT_LE(MaxChannel(thin.image), 1.0);
 }
@@ -145,7 +150,8 @@ InMemory RenderInMemory(const SceneSpec& spec, const CameraPathSpec& camera,
   RenderJob job;
   job.scene = scene.get();
   job.cells = &cells;
-  job.footprints = scene->Footprints(scene->box_lo(), scene->box_hi(), dims, "sparse");
+  const auto footprints = scene->Footprints(scene->box_lo(), scene->box_hi(), dims, "sparse");
+  job.footprints = &footprints;
   job.camera = MakeCameraPath(camera, {0}, scene->box_lo(), scene->box_hi()).at(0);
   job.settings = settings;
   job.settings.store_t = true;  // the trace's parameters are checked too
@@ -237,6 +243,7 @@ TEST(Stability, TransmittanceStaysInTheUnitIntervalAndNeverIncreasesAlongARay) {
   // optical depth below zero where the positive one is thin.
   Case mixed{"positive and negative balls", {}, {}, 0.0};
   mixed.scene.source = FogBall(dir, "mixed", {0.5f, -3.0f});
+  mixed.scene.all_grids = true;
   cases.push_back(mixed);
   for (const bool single : {false, true}) {
     for (const Case& c : cases) {
@@ -333,7 +340,8 @@ TEST(Stability, SinkErrorsAndCancelsStopTheFrameCleanly) {
   RenderJob job;
   job.scene = scene.get();
   job.cells = &cells;
-  job.footprints = scene->Footprints(scene->box_lo(), scene->box_hi(), {2, 2, 2}, "sparse");
+  const auto footprints = scene->Footprints(scene->box_lo(), scene->box_hi(), {2, 2, 2}, "sparse");
+  job.footprints = &footprints;
   job.camera = MakeCameraPath({}, {0}, scene->box_lo(), scene->box_hi()).at(0);
   job.settings.width = job.settings.height = 64;
   Image image(64, 64);
@@ -365,36 +373,14 @@ TEST(Stability, SinkErrorsAndCancelsStopTheFrameCleanly) {
   EXPECT_EQ(next, stats.rays);
 }
 
-// Sums of squares and the largest difference between two linear images.
-struct ImageDiff {
-  double rmse = 0, max_abs = 0, mean = 0;
-};
-
-ImageDiff Compare(const Image& a, const Image& b) {
-  double sq = 0, sum = 0;
-  ImageDiff d;
-  for (std::size_t i = 0; i < a.pixels().size(); ++i) {
-    const Rgb &p = a.pixels()[i], &q = b.pixels()[i];
-    for (double e : {p.r - q.r, p.g - q.g, p.b - q.b}) {
-      sq += e * e;
-      d.max_abs = std::max(d.max_abs, std::abs(e));
-    }
-    sum += p.r + p.g + p.b;
-  }
-  const double n = 3.0 * a.pixels().size();
-  d.rmse = std::sqrt(sq / n);
-  d.mean = sum / n;
-  return d;
-}
-
 double RelativeDiff(double a, double b) { return std::abs(a - b) / std::max(1.0, std::abs(b)); }
 
 // The stated tolerance (also in BENCHMARKS.md): on the built-in scene the single-precision
 // marcher's linear image is within RMSE 1e-4 of the double one's (mean radiance about 0.2)
 // and no pixel channel differs by more than 5e-3; rays and visits differ by under 0.1%,
 // samples by under 0.3%, and the visits per cell by under 0.1% in total. Measured: RMSE
-// 2.9e-6, largest difference 2.2e-4, 1 ray in 38455, 4 visits in 94067, 161 samples in
-// 488151.
+// 3.1e-6, largest difference 2.2e-4, 1 ray in 38371, 4 visits in 93919, 159 samples in
+// 457806.
 TEST(Stability, SingleAndDoublePrecisionMarchersAgreeOnTheBuiltInScene) {
   RenderSettings set;
   set.width = set.height = 96;

@@ -332,6 +332,35 @@ TEST(Cli, BadInputGetsAClearMessageAndExitCode2) {
   EXPECT_EQ(Raycell("record --help").code, 0);
 }
 
+// Sizes beyond the limits fail before any work, naming the option and the limit: record's
+// --cells before the scene is read (the missing file is not the error), and replay's
+// processors x cells when the trace is opened.
+TEST(Cli, SizesBeyondTheLimitsFailUpFrontNamingTheOptionAndTheLimit) {
+  const auto d = Dir();
+  Result r = Raycell("record --cells 1000x1000x1000 --res 8x8 --scene " +
+                     (d / "missing.vdb").string() + " --out " + (d / "big.rct").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("--cells 1000x1000x1000: 1000000000 cells exceeds the trace format's "
+                       "limit of 4194304"),
+            std::string::npos)
+      << r.out;
+  r = Raycell("record --fov 0 --out " + (d / "big.rct").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("--fov 0: the vertical field of view must be in (0, 180)"),
+            std::string::npos)
+      << r.out;
+  EXPECT_FALSE(std::filesystem::exists(d / "big.rct.tmp"));
+  const std::string trace = (d / "fine.rct").string();
+  ASSERT_EQ(Raycell("record --res 8x8 --cells 64x64x64 --no-images --quiet --out " + trace).code,
+            0);
+  r = Raycell("replay " + trace + " --set processors.count=1024 --quiet");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("processors.count 1024 x 262144 cells of the trace = 268435456 exceeds "
+                       "the limit of 134217728"),
+            std::string::npos)
+      << r.out;
+}
+
 TEST(Cli, RecordInSinglePrecisionSaysSoInTheTrace) {
   const auto d = Dir();
   const std::string out = (d / "single.rct").string();

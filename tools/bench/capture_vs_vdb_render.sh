@@ -2,7 +2,10 @@
 # Capture time of `raycell record` against OpenVDB's `vdb_render` on the same volume, camera,
 # image size, step sizes, light, cutoff and thread count, measured alternately in one run
 # (the machines are shared: only the ratio taken in the same run means something).
-# Also prints the trace's bytes per visit and the read speed of `raycell trace verify`.
+# Also prints the trace's bytes per visit, the read speed of `raycell trace verify`, and
+# how far raycell's image is from vdb_render's (linear RMSE, largest channel difference and
+# mean radiance ratio, tools/bench/png_diff.py; a raycell without --image-encoding writes
+# sRGB PNGs, which png_diff.py decodes by their sRGB chunk).
 #
 # Usage: tools/bench/capture_vs_vdb_render.sh [VDB] [THREADS] [REPS]
 # Default: ../shared/data/mj_smoke.vdb, 2 threads, 5 repetitions each.
@@ -28,6 +31,9 @@ common_vr=(-res 256x256 -step 1 -shadowstep 3 -cutoff 0.005 -light 0.3,0.3,0,0.7
 common_rc=(--scene "$vdb" --res 256x256 --step 1 --shadow-step 3 --cutoff 0.005
            --light dir:0.3,0.3,0:0.7,0.7,0.7 --fov "$fov" --eye "$eye" --target "$target"
            --threads "$threads" --quiet)
+if "$raycell" record --help | grep -q -- --image-encoding; then
+  common_rc+=(--image-encoding linear)
+fi
 
 now() { date +%s.%N; }
 t_vr=(); t_rc=()
@@ -45,3 +51,5 @@ printf 'raycell record:  %.3f s (renders, records every ray, writes trace and PN
 printf 'ratio raycell/vdb_render: %.2f\n' "$(echo "$m_rc / $m_vr" | bc -l)"
 "$raycell" trace info "$work/rc.rct" | grep -E "^ +total|^ +frame"
 "$raycell" trace verify "$work/rc.rct" | tail -1
+printf 'image against vdb_render (linear, 0..1): '
+python3 "$root/tools/bench/png_diff.py" "$work/img/frame_0000.png" "$work/vr.png"

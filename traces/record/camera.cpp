@@ -12,6 +12,14 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
+std::string Num(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+std::string Str(Vec3d v) { return Num(v.x) + "," + Num(v.y) + "," + Num(v.z); }
+
 Vec3d RotateAbout(Vec3d v, Vec3d axis, double radians) {
   // Rodrigues' rotation of v about the unit axis.
   const double c = std::cos(radians), s = std::sin(radians);
@@ -67,18 +75,28 @@ CameraKey Interpolate(const std::vector<Keyframe>& keys, int frame, Vec3d up) {
 PinholeCamera PinholeCamera::Create(const CameraKey& key, std::uint32_t width,
                                     std::uint32_t height) {
   if (!IsFinite(key.eye) || !IsFinite(key.target) || !IsFinite(key.up)) {
-    throw InputError("camera: eye, target and up must be finite");
+    throw InputError("camera: eye " + Str(key.eye) + ", target " + Str(key.target) + " and up " +
+                     Str(key.up) + " must be finite");
   }
   if (!(key.fov_deg > 0 && key.fov_deg < 180)) {
-    throw InputError("camera: field of view must be in (0, 180) degrees");
+    throw InputError("camera: field of view " + Num(key.fov_deg) + " must be in (0, 180) degrees");
   }
   const Vec3d f = key.target - key.eye;
-  if (!(Length(f) > 0)) throw InputError("camera: eye and target are the same point");
+  if (!(Length(f) > 0)) {
+    throw InputError("camera: eye and target are the same point " + Str(key.eye));
+  }
+  if (!std::isfinite(Length(f))) {
+    throw InputError("camera: eye " + Str(key.eye) + " and target " + Str(key.target) +
+                     " are too far apart (their distance overflows a double)");
+  }
   PinholeCamera c;
   c.eye_ = key.eye;
   c.forward_ = Normalize(f);
   const Vec3d r = Cross(c.forward_, key.up);
-  if (!(Length(r) > 1e-12)) throw InputError("camera: up is parallel to the view direction");
+  if (!(Length(r) > 1e-12)) {
+    throw InputError("camera: up " + Str(key.up) + " is parallel to the view direction " +
+                     Str(c.forward_) + " (from eye to target)");
+  }
   c.right_ = Normalize(r);
   c.up_ = Cross(c.right_, c.forward_);
   c.width_ = width;
@@ -92,6 +110,40 @@ Vec3d PinholeCamera::Direction(double x, double y) const {
   const double u = (2.0 * x / width_ - 1.0) * half_w_;
   const double v = (1.0 - 2.0 * y / height_) * half_h_;
   return Normalize(forward_ + right_ * u + up_ * v);
+}
+
+void ValidateCameraSpec(const CameraPathSpec& spec) {
+  if (!(spec.fov_deg > 0 && spec.fov_deg < 180)) {
+    throw InputError("--fov " + Num(spec.fov_deg) +
+                     ": the vertical field of view must be in (0, 180) degrees");
+  }
+  if (!IsFinite(spec.up)) throw InputError("--up " + Str(spec.up) + ": must be finite");
+  if (!(Length(spec.up) > 0)) throw InputError("--up " + Str(spec.up) + ": must not be zero");
+  // NaN means "not given" (frame the scene box); infinities are refused.
+  for (const auto& [v, name] : {std::pair{spec.eye, "--eye"}, std::pair{spec.target, "--target"}}) {
+    for (double c : {v.x, v.y, v.z}) {
+      if (std::isinf(c)) throw InputError(std::string(name) + " " + Str(v) + ": must be finite");
+    }
+  }
+  if (!std::isfinite(spec.orbit_degrees)) {
+    throw InputError("--orbit " + Num(spec.orbit_degrees) + ": degrees must be finite");
+  }
+  if (IsFinite(spec.eye) && IsFinite(spec.target) && spec.eye == spec.target) {
+    throw InputError("--eye and --target are the same point " + Str(spec.eye) +
+                     ": the camera must look somewhere");
+  }
+}
+
+void CheckCamera(const CameraPathSpec& spec, const CameraKey& key) {
+  try {
+    PinholeCamera::Create(key, 1, 1);
+  } catch (const InputError& e) {
+    const std::string where =
+        spec.keyframes_file.empty()
+            ? "--eye/--target/--up/--fov/--orbit, frame " + std::to_string(key.frame)
+            : "--keyframes " + spec.keyframes_file + ", frame " + std::to_string(key.frame);
+    throw InputError(where + ": " + e.what());
+  }
 }
 
 std::vector<CameraKey> MakeCameraPath(const CameraPathSpec& spec, const std::vector<int>& frames,
@@ -109,6 +161,10 @@ std::vector<CameraKey> MakeCameraPath(const CameraPathSpec& spec, const std::vec
     const double radius = 0.5 * Length(hi - lo);
     const double dist = 1.05 * radius / std::sin(spec.fov_deg * kPi / 360.0);
     eye = target + Normalize(Vec3d{0.0, 0.3, 1.0}) * dist;
+    if (!std::isfinite(Length(eye - target))) {
+      throw InputError("--fov " + Num(spec.fov_deg) +
+                       ": too small to frame the scene box from a finite distance; give --eye");
+    }
   }
   const Vec3d up = Normalize(spec.up);
   std::vector<CameraKey> path;

@@ -32,7 +32,17 @@ struct CameraPathSpec {
   std::string keyframes_file;  // if set: lines "frame ex ey ez tx ty tz fov", interpolated
 };
 
-// One CameraKey per frame number in `frames`, for a scene box [lo, hi].
+// Checks the camera options before the scene is known: --fov in (0, 180) degrees, --up
+// finite and not zero, --eye and --target finite (where given) and distinct. InputError
+// naming the option, its value and the valid range.
+void ValidateCameraSpec(const CameraPathSpec& spec);
+// Checks the camera of one frame made from `spec` (an --up parallel to the view direction,
+// a key frame whose eye is its target): InputError naming the options or the key-frame file,
+// and the frame.
+void CheckCamera(const CameraPathSpec& spec, const CameraKey& key);
+
+// One CameraKey per frame number in `frames`, for a scene box [lo, hi]. InputError when the
+// default framing would put the eye at infinity (a field of view too small for the box).
 std::vector<CameraKey> MakeCameraPath(const CameraPathSpec& spec, const std::vector<int>& frames,
                                       Vec3d box_lo, Vec3d box_hi);
 

@@ -46,7 +46,7 @@ void KeepBound(double v, double uv, Tighter tighter, double* t, double* u) {
 const char* AxisName(int axis) { return axis == 0 ? "x" : axis == 1 ? "y" : "z"; }
 
 [[noreturn]] void BadDims(std::string_view text, const std::string& why) {
-  throw InputError("invalid cell dimensions \"" + std::string(text) +
+  throw InputError("--cells \"" + std::string(text) +
                    "\": expected NXxNYxNZ with three positive integers, e.g. \"3x3x3\" (" + why +
                    ")");
 }
@@ -88,7 +88,7 @@ std::array<std::uint32_t, 3> ParseCellDims(std::string_view text) {
     d[axis] = ParseDim(text, text.substr(start, end - start));
     start = end + 1;
   }
-  CheckCellCount(d, "invalid cell dimensions \"" + std::string(text) + "\"");
+  CheckCellCount(d, "--cells \"" + std::string(text) + "\"");
   return {static_cast<std::uint32_t>(d[0]), static_cast<std::uint32_t>(d[1]),
           static_cast<std::uint32_t>(d[2])};
 }

@@ -1,5 +1,5 @@
-// A linear RGB image and its PNG writer (libpng; 8-bit sRGB, written to a temporary name and
-// renamed when complete).
+// A linear RGB image and its PNG writer and reader (libpng; 8 bits per channel, written to a
+// temporary name and renamed when complete).
 #pragma once
 
 #include <cstdint>
@@ -29,9 +29,24 @@ class Image {
   std::vector<Rgb> pixels_;
 };
 
-// Writes `image` as an 8-bit sRGB PNG. Throws InputError naming the path on failure.
-void WritePng(const Image& image, const std::string& path);
-// Reads an 8-bit RGB(A) PNG back as linear RGB (for tests and accuracy benchmarks).
-Image ReadPng(const std::string& path);
+// How 8-bit PNG values encode linear radiance (clamped to [0, 1], rounded to the nearest
+// step of 1/255):
+//  - kSrgb, the default of `raycell record`, for display: the sRGB transfer curve, and an
+//    sRGB chunk saying so.
+//  - kLinear: value * 255, and a gAMA chunk of 1.0 saying so. vdb_render writes the same
+//    values (truncated rather than rounded) with no chunk, so viewers show both too dark.
+enum class PngEncoding { kSrgb, kLinear };
+
+// "srgb" or "linear"; InputError naming `what` otherwise.
+PngEncoding ParsePngEncoding(const std::string& text, const std::string& what);
+const char* ToString(PngEncoding e);
+
+// Writes `image` as an 8-bit RGB PNG. Throws InputError naming the path on failure.
+void WritePng(const Image& image, const std::string& path,
+              PngEncoding encoding = PngEncoding::kSrgb);
+// Reads an 8-bit RGB(A) or grey PNG back as linear RGB, decoding its values as `encoding`
+// says whatever chunks the file holds (vdb_render's PNGs are linear and say nothing). For
+// tests and accuracy benchmarks. InputError naming the path if it is not such a PNG.
+Image ReadPng(const std::string& path, PngEncoding encoding);
 
 }  // namespace raycell

@@ -74,13 +74,55 @@ void ValidateSettings(const RenderSettings& s) {
   if (!(s.cutoff >= 0 && s.cutoff < 1)) throw InputError("--cutoff: must be in [0, 1)");
   if (s.width < 1 || s.height < 1) throw InputError("--res: width and height must be positive");
   if (s.spp < 1 || s.spp > 4096) throw InputError("--spp: must be in 1..4096");
+  const std::uint64_t pixels = std::uint64_t{s.width} * s.height;
+  if (pixels > kMaxPixels) {
+    throw InputError("--res " + std::to_string(s.width) + "x" + std::to_string(s.height) + ": " +
+                     std::to_string(pixels) + " pixels exceeds the limit of " +
+                     std::to_string(kMaxPixels) +
+                     " (8192x8192; the image is held in memory, 24 bytes a pixel)");
+  }
+  if (pixels * s.spp > kMaxPrimaryRays) {
+    throw InputError(
+        "--res x --spp: " + std::to_string(pixels) + " pixels x " + std::to_string(s.spp) + " = " +
+        std::to_string(pixels * s.spp) + " primary rays a frame exceeds the limit of " +
+        std::to_string(kMaxPrimaryRays) + " (a frame is analysed and replayed in memory)");
+  }
   if (s.max_depth > 16) throw InputError("--max-depth: must be at most 16");
   if (s.zstd_level < 1 || s.zstd_level > 19) throw InputError("--zstd-level: must be in 1..19");
 }
 
-RecordSummary Record(const RecordOptions& o, std::ostream& log) {
+void ValidateRecordOptions(const RecordOptions& o) {
   ValidateSettings(o.settings);
+  const auto& c = o.cells;
+  const std::uint64_t cells = std::uint64_t{c[0]} * c[1] * c[2];
+  if (c[0] < 1 || c[1] < 1 || c[2] < 1) throw InputError("--cells: each dimension must be >= 1");
+  if (cells > kMaxCaptureCells) {
+    throw InputError("--cells " + std::to_string(c[0]) + "x" + std::to_string(c[1]) + "x" +
+                     std::to_string(c[2]) + ": " + std::to_string(cells) +
+                     " cells exceeds the trace format's limit of " +
+                     std::to_string(kMaxCaptureCells) + " cells (e.g. 161x161x161)");
+  }
   if (o.frames.empty()) throw InputError("--frames: no frames to record");
+  if (o.frames.size() > kMaxCaptureFrames) {
+    throw InputError("--frames (or --orbit FRAMES:DEGREES): " + std::to_string(o.frames.size()) +
+                     " frames exceeds the trace format's limit of " +
+                     std::to_string(kMaxCaptureFrames) + " frames a capture");
+  }
+  if (o.threads < 0 || o.threads > kMaxThreads) {
+    throw InputError("--threads " + std::to_string(o.threads) + ": must be in 0.." +
+                     std::to_string(kMaxThreads) + " (0: all cores)");
+  }
+  if (o.scene.footprint_mode != "sparse" && o.scene.footprint_mode != "dense") {
+    throw InputError("--footprint '" + o.scene.footprint_mode + "': expected sparse or dense");
+  }
+  if (o.scene.all_grids && !o.scene.grids.empty()) {
+    throw InputError("--grid and --all-grids: give one or the other");
+  }
+  ValidateCameraSpec(o.camera);
+}
+
+RecordSummary Record(const RecordOptions& o, std::ostream& log) {
+  ValidateRecordOptions(o);
   const auto t_start = std::chrono::steady_clock::now();
   if (!o.images_dir.empty()) std::filesystem::create_directories(o.images_dir);
   std::unique_ptr<Scene> scene = Scene::Load(o.scene, o.frames.front());
@@ -95,20 +137,30 @@ RecordSummary Record(const RecordOptions& o, std::ostream& log) {
   ScanScene(o, scene.get(), &header);
   const CellGrid cells = CellGrid::Create(header.box_min, header.box_max, o.cells);
   header.cameras = MakeCameraPath(o.camera, o.frames, header.box_min, header.box_max);
+  for (const CameraKey& key : header.cameras) CheckCamera(o.camera, key);
 
   TraceWriter writer = TraceWriter::Create(o.out, header);
   Progress progress(o.progress);
   RecordSummary sum;
   const bool seq = IsSequencePattern(o.scene.source);
+  auto interrupt = [&] {
+    progress.Done();
+    sum.interrupted = true;
+    log << "interrupted: the " << sum.frames << " finished frames are in " << writer.tmp_path()
+        << " (readable by `raycell trace`)\n";
+  };
   for (std::size_t i = 0; i < o.frames.size(); ++i) {
     const int frame = o.frames[i];
     if (seq && i > 0) scene = Scene::Load(o.scene, frame);
+    std::vector<std::uint64_t> frame_footprints;  // a sequence's own, per frame
+    if (seq) {
+      frame_footprints =
+          scene->Footprints(header.box_min, header.box_max, o.cells, o.scene.footprint_mode);
+    }
     RenderJob job;
     job.scene = scene.get();
     job.cells = &cells;
-    job.footprints =
-        seq ? scene->Footprints(header.box_min, header.box_max, o.cells, o.scene.footprint_mode)
-            : header.footprints;
+    job.footprints = seq ? &frame_footprints : &header.footprints;
     job.camera = header.cameras[i];
     job.settings = o.settings;
     job.threads = o.threads;
@@ -122,14 +174,13 @@ RecordSummary Record(const RecordOptions& o, std::ostream& log) {
     FrameStats st;
     writer.BeginFrame(frame);
     if (!RenderFrame(job, &image, &st)) {
-      progress.Done();
-      sum.interrupted = true;
-      log << "interrupted: the " << sum.frames << " finished frames are in " << writer.tmp_path()
-          << " (readable by `raycell trace`)\n";
+      interrupt();
       break;
     }
     writer.EndFrame();
-    if (!o.images_dir.empty()) WritePng(image, ImagePath(o.images_dir, frame));
+    if (!o.images_dir.empty()) {
+      WritePng(image, ImagePath(o.images_dir, frame), o.image_encoding);
+    }
     ++sum.frames;
     sum.rays += st.rays, sum.visits += st.visits, sum.samples += st.samples;
     sum.primary_missed += st.primary_missed;
@@ -140,6 +191,10 @@ RecordSummary Record(const RecordOptions& o, std::ostream& log) {
         << st.rays_by_kind[1] << " reflection, " << st.rays_by_kind[2] << " refraction, "
         << st.rays_by_kind[3] << " shadow), " << st.visits << " visits, " << st.samples
         << " samples, " << FormatFixed(secs, 2) << " s\n";
+    if (o.stop && i + 1 < o.frames.size() && o.stop(sum.frames)) {
+      interrupt();
+      break;
+    }
   }
   if (!sum.interrupted) writer.Finish();
   sum.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();

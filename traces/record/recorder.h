@@ -4,15 +4,36 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "traces/record/camera.h"
+#include "traces/record/image.h"
 #include "traces/record/scene.h"
 #include "traces/trace_header.h"
 
 namespace raycell {
+
+// Size limits of a capture, checked before anything is loaded or rendered.
+//
+// Cells: the trace header holds every cell's footprint (8 bytes) and every frame's camera
+// (112 bytes) in one message of at most 64 MiB (kTraceMaxMessageBytes). These two keep it
+// under 45 MB.
+// TODO(trace format): the trace-format work moves footprints into batches (at least
+// 256x256x256 cells) and exposes its limit as a constant; use that here instead. The renderer
+// itself works at 256^3 (RecorderAtScale tests).
+inline constexpr std::uint64_t kMaxCaptureCells = std::uint64_t{1} << 22;  // 4,194,304
+inline constexpr std::uint64_t kMaxCaptureFrames = 100000;
+// Pixels of one frame: the image is held in memory as linear RGB doubles, 24 bytes a pixel
+// (1.5 GiB at the limit, 8192x8192).
+inline constexpr std::uint64_t kMaxPixels = std::uint64_t{1} << 26;
+// Primary rays of one frame (pixels x samples per pixel): 16 times the 2048x2048 capture of
+// BENCHMARKS.md "Capture at scale" (17 M rays, 92 M visits in 8x8x8 cells). Recording and
+// analysing stream a frame; replaying it per ray segment holds it in memory (6 GiB there).
+inline constexpr std::uint64_t kMaxPrimaryRays = std::uint64_t{1} << 26;
+inline constexpr int kMaxThreads = 1024;
 
 struct RecordOptions {
   SceneSpec scene;
@@ -22,9 +43,15 @@ struct RecordOptions {
   CameraPathSpec camera;
   std::string out = "capture.rct";
   std::string images_dir;  // empty: no images
-  int threads = 0;         // 0: all cores
-  bool progress = true;    // a bar on stderr, when stderr is a terminal
+  PngEncoding image_encoding = PngEncoding::kSrgb;
+  int threads = 0;       // 0: all cores
+  bool progress = true;  // a bar on stderr, when stderr is a terminal
+  // Stops the capture within a frame (Ctrl-C): the frame is dropped.
   const std::atomic<bool>* cancel = nullptr;
+  // Asked after each frame but the last with the number of frames finished; returning true
+  // stops the capture as an interruption would (the finished frames stay readable in
+  // OUT.tmp). For tests.
+  std::function<bool(std::size_t frames_done)> stop;
 };
 
 struct RecordSummary {
@@ -36,8 +63,13 @@ struct RecordSummary {
 
 // Parses "WxH". InputError on bad text or a zero size.
 std::array<std::uint32_t, 2> ParseResolution(const std::string& text);
-// Checks every numeric setting (positive steps, cutoff in [0,1), ...); InputError if not.
+// Checks every numeric setting (positive steps, cutoff in [0,1), pixels and pixels x samples
+// per pixel within kMaxPixels and kMaxPrimaryRays, ...); InputError naming the option if not.
 void ValidateSettings(const RenderSettings& s);
+// Checks everything that can be checked before the scene is loaded: the settings, the cell
+// grid and frame count against the limits above, threads, the camera options, the footprint
+// mode and the grid choice. InputError naming the option and its limit.
+void ValidateRecordOptions(const RecordOptions& o);
 
 // Records the capture. Throws InputError on bad input; `log` gets one line per frame.
 RecordSummary Record(const RecordOptions& options, std::ostream& log);

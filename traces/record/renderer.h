@@ -38,7 +38,9 @@ struct MarchSample {
 struct RenderJob {
   const Scene* scene = nullptr;
   const CellGrid* cells = nullptr;
-  std::vector<std::uint64_t> footprints;  // this frame's; 0 = empty cell, never visited
+  // This frame's footprints, one per cell (0 = empty, never visited); not copied, so they
+  // must outlive the call.
+  const std::vector<std::uint64_t>* footprints = nullptr;
   CameraKey camera;
   RenderSettings settings;
   int threads = 0;  // 0: all cores

@@ -20,6 +20,12 @@
 namespace raycell {
 namespace {
 
+std::string Join(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
 double ParseNumber(const std::string& text, const std::string& what) {
   std::size_t used = 0;
   double v = 0;
@@ -119,9 +125,12 @@ void ApplyMaterial(Scene::Impl& s, const std::string& text, const std::string& s
   for (auto& f : s.surfaces)
     if (f.grid->getName() == grid) surface = &f.material;
   if (!fog && !surface) {
-    std::string names;
-    for (const auto& g : s.infos) names += (names.empty() ? "" : ", ") + g.name;
-    throw InputError(what + ": " + source + " has no grid '" + grid + "' (grids: " + names + ")");
+    if (std::find(s.float_grids.begin(), s.float_grids.end(), grid) != s.float_grids.end()) {
+      throw InputError(what + ": grid '" + grid + "' is not rendered (choose it with --grid " +
+                       grid + ", or --all-grids)");
+    }
+    throw InputError(what + ": " + source + " has no float grid '" + grid +
+                     "' (float grids: " + Join(s.float_grids) + ")");
   }
   for (std::size_t i = 1; i < fields.size(); ++i) {
     const auto eq = fields[i].find('=');
@@ -193,30 +202,87 @@ void InitOpenVdb() {
   std::call_once(once, [] { openvdb::initialize(); });
 }
 
-void LoadFile(Scene::Impl& s, const std::string& path) {
-  openvdb::GridPtrVecPtr grids;
+// The grids to render among a source's float grids `names`: vdb_render's rule by default
+// (the first one; all of them where `default_all`), else what spec.grids or spec.all_grids
+// say.
+std::vector<std::string> ChooseGrids(const std::vector<std::string>& names, const SceneSpec& spec,
+                                     const std::string& source, bool default_all) {
+  if (spec.all_grids && !spec.grids.empty()) {
+    throw InputError("--grid and --all-grids: give one or the other");
+  }
+  if (spec.all_grids || (spec.grids.empty() && default_all)) return names;
+  if (spec.grids.empty()) {
+    return names.empty() ? names : std::vector<std::string>{names.front()};
+  }
+  std::vector<std::string> chosen;
+  for (const std::string& g : spec.grids) {
+    if (std::find(names.begin(), names.end(), g) == names.end()) {
+      throw InputError("--grid '" + g + "': " + source + " has no float grid '" + g +
+                       "' (float grids: " + Join(names) + ")");
+    }
+    if (std::find(chosen.begin(), chosen.end(), g) == chosen.end()) chosen.push_back(g);
+  }
+  return chosen;
+}
+
+// Reads the chosen float grids of a file. Grids are listed as vdb_render lists them
+// (OpenVDB's grid table, ordered by name), so that by default both render the same one.
+void LoadFile(Scene::Impl& s, const std::string& path, const SceneSpec& spec) {
+  std::vector<std::string> chosen;
+  std::string others;
   try {
     openvdb::io::File file(path);
     file.open();
-    grids = file.getGrids();
+    openvdb::io::File::NameIterator name = file.beginName();
+    const openvdb::GridPtrVecPtr metas = file.readAllGridMetadata();
+    for (std::size_t i = 0; i < metas->size(); ++i, ++name) {
+      const openvdb::GridBase& meta = *(*metas)[i];
+      if (meta.isType<openvdb::FloatGrid>()) {
+        s.float_grids.push_back(*name);
+      } else {
+        others += (others.empty() ? "" : ", ") + *name + " (" + meta.valueType() + ")";
+      }
+    }
+    chosen = ChooseGrids(s.float_grids, spec, path, false);
+    for (const std::string& g : chosen) {
+      AddGrid(s, openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(g)), path);
+    }
     file.close();
   } catch (const openvdb::Exception& e) {
     throw InputError(path + ": cannot read as an OpenVDB file: " + e.what());
   }
-  std::string others;
-  for (const auto& base : *grids) {
-    auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
-    if (grid) {
-      AddGrid(s, grid, path);
-    } else {
-      others += (others.empty() ? "" : ", ") + base->getName() + " (" + base->valueType() + ")";
-    }
-  }
-  if (s.fogs.empty() && s.surfaces.empty()) {
+  if (s.float_grids.empty()) {
     throw InputError(path + ": no non-empty float grid" +
                      (others.empty() ? std::string() : " (found: " + others + ")") +
                      "; raycell renders float fog volumes and level sets");
   }
+  if (s.fogs.empty() && s.surfaces.empty()) {
+    throw InputError(path + ": no non-empty float grid: " + Join(chosen) +
+                     " has no active voxels (float grids: " + Join(s.float_grids) +
+                     "; choose with --grid NAME or --all-grids)");
+  }
+}
+
+// Keeps only the chosen grids of the built-in scene.
+void SelectBuiltin(Scene::Impl& s, const SceneSpec& spec) {
+  for (const auto& g : s.infos) s.float_grids.push_back(g.name);
+  const auto chosen = ChooseGrids(s.float_grids, spec, "builtin", true);
+  auto keep = [&](const auto& layer) {
+    return std::find(chosen.begin(), chosen.end(), layer.grid->getName()) != chosen.end();
+  };
+  auto drop = [&](auto& layers) {
+    layers.erase(
+        std::remove_if(layers.begin(), layers.end(), [&](const auto& l) { return !keep(l); }),
+        layers.end());
+  };
+  drop(s.fogs);
+  drop(s.surfaces);
+  s.infos.erase(std::remove_if(s.infos.begin(), s.infos.end(),
+                               [&](const GridInfo& g) {
+                                 return std::find(chosen.begin(), chosen.end(), g.name) ==
+                                        chosen.end();
+                               }),
+                s.infos.end());
 }
 
 openvdb::FloatGrid::Ptr Named(openvdb::FloatGrid::Ptr g, const std::string& name) {
@@ -382,8 +448,9 @@ std::unique_ptr<Scene> Scene::Load(const SceneSpec& spec, int frame) {
   auto s = std::make_unique<Impl>();
   if (spec.source == "builtin") {
     BuildBuiltin(*s);
+    SelectBuiltin(*s, spec);
   } else {
-    LoadFile(*s, FrameFile(spec.source, frame));
+    LoadFile(*s, FrameFile(spec.source, frame), spec);
     s->lights.push_back(Light{});
   }
   for (const auto& m : spec.materials) ApplyMaterial(*s, m, spec.source);

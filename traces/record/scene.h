@@ -38,6 +38,10 @@ struct SceneSpec {
   // "builtin", one .vdb file, or a printf pattern such as fluid_data_%04d.vdb (one file per
   // frame number).
   std::string source = "builtin";
+  // The grids rendered, by name. Empty: vdb_render's choice, the first float grid of the file
+  // (every grid of the built-in scene). Each named grid must be a float grid of the file.
+  std::vector<std::string> grids;
+  bool all_grids = false;  // every float grid of the file (then `grids` must be empty)
   // "GRID:key=value:key=value", e.g. "density:absorb=0.2:scatter=1,1,1" or
   // "ball:color=1,0,0:reflect=0.5:transparent=0:ior=1.5" (see ParseMaterial).
   std::vector<std::string> materials;
@@ -57,8 +61,9 @@ std::string FrameFile(const std::string& source, int frame);
 class Scene {
  public:
   struct Impl;  // OpenVDB grids and materials, see scene_vdb.h
-  // Loads (or builds) the scene of one frame. Throws InputError for a missing file, a file
-  // with no float grid, an unknown material key, and so on.
+  // Loads (or builds) the scene of one frame: only the grids chosen by spec.grids /
+  // spec.all_grids are read. Throws InputError for a missing file, a file with no float grid,
+  // a chosen grid it lacks, an unknown material key, and so on.
   static std::unique_ptr<Scene> Load(const SceneSpec& spec, int frame);
   ~Scene();
 

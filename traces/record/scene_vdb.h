@@ -24,7 +24,8 @@ struct SurfaceLayer {
 struct Scene::Impl {
   std::vector<FogLayer> fogs;
   std::vector<SurfaceLayer> surfaces;
-  std::vector<GridInfo> infos;
+  std::vector<GridInfo> infos;           // the rendered grids
+  std::vector<std::string> float_grids;  // every float grid of the source (for messages)
   std::vector<Light> lights;
   Rgb sky_top{0, 0, 0}, sky_bottom{0, 0, 0};  // background gradient by direction.y
   openvdb::Vec3d lo, hi;
