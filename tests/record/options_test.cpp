@@ -74,10 +74,11 @@ TEST_F(RecordLimits, CellsBeyondTheTraceFormatsLimitAreRefusedBeforeTheSceneIsRe
        "limit of " + std::to_string(kMaxCaptureCells)});
   ExpectRefused(
       [](RecordOptions& o) {
-        o.cells = {2048, 2048, 2};
+        o.cells = {4096, 4096, 2};
       },
-      {"--cells 2048x2048x2", std::to_string(kMaxCaptureCells)});
-  ExpectAccepted([](RecordOptions& o) { o.cells = {2048, 2048, 1}; });  // exactly the limit
+      {"--cells 4096x4096x2", std::to_string(kMaxCaptureCells)});
+  ExpectAccepted([](RecordOptions& o) { o.cells = {4096, 4096, 1}; });  // exactly the limit
+  ExpectAccepted([](RecordOptions& o) { o.cells = {256, 256, 256}; });
   ExpectRefused([](RecordOptions& o) { o.cells = {0, 2, 2}; }, {"--cells"});
 }
 

@@ -254,7 +254,7 @@ Rendered RenderIn(const Scene& scene, std::array<std::uint32_t, 3> dims) {
 
 // The cell grid changes the record, never the picture: a fog scene rendered in 1x1x1,
 // 3x3x3 and 256x256x256 cells gives the same image bit for bit and the same rays and
-// samples. At 256^3 (beyond what a trace holds today, see kMaxCaptureCells) every visit is
+// samples. At 256^3 (the largest grid a trace holds, kMaxCaptureCells) every visit is
 // to a non-empty cell, consecutive visits differ, spawned rays start in their parent's cell,
 // and a fine cell is non-empty only inside a non-empty cell of the 2x2x2 grid (256 = 2x128).
 TEST(RecorderAtScale, CellGridsUpTo256CubedChangeTheRecordNotThePicture) {

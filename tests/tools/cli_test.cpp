@@ -341,7 +341,7 @@ TEST(Cli, SizesBeyondTheLimitsFailUpFrontNamingTheOptionAndTheLimit) {
                      (d / "missing.vdb").string() + " --out " + (d / "big.rct").string());
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("--cells 1000x1000x1000: 1000000000 cells exceeds the trace format's "
-                       "limit of 4194304"),
+                       "limit of 16777216"),
             std::string::npos)
       << r.out;
   r = Raycell("record --fov 0 --out " + (d / "big.rct").string());

@@ -100,7 +100,7 @@ void ValidateRecordOptions(const RecordOptions& o) {
     throw InputError("--cells " + std::to_string(c[0]) + "x" + std::to_string(c[1]) + "x" +
                      std::to_string(c[2]) + ": " + std::to_string(cells) +
                      " cells exceeds the trace format's limit of " +
-                     std::to_string(kMaxCaptureCells) + " cells (e.g. 161x161x161)");
+                     std::to_string(kMaxCaptureCells) + " cells (e.g. 256x256x256)");
   }
   if (o.frames.empty()) throw InputError("--frames: no frames to record");
   if (o.frames.size() > kMaxCaptureFrames) {

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "traces/format.h"
 #include "traces/record/camera.h"
 #include "traces/record/image.h"
 #include "traces/record/scene.h"
@@ -18,13 +19,10 @@ namespace raycell {
 
 // Size limits of a capture, checked before anything is loaded or rendered.
 //
-// Cells: the trace header holds every cell's footprint (8 bytes) and every frame's camera
-// (112 bytes) in one message of at most 64 MiB (kTraceMaxMessageBytes). These two keep it
-// under 45 MB.
-// TODO(trace format): the trace-format work moves footprints into batches (at least
-// 256x256x256 cells) and exposes its limit as a constant; use that here instead. The renderer
-// itself works at 256^3 (RecorderAtScale tests).
-inline constexpr std::uint64_t kMaxCaptureCells = std::uint64_t{1} << 22;  // 4,194,304
+// Cells: the trace format's limit (traces/format.h: footprints are stored in records of
+// runs after the header, so 256x256x256 cells fit whatever their footprints); the renderer
+// keeps one bit per cell and works at that size (RecorderAtScale tests).
+inline constexpr std::uint64_t kMaxCaptureCells = kTraceMaxCells;  // 16,777,216
 inline constexpr std::uint64_t kMaxCaptureFrames = 100000;
 // Pixels of one frame: the image is held in memory as linear RGB doubles, 24 bytes a pixel
 // (1.5 GiB at the limit, 8192x8192).
