@@ -72,8 +72,9 @@ void ScaleBack(ReplayResult& r, std::uint32_t k, std::uint32_t processors) {
 
 TraceReplay ReplayTrace(const TraceReader& reader, const std::vector<std::size_t>& frame_indices,
                         const ReplayConfig& config, const std::function<void(double)>& progress,
-                        std::uint32_t sample_every) {
+                        std::uint32_t sample_every, ReplayObserver* observer) {
   if (sample_every < 1) throw InputError("sampling: 1 in k ray trees needs k >= 1");
+  RAYCELL_CHECK(observer == nullptr || sample_every == 1);
   const TraceHeader& h = reader.header();
   const CellId cells = h.cell_count();
   const bool per_ray = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay;
@@ -89,7 +90,8 @@ TraceReplay ReplayTrace(const TraceReader& reader, const std::vector<std::size_t
     Frame f = LoadFrame(reader, i, per_ray, sample_every);
     const FrameInfo info{i, f.tree.get(), i > 0 ? previous.get() : nullptr, cells};
     const WorkGraph work = per_ray ? RaySegmentWork(f.rays, cells) : NodeWork(*f.tree, cells);
-    ReplayResult r = ReplayFrame(work, h.footprints, config, *scheduler, info, Bound(*f.tree));
+    ReplayResult r =
+        ReplayFrame(work, h.footprints, config, *scheduler, info, Bound(*f.tree), observer);
     ScaleBack(r, sample_every, config.processors.count);
     r.frame = reader.frames()[i].frame;
     Accumulate(r, &out.total);

@@ -25,9 +25,12 @@ struct TraceReplay {
 // segments, samples and work times k, and the simulated time by the added work spread over
 // the processors. Fetches, stall and the bound are those of the sample: the error the
 // sampling makes is what tools/bench/accuracy.py measures.
+//
+// `observer` (may be null) watches every frame's replay (ReplayFrame); it needs
+// sample_every = 1, since it would see the sample's times, not the scaled ones.
 TraceReplay ReplayTrace(const TraceReader& reader, const std::vector<std::size_t>& frame_indices,
                         const ReplayConfig& config,
                         const std::function<void(double)>& progress = {},
-                        std::uint32_t sample_every = 1);
+                        std::uint32_t sample_every = 1, ReplayObserver* observer = nullptr);
 
 }  // namespace raycell

@@ -102,6 +102,10 @@ SimTime MemoryHierarchy::Transfer(std::uint32_t processor, CellId cell, std::siz
     t = start + levels_[i].latency_below +
         levels_[i].bandwidth_below.TransferTime(footprints_[cell]);
     free = t;
+    if (observer_) {  // a prefetch keeps the cell being worked: only it passes `pinned`
+      observer_->Transfer(i, i == 0 ? processor : 0, cell, footprints_[cell], start, t, processor,
+                          pinned.has_value());
+    }
     Store(i, processor).Insert(cell, i == 0 ? pinned : std::nullopt);
     CheckedIncrement(stats_[i].fetches);
     CheckedIncrement(stats_[i].bytes, footprints_[cell]);

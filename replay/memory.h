@@ -12,6 +12,7 @@
 
 #include "engine/time.h"
 #include "replay/config.h"
+#include "replay/observer.h"
 #include "replay/replacement.h"
 #include "traces/ray_batch.h"
 
@@ -79,6 +80,8 @@ class MemoryHierarchy {
   const std::vector<LevelStats>& stats() const { return stats_; }
   std::uint64_t prefetches() const { return prefetches_; }
   std::uint64_t prefetch_hits() const { return prefetch_hits_; }
+  // Told of every transfer (ReplayObserver::Transfer); null (the default): none.
+  void set_observer(ReplayObserver* observer) { observer_ = observer; }
 
  private:
   CellStore& Store(std::size_t level, std::uint32_t processor);
@@ -96,6 +99,7 @@ class MemoryHierarchy {
   std::vector<std::vector<SimTime>> arrival_;  // [processor][cell]: when a prefetch lands
   std::vector<std::vector<bool>> prefetched_;  // [processor][cell]: not yet used
   std::uint64_t prefetches_ = 0, prefetch_hits_ = 0;
+  ReplayObserver* observer_ = nullptr;
 };
 
 }  // namespace raycell

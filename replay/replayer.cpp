@@ -121,7 +121,8 @@ template <typename Units>
 class Board {
  public:
   Board(const WorkGraph& w, Units units, const std::vector<std::uint64_t>& footprints,
-        const ReplayConfig& config, Scheduler& scheduler, const MemoryHierarchy::Requests& futures)
+        const ReplayConfig& config, Scheduler& scheduler, const MemoryHierarchy::Requests& futures,
+        ReplayObserver* observer)
       : w_(w),
         u_(units),
         config_(config),
@@ -133,11 +134,14 @@ class Board {
         view_(w.cells, 0),
         locked_(w.cells, false),
         processors_(config.processors.count),
-        slots_(config.processors.count) {
+        slots_(config.processors.count),
+        obs_(observer) {
     u_.ForEachRoot([this](UnitId x) { Enqueue(x); });
+    memory_.set_observer(obs_);
   }
 
-  void Run() {
+  void Run(std::size_t frame_index) {
+    if (obs_) obs_->BeginRun(frame_index, queued_rays_);
     for (std::uint32_t p = 0; p < processors_.size(); ++p) {
       Schedule(p, SimTime::Zero(), Kind::kIdle);
       slots_.Update(p);
@@ -172,6 +176,7 @@ class Board {
       if (events_since_progress_ >= kWatchdogEvents) Stall("events without progress");
     }
     if (done_ != w_.size()) Stall("no event pending while units remain");
+    if (obs_) obs_->EndRun(now_);
   }
 
   ReplayResult Result() const;
@@ -220,17 +225,23 @@ class Board {
     RAYCELL_CHECK(!queues_[*c].empty() && !locked_[*c]);
     locked_[*c] = true;
     processors_[p].cell = *c;
+    const std::uint64_t fetches = obs_ ? memory_.stats()[0].fetches : 0;  // observed only
     const SimTime ready = memory_.Fetch(p, *c, now_);
     processors_[p].stall = processors_[p].stall + (ready - now_);
+    if (obs_) {
+      obs_->Fetch(p, *c, now_, ready, memory_.stats()[0].fetches != fetches, scheduler_.Reason());
+    }
     Schedule(p, ready, Kind::kFetched);
   }
 
   // Moves the queue of p's cell to the end of its worklist: a swap of arrays when the
   // worklist is used up, as it is whenever a queue is taken.
-  void TakeQueue(Processor& ps) {
+  void TakeQueue(std::uint32_t p) {
+    Processor& ps = processors_[p];
     const CellId c = *ps.cell;
     std::vector<UnitId>& q = queues_[c];
     if (q.empty()) return;
+    if (obs_) obs_->QueueTaken(p, c, queued_rays_[c], now_);
     queued_total_ -= queued_rays_[c];
     queued_rays_[c] = 0;
     if (ps.head == ps.worklist.size()) {
@@ -244,7 +255,7 @@ class Board {
   }
 
   void OnFetched(std::uint32_t p) {
-    TakeQueue(processors_[p]);
+    TakeQueue(p);
     if (config_.processors.prefetch) {  // double buffering: the predicted next cell
       const std::optional<CellId> next = scheduler_.Peek(View(p));
       if (next) memory_.Prefetch(p, *next, now_, *processors_[p].cell);
@@ -254,8 +265,9 @@ class Board {
 
   void StartNext(std::uint32_t p) {
     Processor& ps = processors_[p];
-    if (ps.head == ps.worklist.size()) TakeQueue(ps);  // units that arrived meanwhile
+    if (ps.head == ps.worklist.size()) TakeQueue(p);  // units that arrived meanwhile
     if (ps.head == ps.worklist.size()) {
+      if (obs_) obs_->BatchEnd(p, *ps.cell, now_);
       locked_[*ps.cell] = false;
       Schedule(p, now_, Kind::kIdle);
       return;
@@ -326,6 +338,7 @@ class Board {
   SimTime now_;
   std::uint64_t next_seq_ = 0, events_ = 0, events_since_progress_ = 0;
   std::uint64_t done_ = 0, queued_total_ = 0, peak_queued_ = 0;
+  ReplayObserver* obs_;  // null: nothing observes (replay/observer.h)
 };
 
 template <typename Units>
@@ -361,14 +374,15 @@ bool UsesMin(const ReplayConfig& config) {
 template <typename Units>
 ReplayResult Replay(const WorkGraph& work, Units units,
                     const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
-                    Scheduler& scheduler, const FrameInfo& frame, std::uint64_t bound) {
+                    Scheduler& scheduler, const FrameInfo& frame, std::uint64_t bound,
+                    ReplayObserver* observer) {
   const bool min = UsesMin(config);
   const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
   MemoryHierarchy::Requests futures;
   for (std::uint32_t pass = 1;; ++pass) {
     scheduler.BeginFrame(frame);
-    Board<Units> board(work, units, footprints, config, scheduler, futures);
-    board.Run();
+    Board<Units> board(work, units, footprints, config, scheduler, futures, observer);
+    board.Run(frame.frame_index);
     const bool converged = pass > 1 && !board.memory().diverged();
     if (!min || converged || pass == max_passes) {
       ReplayResult r = board.Result();
@@ -402,14 +416,14 @@ void CheckReplayable(const ReplayConfig& config) {
 
 ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                          const ReplayConfig& config, Scheduler& scheduler, const FrameInfo& frame,
-                         std::uint64_t bound) {
+                         std::uint64_t bound, ReplayObserver* observer) {
   RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
   CheckReplayable(config);
   if (!work.packed.empty()) {
     return Replay(work, PackedUnits{work.packed.data(), UnitId(work.roots.size())}, footprints,
-                  config, scheduler, frame, bound);
+                  config, scheduler, frame, bound, observer);
   }
-  return Replay(work, ColumnUnits{&work}, footprints, config, scheduler, frame, bound);
+  return Replay(work, ColumnUnits{&work}, footprints, config, scheduler, frame, bound, observer);
 }
 
 }  // namespace raycell

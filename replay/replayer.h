@@ -19,6 +19,7 @@
 #include "engine/time.h"
 #include "replay/config.h"
 #include "replay/memory.h"
+#include "replay/observer.h"
 #include "replay/work.h"
 #include "scheduling/scheduler.h"
 
@@ -51,9 +52,12 @@ struct ReplayResult {
 // made, until a run makes exactly the requests it was given (at most levels + 1 runs;
 // min_converged says whether it got there). With one processor the order of cell requests
 // does not depend on the caches, so MIN on the processors' caches is exact after one rerun.
+//
+// `observer` (replay/observer.h), when not null, is told what each run does; the result is the
+// same with or without one.
 ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                          const ReplayConfig& config, Scheduler& scheduler, const FrameInfo& frame,
-                         std::uint64_t bound);
+                         std::uint64_t bound, ReplayObserver* observer = nullptr);
 
 // Whether the maxGen bound holds for `config`: one processor whose cache holds one cell.
 bool BoundHolds(const ReplayConfig& config);

@@ -38,6 +38,8 @@ void ScheduleFollower::Reset(std::vector<CellId> schedule, CellId cells) {
   schedule_ = std::move(schedule);
   cursor_ = 0;
   stats_ = {};
+  last_how_ = 0;
+  last_skipped_ = 0;
 }
 
 std::optional<CellId> Scheduler::Peek(const QueueView& queues) const {
@@ -52,17 +54,28 @@ std::optional<CellId> ScheduleFollower::Peek(const QueueView& queues) const {
 }
 
 std::optional<CellId> ScheduleFollower::Next(const QueueView& queues) {
+  last_skipped_ = 0;
   while (cursor_ < schedule_.size()) {
     const CellId c = schedule_[cursor_++];
     if (queues.has_work(c)) {
       ++stats_.followed;
+      last_how_ = 1;
       return c;
     }
     ++stats_.skipped;
+    ++last_skipped_;
   }
   const std::optional<CellId> c = MostQueuedCell(queues);
   stats_.max_work += c ? 1 : 0;
+  last_how_ = c ? 2 : 0;
   return c;
+}
+
+std::string ScheduleFollower::Reason() const {
+  if (last_how_ == 0) return {};
+  std::string r = last_how_ == 1 ? "followed" : "max work";
+  if (last_skipped_ > 0) r += " (skipped " + std::to_string(last_skipped_) + ")";
+  return r;
 }
 
 const std::vector<SchedulerEntry>& SchedulerRegistry() {

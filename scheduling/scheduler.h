@@ -55,6 +55,11 @@ class Scheduler {
   // cell a processor prefetches while it works the current one. nullopt: no prediction.
   // Default: Max Work's choice.
   virtual std::optional<CellId> Peek(const QueueView& queues) const;
+  // Why the last Next chose its cell, in a few words for people reading a replay's timeline
+  // (replay/timeline.h): "followed", "max work (skipped 2)". Empty (the default) when the
+  // policy has nothing to say beyond its name. Read only when asked: never on the replay's
+  // path unless a timeline is written.
+  virtual std::string Reason() const { return {}; }
 };
 
 // Max Work's choice: the cell with the most queued rays, lowest number on ties; nullopt when
@@ -79,6 +84,10 @@ class ScheduleFollower {
   std::optional<CellId> Next(const QueueView& queues);
   // Next's choice without moving the cursor or counting.
   std::optional<CellId> Peek(const QueueView& queues) const;
+  // Why the last Next chose its cell: "followed" (the next schedule entry with work) or "max
+  // work" (the schedule was used up), with " (skipped N)" when that Next skipped N entries
+  // whose cell had no work; empty before any Next, or when the last found no work.
+  std::string Reason() const;
   const std::vector<CellId>& schedule() const { return schedule_; }
   std::size_t cursor() const { return cursor_; }
   const Stats& stats() const { return stats_; }
@@ -87,6 +96,9 @@ class ScheduleFollower {
   std::vector<CellId> schedule_;
   std::size_t cursor_ = 0;
   Stats stats_;
+  // The last Next: how it chose (0 none, 1 followed, 2 max work) and the entries it skipped.
+  std::uint8_t last_how_ = 0;
+  std::size_t last_skipped_ = 0;
 };
 
 // Every scheduler by name: the one list that MakeScheduler, the configuration's validation
@@ -112,6 +124,7 @@ class FollowingScheduler : public Scheduler {
   std::optional<CellId> Peek(const QueueView& queues) const override {
     return follower_.Peek(queues);
   }
+  std::string Reason() const override { return follower_.Reason(); }
   const ScheduleFollower& follower() const { return follower_; }
 
  protected:

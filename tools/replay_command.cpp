@@ -14,6 +14,7 @@
 #include "replay/config.h"
 #include "replay/driver.h"
 #include "replay/result_table.h"
+#include "replay/timeline.h"
 #include "scheduling/scheduler.h"
 #include "tools/commands.h"
 #include "tools/frames.h"
@@ -23,9 +24,10 @@ namespace raycell {
 namespace {
 
 struct ReplayArgs {
-  std::string trace, config, scheduler, granularity, frames, format = "table", out;
+  std::string trace, config, scheduler, granularity, frames, format = "table", out, timeline;
   std::vector<std::string> sets;
   std::uint32_t sample = 1;
+  std::uint64_t timeline_limit = kTimelineLimitBytes;  // hidden option, for the tests
   bool print_config = false, quiet = false;
 };
 
@@ -42,12 +44,6 @@ void CheckModelSize(const TraceHeader& h, const ReplayConfig& c) {
                      " exceeds the limit of " + std::to_string(kMaxProcessorCells) +
                      " (the memory model keeps 8 bytes per processor and cell)");
   }
-}
-
-std::string Ms(SimTime t) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3f", double(t.picoseconds()) * 1e-9);
-  return buf;
 }
 
 // Every output below prints the result's StatsTable (replay/result_table.h).
@@ -149,9 +145,31 @@ void Run(const ReplayArgs& a) {
   CheckModelSize(reader.header(), config);
   if (!reader.warning().empty()) std::cerr << "raycell: warning: " << reader.warning() << "\n";
   Progress progress(!a.quiet);
-  const TraceReplay t = ReplayTrace(
-      reader, SelectFrameRange(reader, a.frames), config,
-      [&](double f) { progress.Update(f, "replaying"); }, a.sample);
+  if (!a.timeline.empty() && a.sample > 1) {
+    throw InputError("--timeline shows the replay as it ran; it cannot be combined with --sample " +
+                     std::to_string(a.sample) + " (the sample's times are scaled afterwards)");
+  }
+  const std::vector<std::size_t> frames = SelectFrameRange(reader, a.frames);
+  const auto replay = [&](ReplayObserver* observer) {
+    return ReplayTrace(
+        reader, frames, config, [&](double f) { progress.Update(f, "replaying"); }, a.sample,
+        observer);
+  };
+  TraceReplay t;
+  if (a.timeline.empty()) {
+    t = replay(nullptr);
+  } else {  // streamed to a temporary, renamed when complete; removed if too large
+    TimelineOptions options{a.trace, {}, a.timeline_limit, "--timeline " + a.timeline};
+    for (const FrameSummary& f : reader.frames()) options.frame_numbers.push_back(f.frame);
+    WriteFileAtomically(
+        a.timeline,
+        [&](std::ostream& out) {
+          TimelineWriter writer(out, config, reader.header().footprints, options);
+          t = replay(&writer);
+          writer.Finish();
+        },
+        "--timeline " + a.timeline);
+  }
   progress.Done();
   std::ostringstream out;
   a.format == "json"  ? PrintJson(t, out)
@@ -196,6 +214,7 @@ void AddReplayCommand(CLI::App& app) {
       "  raycell replay capture.rct --scheduler maxwork\n"
       "  raycell replay capture.rct --granularity node --format json --out r.json\n"
       "  raycell replay capture.rct --set processors.count=2 --set level.cache.capacity=2\n"
+      "  raycell replay capture.rct --timeline timeline.json --frames 0..1   # ui.perfetto.dev\n"
       "  raycell replay --print-config > gicube.toml");
   cmd->add_option("TRACE", args->trace, "trace file written by `raycell record`");
   cmd->add_option("--config", args->config, "TOML configuration (unknown keys are errors)");
@@ -215,6 +234,14 @@ void AddReplayCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--format", args->format, "table, json or csv")->capture_default_str();
   cmd->add_option("--out", args->out, "write the results to FILE instead of standard output");
+  cmd->add_option("--timeline", args->timeline,
+                  "also write the replay as a Chrome trace-event JSON FILE, for ui.perfetto.dev or "
+                  "chrome://tracing: a track per processor (fetch, work, idle) and per memory "
+                  "level (transfers), queue counters, frame marks (docs/schemas.md); refused past "
+                  "about 256 MB (choose fewer --frames)");
+  cmd->add_option("--timeline-limit", args->timeline_limit,
+                  "the timeline's size limit in bytes (for tests)")
+      ->group("");  // hidden
   cmd->add_flag("--print-config", args->print_config, "print the full configuration and exit");
   cmd->add_flag("--quiet", args->quiet, "no progress bar");
   cmd->callback([args] { Run(*args); });

@@ -163,11 +163,24 @@ TEST_F(FollowTest, PeelOracleFollowsTheScheduleThenMaxWork) {
 TEST_F(FollowTest, PeelOracleSkipsEntriesWithoutWork) {
   PeelOracleScheduler s;
   s.BeginFrame(Frame(0, 3, &tree_));
+  EXPECT_EQ(s.Reason(), "");        // no Next yet
   EXPECT_EQ(Ask(s, {2, 0, 0}), A);  // C skipped
+  EXPECT_EQ(s.Reason(), "followed (skipped 1)");
   EXPECT_EQ(Ask(s, {0, 0, 4}), C);  // B skipped, used up: Max Work
-  EXPECT_EQ(s.follower().stats().ToString(), "followed 1, skipped 2, max work 1");
+  EXPECT_EQ(s.Reason(), "max work (skipped 1)");
+  EXPECT_EQ(Ask(s, {0, 0, 4}), C);
+  EXPECT_EQ(s.Reason(), "max work");
+  EXPECT_EQ(s.follower().stats().ToString(), "followed 1, skipped 2, max work 2");
   s.BeginFrame(Frame(1, 3, &tree_));  // starts over
+  EXPECT_EQ(s.Reason(), "");
   EXPECT_EQ(Ask(s, {1, 1, 1}), C);
+  EXPECT_EQ(s.Reason(), "followed");
+  EXPECT_EQ(Ask(s, {0, 0, 0}), std::nullopt);
+  EXPECT_EQ(s.Reason(), "");  // no work: no choice to explain
+  MaxWorkScheduler m;
+  m.BeginFrame(Frame(0, 3, &tree_));
+  EXPECT_EQ(Ask(m, {1, 1, 1}), A);
+  EXPECT_EQ(m.Reason(), "");  // the default: nothing beyond the name
 }
 
 TEST_F(FollowTest, CellTreeFrameZeroIsMaxWork) {

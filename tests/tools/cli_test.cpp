@@ -374,3 +374,89 @@ TEST(Cli, RecordInSinglePrecisionSaysSoInTheTrace) {
 }
 
 }  // namespace
+
+namespace timeline {
+
+using raycell::testing::Json;
+
+// `raycell replay --timeline`, run as the README's tour shows it (in a folder holding a small
+// smoke.rct of four frames): a JSON document with the frames asked for, and the replay's
+// output the same byte for byte as without a timeline.
+TEST(Cli, ReadmeTourTimelineRunsAsShown) {
+  std::istringstream readme(raycell::testing::ReadBytes(RAYCELL_SOURCE_DIR "/README.md"));
+  std::string command;
+  for (std::string line; std::getline(readme, line);) {
+    if (line.rfind("raycell replay ", 0) == 0 && line.find("--timeline") != std::string::npos) {
+      command = line.substr(0, line.find(" #"));
+    }
+  }
+  ASSERT_NE(command, "") << "no `raycell replay ... --timeline` line in the README";
+  EXPECT_NE(command.find("--frames 0..1"), std::string::npos) << command;
+  const auto d = Dir() / "tour_timeline";
+  std::filesystem::create_directories(d);
+  const std::string trace = (d / "smoke.rct").string();
+  ASSERT_EQ(
+      Raycell("record --res 24x24 --cells 3x3x3 --orbit 4:60 --no-images --quiet --out " + trace)
+          .code,
+      0);
+  const std::string run = "cd " + d.string() + " && " + RAYCELL_BINARY +
+                          command.substr(std::string("raycell").size()) + " --quiet > /dev/null";
+  ASSERT_EQ(std::system(run.c_str()), 0) << run;
+  const std::string out = command.substr(command.find("--timeline ") + 11);
+  const std::string file = (d / out.substr(0, out.find(' '))).string();
+  const Json doc = Json::Parse(raycell::testing::ReadBytes(file));
+  EXPECT_EQ(doc["otherData"]["schema"].text, "raycell-timeline/1");
+  EXPECT_EQ(doc["otherData"]["frames"].text, "2");
+  std::vector<std::string> frames;
+  for (const Json& e : doc["traceEvents"].items) {
+    if (e["ph"].text == "i") frames.push_back(e["name"].text);
+  }
+  EXPECT_EQ(frames, (std::vector<std::string>{"frame 0", "frame 1"}));
+  EXPECT_FALSE(std::filesystem::exists(file + ".tmp"));
+
+  const std::string options = " --frames 0..1 --format json --quiet --set processors.count=2";
+  const Result with = Raycell("replay " + trace + options + " --timeline " + file, false);
+  const Result without = Raycell("replay " + trace + options, false);
+  ASSERT_EQ(with.code, 0) << with.out;
+  EXPECT_EQ(with.out, without.out);
+}
+
+// Past its size limit (lowered by a hidden option) the timeline is refused, with a message
+// that suggests --frames, and nothing is left behind: no file, no temporary. Nor can it be
+// combined with --sample, and `raycell sweep` has no timeline.
+TEST(Cli, TimelinePastItsLimitIsRefusedAndLeavesNothing) {
+  const auto d = Dir() / "timeline_limit";
+  std::filesystem::create_directories(d);
+  const std::string trace = (d / "t.rct").string(), file = (d / "t.json").string();
+  ASSERT_EQ(Raycell("record --res 24x24 --orbit 3:90 --no-images --quiet --out " + trace).code, 0);
+  ASSERT_EQ(Raycell("replay " + trace + " --quiet --timeline " + file).code, 0);
+  const std::uintmax_t size = std::filesystem::file_size(file);
+  std::filesystem::remove(file);
+
+  Result r = Raycell("replay " + trace + " --quiet --timeline " + file + " --timeline-limit " +
+                     std::to_string(size - 1));
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--timeline " + file + ": the timeline would exceed " +
+                       std::to_string(size - 1) + " bytes (frames 0..2 fit)"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("--frames A..B"), std::string::npos) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(file));
+  EXPECT_FALSE(std::filesystem::exists(file + ".tmp"));
+  r = Raycell("replay " + trace + " --quiet --timeline " + file + " --timeline-limit " +
+              std::to_string(size));
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(std::filesystem::file_size(file), size);
+  std::filesystem::remove(file);
+
+  r = Raycell("replay " + trace + " --quiet --sample 2 --timeline " + file);
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--timeline shows the replay as it ran"), std::string::npos) << r.out;
+  r = Raycell("sweep " + trace + " --vary scheduler=maxwork --quiet --out " +
+              (d / "s.csv").string() + " --timeline " + file);
+  EXPECT_NE(r.code, 0) << r.out;
+  EXPECT_FALSE(std::filesystem::exists(file));
+  EXPECT_FALSE(std::filesystem::exists(file + ".tmp"));
+}
+
+}  // namespace timeline

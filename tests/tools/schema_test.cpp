@@ -169,6 +169,23 @@ TEST_F(SchemaTest, ReplayJson) {
   }
 }
 
+// The timeline: with the default scheduler (celltree: its reasons), with one that gives none,
+// and with prefetch and two processors (prefetch transfers, misses false, idle slices).
+TEST_F(SchemaTest, ReplayTimeline) {
+  const std::string file = (*dir_ / "timeline.json").string();
+  for (const std::string options :
+       {"--scheduler celltree", "--scheduler maxwork",
+        "--scheduler celltree --set processors.count=2 --set "
+        "processors.prefetch=true --set 'level.cache.capacity=2 cells'"}) {
+    const Result r =
+        Raycell("replay " + trace_ + " --quiet --timeline " + file + " " + options, false);
+    ASSERT_EQ(r.code, 0) << r.out;
+    const Json doc = Json::Parse(ReadBytes(file));
+    CheckJson("replay-timeline", {doc}, options, false);
+    EXPECT_EQ(doc["otherData"]["schema"].text, "raycell-timeline/1");
+  }
+}
+
 // "# raycell sweep NAME=VALUE NAME=VALUE ...", values JSON strings or bare words.
 std::map<std::string, std::vector<std::string>> CommentParts(const std::string& comment) {
   const std::string start = "# raycell sweep ";
