@@ -1,0 +1,69 @@
+// Local search for short schedules: improves a feasible schedule by re-solving windows of it
+// (a large-neighbourhood search).
+//
+// A window is entries i..j-1 of the schedule; the rest stays fixed. Which nodes the window
+// must process is exact (graph/forest.h, ScheduleTimes): the sub-forest
+// D = {n : i <= earliest[n], latest[n] < j}, and any feasible schedule of D may replace the
+// window, no other. So a window is a problem of its own:
+//  - short windows (at most exact_window entries) are first solved exactly
+//    (graph/optimum.h FindShorter, only schedules shorter than the window): a shorter one
+//    shortens the schedule;
+//  - otherwise a beam search of D (graph/beam_search.h, a fresh seed each time, only
+//    schedules no longer than the window) gives a replacement of the same length: a plateau
+//    move, which changes which nodes later windows hold and so lets the search walk between
+//    schedules of one length until a shorter one appears (or a shorter one, for windows too
+//    long for the exact search).
+// After every change, entries that no node needs (no node has earliest == latest == p) are
+// deleted, one at a time.
+//
+// Kicks: after kick_after windows without a shorter schedule, kick_size fetches of random
+// cells are inserted at random places (the schedule stays feasible, a little longer), and
+// the walk goes on from there; a walk more than kick_slack entries above the best schedule
+// found restarts from that best. The best schedule found is returned.
+//
+// Deterministic: windows, seeds and kicks are drawn from a seeded std::mt19937_64 with our
+// own bounded draw (graph/search_util.h), and every limit counts windows or work, never
+// time.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "graph/cell_tree.h"
+#include "graph/forest.h"
+
+namespace raycell {
+
+struct LocalSearchOptions {
+  std::uint64_t seed = 1;
+  std::uint64_t max_windows = 15000;  // windows re-solved: the iteration limit
+  // Work limit, in node visits (window searches, re-timing the schedule after a change), so
+  // that huge trees stop early instead of running for hours.
+  std::uint64_t max_work = 50'000'000'000;
+  std::size_t min_window = 6, max_window = 10;  // window lengths, drawn uniformly
+  std::size_t exact_window = 10;                // longest window solved exactly
+  std::uint64_t exact_states = 20000;           // states per exact window search
+  std::size_t beam_width = 256;                 // beam of the plateau moves
+  std::uint64_t kick_after = 500;               // 0: no kicks
+  std::size_t kick_size = 2;
+  std::uint64_t kick_slack = 1;
+  // Stop as soon as the schedule is this short (a known lower bound: then it is optimal).
+  std::uint64_t lower_bound = 0;
+};
+
+struct LocalSearchResult {
+  std::vector<CellId> schedule;  // feasible, never longer than the input
+  std::uint64_t windows = 0;     // windows re-solved
+  std::uint64_t improvements = 0, plateau_moves = 0, deletions = 0, kicks = 0;
+  std::uint64_t work = 0;  // node visits
+  // "84 entries after 15000 windows (5 shorter, 14000 plateau moves, 10 deletions, 20 kicks)".
+  std::string ToString() const;
+};
+
+// Improves `schedule`, which must be feasible for `forest` (RAYCELL_CHECK).
+LocalSearchResult ImproveSchedule(const CellForest& forest, std::vector<CellId> schedule,
+                                  const LocalSearchOptions& options = {});
+
+}  // namespace raycell
