@@ -137,5 +137,18 @@ TEST(LocalSearchPropertyTest, KicksKeepTheBest) {
   EXPECT_LE(r.schedule.size(), peel.size());
 }
 
+// A B A is optimal for A B and B A; one window that cannot improve it, then a kick of 20
+// fetches: the kicked walk is longer, the best (the input) is returned.
+TEST(LocalSearchTest, KickedWalkIsNotReturned) {
+  const CellTree t = FromPaths({{A, B}, {B, A}});
+  LocalSearchOptions o;
+  o.max_windows = 1;
+  o.kick_after = 1;
+  o.kick_size = 20;
+  const LocalSearchResult r = Improve(t, {A, B, A}, o);
+  EXPECT_EQ(r.kicks, 1u);
+  EXPECT_EQ(r.schedule, (Schedule{A, B, A}));
+}
+
 }  // namespace
 }  // namespace raycell
