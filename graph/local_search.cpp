@@ -101,15 +101,14 @@ class LocalSearch {
     out_.work += sub.size();
     if (k <= o_.exact_window) {
       ShorterOptions so;
-      so.upper = k;
+      so.upper = k + 1;
+      so.seed = rng_.Next() | 1;
       so.limits.max_states = o_.exact_states;
       so.limits.max_seconds = 1e30;  // limited by states only
       const ShorterResult r = FindShorter(sub, so);
       out_.work += r.expanded * (sub.size() + 1);
-      if (r.status == ShorterResult::kFound) {
-        Replace(i, j, r.schedule);
-        return;
-      }
+      if (r.status == ShorterResult::kFound) Replace(i, j, r.schedule);
+      if (r.status != ShorterResult::kStopped) return;
     }
     BeamOptions bo;
     bo.width = o_.beam_width;

@@ -5,14 +5,13 @@
 // must process is exact (graph/forest.h, ScheduleTimes): the sub-forest
 // D = {n : i <= earliest[n], latest[n] < j}, and any feasible schedule of D may replace the
 // window, no other. So a window is a problem of its own:
-//  - short windows (at most exact_window entries) are first solved exactly
-//    (graph/optimum.h FindShorter, only schedules shorter than the window): a shorter one
-//    shortens the schedule;
-//  - otherwise a beam search of D (graph/beam_search.h, a fresh seed each time, only
-//    schedules no longer than the window) gives a replacement of the same length: a plateau
-//    move, which changes which nodes later windows hold and so lets the search walk between
-//    schedules of one length until a shorter one appears (or a shorter one, for windows too
-//    long for the exact search).
+//  - windows of at most exact_window entries are solved exactly (graph/optimum.h
+//    FindShorter, schedules no longer than the window, ties broken by a fresh seed): a
+//    shorter schedule shortens the whole one; one of the same length (a plateau move)
+//    changes which nodes later windows hold, which lets the search walk between schedules
+//    of one length until a shorter one appears;
+//  - longer windows, and windows whose exact search ran out of states, by a beam search of
+//    D (graph/beam_search.h, a fresh seed each time, schedules no longer than the window).
 // After every change, entries that no node needs (no node has earliest == latest == p) are
 // deleted, one at a time.
 //
@@ -38,16 +37,16 @@ namespace raycell {
 
 struct LocalSearchOptions {
   std::uint64_t seed = 1;
-  std::uint64_t max_windows = 15000;  // windows re-solved: the iteration limit
+  std::uint64_t max_windows = 20000;  // windows re-solved: the iteration limit
   // Work limit, in node visits (window searches, re-timing the schedule after a change), so
   // that huge trees stop early instead of running for hours.
   std::uint64_t max_work = 50'000'000'000;
-  std::size_t min_window = 6, max_window = 10;  // window lengths, drawn uniformly
-  std::size_t exact_window = 10;                // longest window solved exactly
-  std::uint64_t exact_states = 20000;           // states per exact window search
-  std::size_t beam_width = 256;                 // beam of the plateau moves
-  std::uint64_t kick_after = 500;               // 0: no kicks
-  std::size_t kick_size = 2;
+  std::size_t min_window = 10, max_window = 16;  // window lengths, drawn uniformly
+  std::size_t exact_window = 16;                 // longest window solved exactly
+  std::uint64_t exact_states = 20000;            // states per exact window search
+  std::size_t beam_width = 64;      // windows too long or too hard for the exact search
+  std::uint64_t kick_after = 2000;  // 0: no kicks
+  std::size_t kick_size = 3;
   std::uint64_t kick_slack = 1;
   // Stop as soon as the schedule is this short (a known lower bound: then it is optimal).
   std::uint64_t lower_bound = 0;

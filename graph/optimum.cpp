@@ -62,7 +62,8 @@
 // optimum; a search stopped by a limit reports it.
 //
 // Determinism. Moves are generated in increasing cell order and the open list is ordered by
-// (f, larger g first, state creation order): no ties depend on addresses or hashing.
+// (f, larger g first, state creation order or, with a seed, a seeded hash of it): no ties
+// depend on addresses. Different seeds may return different shortest schedules.
 
 namespace raycell {
 
@@ -256,13 +257,14 @@ class Heuristic {
 
 struct OpenEntry {
   std::uint32_t f, g;
+  std::uint64_t tie;  // the state's id, or a seeded hash of it
   StateId state;
   // std::priority_queue pops the largest: the smallest f, then the largest g, then the
-  // oldest state.
+  // smallest tie (the oldest state without a seed).
   bool operator<(const OpenEntry& o) const {
     if (f != o.f) return f > o.f;
     if (g != o.g) return g < o.g;
-    return state > o.state;
+    return tie > o.tie;
   }
 };
 
@@ -378,7 +380,7 @@ class Search {
     } else {
       g_[s] = g, parent_[s] = parent, move_[s] = move, closed_[s] = false;  // reopened
     }
-    open_.push({f, g, s});
+    open_.push({f, g, o_.seed == 0 ? s : MixBits(o_.seed ^ s), s});
   }
 
   std::vector<CellId> PathTo(StateId s) const {

@@ -92,6 +92,9 @@ struct ShorterResult {
 };
 struct ShorterOptions {
   std::uint64_t upper = 0;
+  // Ties between states of equal f and g are broken by creation order (0) or by a hash of
+  // the state with this seed: another shortest schedule, deterministically.
+  std::uint64_t seed = 0;
   OptimumLimits limits;  // max_nodes is not used here
   bool pair_heuristic = false;
   RemainingBound extra_bound;

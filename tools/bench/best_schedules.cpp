@@ -6,9 +6,11 @@
 //   bench_best_schedules CAPTURE.rct [options]     every frame of a capture
 //   bench_best_schedules --synthetic [options]     random trees of 10^3 .. 10^5 nodes
 // Options (defaults: BestScheduleOptions'):
-//   --frames A-B        frame indices to run (into the capture's frames; default all)
+//   --frames A-B,C      frame indices to run (into the capture's frames; default all)
 //   --width N           beam width          --chains N     local-search chains
 //   --windows N         windows per chain   --threads N    chains at once
+//   --min-window N, --max-window N, --exact-window N, --kick-after N, --kick-size N
+//                       local search (LocalSearchOptions)
 //   --exact-states N    exact search states --seed N
 //   --cells N           cells of the synthetic trees (27)
 //   --max-nodes N       largest synthetic tree (100000)
@@ -68,13 +70,25 @@ Args Parse(int argc, char** argv) {
     } else if (arg == "--schedules") {
       a.schedules = true;
     } else if (arg == "--frames") {
-      a.frames = ParseFrameRange(value(i), arg);
+      for (const std::string& part : Split(value(i), ',')) {
+        for (int f : ParseFrameRange(part, arg)) a.frames.push_back(f);
+      }
     } else if (arg == "--width") {
       a.options.beam_width = number();
     } else if (arg == "--chains") {
       a.options.chains = number();
     } else if (arg == "--windows") {
       a.options.local.max_windows = number();
+    } else if (arg == "--min-window") {
+      a.options.local.min_window = number();
+    } else if (arg == "--max-window") {
+      a.options.local.max_window = number();
+    } else if (arg == "--exact-window") {
+      a.options.local.exact_window = number();
+    } else if (arg == "--kick-after") {
+      a.options.local.kick_after = number();
+    } else if (arg == "--kick-size") {
+      a.options.local.kick_size = number();
     } else if (arg == "--threads") {
       a.options.threads = number();
     } else if (arg == "--exact-states") {
