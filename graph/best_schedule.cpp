@@ -31,6 +31,22 @@ std::uint64_t ChainSeed(std::uint64_t seed, std::size_t i) {
   return MixBits(seed ^ MixBits(0x6c6e73ULL + i));
 }
 
+// Chain i's options: o.local with its own seed and, when o.vary_windows, its window lengths
+// shifted by -4, -2, 0, +2 entries (chains 0, 1, 2, 3, then again), the longest solved
+// exactly: the chains then fall into different local optima, and the best of them is
+// taken.
+LocalSearchOptions ChainOptions(const BestScheduleOptions& o, std::size_t i) {
+  LocalSearchOptions lo = o.local;
+  lo.seed = ChainSeed(o.seed, i);
+  if (o.vary_windows) {
+    const long shift = 2 * long(i % 4) - 4;
+    lo.min_window = std::size_t(std::max<long>(1, long(lo.min_window) + shift));
+    lo.max_window = std::size_t(std::max<long>(long(lo.min_window), long(lo.max_window) + shift));
+    if (o.local.exact_window >= o.local.max_window) lo.exact_window = lo.max_window;
+  }
+  return lo;
+}
+
 // Runs the local-search chains, `threads` at a time; results in chain order.
 std::vector<LocalSearchResult> RunChains(const CellForest& forest, const std::vector<CellId>& start,
                                          const BestScheduleOptions& o) {
@@ -38,8 +54,7 @@ std::vector<LocalSearchResult> RunChains(const CellForest& forest, const std::ve
   std::atomic<std::size_t> next{0};
   auto worker = [&] {
     for (std::size_t i; (i = next++) < o.chains;) {
-      LocalSearchOptions lo = o.local;
-      lo.seed = ChainSeed(o.seed, i);
+      LocalSearchOptions lo = ChainOptions(o, i);
       lo.lower_bound = std::max(lo.lower_bound, o.lower_bound);
       results[i] = ImproveSchedule(forest, start, lo);
     }
@@ -65,8 +80,13 @@ class Best {
     Offer(peel.schedule, "peel");
     const CellForest forest = CellForest::FromTree(tree_);
     if (!Done() && o_.beam_width > 0) RunBeam(forest);
+    // Small trees: the exact search first, which often proves the beam's schedule optimal;
+    // if it does not, once more after the local search, with its (maybe shorter) schedule.
+    const bool exact = o_.exact_states > 0 && tree_.node_count() <= o_.exact_max_nodes;
+    if (!Done() && exact) RunExact();
+    const std::size_t before = out_.schedule.size();
     if (!Done() && o_.chains > 0) RunLocal(forest);
-    if (!Done() && o_.exact_states > 0 && tree_.node_count() <= o_.exact_max_nodes) RunExact();
+    if (!Done() && exact && out_.schedule.size() < before) RunExact();
     out_.length = out_.schedule.size();
     out_.optimal = out_.lower >= out_.length;
     RAYCELL_CHECK(IsFeasible(tree_, out_.schedule));
@@ -117,7 +137,7 @@ class Best {
     eo.limits.max_seconds = 1e30;  // limited by states only
     eo.limits.max_nodes = o_.exact_max_nodes;
     const OptimumResult r = ExactOptimum(tree_, eo);
-    out_.exact_states = r.states_expanded;
+    out_.exact_states += r.states_expanded;
     out_.exact_status = r.ToString();
     if (r.status == OptimumResult::kTooLarge) return;
     out_.lower = std::max(out_.lower, r.lower);

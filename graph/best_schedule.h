@@ -1,8 +1,10 @@
 // The shortest schedule we can find for a Cell Tree (DESIGN.md §1 "Schedule and
 // feasibility"), far shorter than Peel's on real frames: Peel, a beam search
-// (graph/beam_search.h), several seeded local-search chains from the better of the two
-// (graph/local_search.h), and for small trees the exact search (graph/optimum.h) with the
-// best schedule as its incumbent, which proves it optimal or brackets the optimum.
+// (graph/beam_search.h), for small trees the exact search (graph/optimum.h) with the best
+// schedule so far as its incumbent (it proves it optimal or brackets the optimum), then
+// several seeded local-search chains from the best schedule (graph/local_search.h), and
+// the exact search again if they shortened it. Each step is skipped once the best schedule
+// meets the lower bound (then it is optimal).
 //
 // Every schedule returned is checked with the independent checker (graph/schedule.h
 // IsFeasible) before it is returned. Deterministic: every limit counts states, windows or
@@ -27,6 +29,9 @@ struct BestScheduleOptions {
   // derived from `seed` and the chain number).
   std::size_t chains = 4;
   LocalSearchOptions local;
+  // Chain i's windows are shifted by -4, -2, 0, +2 entries (i % 4; at least 1 entry): a
+  // portfolio of neighbourhood sizes.
+  bool vary_windows = true;
   std::size_t threads = 0;  // chains run at once; 0: the hardware's threads
   // Exact search with the best schedule as incumbent, on trees of at most exact_max_nodes
   // nodes (0 states: never).

@@ -104,7 +104,8 @@ class LocalSearch {
       so.upper = k + 1;
       so.seed = rng_.Next() | 1;
       so.limits.max_states = o_.exact_states;
-      so.limits.max_seconds = 1e30;  // limited by states only
+      so.limits.max_seconds = 1e30;  // limited by states and memory only
+      so.limits.max_bytes = o_.exact_bytes;
       const ShorterResult r = FindShorter(sub, so);
       out_.work += r.expanded * (sub.size() + 1);
       if (r.status == ShorterResult::kFound) Replace(i, j, r.schedule);

@@ -39,8 +39,13 @@ struct LocalSearchOptions {
   std::uint64_t seed = 1;
   std::uint64_t max_windows = 20000;  // windows re-solved: the iteration limit
   // Work limit, in node visits (window searches, re-timing the schedule after a change), so
-  // that huge trees stop early instead of running for hours.
-  std::uint64_t max_work = 50'000'000'000;
+  // that huge trees stop early instead of running for hours: a 27-cell frame of the study
+  // (3,400 nodes) needs about 3e8 for 20000 windows, a tree of 10^5 nodes 2e9 for its
+  // re-timings alone.
+  std::uint64_t max_work = 1'000'000'000;
+  // Memory of one window's exact search (its states and open list); past it the window goes
+  // to the beam.
+  std::size_t exact_bytes = std::size_t{64} << 20;
   std::size_t min_window = 10, max_window = 16;  // window lengths, drawn uniformly
   std::size_t exact_window = 16;                 // longest window solved exactly
   std::uint64_t exact_states = 20000;            // states per exact window search
