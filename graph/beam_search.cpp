@@ -34,7 +34,8 @@ struct Child {
   bool operator<(const Child& o) const {
     if (f != o.f) return f < o.f;
     if (left != o.left) return left < o.left;
-    return tie < o.tie;
+    if (tie != o.tie) return tie < o.tie;
+    return state != o.state ? state < o.state : cell < o.cell;  // a total order
   }
 };
 
@@ -65,7 +66,7 @@ class Beam {
       out.width = std::max(out.width, width);
       ScoreChildren(g, out);
       if (children_.empty()) return out;  // every child pruned by `upper`
-      std::sort(children_.begin(), children_.end());
+      SortPrefix(0, 2 * width);
       moves_.emplace_back();
       if (children_[0].h == 0) {  // the complete set: the shortest schedule of the beam
         moves_.back().push_back({children_[0].state, children_[0].cell});
@@ -143,14 +144,31 @@ class Beam {
   }
 
   // The next layer: the best children, duplicates merged, at most `width`.
+  // Sorts children_[from..] so that its first `count` are the smallest, in order (the
+  // order is total, so this is a prefix of the fully sorted list).
+  void SortPrefix(std::size_t from, std::size_t count) {
+    const auto begin = children_.begin() + from;
+    if (children_.size() - from > count) {
+      std::nth_element(begin, begin + count, children_.end());
+      std::sort(begin, begin + count);
+    } else {
+      std::sort(begin, children_.end());
+    }
+  }
+
   void Select(std::size_t width, BeamResult& out) {
     next_.Clear();
     const std::size_t most = std::min(width, children_.size());
     table_.assign(std::size_t(1) << CeilLog2(2 * most + 2), kEmpty);
     hashes_.clear();
     std::vector<Word> bits(words_);
-    for (const Child& ch : children_) {
-      if (next_.size() >= width) break;
+    std::size_t sorted = std::min(children_.size(), 2 * width);
+    for (std::size_t k = 0; k < children_.size() && next_.size() < width; ++k) {
+      if (k == sorted) {  // duplicates used up the sorted part: sort the rest
+        SortPrefix(k, children_.size() - k);
+        sorted = children_.size();
+      }
+      const Child& ch = children_[k];
       const Word* from = &cur_.bits[std::size_t(ch.state) * words_];
       std::copy(from, from + words_, bits.begin());
       for (Index n : f_.nodes_of(ch.cell)) {

@@ -45,7 +45,7 @@ struct BeamOptions {
   // Work limit, in node visits (each child scored costs the nodes of its cell, each state
   // kept its bitset): the width is lowered to fit; a search that ran over continues with
   // width 1 until it completes.
-  std::uint64_t max_node_visits = 4'000'000'000;
+  std::uint64_t max_node_visits = 1'000'000'000;
 };
 
 struct BeamResult {

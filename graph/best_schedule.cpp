@@ -108,6 +108,7 @@ class Best {
   void RunBeam(const CellForest& forest) {
     BeamOptions bo;
     bo.width = o_.beam_width;
+    bo.max_node_visits = o_.beam_max_node_visits;
     const BeamResult r = BeamSearch(forest, bo);
     out_.beam_length = r.schedule.size();
     out_.beam_states = r.states;

@@ -107,7 +107,7 @@ class LocalSearch {
       so.limits.max_seconds = 1e30;  // limited by states and memory only
       so.limits.max_bytes = o_.exact_bytes;
       const ShorterResult r = FindShorter(sub, so);
-      out_.work += r.expanded * (sub.size() + 1);
+      out_.work += r.work;
       if (r.status == ShorterResult::kFound) Replace(i, j, r.schedule);
       if (r.status != ShorterResult::kStopped) return;
     }

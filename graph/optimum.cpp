@@ -309,6 +309,7 @@ class Search {
       Expand(e.state);
     }
     out.bytes = peak_bytes_;
+    out.work = work_;
     if (goal != kNoState) {
       out.status = ShorterResult::kFound;
       out.schedule = PathTo(goal);
@@ -348,17 +349,19 @@ class Search {
   void Expand(StateId s) {
     std::copy(store_.bits(s), store_.bits(s) + words_, cur_.begin());
     const std::uint32_t g = g_[s] + 1, own = own_[s];
+    work_ += f_.size();
     for (CellId c : f_.cells()) {
-      next_ = cur_;
-      bool any = false;
+      ready_.clear();
       for (Index n : f_.nodes_of(c)) {
         const Index p = f_.parent(n);
         if (!TestBit(cur_.data(), n) && (p == CellForest::kNone || TestBit(cur_.data(), p))) {
-          SetBit(next_, n);
-          any = true;
+          ready_.push_back(n);
         }
       }
-      if (!any) continue;
+      if (ready_.empty()) continue;
+      next_ = cur_;
+      for (Index n : ready_) SetBit(next_, n);
+      work_ += 2 * (words_ + f_.nodes_of(c).size());
       const std::uint32_t next_own = heuristic_.Child(own, cur_.data(), next_.data(), c);
       const std::uint32_t h =
           o_.extra_bound ? std::max(next_own, o_.extra_bound(f_, next_.data())) : next_own;
@@ -402,7 +405,9 @@ class Search {
   std::priority_queue<OpenEntry> open_;
   Heuristic heuristic_;
   std::vector<Word> cur_, next_;  // scratch bitsets
+  std::vector<Index> ready_;      // scratch
   std::size_t peak_bytes_ = 0;
+  std::uint64_t work_ = 0;
 };
 
 std::string Sizes(const CellTree& tree, const char* what, std::size_t incumbent) {

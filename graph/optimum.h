@@ -87,8 +87,9 @@ struct ShorterResult {
   // kStopped: every schedule has at least `lower` entries.
   std::uint64_t lower = 0;
   std::uint64_t expanded = 0;
-  std::size_t bytes = 0;  // peak memory estimate
-  std::string stopped;    // which limit stopped the search
+  std::uint64_t work = 0;  // node visits (scans for ready nodes, bitsets copied, heuristic)
+  std::size_t bytes = 0;   // peak memory estimate
+  std::string stopped;     // which limit stopped the search
 };
 struct ShorterOptions {
   std::uint64_t upper = 0;

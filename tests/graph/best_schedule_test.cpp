@@ -137,5 +137,26 @@ TEST(BestSchedulePropertyTest, SameResultForAnyThreadCount) {
   }
 }
 
+// Large trees and many cells: everything stays within its limits and the result is
+// feasible and no longer than Peel's (a tree of ~20000 nodes over 512 cells, one of ~3000
+// nodes over 4096 cells; random paths, so nearly every visit is a node).
+TEST(BestScheduleTest, LargeTreesAndManyCells) {
+  std::mt19937 rng(4096);
+  for (const auto& [cells, rays] : {std::pair<CellId, int>{512, 6000}, {4096, 900}}) {
+    const CellTree t = RandomTree(rng, cells, rays);
+    BestScheduleOptions o;
+    o.chains = 2;
+    o.local.max_windows = 20;
+    o.beam_width = 16;
+    o.beam_max_node_visits = 10'000'000;
+    const BestScheduleResult r = BestSchedule(t, o);
+    EXPECT_TRUE(IsFeasible(t, r.schedule));
+    EXPECT_LE(r.length, Peel(t).schedule.size());
+    EXPECT_GE(r.length, Bound(t));
+    EXPECT_EQ(r.exact_status, "not run");  // more than exact_max_nodes
+    EXPECT_GT(t.node_count(), 2500u);
+  }
+}
+
 }  // namespace
 }  // namespace raycell
