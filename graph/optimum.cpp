@@ -5,6 +5,7 @@
 #include <limits>
 #include <queue>
 #include <sstream>
+#include <utility>
 
 #include "base/check.h"
 #include "graph/peel.h"
@@ -12,38 +13,57 @@
 
 // Why the search is exact.
 //
-// States and moves. A state is the set of processed nodes; it always contains the root and
-// is downward closed (a node is processed only after its parent). A move on cell c processes
-// every node of c whose parent is processed. That is exactly how DESIGN.md runs a schedule,
-// so the paths from the start state are the schedules, entry for entry, once entries that
-// process nothing are dropped (dropping them keeps a schedule feasible and makes it shorter).
-// Taking all available nodes of c is also never worse than taking some: running any schedule
-// from a superset state S' of S keeps, entry by entry, a superset of what the run from S has
-// processed (a node processed from S has its parent processed from S, hence from S'), so
-// every schedule that finishes from S finishes from S'. Processing more now only enables more
-// later.
+// States and moves. A state is the set of processed nodes; it is downward closed (a node is
+// processed only after its parent). A move on cell c processes every node of c whose parent
+// is processed. That is exactly how DESIGN.md runs a schedule, so the paths from the start
+// state are the schedules, entry for entry, once entries that process nothing are dropped
+// (dropping them keeps a schedule feasible and makes it shorter). Taking all available nodes
+// of c is also never worse than taking some: running any schedule from a superset state S'
+// of S keeps, entry by entry, a superset of what the run from S has processed (a node
+// processed from S has its parent processed from S, hence from S'), so every schedule that
+// finishes from S finishes from S'. Processing more now only enables more later.
 //
-// Heuristic. remgen(n), for an unprocessed node n, is the number of unprocessed nodes of
-// cell(n) on the path from the processed part to n, inclusive; h(S) = sum over cells c of
-// the largest remgen of a node of c (the bound of the remaining forest; h = 0 exactly at the
-// goal). Admissible: one fetch of c lowers remgen of a node of c by at most one (the path's
-// nodes of c are processed top-down, at most one per fetch, since two nodes of c on one path
-// cannot both have a processed parent), so a node with remgen g needs g more fetches of c;
-// and fetches of different cells are different entries.
-// Consistent (h(S) <= 1 + h(S') for a move S -> S' on c): the move processes only nodes of
-// c, so remgen of every node of another cell is unchanged (it counts only nodes of its own
-// cell), and remgen of a node of c drops by one if the first node of c on its remaining path
-// was processed, else stays. So the term of c drops by at most one and the others stay.
-// With unit move costs, A* with a consistent heuristic never reopens a closed state and the
-// first goal taken from the open list has the fewest fetches.
+// Heuristic. The cells are split into groups: pairs {a, b} chosen at the start (below) and
+// single cells. h(S) = sum over groups G of h_G(S):
+//  - single cell c: the largest remgen of an unprocessed node of c, where remgen(n) is the
+//    number of unprocessed nodes of c on the path from the processed part to n, inclusive
+//    (the bound of the remaining forest for c). A fetch of c lowers the remgen of a node of
+//    c by at most one (the path's nodes of c are processed top-down, at most one per fetch,
+//    since two nodes of c on one path cannot both have a processed parent), so at least
+//    h_c(S) more fetches of c are needed.
+//  - pair {a, b}: the length of the shortest schedule of the projection of the unprocessed
+//    forest onto {a, b} (every node of a or b, its parent the nearest ancestor of a or b),
+//    computed exactly by this same search, memoised. The fetches of a and b of any schedule
+//    that finishes from S, run on the projection, finish it (each node's projected parent is
+//    processed no later than its real parent), so they are at least h_G(S).
+// Groups are disjoint and every entry fetches one cell, so h is admissible. It is also
+// consistent (h(S) <= 1 + h(S') for a move S -> S' on c): only the group of c changes; a
+// single cell's term drops by at most one (above); for a pair, prepending c to a shortest
+// projected schedule from S' gives a projected schedule from S (the projected move on c
+// processes at least the nodes the real move did, and more processed never hurts), so
+// h_G(S) <= 1 + h_G(S'). With the optional extra bound (consistent by contract), the maximum
+// of consistent heuristics is consistent. With a consistent heuristic A* never reopens a
+// closed state and the first goal taken from the open list has the fewest fetches; the
+// search reopens states anyway when reached with fewer fetches, so a heuristic that is only
+// admissible (a pair value that hit its limit, or a faulty extra bound) costs time, not
+// exactness.
 //
-// Incumbent. Peel's schedule is feasible, of length P. Any state on a schedule of length
+// Pairs are chosen once: for every pair of cells (when there are at most kMaxPairCells
+// cells), the gain h_{a,b} - maxGen(a) - maxGen(b) at the start; pairs with positive gain
+// are matched greedily, largest gain first (lowest cells on ties).
+//
+// Incumbent. A feasible schedule of length P is known. Any state on a schedule of length
 // L < P has g + h <= L < P (admissibility), so states with g + h >= P are pruned without
 // losing any schedule shorter than P. If the open list runs empty, none exists and P is
 // optimal.
 //
+// Bracket. While the search runs, some state on an optimal path is open with its optimal
+// g (the usual A* argument), so the smallest f on the open list is a lower bound on the
+// optimum; a search stopped by a limit reports it.
+//
 // Determinism. Moves are generated in increasing cell order and the open list is ordered by
-// (f, larger g first, state creation order): no ties depend on addresses or hashing.
+// (f, larger g first, state creation order or, with a seed, a seeded hash of it): no ties
+// depend on addresses. Different seeds may return different shortest schedules.
 
 namespace raycell {
 
@@ -63,6 +83,7 @@ std::string OptimumResult::ToString() const {
   std::ostringstream s;
   s << raycell::ToString(status);
   if (status == kOptimal) s << " " << length;
+  if (status == kUnknown) s << " in [" << lower << ", " << upper << "]";
   s << " (";
   if (status == kOptimal) {
     s << "schedule";
@@ -75,306 +96,392 @@ std::string OptimumResult::ToString() const {
 
 namespace {
 
-using Word = std::uint64_t;
-using StateId = std::uint32_t;
-constexpr StateId kNoState = std::numeric_limits<StateId>::max();
+using Index = CellForest::Index;
+using StateId = BitsTable::Id;
+constexpr StateId kNoState = BitsTable::kNone;
+using Clock = std::chrono::steady_clock;
 
-bool Test(const Word* bits, NodeId n) { return (bits[n / 64] >> (n % 64)) & 1; }
-void Set(Word* bits, NodeId n) { bits[n / 64] |= Word{1} << (n % 64); }
-
-std::uint64_t Mix(std::uint64_t x) {  // splitmix64's finalizer
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
+// The largest remgen of an unprocessed node of c (0 if none); see "Heuristic".
+std::uint32_t MaxRemgen(const CellForest& f, const Word* bits, CellId c,
+                        std::vector<std::uint32_t>& remgen) {
+  std::uint32_t best = 0;
+  for (Index n : f.nodes_of(c)) {
+    if (TestBit(bits, n)) continue;
+    const Index a = f.same_cell_above(n);
+    remgen[n] = (a != CellForest::kNone && !TestBit(bits, a)) ? remgen[a] + 1 : 1;
+    best = std::max(best, remgen[n]);
+  }
+  return best;
 }
 
-std::uint64_t Hash(const Word* bits, std::size_t words) {
-  std::uint64_t h = words;
-  for (std::size_t i = 0; i < words; ++i) h = Mix(h ^ bits[i]);
-  return h;
-}
+// The projection of a forest onto two cells, and the memoised length of the shortest
+// schedule of its unprocessed part.
+class PairProjection {
+ public:
+  static constexpr std::uint64_t kMaxStates = 200'000;  // per memo miss
 
-// What the search needs of the tree, in flat arrays.
-struct TreeIndex {
-  std::vector<CellId> cell;
-  std::vector<NodeId> parent;
-  // The nearest proper ancestor with the same cell, or kNoNode.
-  std::vector<NodeId> same_cell_above;
-  std::vector<std::vector<NodeId>> cell_nodes;  // increasing ids, so ancestors come first
-
-  static TreeIndex Create(const CellTree& tree) {
-    TreeIndex t;
-    t.cell.resize(tree.size(), kNoCell);
-    t.parent.resize(tree.size(), kNoNode);
-    t.same_cell_above.resize(tree.size(), kNoNode);
-    t.cell_nodes.resize(tree.cell_count());
-    for (NodeId n = 1; n < tree.size(); ++n) {
-      t.cell[n] = tree.cell(n);
-      t.parent[n] = tree.parent(n);
-      t.same_cell_above[n] = SameCellAbove(tree, n);
-      t.cell_nodes[t.cell[n]].push_back(n);
+  PairProjection(const CellForest& f, CellId a, CellId b) {
+    std::merge(f.nodes_of(a).begin(), f.nodes_of(a).end(), f.nodes_of(b).begin(),
+               f.nodes_of(b).end(), std::back_inserter(nodes_));
+    std::vector<Index> parent(nodes_.size());
+    std::vector<CellId> cells(nodes_.size());
+    for (std::size_t i = 0; i < nodes_.size(); ++i) {
+      cells[i] = f.cell(nodes_[i]);
+      Index p = f.parent(nodes_[i]);
+      while (p != CellForest::kNone && f.cell(p) != a && f.cell(p) != b) p = f.parent(p);
+      parent[i] = p == CellForest::kNone ? CellForest::kNone : Local(p);
     }
-    return t;
+    forest_ = CellForest::FromArrays(parent, cells);
+    words_ = WordsFor(nodes_.size());
+    memo_ = BitsTable(words_);
+    scratch_.resize(words_);
   }
 
-  static NodeId SameCellAbove(const CellTree& tree, NodeId n) {
-    NodeId a = tree.parent(n);
-    while (a != kRootNode && tree.cell(a) != tree.cell(n)) a = tree.parent(a);
-    return a == kRootNode ? kNoNode : a;
+  // h_G of the state `bits` of the full forest. `exact` is cleared when a memo miss hit its
+  // limit (the value is then only a lower bound).
+  std::uint32_t Value(const Word* bits, bool& exact) {
+    std::fill(scratch_.begin(), scratch_.end(), 0);
+    std::vector<Index> left;
+    for (std::size_t i = 0; i < nodes_.size(); ++i) {
+      if (TestBit(bits, nodes_[i])) {
+        SetBit(scratch_, i);
+      } else {
+        left.push_back(Index(i));
+      }
+    }
+    if (left.empty()) return 0;
+    const std::uint64_t hash = HashBits(scratch_.data(), words_);
+    const StateId s = memo_.Find(scratch_.data(), hash);
+    if (s != kNoState) return value_[s];
+    ShorterOptions o;
+    o.limits.max_states = kMaxStates;
+    o.limits.max_seconds = std::numeric_limits<double>::infinity();
+    const ShorterResult r = FindShorter(CellForest::Sub(forest_, left), o);
+    expanded_ += r.expanded;
+    if (r.status != ShorterResult::kFound) exact = false;
+    const auto v = std::uint32_t(r.status == ShorterResult::kFound ? r.schedule.size() : r.lower);
+    memo_.Add(scratch_.data(), hash);
+    value_.push_back(v);
+    return v;
+  }
+
+  std::size_t bytes() const { return memo_.bytes() + value_.size() * 4; }
+  std::uint64_t expanded() const { return expanded_; }
+
+ private:
+  Index Local(Index n) const {
+    return Index(std::lower_bound(nodes_.begin(), nodes_.end(), n) - nodes_.begin());
+  }
+
+  std::vector<Index> nodes_;  // forest nodes of a and b, increasing
+  CellForest forest_;         // their projection
+  std::size_t words_ = 0;
+  BitsTable memo_{1};
+  std::vector<std::uint32_t> value_;
+  std::vector<Word> scratch_;
+  std::uint64_t expanded_ = 0;
+};
+
+// h = sum over groups; see "Heuristic".
+class Heuristic {
+ public:
+  static constexpr CellId kMaxPairCells = 64;
+
+  Heuristic(const CellForest& f, bool pairs) : f_(f), group_of_(f.cell_count(), kSingle) {
+    remgen_.resize(f.size());
+    if (pairs && f.cells().size() <= kMaxPairCells) ChoosePairs();
+  }
+
+  std::uint32_t Start(const Word* bits) {
+    std::uint32_t h = 0;
+    for (CellId c : f_.cells()) {
+      if (group_of_[c] == kSingle) h += MaxRemgen(f_, bits, c, remgen_);
+    }
+    for (PairProjection& p : pairs_) h += p.Value(bits, exact_);
+    return h;
+  }
+
+  // h of `after`, a move on c from `before` whose h is h.
+  std::uint32_t Child(std::uint32_t h, const Word* before, const Word* after, CellId c) {
+    if (group_of_[c] == kSingle) {
+      return h - MaxRemgen(f_, before, c, remgen_) + MaxRemgen(f_, after, c, remgen_);
+    }
+    PairProjection& p = pairs_[group_of_[c]];
+    return h - p.Value(before, exact_) + p.Value(after, exact_);
+  }
+
+  std::size_t bytes() const {
+    std::size_t b = 0;
+    for (const PairProjection& p : pairs_) b += p.bytes();
+    return b;
+  }
+  std::size_t pairs() const { return pairs_.size(); }
+
+ private:
+  static constexpr std::uint32_t kSingle = std::numeric_limits<std::uint32_t>::max();
+
+  void ChoosePairs() {
+    struct Candidate {
+      std::int64_t gain;
+      CellId a, b;
+    };
+    std::vector<Candidate> candidates;
+    const std::vector<Word> none(WordsFor(f_.size()), 0);
+    const auto& max_gen = f_.max_generations();
+    const std::vector<CellId>& cells = f_.cells();
+    std::vector<PairProjection> all;
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      for (std::size_t j = i + 1; j < cells.size(); ++j) {
+        PairProjection p(f_, cells[i], cells[j]);
+        bool exact = true;
+        const std::int64_t gain =
+            std::int64_t(p.Value(none.data(), exact)) - max_gen[cells[i]] - max_gen[cells[j]];
+        if (exact && gain > 0) candidates.push_back({gain, cells[i], cells[j]});
+      }
+    }
+    std::stable_sort(candidates.begin(), candidates.end(),
+                     [](const Candidate& x, const Candidate& y) { return x.gain > y.gain; });
+    for (const Candidate& c : candidates) {
+      if (group_of_[c.a] != kSingle || group_of_[c.b] != kSingle) continue;
+      group_of_[c.a] = group_of_[c.b] = std::uint32_t(pairs_.size());
+      pairs_.emplace_back(f_, c.a, c.b);
+    }
+  }
+
+  const CellForest& f_;
+  std::vector<std::uint32_t> group_of_;  // per cell: kSingle or an index into pairs_
+  std::vector<PairProjection> pairs_;
+  std::vector<std::uint32_t> remgen_;  // scratch, per node
+  bool exact_ = true;
+};
+
+struct OpenEntry {
+  std::uint32_t f, g;
+  std::uint64_t tie;  // the state's id, or a seeded hash of it
+  StateId state;
+  // std::priority_queue pops the largest: the smallest f, then the largest g, then the
+  // smallest tie (the oldest state without a seed).
+  bool operator<(const OpenEntry& o) const {
+    if (f != o.f) return f > o.f;
+    if (g != o.g) return g < o.g;
+    return tie > o.tie;
   }
 };
 
-// Every state created, in creation order, with a hash table over their bitsets.
-class StateStore {
+class Search {
  public:
-  explicit StateStore(std::size_t words) : words_(words), table_(1024, kNoState) {}
+  Search(const CellForest& f, const ShorterOptions& o)
+      : f_(f),
+        o_(o),
+        start_(Clock::now()),
+        words_(WordsFor(f.size())),
+        store_(words_),
+        heuristic_(f, o.pair_heuristic),
+        cur_(words_),
+        next_(words_) {}
 
-  std::size_t size() const { return g_.size(); }
-  const Word* bits(StateId s) const { return &bits_[s * words_]; }
-  std::uint32_t g(StateId s) const { return g_[s]; }
-  std::uint32_t h(StateId s) const { return h_[s]; }
-  bool closed(StateId s) const { return closed_[s]; }
-  void Close(StateId s) { closed_[s] = true; }
-  // Moves from the start state to `s`, in order.
+  ShorterResult Run() {
+    ShorterResult out;
+    const std::uint32_t own = heuristic_.Start(cur_.data());
+    const std::uint32_t h = o_.extra_bound ? std::max(own, o_.extra_bound(f_, cur_.data())) : own;
+    if (o_.upper != 0 && h >= o_.upper) {
+      out.status = ShorterResult::kNone;
+      out.lower = o_.upper;
+      return out;
+    }
+    Offer(cur_.data(), own, h, kNoState, kNoCell);
+    StateId goal = kNoState;
+    while (!open_.empty()) {
+      const OpenEntry e = open_.top();
+      if (closed_[e.state] || e.g != g_[e.state]) {  // stale entry
+        open_.pop();
+        continue;
+      }
+      if (own_[e.state] == 0) {
+        goal = e.state;
+        break;
+      }
+      out.stopped = LimitReached(out.expanded);
+      if (!out.stopped.empty()) break;
+      open_.pop();
+      closed_[e.state] = true;
+      ++out.expanded;
+      Expand(e.state);
+    }
+    out.bytes = peak_bytes_;
+    out.work = work_;
+    if (goal != kNoState) {
+      out.status = ShorterResult::kFound;
+      out.schedule = PathTo(goal);
+      out.lower = out.schedule.size();
+    } else if (out.stopped.empty()) {
+      out.status = ShorterResult::kNone;
+      out.lower = o_.upper;
+    } else {
+      out.status = ShorterResult::kStopped;
+      out.lower = open_.top().f;  // the smallest f: see "Bracket"
+    }
+    return out;
+  }
+
+ private:
+  std::size_t Bytes() const {
+    return store_.bytes() + g_.size() * (3 * 4 + sizeof(CellId) + 1) +
+           open_.size() * sizeof(OpenEntry) + heuristic_.bytes();
+  }
+
+  std::string LimitReached(std::uint64_t expanded) {
+    std::ostringstream s;
+    const std::size_t bytes = Bytes();
+    peak_bytes_ = std::max(peak_bytes_, bytes);
+    if (expanded >= o_.limits.max_states) {
+      s << "state limit reached (max_states = " << o_.limits.max_states << ")";
+    } else if (bytes > o_.limits.max_bytes) {
+      s << "memory limit reached (max_bytes = " << o_.limits.max_bytes << ")";
+    } else if (expanded % 256 == 0 && std::chrono::duration<double>(Clock::now() - start_).count() >
+                                          o_.limits.max_seconds) {
+      s << "time limit reached (max_seconds = " << o_.limits.max_seconds << ")";
+    }
+    return s.str();
+  }
+
+  // Creates each successor of `s`: one per cell with an available node.
+  void Expand(StateId s) {
+    std::copy(store_.bits(s), store_.bits(s) + words_, cur_.begin());
+    const std::uint32_t g = g_[s] + 1, own = own_[s];
+    work_ += f_.size();
+    for (CellId c : f_.cells()) {
+      ready_.clear();
+      for (Index n : f_.nodes_of(c)) {
+        const Index p = f_.parent(n);
+        if (!TestBit(cur_.data(), n) && (p == CellForest::kNone || TestBit(cur_.data(), p))) {
+          ready_.push_back(n);
+        }
+      }
+      if (ready_.empty()) continue;
+      next_ = cur_;
+      for (Index n : ready_) SetBit(next_, n);
+      work_ += 2 * (words_ + f_.nodes_of(c).size());
+      const std::uint32_t next_own = heuristic_.Child(own, cur_.data(), next_.data(), c);
+      const std::uint32_t h =
+          o_.extra_bound ? std::max(next_own, o_.extra_bound(f_, next_.data())) : next_own;
+      if (o_.upper == 0 || g + h < o_.upper) Offer(next_.data(), next_own, g + h, s, c);
+    }
+  }
+
+  // Stores the state (or finds it) and queues it if reached with fewer fetches than before.
+  void Offer(const Word* bits, std::uint32_t own, std::uint32_t f, StateId parent, CellId move) {
+    const std::uint32_t g = parent == kNoState ? 0 : g_[parent] + 1;
+    const std::uint64_t hash = HashBits(bits, words_);
+    StateId s = store_.Find(bits, hash);
+    if (s == kNoState) {
+      s = store_.Add(bits, hash);
+      g_.push_back(g), own_.push_back(own), parent_.push_back(parent), move_.push_back(move);
+      closed_.push_back(false);
+    } else if (g_[s] <= g) {
+      return;  // with a consistent heuristic a closed state already has its fewest fetches
+    } else {
+      g_[s] = g, parent_[s] = parent, move_[s] = move, closed_[s] = false;  // reopened
+    }
+    open_.push({f, g, o_.seed == 0 ? s : MixBits(o_.seed ^ s), s});
+  }
+
   std::vector<CellId> PathTo(StateId s) const {
     std::vector<CellId> path;
     for (; parent_[s] != kNoState; s = parent_[s]) path.push_back(move_[s]);
     std::reverse(path.begin(), path.end());
     return path;
   }
-  // The state with these bits, if stored, else kNoState.
-  StateId Find(const Word* bits, std::uint64_t hash) const {
-    for (std::size_t i = hash & (table_.size() - 1);; i = (i + 1) & (table_.size() - 1)) {
-      const StateId s = table_[i];
-      if (s == kNoState) return kNoState;
-      if (hash_[s] == hash && std::equal(bits, bits + words_, this->bits(s))) return s;
-    }
-  }
-  StateId Add(const Word* bits, std::uint64_t hash, std::uint32_t h) {
-    const auto s = static_cast<StateId>(size());
-    RAYCELL_CHECK_LT(size(), std::size_t{kNoState});
-    bits_.insert(bits_.end(), bits, bits + words_);
-    hash_.push_back(hash);
-    g_.push_back(0), h_.push_back(h), parent_.push_back(kNoState), move_.push_back(kNoCell);
-    closed_.push_back(false);
-    if (2 * size() > table_.size()) Rehash(2 * table_.size());
-    Place(s);
-    return s;
-  }
-  void Reach(StateId s, std::uint32_t g, StateId parent, CellId move) {
-    g_[s] = g, parent_[s] = parent, move_[s] = move;
-  }
-  std::size_t bytes() const {
-    return size() * (words_ * sizeof(Word) + sizeof(std::uint64_t) + 4 * 4) +
-           table_.size() * sizeof(StateId);
-  }
 
- private:
-  void Place(StateId s) {
-    std::size_t i = hash_[s] & (table_.size() - 1);
-    while (table_[i] != kNoState) i = (i + 1) & (table_.size() - 1);
-    table_[i] = s;
-  }
-  void Rehash(std::size_t slots) {
-    table_.assign(slots, kNoState);
-    for (StateId s = 0; s < size(); ++s) Place(s);
-  }
-
-  std::size_t words_;
-  std::vector<Word> bits_;
-  std::vector<std::uint64_t> hash_;
-  std::vector<std::uint32_t> g_, h_;
+  const CellForest& f_;
+  const ShorterOptions o_;
+  const Clock::time_point start_;
+  const std::size_t words_;
+  BitsTable store_;
+  std::vector<std::uint32_t> g_, own_;
   std::vector<StateId> parent_;
   std::vector<CellId> move_;
   std::vector<bool> closed_;
-  std::vector<StateId> table_;  // open addressing, power-of-two size, at most half full
-};
-
-struct OpenEntry {
-  std::uint32_t f, g;
-  StateId state;
-  // std::priority_queue pops the largest: the smallest f, then the largest g, then the
-  // oldest state.
-  bool operator<(const OpenEntry& o) const {
-    if (f != o.f) return f > o.f;
-    if (g != o.g) return g < o.g;
-    return state > o.state;
-  }
-};
-
-struct SearchOutcome {
-  StateId goal = kNoState;  // a goal state with fewest fetches, if one below the incumbent
-  std::string stopped;      // the limit that stopped the search, if one did
-  std::uint64_t expanded = 0;
-};
-
-class Search {
- public:
-  using Clock = std::chrono::steady_clock;
-
-  Search(const CellTree& tree, const OptimumLimits& limits, std::uint64_t incumbent,
-         Clock::time_point start)
-      : t_(TreeIndex::Create(tree)),
-        limits_(limits),
-        incumbent_(incumbent),
-        start_(start),
-        words_((tree.size() + 63) / 64),
-        store_(words_),
-        cur_(words_),
-        next_(words_),
-        remgen_(tree.size(), 0),
-        available_(tree.cell_count()) {}
-
-  SearchOutcome Run() {
-    Set(cur_.data(), kRootNode);
-    Offer(cur_.data(), StartHeuristic(), 0, kNoState, kNoCell);
-    SearchOutcome out;
-    while (!open_.empty() && out.stopped.empty()) {
-      const OpenEntry e = open_.top();
-      open_.pop();
-      if (store_.closed(e.state) || e.g != store_.g(e.state)) continue;  // stale entry
-      if (store_.h(e.state) == 0) {
-        out.goal = e.state;
-        break;
-      }
-      out.stopped = LimitReached(out.expanded);
-      if (!out.stopped.empty()) break;
-      store_.Close(e.state);
-      ++out.expanded;
-      Expand(e.state);
-    }
-    return out;
-  }
-
-  std::vector<CellId> PathTo(StateId s) const { return store_.PathTo(s); }
-
- private:
-  std::string LimitReached(std::uint64_t expanded) const {
-    std::ostringstream s;
-    if (expanded >= limits_.max_states) {
-      s << "state limit reached (max_states = " << limits_.max_states << ")";
-    } else if (store_.bytes() + open_.size() * sizeof(OpenEntry) > limits_.max_bytes) {
-      s << "memory limit reached (max_bytes = " << limits_.max_bytes << ")";
-    } else if (expanded % 256 == 0 && Seconds() > limits_.max_seconds) {
-      s << "time limit reached (max_seconds = " << limits_.max_seconds << ")";
-    }
-    return s.str();
-  }
-
-  double Seconds() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
-
-  // Creates each successor of `s`: one per cell with an available node.
-  void Expand(StateId s) {
-    std::copy(store_.bits(s), store_.bits(s) + words_, cur_.begin());
-    const std::uint32_t g = store_.g(s) + 1, h = store_.h(s);
-    for (auto& nodes : available_) nodes.clear();
-    for (NodeId n = 1; n < t_.cell.size(); ++n) {
-      if (!Test(cur_.data(), n) && Test(cur_.data(), t_.parent[n])) {
-        available_[t_.cell[n]].push_back(n);
-      }
-    }
-    for (CellId c = 0; c < available_.size(); ++c) {
-      if (available_[c].empty()) continue;
-      next_ = cur_;
-      for (NodeId n : available_[c]) Set(next_.data(), n);
-      const std::uint32_t next_h = h - MaxRemgen(cur_.data(), c) + MaxRemgen(next_.data(), c);
-      if (g + next_h < incumbent_) Offer(next_.data(), next_h, g, s, c);
-    }
-  }
-
-  // Stores the state (or finds it) and queues it if reached with fewer fetches than before.
-  void Offer(const Word* bits, std::uint32_t h, std::uint32_t g, StateId parent, CellId move) {
-    const std::uint64_t hash = Hash(bits, words_);
-    StateId s = store_.Find(bits, hash);
-    if (s == kNoState) {
-      s = store_.Add(bits, hash, h);
-    } else if (store_.closed(s) || store_.g(s) <= g) {
-      return;  // consistency: a closed state already has its fewest fetches
-    }
-    store_.Reach(s, g, parent, move);
-    open_.push({g + h, g, s});
-  }
-
-  // The largest remgen of an unprocessed node of c (0 if none).
-  std::uint32_t MaxRemgen(const Word* bits, CellId c) {
-    std::uint32_t best = 0;
-    for (NodeId n : t_.cell_nodes[c]) {
-      if (Test(bits, n)) continue;
-      const NodeId a = t_.same_cell_above[n];
-      remgen_[n] = (a != kNoNode && !Test(bits, a)) ? remgen_[a] + 1 : 1;
-      best = std::max(best, remgen_[n]);
-    }
-    return best;
-  }
-
-  std::uint32_t StartHeuristic() {
-    std::uint32_t h = 0;
-    for (CellId c = 0; c < t_.cell_nodes.size(); ++c) h += MaxRemgen(cur_.data(), c);
-    return h;
-  }
-
-  const TreeIndex t_;
-  const OptimumLimits limits_;
-  const std::uint64_t incumbent_;
-  const Clock::time_point start_;
-  const std::size_t words_;
-  StateStore store_;
   std::priority_queue<OpenEntry> open_;
-  std::vector<Word> cur_, next_;                // scratch bitsets
-  std::vector<std::uint32_t> remgen_;           // scratch, per node
-  std::vector<std::vector<NodeId>> available_;  // scratch, per cell
+  Heuristic heuristic_;
+  std::vector<Word> cur_, next_;  // scratch bitsets
+  std::vector<Index> ready_;      // scratch
+  std::size_t peak_bytes_ = 0;
+  std::uint64_t work_ = 0;
 };
 
-std::string TooLarge(const CellTree& tree, const OptimumLimits& limits) {
-  return "tree has " + std::to_string(tree.node_count()) +
-         " nodes, more than max_nodes = " + std::to_string(limits.max_nodes);
-}
-
-// Fills the answer of a search that ran to its end.
-void Conclude(const CellTree& tree, const Search& search, const SearchOutcome& outcome,
-              const PeelResult& peel, OptimumResult& out) {
-  const std::string sizes =
-      "bound " + std::to_string(Bound(tree)) + ", Peel " + std::to_string(peel.schedule.size());
-  if (!outcome.stopped.empty()) {
-    out.status = OptimumResult::kUnknown;
-    out.reason = outcome.stopped + "; " + sizes;
-    return;
-  }
-  out.status = OptimumResult::kOptimal;
-  if (outcome.goal == kNoState) {
-    out.schedule = peel.schedule;
-    out.reason = "no schedule is shorter than Peel's; " + sizes;
-  } else {
-    out.schedule = search.PathTo(outcome.goal);
-    out.reason = "shorter than Peel's; " + sizes;
-  }
-  out.length = out.schedule.size();
-  RAYCELL_CHECK(IsFeasible(tree, out.schedule));
+std::string Sizes(const CellTree& tree, const char* what, std::size_t incumbent) {
+  return "bound " + std::to_string(Bound(tree)) + ", " + what + " " + std::to_string(incumbent);
 }
 
 }  // namespace
 
+ShorterResult FindShorter(const CellForest& forest, const ShorterOptions& options) {
+  ShorterResult out = Search(forest, options).Run();
+  if (out.status == ShorterResult::kFound) {
+    RAYCELL_CHECK(IsFeasible(forest, out.schedule));
+    RAYCELL_CHECK(options.upper == 0 || out.schedule.size() < options.upper);
+  }
+  return out;
+}
+
 OptimumResult ExactOptimum(const CellTree& tree, const OptimumLimits& limits) {
-  const auto start = Search::Clock::now();
+  OptimumOptions options;
+  options.limits = limits;
+  return ExactOptimum(tree, options);
+}
+
+OptimumResult ExactOptimum(const CellTree& tree, const OptimumOptions& options) {
+  const auto start = Clock::now();
   OptimumResult out;
-  if (tree.node_count() > limits.max_nodes) {
+  if (tree.node_count() > options.limits.max_nodes) {
     out.status = OptimumResult::kTooLarge;
-    out.reason = TooLarge(tree, limits);
+    out.reason = "tree has " + std::to_string(tree.node_count()) +
+                 " nodes, more than max_nodes = " + std::to_string(options.limits.max_nodes);
     return out;
   }
-  const PeelResult peel = Peel(tree);
-  if (peel.schedule.size() == Bound(tree)) {
+  const bool peel = options.incumbent.empty();
+  const std::vector<CellId> incumbent = peel ? Peel(tree).schedule : options.incumbent;
+  RAYCELL_CHECK(IsFeasible(tree, incumbent));
+  const char* what = peel ? "Peel" : "incumbent";
+  const std::string whose = peel ? "Peel's" : "the incumbent's";
+  const std::uint64_t bound = Bound(tree);
+  // A lower bound above a feasible schedule's length is a bug of whoever computed it.
+  RAYCELL_CHECK_LE(options.lower_bound, incumbent.size());
+  out.lower = std::max(bound, options.lower_bound);
+  out.upper = incumbent.size();
+  if (incumbent.size() <= out.lower) {
     out.status = OptimumResult::kOptimal;
-    out.schedule = peel.schedule;
-    out.length = out.schedule.size();
-    out.reason = "Peel's length equals the bound " + std::to_string(out.length);
+    out.schedule = incumbent;
+    out.reason = (peel ? "Peel's length equals the " : "the incumbent's length equals the ") +
+                 std::string(incumbent.size() == bound ? "bound " : "lower bound ") +
+                 std::to_string(incumbent.size());
   } else {
-    Search search(tree, limits, peel.schedule.size(), start);
-    const SearchOutcome outcome = search.Run();
-    out.states_expanded = outcome.expanded;
-    Conclude(tree, search, outcome, peel, out);
+    ShorterOptions o;
+    o.upper = incumbent.size();
+    o.limits = options.limits;
+    o.pair_heuristic = options.pair_heuristic;
+    o.extra_bound = options.extra_bound;
+    const ShorterResult r = FindShorter(CellForest::FromTree(tree), o);
+    out.states_expanded = r.expanded;
+    const std::string sizes = Sizes(tree, what, incumbent.size());
+    if (r.status == ShorterResult::kStopped) {
+      out.status = OptimumResult::kUnknown;
+      out.lower = std::max(out.lower, r.lower);
+      out.reason = r.stopped + "; " + sizes;
+    } else {
+      out.status = OptimumResult::kOptimal;
+      out.schedule = r.status == ShorterResult::kFound ? r.schedule : incumbent;
+      out.reason =
+          (r.status == ShorterResult::kFound ? "shorter than " : "no schedule is shorter than ") +
+          whose + "; " + sizes;
+    }
   }
-  out.seconds = std::chrono::duration<double>(Search::Clock::now() - start).count();
+  if (out.status == OptimumResult::kOptimal) {
+    out.length = out.lower = out.upper = out.schedule.size();
+    RAYCELL_CHECK(IsFeasible(tree, out.schedule));
+  }
+  out.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return out;
 }
 

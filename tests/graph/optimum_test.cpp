@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <random>
 #include <set>
 #include <sstream>
@@ -190,6 +191,143 @@ TEST(OptimumPropertyTest, Deterministic) {
     EXPECT_EQ(a.schedule, b.schedule);
     EXPECT_EQ(a.states_expanded, b.states_expanded);
   });
+}
+
+// ------------------------------------------------------------------- strengthened search
+
+// The optimum as incumbent: nothing shorter exists, the incumbent is returned as optimal.
+TEST(OptimumIncumbentTest, OptimalIncumbentIsConfirmed) {
+  const CellTree t = FromPaths({{C, A, D, B}, {A, C, A}});
+  OptimumOptions o;
+  o.incumbent = {A, C, A, D, B};
+  o.lower_bound = 0;
+  const OptimumResult r = ExactOptimum(t, o);
+  ASSERT_EQ(r.status, OptimumResult::kOptimal);
+  EXPECT_EQ(r.schedule, o.incumbent);
+  EXPECT_EQ(r.reason, "the incumbent's length equals the bound 5");
+  // Rotations: bound 5, optimum 9; an incumbent of 9 is confirmed by a search.
+  const CellTree rot = Rotations(5);
+  o.incumbent = ExactOptimum(rot).schedule;
+  ASSERT_EQ(o.incumbent.size(), 9u);
+  const OptimumResult q = ExactOptimum(rot, o);
+  ASSERT_EQ(q.status, OptimumResult::kOptimal);
+  EXPECT_EQ(q.schedule, o.incumbent);
+  EXPECT_GT(q.states_expanded, 0u);
+  EXPECT_EQ(q.reason, "no schedule is shorter than the incumbent's; bound 5, incumbent 9");
+}
+
+// A longer incumbent: the search finds the optimum below it.
+TEST(OptimumIncumbentTest, LongerIncumbentIsImproved) {
+  const CellTree t = Rotations(4);  // optimum 7
+  OptimumOptions o;
+  o.incumbent = {0, 1, 2, 3, 0, 1, 2, 3};
+  const OptimumResult r = ExactOptimum(t, o);
+  ASSERT_EQ(r.status, OptimumResult::kOptimal);
+  EXPECT_EQ(r.length, 7u);
+  EXPECT_EQ(r.reason, "shorter than the incumbent's; bound 4, incumbent 8");
+  EXPECT_TRUE(IsFeasible(t, r.schedule));
+}
+
+// A given lower bound that the incumbent meets: optimal without a search.
+TEST(OptimumIncumbentTest, LowerBoundMetNeedsNoSearch) {
+  const CellTree t = Rotations(4);
+  OptimumOptions o;
+  o.incumbent = {0, 1, 2, 3, 0, 1, 2};
+  o.lower_bound = 7;
+  const OptimumResult r = ExactOptimum(t, o);
+  ASSERT_EQ(r.status, OptimumResult::kOptimal);
+  EXPECT_EQ(r.states_expanded, 0u);
+  EXPECT_EQ(r.reason, "the incumbent's length equals the lower bound 7");
+}
+
+// Stopped by the state limit: a bracket [lower, upper] that holds the optimum, never a guess.
+TEST(OptimumIncumbentTest, StoppedSearchGivesABracket) {
+  const CellTree t = Rotations(6);  // bound 6, optimum 11
+  OptimumOptions o;
+  o.limits.max_states = 50;
+  o.pair_heuristic = false;
+  const OptimumResult r = ExactOptimum(t, o);
+  ASSERT_EQ(r.status, OptimumResult::kUnknown);
+  EXPECT_GE(r.lower, 6u);
+  EXPECT_LE(r.lower, 11u);
+  EXPECT_GT(r.lower, 6u);  // the search proved more than the bound
+  EXPECT_EQ(r.upper, Peel(t).schedule.size());
+  EXPECT_TRUE(r.schedule.empty());
+  EXPECT_NE(r.ToString().find("unknown in [" + std::to_string(r.lower) + ", "), std::string::npos);
+}
+
+// The extra bound is used: a consistent one changes nothing but is called; one that
+// overestimates (a broken bound) prunes the optimum away, which shows it is used.
+TEST(OptimumIncumbentTest, ExtraBoundIsUsed) {
+  const CellTree t = Rotations(4);
+  int calls = 0;
+  OptimumOptions o;
+  o.extra_bound = [&](const CellForest& f, const Word* bits) {
+    ++calls;
+    for (CellForest::Index n = 0; n < f.size(); ++n) {
+      if (!TestBit(bits, n)) return 1u;
+    }
+    return 0u;
+  };
+  EXPECT_EQ(ExactOptimum(t, o).length, 7u);
+  EXPECT_GT(calls, 0);
+  o.extra_bound = [](const CellForest&, const Word*) { return 100u; };
+  EXPECT_EQ(ExactOptimum(t, o).length, Peel(t).schedule.size());  // 8: wrong, as expected
+}
+
+// The pair heuristic keeps the search exact (equal to brute force) on random trees, with
+// and without it.
+TEST(OptimumPropertyTest, PairHeuristicIsExact) {
+  int fewer = 0, more = 0;
+  ForSmallRandomTrees(1500, [&](const CellTree& t) {
+    OptimumOptions with, without;
+    without.pair_heuristic = false;
+    const OptimumResult a = ExactOptimum(t, with), b = ExactOptimum(t, without);
+    ASSERT_EQ(a.status, OptimumResult::kOptimal);
+    ASSERT_EQ(b.status, OptimumResult::kOptimal);
+    const std::size_t best = BruteForceOptimum(t);
+    EXPECT_EQ(a.length, best);
+    EXPECT_EQ(b.length, best);
+    fewer += a.states_expanded < b.states_expanded;
+    more += a.states_expanded > b.states_expanded;
+  });
+  EXPECT_GT(fewer, 10 * more);
+}
+
+// The figure for the strengthened search: random trees of 6-9 cells and 40-120 nodes, each
+// searched with 3000 states at most; the pair heuristic proves the optimum on many more.
+// Each proved optimum is checked against a search without limits.
+TEST(OptimumPropertyTest, PairHeuristicProvesMoreWithinTheStateLimit) {
+  std::mt19937 rng(8128);
+  int old_proved = 0, new_proved = 0, trees = 0;
+  while (trees < 30) {
+    const CellTree t = RandomTree(rng, 6 + rng() % 4, 10 + rng() % 12, 7);
+    if (t.node_count() < 40 || t.node_count() > 120) continue;
+    ++trees;
+    OptimumOptions o;
+    o.limits.max_states = 3000;
+    const OptimumResult strong = ExactOptimum(t, o);
+    o.pair_heuristic = false;
+    const OptimumResult weak = ExactOptimum(t, o);
+    OptimumOptions unlimited;
+    unlimited.limits.max_states = 10'000'000;
+    unlimited.limits.max_seconds = 1e9;
+    const OptimumResult truth = ExactOptimum(t, unlimited);
+    ASSERT_EQ(truth.status, OptimumResult::kOptimal);
+    for (const OptimumResult* r : {&strong, &weak}) {
+      if (r->status == OptimumResult::kOptimal) {
+        EXPECT_EQ(r->length, truth.length);
+      } else {
+        EXPECT_LE(r->lower, truth.length);
+        EXPECT_GE(r->upper, truth.length);
+      }
+    }
+    new_proved += strong.status == OptimumResult::kOptimal;
+    old_proved += weak.status == OptimumResult::kOptimal;
+  }
+  std::printf("proved within 3000 states: %d of %d trees with pairs, %d without\n", new_proved,
+              trees, old_proved);
+  EXPECT_GT(new_proved, old_proved);
 }
 
 }  // namespace

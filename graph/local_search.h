@@ -1,0 +1,73 @@
+// Local search for short schedules: improves a feasible schedule by re-solving windows of it
+// (a large-neighbourhood search).
+//
+// A window is entries i..j-1 of the schedule; the rest stays fixed. Which nodes the window
+// must process is exact (graph/forest.h, ScheduleTimes): the sub-forest
+// D = {n : i <= earliest[n], latest[n] < j}, and any feasible schedule of D may replace the
+// window, no other. So a window is a problem of its own:
+//  - windows of at most exact_window entries are solved exactly (graph/optimum.h
+//    FindShorter, schedules no longer than the window, ties broken by a fresh seed): a
+//    shorter schedule shortens the whole one; one of the same length (a plateau move)
+//    changes which nodes later windows hold, which lets the search walk between schedules
+//    of one length until a shorter one appears;
+//  - longer windows, and windows whose exact search ran out of states, by a beam search of
+//    D (graph/beam_search.h, a fresh seed each time, schedules no longer than the window).
+// After every change, entries that no node needs (no node has earliest == latest == p) are
+// deleted, one at a time.
+//
+// Kicks: after kick_after windows without a shorter schedule, kick_size fetches of random
+// cells are inserted at random places (the schedule stays feasible, a little longer), and
+// the walk goes on from there; a walk more than kick_slack entries above the best schedule
+// found restarts from that best. The best schedule found is returned.
+//
+// Deterministic: windows, seeds and kicks are drawn from a seeded std::mt19937_64 with our
+// own bounded draw (graph/search_util.h), and every limit counts windows or work, never
+// time.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "graph/cell_tree.h"
+#include "graph/forest.h"
+
+namespace raycell {
+
+struct LocalSearchOptions {
+  std::uint64_t seed = 1;
+  std::uint64_t max_windows = 20000;  // windows re-solved: the iteration limit
+  // Work limit, in node visits (window searches, re-timing the schedule after a change), so
+  // that huge trees stop early instead of running for hours: a 27-cell frame of the study
+  // (3,400 nodes) needs 2e8-8e8 for 20000 windows, a tree of 10^5 nodes 2e9 for its
+  // re-timings alone.
+  std::uint64_t max_work = 2'000'000'000;
+  // Memory of one window's exact search (its states and open list); past it the window goes
+  // to the beam.
+  std::size_t exact_bytes = std::size_t{64} << 20;
+  std::size_t min_window = 10, max_window = 16;  // window lengths, drawn uniformly
+  std::size_t exact_window = 16;                 // longest window solved exactly
+  std::uint64_t exact_states = 20000;            // states per exact window search
+  std::size_t beam_width = 64;      // windows too long or too hard for the exact search
+  std::uint64_t kick_after = 2000;  // 0: no kicks
+  std::size_t kick_size = 3;
+  std::uint64_t kick_slack = 1;
+  // Stop as soon as the schedule is this short (a known lower bound: then it is optimal).
+  std::uint64_t lower_bound = 0;
+};
+
+struct LocalSearchResult {
+  std::vector<CellId> schedule;  // feasible, never longer than the input
+  std::uint64_t windows = 0;     // windows re-solved
+  std::uint64_t improvements = 0, plateau_moves = 0, deletions = 0, kicks = 0;
+  std::uint64_t work = 0;  // node visits
+  // "84 entries after 15000 windows (5 shorter, 14000 plateau moves, 10 deletions, 20 kicks)".
+  std::string ToString() const;
+};
+
+// Improves `schedule`, which must be feasible for `forest` (RAYCELL_CHECK).
+LocalSearchResult ImproveSchedule(const CellForest& forest, std::vector<CellId> schedule,
+                                  const LocalSearchOptions& options = {});
+
+}  // namespace raycell

@@ -1,0 +1,154 @@
+#include "graph/local_search.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "graph/peel.h"
+#include "graph/schedule.h"
+#include "tests/graph/test_trees.h"
+
+namespace raycell {
+namespace {
+
+using testing::BruteForceOptimum;
+using testing::FromPaths;
+using testing::RandomTree;
+using Schedule = std::vector<CellId>;
+constexpr CellId A = 0, B = 1, C = 2;
+
+LocalSearchResult Improve(const CellTree& t, const Schedule& s, const LocalSearchOptions& o) {
+  return ImproveSchedule(CellForest::FromTree(t), s, o);
+}
+
+// Path A B run by A A B B: the second A and the second B process nothing and are deleted
+// before any window is tried.
+TEST(LocalSearchTest, DeletesEntriesNoNodeNeeds) {
+  LocalSearchOptions o;
+  o.max_windows = 0;
+  const LocalSearchResult r = Improve(FromPaths({{A, B}}), {A, A, B, B}, o);
+  EXPECT_EQ(r.schedule, (Schedule{A, B}));
+  EXPECT_EQ(r.deletions, 2u);
+  EXPECT_EQ(r.windows, 0u);
+}
+
+// Paths C B A and B A B (nodes C1 B1 A1, B2 A2 B3) run by B C A B A: every entry processes
+// a node no other entry can (B: B2; C: C1; A: A2; B: B1 and B3; A: A1), so nothing can be
+// deleted, yet C B A B (C1; B1 B2; A1 A2; B3) has 4 entries, the bound (B twice, A and C
+// once). The window over the whole schedule, solved exactly, finds a schedule of 4.
+TEST(LocalSearchTest, WindowFindsWhatDeletionCannot) {
+  const CellTree t = FromPaths({{C, B, A}, {B, A, B}});
+  const Schedule start{B, C, A, B, A};
+  for (std::size_t p = 0; p < start.size(); ++p) {
+    Schedule without = start;
+    without.erase(without.begin() + p);
+    ASSERT_FALSE(IsFeasible(t, without)) << p;
+  }
+  ASSERT_TRUE(IsFeasible(t, {C, B, A, B}));
+  LocalSearchOptions o;
+  o.min_window = o.max_window = o.exact_window = 5;
+  o.max_windows = 1;
+  const LocalSearchResult r = Improve(t, start, o);
+  EXPECT_EQ(r.schedule.size(), 4u);
+  EXPECT_TRUE(IsFeasible(t, r.schedule));
+  EXPECT_EQ(r.improvements, 1u);
+  EXPECT_EQ(r.deletions, 0u);
+}
+
+TEST(LocalSearchTest, StopsAtTheLowerBound) {
+  const CellTree t = FromPaths({{A, B}, {B, A}});
+  LocalSearchOptions o;
+  o.lower_bound = 3;
+  const LocalSearchResult r = Improve(t, {A, B, A}, o);
+  EXPECT_EQ(r.windows, 0u);
+  EXPECT_EQ(r.schedule, (Schedule{A, B, A}));
+}
+
+TEST(LocalSearchTest, ToString) {
+  LocalSearchOptions o;
+  o.max_windows = 0;
+  EXPECT_EQ(Improve(FromPaths({{A, B}}), {A, A, B, B}, o).ToString(),
+            "2 entries after 0 windows (0 shorter, 0 plateau moves, 2 deletions, 0 kicks)");
+}
+
+// Windows as long as the schedule, solved exactly: the local search is then an exact search
+// and must reach the optimum from Peel's schedule.
+TEST(LocalSearchPropertyTest, WholeWindowIsExact) {
+  std::mt19937 rng(424242);
+  int below_peel = 0, tried = 0;
+  for (int i = 0; i < 1200; ++i) {
+    const CellTree t = RandomTree(rng, 2 + rng() % 4, 1 + rng() % 8);
+    if (t.node_count() > 22) continue;
+    ++tried;
+    SCOPED_TRACE(t.ToString());
+    const Schedule peel = Peel(t).schedule;
+    LocalSearchOptions o;
+    o.min_window = o.max_window = o.exact_window = 64;
+    o.exact_states = 1'000'000;
+    o.max_windows = 1;
+    const LocalSearchResult r = Improve(t, peel, o);
+    EXPECT_TRUE(IsFeasible(t, r.schedule));
+    EXPECT_EQ(r.schedule.size(), BruteForceOptimum(t));
+    below_peel += r.schedule.size() < peel.size();
+  }
+  EXPECT_GT(tried, 800);
+  EXPECT_GT(below_peel, 20);
+}
+
+// Default windows on random trees, from Peel and from padded schedules: feasible, between the
+// optimum and the input, deterministic.
+TEST(LocalSearchPropertyTest, FeasibleNeverLongerDeterministic) {
+  std::mt19937 rng(77);
+  int improved = 0;
+  for (int i = 0; i < 600; ++i) {
+    const CellTree t = RandomTree(rng, 2 + rng() % 5, 1 + rng() % 8);
+    if (t.node_count() > 22) continue;
+    SCOPED_TRACE(t.ToString());
+    Schedule start = Peel(t).schedule;
+    for (int k = rng() % 4; k > 0; --k) {
+      start.insert(start.begin() + rng() % (start.size() + 1), CellId(rng() % t.cell_count()));
+    }
+    LocalSearchOptions o;
+    o.max_windows = 30;
+    o.kick_after = 5;
+    o.seed = 1 + i;
+    const LocalSearchResult a = Improve(t, start, o), b = Improve(t, start, o);
+    EXPECT_TRUE(IsFeasible(t, a.schedule));
+    EXPECT_LE(a.schedule.size(), start.size());
+    EXPECT_GE(a.schedule.size(), BruteForceOptimum(t));
+    EXPECT_EQ(a.schedule, b.schedule);
+    EXPECT_EQ(a.work, b.work);
+    improved += a.schedule.size() < start.size();
+  }
+  EXPECT_GT(improved, 100);
+}
+
+TEST(LocalSearchPropertyTest, KicksKeepTheBest) {
+  std::mt19937 rng(8);
+  const CellTree t = RandomTree(rng, 6, 30);
+  const Schedule peel = Peel(t).schedule;
+  LocalSearchOptions o;
+  o.max_windows = 200;
+  o.kick_after = 1;
+  o.kick_size = 5;
+  const LocalSearchResult r = Improve(t, peel, o);
+  EXPECT_GT(r.kicks, 100u);
+  EXPECT_TRUE(IsFeasible(t, r.schedule));
+  EXPECT_LE(r.schedule.size(), peel.size());
+}
+
+// A B A is optimal for A B and B A; one window that cannot improve it, then a kick of 20
+// fetches: the kicked walk is longer, the best (the input) is returned.
+TEST(LocalSearchTest, KickedWalkIsNotReturned) {
+  const CellTree t = FromPaths({{A, B}, {B, A}});
+  LocalSearchOptions o;
+  o.max_windows = 1;
+  o.kick_after = 1;
+  o.kick_size = 20;
+  const LocalSearchResult r = Improve(t, {A, B, A}, o);
+  EXPECT_EQ(r.kicks, 1u);
+  EXPECT_EQ(r.schedule, (Schedule{A, B, A}));
+}
+
+}  // namespace
+}  // namespace raycell
