@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iterator>
 #include <map>
 #include <memory>
 #include <numeric>
@@ -244,6 +245,9 @@ std::uint64_t MatchingGain(
 struct Group {
   GroupBound bound;
   std::unique_ptr<ScsSolver> solver;
+  bool union_of_tight = false;  // made by UnionCuts (no SCS computed)
+  // Count vectors (over bound.cells) known to be realisable (a witness's copies) or not.
+  std::vector<std::vector<std::uint32_t>> realisable, not_realisable;
 };
 
 class Bounder {
@@ -290,7 +294,14 @@ class Bounder {
       parts.push_back("blocks");
       Solve(program, "ip(" + Join(parts) + ")");
     }
-    if (options_.cuts && !parts.empty()) CutLoop(program, "ip(" + Join(parts) + ")+cuts");
+    if (options_.cuts && !parts.empty()) {
+      if (Complete()) {
+        Stage("ip(" + Join(parts) + ")+cuts", r_.value);  // nothing left to gain
+      } else {
+        CutLoop(program, "ip(" + Join(parts) + ")+cuts");
+      }
+    }
+    r_.optimal = Complete() && r_.value == complete_value_;
     for (const Group& g : groups_) {
       if (g.bound.scs_lower > g.bound.max_gen_sum) r_.groups.push_back(g.bound);
     }
@@ -298,6 +309,20 @@ class Bounder {
   }
 
  private:
+  // Whether some group holds every cell with nodes and its SCS is exact: its projection is the
+  // tree's paths themselves, so that SCS is the optimum (and no bound can exceed it).
+  bool Complete() {
+    std::size_t active = 0;
+    for (std::uint32_t m : max_gen_) active += m > 0;
+    for (const Group& g : groups_) {
+      if (g.bound.exact && g.bound.cells.size() == active && active > 0) {
+        complete_value_ = g.bound.scs_lower;
+        return true;
+      }
+    }
+    return active == 0;
+  }
+
   static std::string Join(const std::vector<std::string>& v) {
     std::string s;
     for (const std::string& p : v) s += (s.empty() ? "" : ",") + p;
@@ -427,6 +452,12 @@ class Bounder {
     std::vector<std::vector<CellId>> blocks =
         options_.grid[0] != 0 ? GridBlocks() : ClusterBlocks();
     if (blocks.size() > options_.max_blocks) blocks.resize(options_.max_blocks);
+    // With few cells, all of them together (the tree's own SCS) comes last.
+    std::vector<CellId> all;
+    for (CellId c = 0; c < max_gen_.size(); ++c) {
+      if (max_gen_[c] > 0) all.push_back(c);
+    }
+    if (!all.empty() && all.size() <= options_.max_block_cells) blocks.push_back(all);
     for (const auto& b : blocks) AddIfGain(program, Compute(b));
   }
 
@@ -440,7 +471,7 @@ class Bounder {
       for (std::uint32_t dy = 1; dy <= std::min(3u, n[1]); ++dy) {
         for (std::uint32_t dx = 1; dx <= std::min(3u, n[0]); ++dx) {
           const std::uint32_t v = dx * dy * dz;
-          if (v >= 4 && v <= 18) shapes.push_back({dx, dy, dz});
+          if (v >= 4 && v <= options_.max_block_cells) shapes.push_back({dx, dy, dz});
         }
       }
     }
@@ -507,8 +538,9 @@ class Bounder {
   }
 
   // Solve, find groups whose projection the solution's counts cannot realise, cut, repeat.
+  // Groups are checked smallest first; a round ends after kCutsPerRound cuts.
   void CutLoop(CountProgram& program, const std::string& name) {
-    std::map<std::pair<std::size_t, std::vector<std::uint32_t>>, Realisability> known;
+    constexpr std::size_t kCutsPerRound = 20;
     std::uint64_t best = 0;
     for (std::uint32_t round = 0; round < options_.max_cut_rounds; ++round) {
       const CountProgram::Solution s = program.Solve(options_.max_ip_nodes);
@@ -516,27 +548,92 @@ class Bounder {
       best = std::max(best, s.bound);
       if (!s.optimal || s.x.empty()) break;
       std::size_t added = 0;
-      for (std::size_t gi = 0; gi < groups_.size() && StatesLeft() > 0; ++gi) {
-        const Group& g = groups_[gi];
+      for (std::size_t gi = 0; gi < groups_.size() && added < kCutsPerRound && StatesLeft() > 0;
+           ++gi) {
+        Group& g = groups_[gi];
         // Every x >= maxGen fits a group without gain; a group whose SCS search hit its limit
         // is left out (its budget searches would mostly hit the limit too).
-        if (g.bound.scs_lower <= g.bound.max_gen_sum || !g.bound.exact) continue;
+        if (!g.union_of_tight && (g.bound.scs_lower <= g.bound.max_gen_sum || !g.bound.exact)) {
+          continue;
+        }
+        if (g.bound.cells.size() > options_.max_cut_group_cells) continue;
         std::vector<std::uint32_t> u;
         for (CellId c : g.bound.cells) u.push_back(s.x[c]);
-        auto [it, inserted] = known.insert({{gi, u}, Realisability::kUnknown});
-        if (inserted) it->second = Fits(g, u);
-        if (it->second != Realisability::kNotRealisable) continue;
+        if (Fits(g, u) != Realisability::kNotRealisable) continue;
         program.AddCut(Lift(g, u));
         ++r_.cuts;
         ++added;
       }
+      if (added == 0) added = UnionCuts(program, s.x);
       if (added == 0) break;
     }
     if (StatesLeft() == 0) r_.limits_reached = true;
     Stage(name, best);
   }
 
-  Realisability Fits(const Group& g, const std::vector<std::uint32_t>& u) {
+  // When no group cuts x: unions of two intersecting groups that x meets with equality (their
+  // row is tight), not yet known, of at most max_cut_group_cells cells, are checked too; those
+  // that x cannot realise are cut and join the groups checked in later rounds.
+  std::size_t UnionCuts(CountProgram& program, const std::vector<std::uint32_t>& x) {
+    constexpr std::size_t kMostUnions = 300;
+    std::vector<std::size_t> tight;
+    for (std::size_t gi = 0; gi < groups_.size(); ++gi) {
+      const GroupBound& b = groups_[gi].bound;
+      std::uint64_t sum = 0;
+      for (CellId c : b.cells) sum += x[c];
+      if (b.scs_lower > b.max_gen_sum && sum == b.scs_lower) tight.push_back(gi);
+    }
+    std::size_t added = 0, tried = 0;
+    for (std::size_t i = 0; i < tight.size() && tried < kMostUnions; ++i) {
+      for (std::size_t j = i + 1; j < tight.size() && tried < kMostUnions; ++j) {
+        if (StatesLeft() == 0) return added;
+        const std::vector<CellId>& a = groups_[tight[i]].bound.cells;
+        const std::vector<CellId>& b = groups_[tight[j]].bound.cells;
+        std::vector<CellId> both, either;
+        std::set_intersection(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(both));
+        std::set_union(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(either));
+        if (both.empty() || either.size() > options_.max_cut_group_cells) continue;
+        if (!seen_.insert(either).second) continue;
+        ++tried;
+        Group g;
+        g.bound.cells = either;
+        for (CellId c : either) g.bound.max_gen_sum += max_gen_[c];
+        g.bound.scs_lower = g.bound.max_gen_sum;  // (1); no SCS search for these
+        g.solver = std::make_unique<ScsSolver>(Project(either));
+        g.bound.strings = static_cast<std::uint32_t>(g.solver->strings());
+        g.union_of_tight = true;
+        std::vector<std::uint32_t> u;
+        for (CellId c : either) u.push_back(x[c]);
+        const bool cut = Fits(g, u) == Realisability::kNotRealisable;
+        if (cut) {
+          program.AddCut(Lift(g, u));
+          ++r_.cuts;
+          ++added;
+        }
+        groups_.push_back(std::move(g));
+      }
+    }
+    return added;
+  }
+
+  static bool AllLessEqual(const std::vector<std::uint32_t>& a,
+                           const std::vector<std::uint32_t>& b) {
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      if (a[i] > b[i]) return false;
+    }
+    return true;
+  }
+
+  // Whether the group's projection has a common supersequence within the counts u (one per
+  // cell of the group). Realisability only grows with the counts, so an answer found before
+  // for counts below (realisable) or above (not realisable) answers again without a search.
+  Realisability Fits(Group& g, const std::vector<std::uint32_t>& u) {
+    for (const auto& r : g.realisable) {
+      if (AllLessEqual(r, u)) return Realisability::kRealisable;
+    }
+    for (const auto& n : g.not_realisable) {
+      if (AllLessEqual(u, n)) return Realisability::kNotRealisable;
+    }
     std::vector<std::uint32_t> budget(tree_.cell_count(), 0);
     for (std::size_t i = 0; i < u.size(); ++i) budget[g.bound.cells[i]] = u[i];
     ScsLimits limits = Limits();
@@ -544,34 +641,40 @@ class Bounder {
     if (limits.max_states == 0) return Realisability::kUnknown;
     const BudgetResult b = g.solver->FitsBudget(budget, limits);
     r_.states += std::max<std::uint64_t>(b.states, 1);
+    if (b.answer == Realisability::kRealisable) {
+      std::vector<std::uint32_t> used(u.size(), 0);  // the witness's copies: all it needs
+      for (CellId c : b.witness) {
+        const auto at = std::lower_bound(g.bound.cells.begin(), g.bound.cells.end(), c);
+        ++used[at - g.bound.cells.begin()];
+      }
+      g.realisable.push_back(used);
+    } else if (b.answer == Realisability::kNotRealisable) {
+      g.not_realisable.push_back(u);
+    }
     return b.answer;
   }
 
-  // u is not realisable for g. Raise each coordinate in turn to the largest value that keeps
-  // it not realisable (realisability only grows with the budgets, so binary search), or drop
-  // the cell when even MostUseful copies do not help; the cut (3): some cell kept has
-  // x_c >= u_c + 1. An unknown answer counts as realisable (the coordinate is not raised).
-  std::vector<std::pair<CellId, std::uint32_t>> Lift(const Group& g, std::vector<std::uint32_t> u) {
-    std::vector<bool> dropped(u.size(), false);
-    for (std::size_t i = 0; i < u.size(); ++i) {
-      const std::uint32_t most = std::max(g.solver->MostUseful(g.bound.cells[i]), u[i]);
-      const std::uint32_t keep = u[i];
-      u[i] = most;
-      if (Fits(g, u) == Realisability::kNotRealisable) {
-        dropped[i] = true;
-        continue;
+  // u is not realisable for g. Raise each coordinate in turn, one at a time, while it stays
+  // not realisable (realisability only grows with the counts, so the result is a maximal such
+  // vector along that order); the cut (3): some cell of g has x_c >= u_c + 1. An unknown
+  // answer counts as realisable (the coordinate is not raised), which only weakens the cut.
+  std::vector<std::pair<CellId, std::uint32_t>> Lift(Group& g, std::vector<std::uint32_t> u) {
+    for (std::size_t i = 0; i < u.size() && u.size() <= options_.max_lift_cells; ++i) {
+      const std::uint32_t most = g.solver->MostUseful(g.bound.cells[i]);
+      while (u[i] < most) {
+        ++u[i];
+        if (Fits(g, u) != Realisability::kNotRealisable) {
+          --u[i];
+          break;
+        }
       }
-      std::uint32_t lo = keep, hi = most;  // lo not realisable, hi realisable or unknown
-      while (hi - lo > 1) {
-        const std::uint32_t mid = lo + (hi - lo) / 2;
-        u[i] = mid;
-        (Fits(g, u) == Realisability::kNotRealisable ? lo : hi) = mid;
-      }
-      u[i] = lo;
     }
     std::vector<std::pair<CellId, std::uint32_t>> cut;
     for (std::size_t i = 0; i < u.size(); ++i) {
-      if (!dropped[i]) cut.push_back({g.bound.cells[i], u[i] + 1});
+      // u_c >= MostUseful: more copies of c never help, so x_c >= u_c + 1 is no way out and
+      // the term is left out of the disjunction.
+      if (u[i] < g.solver->MostUseful(g.bound.cells[i]))
+        cut.push_back({g.bound.cells[i], u[i] + 1});
     }
     RAYCELL_CHECK(!cut.empty());
     return cut;
@@ -587,6 +690,7 @@ class Bounder {
   std::vector<Group> groups_;
   std::set<std::vector<CellId>> seen_;
   LowerBoundResult r_;
+  std::uint64_t complete_value_ = 0;
   std::chrono::steady_clock::time_point start_;
 };
 

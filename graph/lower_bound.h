@@ -39,6 +39,9 @@ struct LowerBoundOptions {
   std::size_t max_blocks = 400;
   std::uint64_t max_group_states = 50'000;      // per SCS search
   std::uint64_t max_cut_states = 20'000;        // per budget search (cuts)
+  std::size_t max_cut_group_cells = 10;         // cuts only for groups of at most this many cells
+  std::uint32_t max_block_cells = 12;           // blocks of at most this many cells
+  std::size_t max_lift_cells = 4;               // cuts of larger groups are not lifted
   std::uint64_t max_total_states = 10'000'000;  // all searches together
   std::uint32_t max_cut_rounds = 200;           // solve-check-cut rounds
   std::uint64_t max_ip_nodes = 200'000;         // branch-and-bound nodes per program
@@ -71,6 +74,8 @@ struct LowerBoundResult {
   std::size_t cuts = 0;            // cuts added
   std::uint64_t states = 0;        // search states used in total
   bool limits_reached = false;     // some search or the program stopped at a limit
+  // value is the optimum: a group held every cell with nodes and its SCS search was exact.
+  bool optimal = false;
   // One line: "lower bound 79 (maxGen 63; ip(pairs,triples,blocks)+cuts; 214 groups, 31 cuts,
   // 1234567 states)".
   std::string ToString() const;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <queue>
@@ -391,6 +392,7 @@ class Moves {
       : dag_(dag), parts_(parts), blocked_(dag.symbols()), present_(dag.symbols()) {}
 
   Eval Evaluate(const Frontier& f);
+  void EvaluateInto(const Frontier& f, Eval& e);  // the same, reusing e's memory
   const std::vector<PartTable>* parts() const { return parts_; }
 
   // The symbols of the frontier's nodes, increasing.
@@ -408,56 +410,72 @@ class Moves {
   // duplicates and dominated nodes.
   Frontier Move(const Frontier& f, Symbol a) const {
     // f has no dominated node; only pairs with a new node (a child) need a test.
-    std::vector<std::pair<Node, bool>> next;  // (node, new)
+    olds_.clear();
+    news_.clear();
     for (Node v : f) {
-      if (dag_.symbol(v) != a) next.push_back({v, false});
-    }
-    for (Node v : f) {
-      if (dag_.symbol(v) != a) continue;
-      for (const Node* c = dag_.children_begin(v); c != dag_.children_end(v); ++c) {
-        next.push_back({*c, true});
+      if (dag_.symbol(v) != a) {
+        olds_.push_back(v);  // increasing, as f
+      } else {
+        news_.insert(news_.end(), dag_.children_begin(v), dag_.children_end(v));
       }
     }
-    std::sort(next.begin(), next.end());  // an old node comes before the same node as new
-    next.erase(std::unique(next.begin(), next.end(),
-                           [](const auto& x, const auto& y) { return x.first == y.first; }),
-               next.end());
-    return Reduce(next);
+    std::sort(news_.begin(), news_.end());
+    news_.erase(std::unique(news_.begin(), news_.end()), news_.end());
+    // A child that is also an old node stays an old one.
+    fresh_.clear();
+    std::set_difference(news_.begin(), news_.end(), olds_.begin(), olds_.end(),
+                        std::back_inserter(fresh_));
+    return Reduce(olds_, fresh_);
   }
 
   Frontier WithoutDominated(Frontier f) const {
     std::sort(f.begin(), f.end());
     f.erase(std::unique(f.begin(), f.end()), f.end());
-    std::vector<std::pair<Node, bool>> all;
-    for (Node v : f) all.push_back({v, true});
-    return Reduce(all);
+    return Reduce({}, f);
   }
 
  private:
-  // The nodes, increasing, without those dominated by another; pairs of two old nodes are
-  // known not to dominate each other.
-  Frontier Reduce(const std::vector<std::pair<Node, bool>>& f) const {
-    Frontier out;
-    if (f.size() < 2) {
-      for (const auto& x : f) out.push_back(x.first);
-      return out;
-    }
-    std::vector<bool> drop(f.size(), false);
-    for (std::size_t i = 0; i < f.size(); ++i) {
-      for (std::size_t j = 0; j < f.size() && !drop[i]; ++j) {
-        if (i == j || drop[j] || (!f[i].second && !f[j].second)) continue;
-        if (dag_.Covered(f[i].first, f[j].first)) drop[i] = true;
+  // olds and news (disjoint, each increasing) without the nodes dominated by another; two old
+  // nodes are known not to dominate each other. Dominance is a strict partial order (see
+  // above), so a node dominated by a dropped node is dominated by a kept one too, and each
+  // test can look at the whole set.
+  Frontier Reduce(const std::vector<Node>& olds, const std::vector<Node>& news) const {
+    kept_old_.clear();
+    kept_new_.clear();
+    for (Node o : olds) {
+      bool dominated = false;
+      for (Node n : news) {
+        if (dag_.Covered(o, n)) {
+          dominated = true;
+          break;
+        }
       }
+      if (!dominated) kept_old_.push_back(o);
     }
-    for (std::size_t i = 0; i < f.size(); ++i) {
-      if (!drop[i]) out.push_back(f[i].first);
+    for (Node n : news) {
+      bool dominated = false;
+      for (Node y : olds) {
+        if (dag_.Covered(n, y)) {
+          dominated = true;
+          break;
+        }
+      }
+      for (std::size_t i = 0; i < news.size() && !dominated; ++i) {
+        dominated = news[i] != n && dag_.Covered(n, news[i]);
+      }
+      if (!dominated) kept_new_.push_back(n);
     }
+    Frontier out;
+    out.reserve(kept_old_.size() + kept_new_.size());
+    std::merge(kept_old_.begin(), kept_old_.end(), kept_new_.begin(), kept_new_.end(),
+               std::back_inserter(out));
     return out;
   }
 
   const Dag& dag_;
   std::vector<PartTable>* parts_;
   std::vector<char> blocked_, present_;
+  mutable std::vector<Node> olds_, news_, fresh_, kept_old_, kept_new_;  // scratch
 };
 
 // Frontiers (plus any extra values) stored once each, in creation order, with a hash table.
@@ -636,14 +654,23 @@ class AStar {
 class BudgetSearch {
  public:
   BudgetSearch(const Dag& dag, std::vector<std::uint32_t> budget, const ScsLimits& limits,
-               std::vector<PartTable>* parts = nullptr)
-      : dag_(dag), moves_(dag, parts), budget_(std::move(budget)), limits_(limits) {}
+               std::vector<PartTable>* parts = nullptr, std::vector<PartTable>* checks = nullptr)
+      : dag_(dag),
+        moves_(dag, parts),
+        budget_(std::move(budget)),
+        limits_(limits),
+        checks_(checks) {}
 
   BudgetResult Run() {
     BudgetResult r;
     std::vector<std::uint32_t> used(dag_.symbols(), 0);
     std::uint64_t left = 0;
     for (std::uint32_t b : budget_) left += b;
+    // Every move advances some path, so the depth is at most the strings' total length.
+    std::uint64_t deepest = 0;
+    for (Symbol a = 0; a < dag_.symbols(); ++a) deepest += dag_.total(a);
+    evals_.resize(std::min(left, deepest) + 2);
+    keys_.resize(evals_.size());
     const Outcome o = Search(moves_.WithoutDominated(dag_.start()), used, left);
     r.states = states_;
     if (o == kFound) {
@@ -660,7 +687,10 @@ class BudgetSearch {
 
   Outcome Search(const Frontier& f, std::vector<std::uint32_t>& used, std::uint64_t left) {
     if (f.empty()) return kFound;
-    const Eval e = moves_.Evaluate(f);
+    const std::size_t depth = path_.size();
+    RAYCELL_CHECK_LT(depth, evals_.size());  // sized by Run
+    Eval& e = evals_[depth];
+    moves_.EvaluateInto(f, e);
     if (e.h > left) return kFail;
     for (Symbol a = 0; a < dag_.symbols(); ++a) {
       if (e.need[a] + used[a] > budget_[a]) return kFail;
@@ -670,7 +700,15 @@ class BudgetSearch {
       for (Symbol a : (*moves_.parts())[i].part()) left_in_part += budget_[a] - used[a];
       if (e.parts[i] > left_in_part) return kFail;
     }
-    std::vector<std::uint32_t> key = f;
+    if (checks_ != nullptr) {
+      for (PartTable& p : *checks_) {
+        std::uint64_t left_in_part = 0;
+        for (Symbol a : p.part()) left_in_part += budget_[a] - used[a];
+        if (p.Remaining(f) > left_in_part) return kFail;
+      }
+    }
+    std::vector<std::uint32_t>& key = keys_[depth];
+    key.assign(f.begin(), f.end());
     key.push_back(kNoSymbol);  // separates the frontier from the copies used
     key.insert(key.end(), used.begin(), used.end());
     const std::uint64_t hash = HashOf(key);
@@ -696,7 +734,7 @@ class BudgetSearch {
       path_.pop_back();
       --used[a];
     }
-    failed_.Add(key, hash);
+    failed_.Add(keys_[depth], hash);
     return kFail;
   }
 
@@ -707,6 +745,9 @@ class BudgetSearch {
   StateStore failed_;
   std::uint64_t states_ = 0;
   std::vector<Symbol> path_;
+  std::vector<PartTable>* checks_;
+  std::vector<Eval> evals_;                       // per depth
+  std::vector<std::vector<std::uint32_t>> keys_;  // per depth
 };
 
 std::uint32_t PartTable::Remaining(const Frontier& f) {
@@ -731,7 +772,15 @@ std::uint32_t PartTable::Remaining(const Frontier& f) {
 
 Eval Moves::Evaluate(const Frontier& f) {
   Eval e;
+  EvaluateInto(f, e);
+  return e;
+}
+
+void Moves::EvaluateInto(const Frontier& f, Eval& e) {
   const std::uint32_t k = dag_.symbols();
+  e.h = e.hl = 0;
+  e.forced = kNoSymbol;
+  e.parts.clear();
   e.need.assign(k, 0);
   std::fill(blocked_.begin(), blocked_.end(), 0);
   for (Node v : f) {
@@ -759,7 +808,6 @@ Eval Moves::Evaluate(const Frontier& f) {
     }
     e.h = std::max(e.h, hp);
   }
-  return e;
 }
 
 // Disjoint pairs of symbols for the heuristic: each pair's SCS at the start minus its two
@@ -807,6 +855,7 @@ class ScsSolver::Instance {
   Dag dag;
   // The heuristic's memo tables fill as searches run (not thread-safe; see scs.h).
   mutable std::vector<PartTable> parts;
+  mutable std::vector<PartTable> checks;  // AddChecks
 };
 
 ScsSolver::ScsSolver(const std::vector<CellString>& strings)
@@ -821,6 +870,20 @@ const std::vector<CellId>& ScsSolver::symbols() const { return in_->dag.cells();
 std::uint32_t ScsSolver::MostUseful(CellId cell) const {
   const Symbol a = in_->dag.Dense(cell);
   return a == kNoSymbol ? 0 : in_->dag.total(a);
+}
+
+void ScsSolver::AddChecks(const std::vector<std::vector<CellId>>& groups) {
+  const Dag& dag = in_->dag;
+  for (const std::vector<CellId>& g : groups) {
+    std::vector<Symbol> part;
+    for (CellId c : g) {
+      const Symbol a = dag.Dense(c);
+      if (a != kNoSymbol) part.push_back(a);
+    }
+    std::sort(part.begin(), part.end());
+    part.erase(std::unique(part.begin(), part.end()), part.end());
+    if (part.size() >= 2) in_->checks.emplace_back(dag, part, Instance::kSubStates);
+  }
 }
 
 ScsResult ScsSolver::Shortest(const ScsLimits& limits) const {
@@ -840,7 +903,7 @@ BudgetResult ScsSolver::FitsBudget(const std::vector<std::uint32_t>& budget,
     RAYCELL_CHECK_LT(std::size_t{dag.cell(a)}, budget.size());
     dense[a] = budget[dag.cell(a)];
   }
-  return BudgetSearch(dag, std::move(dense), limits, &in_->parts).Run();
+  return BudgetSearch(dag, std::move(dense), limits, &in_->parts, &in_->checks).Run();
 }
 
 ScsResult ShortestCommonSupersequence(const std::vector<CellString>& strings,

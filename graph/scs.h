@@ -71,6 +71,11 @@ class ScsSolver {
   // each takes about strings * bits per position / 8 + 40 bytes.
   ScsResult Shortest(const ScsLimits& limits = {}) const;
 
+  // Groups of symbols whose remaining SCS FitsBudget also compares, at every state, with the
+  // copies their budgets leave (a state where it exceeds them is a dead end). Costs memory per
+  // group and node; not used by Shortest.
+  void AddChecks(const std::vector<std::vector<CellId>>& groups);
+
   // Is there a common supersequence with at most budget[c] copies of every symbol c?
   // `budget` is indexed by cell id and must cover every symbol (RAYCELL_CHECK). Depth-first
   // search over (position vector, copies used) with a memo of failed states, pruned by the
