@@ -87,15 +87,39 @@ TEST(LowerBoundTest, RandomTreesStayBetweenMaxGenAndTheOptimum) {
     if (t.node_count() > 22) continue;  // keep the brute force fast
     LowerBoundOptions options;
     if (trial % 3 == 0) options.grid = {cells, 1, 1};
+    // Without blocks (one of which is the whole tree here), the cuts have work to do.
+    if (trial % 2 == 1) options.blocks = false;
     const LowerBoundResult r = LowerBound(t, options);
     ExpectValid(t, r);
     const std::size_t optimum = BruteForceOptimum(t);
     ASSERT_LE(r.value, optimum) << t.ToString() << r.ToString();
     if (r.value > r.max_gen) ++above;
     if (r.value == optimum) ++equal;
+    if (r.optimal) {
+      EXPECT_EQ(r.value, optimum) << t.ToString() << r.ToString();
+    }
   }
   EXPECT_GT(above, 100);  // the bound does more than maxGen on many of them
   EXPECT_GT(equal, trials / 2);
+}
+
+// Trees where the program over pairs and triples stays below the optimum and the cuts (of
+// pairs, triples and unions of tight groups; no blocks) have to raise it.
+TEST(LowerBoundTest, CutsRaiseTheBoundAndStayValid) {
+  std::mt19937 rng(5);
+  int cut = 0;
+  for (int trial = 0; trial < 700; ++trial) {
+    const CellId cells = 4 + rng() % 3;
+    const CellTree t = RandomTree(rng, cells, 4 + rng() % 10, 2 + rng() % 6);
+    if (t.node_count() > 26) continue;
+    LowerBoundOptions options;
+    options.blocks = false;
+    const LowerBoundResult r = LowerBound(t, options);
+    ExpectValid(t, r);
+    ASSERT_LE(r.value, BruteForceOptimum(t)) << t.ToString() << r.ToString();
+    if (r.stages.back().value > r.stages[r.stages.size() - 2].value) ++cut;
+  }
+  EXPECT_GT(cut, 15);
 }
 
 TEST(LowerBoundTest, EmptyAndTinyTrees) {
