@@ -1,9 +1,12 @@
 #include "graph/analysis.h"
 
+#include <algorithm>
 #include <chrono>
 
+#include "base/check.h"
 #include "graph/optimum.h"
 #include "graph/peel.h"
+#include "graph/schedule.h"
 
 namespace raycell {
 
@@ -12,6 +15,80 @@ CellTree BuildFrameTree(const TraceReader& reader, std::size_t frame_index) {
   reader.ForEachBatch(frame_index, [&](const RayBatch& b) { builder.AddBatch(b); });
   return builder.Finish();
 }
+
+BracketOptions BracketEffort(const std::string& name) {
+  BracketOptions o;  // "default": the graph/ modules' own defaults
+  o.best.threads = 0;
+  if (name == "default") return o;
+  if (name == "quick") {
+    o.lower.triples = false;
+    o.lower.max_blocks = 60;
+    o.lower.max_total_states = 1'000'000;
+    o.lower.max_cut_rounds = 40;
+    o.best.beam_width = 64;
+    o.best.chains = 2;
+    o.best.local.max_windows = 2000;
+    o.best.local.max_work = 200'000'000;
+    o.best.exact_states = 20000;
+    return o;
+  }
+  if (name == "thorough") {
+    o.lower.max_triples *= 4;
+    o.lower.max_blocks *= 4;
+    o.lower.max_group_states *= 4;
+    o.lower.max_total_states *= 4;
+    o.lower.max_cut_rounds *= 2;
+    o.best.beam_width *= 4;
+    o.best.chains *= 2;
+    o.best.local.max_windows *= 4;
+    o.best.local.max_work *= 4;
+    o.best.exact_states *= 10;
+    return o;
+  }
+  throw InputError("--effort '" + name + "': expected quick, default or thorough");
+}
+
+std::optional<double> FrameAnalysis::gap() const {
+  if (!lower_bound || !best_length) return std::nullopt;
+  if (*lower_bound == 0) return 0.0;
+  return double(*best_length - *lower_bound) / double(*lower_bound);
+}
+
+namespace {
+
+// Brackets the optimum of `tree`: the lower bound first, then the schedule search told of it
+// (it stops when a schedule meets it). A proved optimum (a.optimum, from --exact) tightens
+// both sides.
+void Bracket(const CellTree& tree, const BracketOptions& options,
+             const std::vector<CellId>& optimal_schedule, FrameAnalysis& a) {
+  const LowerBoundResult lb = LowerBound(tree, options.lower);
+  BestScheduleOptions best = options.best;
+  best.lower_bound = std::max(best.lower_bound, lb.value);
+  BestScheduleResult b = BestSchedule(tree, best);
+  RAYCELL_CHECK(IsFeasible(tree, b.schedule));
+  std::uint64_t lower = std::max<std::uint64_t>(lb.value, b.lower);
+  a.lower_bound_method = lb.value >= b.lower ? lb.method : "exact search";
+  a.best_schedule = std::move(b.schedule);
+  a.best_method = b.method;
+  if (a.optimum && *a.optimum < a.best_schedule.size()) {  // --exact found a shorter one
+    a.best_schedule = optimal_schedule;
+    a.best_method = "exact search";
+  }
+  if (a.optimum && *a.optimum > lower) {
+    lower = *a.optimum;
+    a.lower_bound_method = "exact search";
+  }
+  RAYCELL_CHECK_LE(Bound(tree), lower);
+  RAYCELL_CHECK_LE(lower, a.best_schedule.size());
+  a.lower_bound = lower;
+  a.best_length = a.best_schedule.size();
+  if (lower == a.best_schedule.size() && !a.optimum) {
+    a.optimum = lower;
+    a.optimum_status = "optimal (the best schedule meets the lower bound)";
+  }
+}
+
+}  // namespace
 
 FrameAnalysis AnalyzeTree(const CellTree& tree, const AnalyzeOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -22,20 +99,23 @@ FrameAnalysis AnalyzeTree(const CellTree& tree, const AnalyzeOptions& options) {
   PeelResult peel = Peel(tree);
   a.peel_schedule = std::move(peel.schedule);
   a.splits = peel.split_peels;
+  std::vector<CellId> optimal_schedule;  // from the exact search, when it proves one
   if (options.exact) {
     OptimumLimits limits;
     limits.max_states = options.max_states;
     limits.max_seconds = options.max_seconds;
     limits.max_nodes = options.max_nodes;
-    const OptimumResult r = ExactOptimum(tree, limits);
+    OptimumResult r = ExactOptimum(tree, limits);
     if (r.status == OptimumResult::kOptimal) {
       a.optimum = r.length;
       a.optimum_status = "optimal";
+      optimal_schedule = std::move(r.schedule);
     } else {
       a.optimum_status =
           (r.status == OptimumResult::kTooLarge ? "too large: " : "unknown: ") + r.reason;
     }
   }
+  if (options.bracket) Bracket(tree, options.bracket_options, optimal_schedule, a);
   a.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return a;
 }

@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "base/check.h"
+#include "scheduling/best_scheduler.h"
 #include "scheduling/cell_tree_scheduler.h"
 #include "scheduling/max_work.h"
 #include "scheduling/peel_oracle.h"
@@ -99,6 +100,19 @@ const std::vector<SchedulerEntry>& SchedulerRegistry() {
       {"celltree", "the paper's Cell Tree scheduling: frame i+1 follows frame i's Peel schedule",
        [](std::uint64_t) -> std::unique_ptr<Scheduler> {
          return std::make_unique<CellTreeScheduler>();
+       }},
+      {"best", "the best-schedule oracle: each frame follows the best schedule found for its tree",
+       [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+         return std::make_unique<BestOracleScheduler>(seed);
+       }},
+      {"celltree-best", "frame i+1 follows the best schedule found for frame i's tree",
+       [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+         return std::make_unique<CellTreeBestScheduler>(seed, false);
+       }},
+      {"celltree-union",
+       "frame i+1 follows the best schedule found for the union of frames i and i-1's trees",
+       [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+         return std::make_unique<CellTreeBestScheduler>(seed, true);
        }},
   };
   return registry;

@@ -23,7 +23,7 @@ namespace raycell {
 namespace {
 
 struct AnalyzeArgs {
-  std::string trace, paths, format = "table", dot;
+  std::string trace, paths, format = "table", dot, effort = "default";
   std::optional<int> frame;
   bool all = false, quiet = false, timing = false;
   AnalyzeOptions options;
@@ -53,7 +53,13 @@ void PrintJson(const FrameAnalysis& a, bool timing, std::ostream& out) {
       << ",\"peel_schedule\":[" << Schedule(a.peel_schedule, ",") << "],\"splits\":" << a.splits
       << ",\"peel_minus_bound\":" << a.peel_length() - a.bound
       << ",\"optimum\":" << OptionalNumber(a.optimum, "null")
-      << ",\"optimum_status\":" << JsonQuote(a.optimum_status);
+      << ",\"optimum_status\":" << JsonQuote(a.optimum_status)
+      << ",\"lower_bound\":" << OptionalNumber(a.lower_bound, "null")
+      << ",\"lower_bound_method\":" << (a.lower_bound ? JsonQuote(a.lower_bound_method) : "null")
+      << ",\"best_length\":" << OptionalNumber(a.best_length, "null") << ",\"best_schedule\":"
+      << (a.best_length ? "[" + Schedule(a.best_schedule, ",") + "]" : "null")
+      << ",\"best_method\":" << (a.best_length ? JsonQuote(a.best_method) : "null")
+      << ",\"gap\":" << (a.gap() ? FormatFixed(*a.gap(), 4) : "null");
   if (timing) out << ",\"seconds\":" << FormatFixed(a.seconds, 6);
   out << "}\n";
 }
@@ -61,7 +67,9 @@ void PrintJson(const FrameAnalysis& a, bool timing, std::ostream& out) {
 void PrintCsvHeader(bool timing, std::ostream& out) {
   out << "frame,rays,nodes,rays_per_node,bound,peel_length,splits,peel_minus_bound,optimum,"
          "peel_minus_optimum,optimum_status,"
-      << (timing ? "seconds," : "") << "peel_schedule\n";
+      << (timing ? "seconds," : "")
+      << "peel_schedule,lower_bound,lower_bound_method,best_length,gap,best_method,"
+         "best_schedule\n";
 }
 
 void PrintCsv(const FrameAnalysis& a, bool timing, std::ostream& out) {
@@ -69,16 +77,19 @@ void PrintCsv(const FrameAnalysis& a, bool timing, std::ostream& out) {
       << ',' << a.bound << ',' << a.peel_length() << ',' << a.splits << ','
       << a.peel_length() - a.bound << ',' << OptionalNumber(a.optimum, "") << ',' << Gap(a) << ",\""
       << a.optimum_status << "\"," << (timing ? FormatFixed(a.seconds, 6) + "," : "") << '"'
-      << Schedule(a.peel_schedule, " ") << "\"\n";
+      << Schedule(a.peel_schedule, " ") << "\"," << OptionalNumber(a.lower_bound, "") << ','
+      << CsvField(a.lower_bound_method) << ',' << OptionalNumber(a.best_length, "") << ','
+      << (a.gap() ? FormatFixed(*a.gap(), 4) : "") << ',' << CsvField(a.best_method) << ",\""
+      << Schedule(a.best_schedule, " ") << "\"\n";
 }
 
-void PrintTableHeader(bool timing, std::ostream& out) {
+void PrintTableHeader(bool timing, bool bracket, std::ostream& out) {
   out << "   frame         rays      nodes  rays/node    bound     peel   splits peel-bound"
          "  optimum peel-opt"
-      << (timing ? "     time" : "") << "\n";
+      << (bracket ? "    lower     best      gap" : "") << (timing ? "     time" : "") << "\n";
 }
 
-void PrintRow(const FrameAnalysis& a, bool timing, std::ostream& out) {
+void PrintRow(const FrameAnalysis& a, bool timing, bool bracket, std::ostream& out) {
   char line[256];
   std::snprintf(line, sizeof line, "%8d %12llu %10llu %10.1f %8llu %8llu %8llu %10llu %8s %8s",
                 a.frame, (unsigned long long)a.rays, (unsigned long long)a.nodes, a.rays_per_node(),
@@ -86,6 +97,12 @@ void PrintRow(const FrameAnalysis& a, bool timing, std::ostream& out) {
                 (unsigned long long)a.splits, (unsigned long long)(a.peel_length() - a.bound),
                 OptionalNumber(a.optimum, "-").c_str(), a.optimum ? Gap(a).c_str() : "-");
   out << line;
+  if (bracket) {
+    std::snprintf(line, sizeof line, " %8s %8s %7s%%", OptionalNumber(a.lower_bound, "-").c_str(),
+                  OptionalNumber(a.best_length, "-").c_str(),
+                  a.gap() ? FormatFixed(100 * *a.gap(), 1).c_str() : "-");
+    out << line;
+  }
   if (timing) {
     std::snprintf(line, sizeof line, " %7.3fs", a.seconds);
     out << line;
@@ -96,18 +113,19 @@ void PrintRow(const FrameAnalysis& a, bool timing, std::ostream& out) {
 // Results only, unless --timing: then the output depends on the machine too.
 class Printer {
  public:
-  Printer(const std::string& format, bool timing) : format_(format), timing_(timing) {
+  Printer(const std::string& format, bool timing, bool bracket)
+      : format_(format), timing_(timing), bracket_(bracket) {
     if (format != "table" && format != "json" && format != "csv") {
       throw InputError("--format '" + format + "': expected table, json or csv");
     }
-    if (format_ == "table") PrintTableHeader(timing_, std::cout);
+    if (format_ == "table") PrintTableHeader(timing_, bracket_, std::cout);
     if (format_ == "csv") PrintCsvHeader(timing_, std::cout);
   }
   void Print(const FrameAnalysis& a) {
     if (format_ == "json") PrintJson(a, timing_, std::cout);
     if (format_ == "csv") PrintCsv(a, timing_, std::cout);
     if (format_ == "table") {
-      PrintRow(a, timing_, std::cout);
+      PrintRow(a, timing_, bracket_, std::cout);
       if (!a.optimum && a.optimum_status != "not computed") {
         std::cout << "         optimum " << a.optimum_status << "\n";
       }
@@ -117,7 +135,7 @@ class Printer {
 
  private:
   std::string format_;
-  bool timing_;
+  bool timing_, bracket_;
 };
 
 // The tree as Graphviz DOT, with the cache-saving links of its Peel schedule, written to a
@@ -176,8 +194,10 @@ std::vector<std::size_t> SelectFrames(const TraceReader& r, const AnalyzeArgs& a
   return out;
 }
 
-void AnalyzeTrace(const AnalyzeArgs& a, Printer& printer) {
+void AnalyzeTrace(AnalyzeArgs a, Printer& printer) {
   const TraceReader r = TraceReader::Open(a.trace);
+  // The lower bound takes blocks of neighbouring cells from the trace's cell grid.
+  a.options.bracket_options.lower.grid = r.header().cells;
   if (!r.warning().empty()) std::cerr << "raycell: warning: " << r.warning() << "\n";
   const std::vector<std::size_t> frames = SelectFrames(r, a);
   if (!a.dot.empty() && frames.size() != 1) {
@@ -204,8 +224,10 @@ void Run(const AnalyzeArgs& a) {
     throw InputError("give either a TRACE file or --paths FILE.jsonl");
   }
   if (a.frame && a.all) throw InputError("--frame and --all exclude each other");
-  Printer printer(a.format, a.timing);
-  a.paths.empty() ? AnalyzeTrace(a, printer) : AnalyzePaths(a, printer);
+  AnalyzeArgs args = a;
+  args.options.bracket_options = BracketEffort(a.effort);
+  Printer printer(args.format, args.timing, args.options.bracket);
+  args.paths.empty() ? AnalyzeTrace(args, printer) : AnalyzePaths(args, printer);
 }
 
 }  // namespace
@@ -223,8 +245,11 @@ void AddAnalyzeCommand(CLI::App& app) {
       "--format json prints one object per frame and line with the keys schema\n"
       "(\"raycell-analyze/1\"), frame, rays, nodes, rays_per_node, bound, peel_length,\n"
       "peel_schedule (cells in fetch order), splits, peel_minus_bound, optimum (null when\n"
-      "not computed or unknown), optimum_status (and seconds with --timing); docs/schemas.md\n"
-      "documents each.\n"
+      "not computed or unknown), optimum_status, and with --bracket lower_bound,\n"
+      "lower_bound_method, best_length, best_schedule, best_method and gap ((best - lower)\n"
+      "/ lower; all null without --bracket), and seconds with --timing; docs/schemas.md\n"
+      "documents each. With --bracket the optimum is set when the best schedule meets the\n"
+      "lower bound.\n"
       "--paths reads ray paths as JSON Lines from raycell (`raycell trace cat`) or any other\n"
       "tool: keys in any order, rays in any order within a frame, ids any non-negative\n"
       "integers; required \"id\", \"parent\", \"spawn\", \"cells\" (\"parent\" and \"spawn\"\n"
@@ -239,6 +264,7 @@ void AddAnalyzeCommand(CLI::App& app) {
       "Examples:\n"
       "  raycell analyze capture.rct\n"
       "  raycell analyze capture.rct --frame 3 --exact --format json\n"
+      "  raycell analyze capture.rct --bracket --format csv > bracket.csv\n"
       "  raycell trace cat capture.rct --frame 0 > rays.jsonl && raycell analyze --paths "
       "rays.jsonl\n"
       "  echo '{\"id\":0,\"parent\":null,\"spawn\":null,\"cells\":[0,1]}' > p.jsonl && "
@@ -257,6 +283,16 @@ void AddAnalyzeCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--max-nodes", args->options.max_nodes,
                   "exact search: larger trees are not searched")
+      ->capture_default_str();
+  cmd->add_flag("--bracket", args->options.bracket,
+                "also bracket the optimum: the best lower bound (projections of the paths on "
+                "groups of cells, combined by an integer program) and the best schedule found "
+                "(beam and local search, exact search on small trees); the optimum when they "
+                "meet");
+  cmd->add_option("--effort", args->effort,
+                  "--bracket's budget: quick, default (about a minute per 27-cell frame on 2 "
+                  "cores) or thorough (about 4x); counted in states, so every machine reports "
+                  "the same")
       ->capture_default_str();
   cmd->add_option("--format", args->format, "table, json or csv")->capture_default_str();
   cmd->add_option("--dot", args->dot,

@@ -219,7 +219,7 @@ TEST(LoadConfig, BadUnitsAndValuesNameFileAndLine) {
             "replay.toml:1:8: seed: must be in 0..18446744073709551615, got -1");
   EXPECT_EQ(LoadError("scheduler = \"fastest\"\n"),
             "replay.toml:1:13: scheduler: unknown scheduler 'fastest' (expected maxwork, "
-            "roundrobin, random, peel or celltree)");
+            "roundrobin, random, peel, celltree, best, celltree-best or celltree-union)");
   EXPECT_EQ(
       LoadError("granularity = \"cell\"\n"),
       "replay.toml:1:15: granularity: unknown granularity 'cell' (expected ray, node or auto)");
@@ -369,9 +369,9 @@ TEST(ApplyOverride, ErrorsNameTheKeyAndLeaveTheConfigUnchanged) {
             "override 'level.board.bandwidth': bandwidth must be greater than zero: '0GB/s'");
   EXPECT_EQ(err("processors.prefetch", "yes"),
             "override 'processors.prefetch': expected true or false, got 'yes'");
-  EXPECT_EQ(err("scheduler", "best"),
-            "override 'scheduler': unknown scheduler 'best' (expected maxwork, roundrobin, "
-            "random, peel or celltree)");
+  EXPECT_EQ(err("scheduler", "fastest"),
+            "override 'scheduler': unknown scheduler 'fastest' (expected maxwork, roundrobin, "
+            "random, peel, celltree, best, celltree-best or celltree-union)");
   EXPECT_EQ(c, DefaultConfig());
 }
 

@@ -119,8 +119,8 @@ TEST(Replay, ConservationBoundsGranularityAndDeterminismOnRandomFrames) {
     const CellId cells = 2 + rng() % 5;
     const RayBatch f = RandomFrame(rng, cells);
     const CellTree previous = TreeOf(RandomFrame(rng, cells));
-    for (const char* s : {"maxwork", "roundrobin", "random", "peel", "celltree"}) {
-      SCOPED_TRACE(std::string(s) + " trial " + std::to_string(trial));
+    for (const std::string& s : SchedulerNames()) {
+      SCOPED_TRACE(s + " trial " + std::to_string(trial));
       // One processor: per node is exact whatever the cache and prefetch.
       ReplayConfig ray = DefaultConfig(), node = DefaultConfig();
       ray.granularity = ReplayConfig::Granularity::kRay;

@@ -8,6 +8,7 @@
 
 #include "graph/peel.h"
 #include "graph/schedule.h"
+#include "scheduling/best_scheduler.h"
 #include "scheduling/cell_tree_scheduler.h"
 #include "scheduling/scheduler.h"
 #include "tests/graph/test_trees.h"
@@ -248,6 +249,11 @@ TEST(FetchReferenceTest, RandomFrames) {
         ASSERT_GE(r.fetches(), Bound(tree)) << name << ", frame " << i;
         ASSERT_TRUE(IsFeasible(tree, r.fetched)) << name << ", frame " << i;
         cell_tree_wins += name == "celltree" && r.fetches() < max_work ? 1 : 0;
+        if (name == "best") {  // the useful entries of its own tree's best schedule
+          const std::vector<CellId> plan = PlanFor(tree, 5);
+          ASSERT_LE(plan.size(), peel.schedule.size());
+          ASSERT_EQ(r.fetches(), RunSchedule(tree, plan).useful_fetches);
+        }
         if (name != "peel") continue;
         oracle_skips += r.fetches() < peel.schedule.size() ? 1 : 0;
         ASSERT_LE(r.fetches(), peel.schedule.size()) << tree.ToString();

@@ -5,6 +5,8 @@
 
 #include "base/check.h"
 #include "graph/peel.h"
+#include "graph/schedule.h"
+#include "scheduling/best_scheduler.h"
 #include "scheduling/cell_tree_scheduler.h"
 #include "scheduling/max_work.h"
 #include "scheduling/peel_oracle.h"
@@ -217,6 +219,53 @@ TEST(CellTreeDeathTest, TreeCellsMustBeInTheGrid) {
   EXPECT_DEATH(s.BeginFrame(Frame(1, 2, nullptr, &t)), "CHECK failed");
 }
 
+// ------------------------------------------------------------------ best schedules
+
+// Rotations of 0 1 2 3: the optimum is 2n - 1 = 7.
+CellTree Rotations() { return FromPaths({{0, 1, 2, 3}, {1, 2, 3, 0}, {2, 3, 0, 1}, {3, 0, 1, 2}}); }
+
+// Paths C A D B and A C A: Peel gives A C A D B A (6), the optimum is A C A D B (5).
+TEST(BestSchedulersTest, TheOracleFollowsItsOwnTreesBestSchedule) {
+  const CellTree t = FromPaths({{C, A, 3, B}, {A, C, A}});
+  BestOracleScheduler s(3);
+  s.BeginFrame(Frame(0, 4, &t, nullptr));
+  const Schedule plan = s.follower().schedule();
+  EXPECT_EQ(plan, PlanFor(t, 3));
+  EXPECT_TRUE(IsFeasible(t, plan));
+  EXPECT_EQ(plan.size(), 5u);
+  EXPECT_EQ(testing::BruteForceOptimum(t), 5u);
+  EXPECT_EQ(Peel(t).schedule.size(), 6u);
+}
+
+TEST(BestSchedulersTest, CellTreeBestFollowsThePreviousFramesPlan) {
+  const CellTree t0 = Rotations(), t1 = FromPaths({{0, 1}, {1, 0}});
+  CellTreeBestScheduler s(3, false);
+  s.BeginFrame(Frame(0, 4, &t0, nullptr));
+  EXPECT_TRUE(s.follower().schedule().empty());  // frame 0: Max Work
+  s.BeginFrame(Frame(1, 4, &t1, &t0));
+  EXPECT_EQ(s.follower().schedule(), PlanFor(t0, 3));
+  s.BeginFrame(Frame(2, 4, nullptr, &t1));
+  EXPECT_EQ(s.follower().schedule(), PlanFor(t1, 3));
+}
+
+// The union plan of frames i-1 and i serves both; it is made only for consecutive frames.
+TEST(BestSchedulersTest, CellTreeUnionPlansTheLastTwoFramesTogether) {
+  const CellTree t0 = Rotations(), t1 = FromPaths({{3, 2, 1, 0}}), t2 = FromPaths({{0}});
+  CellTreeBestScheduler s(3, true);
+  s.BeginFrame(Frame(0, 4, &t0, nullptr));
+  EXPECT_TRUE(s.follower().schedule().empty());
+  s.BeginFrame(Frame(1, 4, &t1, &t0));
+  EXPECT_EQ(s.follower().schedule(), PlanFor(t0, 3));  // no frame before 0: t0 alone
+  s.BeginFrame(Frame(2, 4, &t2, &t1));
+  const Schedule plan = s.follower().schedule();
+  EXPECT_EQ(plan, PlanFor(UnionTree({&t0, &t1}), 3));
+  EXPECT_TRUE(IsFeasible(t0, plan));
+  EXPECT_TRUE(IsFeasible(t1, plan));
+  EXPECT_FALSE(IsFeasible(t1, PlanFor(t0, 3)));  // t0's plan alone would not serve t1
+  s.BeginFrame(Frame(7, 4, &t2, &t1));           // not consecutive: the previous tree alone
+  EXPECT_EQ(s.follower().schedule(), PlanFor(t1, 3));
+}
+
 // ------------------------------------------------------------------ factory
 
 TEST(MakeSchedulerTest, EveryNameRoundTrips) {
@@ -225,7 +274,7 @@ TEST(MakeSchedulerTest, EveryNameRoundTrips) {
     ASSERT_NE(s, nullptr);
     EXPECT_EQ(s->Name(), name);
   }
-  EXPECT_EQ(SchedulerNames().size(), 5u);
+  EXPECT_EQ(SchedulerNames().size(), 8u);
   EXPECT_NE(dynamic_cast<RandomScheduler*>(MakeScheduler("random", 99).get()), nullptr);
   EXPECT_EQ(dynamic_cast<RandomScheduler&>(*MakeScheduler("random", 99)).seed(), 99u);
 }
@@ -237,7 +286,7 @@ TEST(MakeSchedulerTest, UnknownNameListsTheValidOnes) {
   } catch (const InputError& e) {
     EXPECT_STREQ(e.what(),
                  "unknown scheduler 'MaxWork' (expected one of: maxwork, roundrobin, random, "
-                 "peel, celltree)");
+                 "peel, celltree, best, celltree-best, celltree-union)");
   }
   EXPECT_THROW(MakeScheduler("", 0), InputError);
 }

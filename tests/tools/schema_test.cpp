@@ -150,7 +150,8 @@ std::filesystem::path* SchemaTest::dir_ = nullptr;
 std::string SchemaTest::trace_;
 
 TEST_F(SchemaTest, AnalyzeJson) {
-  for (const std::string options : {"--exact", "--exact --timing", ""}) {
+  for (const std::string options :
+       {"--exact", "--exact --timing", "", "--bracket --effort quick"}) {
     const Result r = Raycell("analyze " + trace_ + " --format json --quiet " + options, false);
     ASSERT_EQ(r.code, 0) << r.out;
     const std::vector<Json> objects = JsonLines(r.out);

@@ -1,0 +1,105 @@
+#include "scheduling/best_scheduler.h"
+
+#include <deque>
+#include <map>
+#include <mutex>
+
+#include "base/check.h"
+#include "base/hash.h"
+#include "graph/schedule.h"
+
+namespace raycell {
+
+BestScheduleOptions PlanEffort(std::uint64_t seed) {
+  BestScheduleOptions o;
+  o.seed = seed;
+  o.beam_width = 64;
+  o.chains = 1;
+  o.threads = 1;
+  o.local.max_windows = 1000;
+  o.local.max_work = 100'000'000;
+  o.exact_states = 20000;
+  o.exact_max_nodes = 1000;
+  return o;
+}
+
+namespace {
+
+// The tree's contents (cells and parents of every node) and the seed.
+std::uint64_t PlanKey(const CellTree& tree, std::uint64_t seed) {
+  Hash64 h;
+  h.Add(seed);
+  h.Add(tree.size());
+  for (NodeId n = 1; n < tree.size(); ++n)
+    h.Add(std::uint64_t{tree.cell(n)} << 32 | tree.parent(n));
+  return h.Finish();
+}
+
+// A bounded memo of plans: the oldest is dropped past kCapacity entries.
+class PlanMemo {
+ public:
+  std::optional<std::vector<CellId>> Find(std::uint64_t key) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = plans_.find(key);
+    if (it == plans_.end()) return std::nullopt;
+    return it->second;
+  }
+  void Add(std::uint64_t key, const std::vector<CellId>& plan) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!plans_.emplace(key, plan).second) return;
+    order_.push_back(key);
+    if (order_.size() > kCapacity) {
+      plans_.erase(order_.front());
+      order_.pop_front();
+    }
+  }
+
+ private:
+  static constexpr std::size_t kCapacity = 256;
+  std::mutex mutex_;
+  std::map<std::uint64_t, std::vector<CellId>> plans_;
+  std::deque<std::uint64_t> order_;
+};
+
+PlanMemo& Memo() {
+  static PlanMemo memo;
+  return memo;
+}
+
+}  // namespace
+
+std::vector<CellId> PlanFor(const CellTree& tree, std::uint64_t seed) {
+  const std::uint64_t key = PlanKey(tree, seed);
+  if (auto plan = Memo().Find(key)) return *plan;
+  std::vector<CellId> plan = BestSchedule(tree, PlanEffort(seed)).schedule;
+  RAYCELL_CHECK(IsFeasible(tree, plan));
+  Memo().Add(key, plan);
+  return plan;
+}
+
+void BestOracleScheduler::BeginFrame(const FrameInfo& frame) {
+  RAYCELL_CHECK(frame.current != nullptr);
+  follower_.Reset(PlanFor(*frame.current, seed_), frame.cells);
+}
+
+void CellTreeBestScheduler::BeginFrame(const FrameInfo& frame) {
+  // The tree before the previous one is known only when frames come one after another.
+  const bool consecutive = before_previous_ && frame.frame_index == last_frame_index_ + 1;
+  std::vector<CellId> plan;
+  if (frame.previous != nullptr) {
+    plan = union_frames_ && consecutive
+               ? PlanFor(UnionTree({&*before_previous_, frame.previous}), seed_)
+               : PlanFor(*frame.previous, seed_);
+  }
+  follower_.Reset(std::move(plan), frame.cells);
+  if (union_frames_) {
+    if (frame.previous != nullptr) {
+      before_previous_ = *frame.previous;
+    } else {
+      before_previous_.reset();
+    }
+  }
+  last_frame_index_ = frame.frame_index;
+}
+
+}  // namespace raycell

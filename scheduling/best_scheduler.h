@@ -1,0 +1,59 @@
+// Schedulers that follow the best schedule found for a Cell Tree (graph/best_schedule.h)
+// instead of Peel's (DESIGN.md §1 "Cell Tree scheduling"):
+//  - `best`: each frame follows its own tree's best schedule, an offline oracle (as `peel`
+//    is for Peel);
+//  - `celltree-best`: frame i+1 follows the best schedule of frame i's tree, the paper's
+//    scheme with a better plan (frame 0 runs Max Work);
+//  - `celltree-union`: frame i+1 follows the best schedule of the union of frames i and
+//    i-1's trees (graph/cell_tree.h UnionTree): feasible for both, so a plan that holds
+//    whichever of the two the next frame resembles (frame 0 runs Max Work, frame 1 follows
+//    frame 0's tree alone).
+// Entries with no queued work are skipped; when the plan is used up, Max Work.
+//
+// The plans use kPlanEffort, a small budget (a plan must be ready while the frame before it
+// is replayed: BENCHMARKS.md states the time per frame). BestSchedule is deterministic, so
+// plans are memoised by the tree's contents (PlanFor): sweeps whose configurations share a
+// scheduler compute each frame's plan once, with the same result.
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "graph/best_schedule.h"
+#include "scheduling/scheduler.h"
+
+namespace raycell {
+
+// The schedule search budget of the following schedulers.
+BestScheduleOptions PlanEffort(std::uint64_t seed);
+
+// The best schedule BestSchedule(tree, PlanEffort(seed)) finds, memoised (thread-safe).
+std::vector<CellId> PlanFor(const CellTree& tree, std::uint64_t seed);
+
+class BestOracleScheduler : public FollowingScheduler {
+ public:
+  explicit BestOracleScheduler(std::uint64_t seed) : seed_(seed) {}
+  std::string Name() const override { return "best"; }
+  // Plans frame.current, which must not be null.
+  void BeginFrame(const FrameInfo& frame) override;
+
+ private:
+  std::uint64_t seed_;
+};
+
+class CellTreeBestScheduler : public FollowingScheduler {
+ public:
+  // union_frames: plan the union of the last two frames' trees rather than the last alone.
+  CellTreeBestScheduler(std::uint64_t seed, bool union_frames)
+      : seed_(seed), union_frames_(union_frames) {}
+  std::string Name() const override { return union_frames_ ? "celltree-union" : "celltree-best"; }
+  void BeginFrame(const FrameInfo& frame) override;
+
+ private:
+  std::uint64_t seed_;
+  bool union_frames_;
+  std::optional<CellTree> before_previous_;  // frame i-1's tree, for the union
+  std::size_t last_frame_index_ = 0;
+};
+
+}  // namespace raycell
