@@ -180,7 +180,8 @@ const LoadedFrame* FrameWalker::Next() {
   if (!need_segments_ && k_ == 1) {  // per node the tree is all the replay needs: stream it
     f.tree = LoadTree(reader_, i, 1);
   } else {
-    const RayBatch rays = SampleRayTrees(reader_.LoadFrame(i), k_);
+    RayBatch rays = reader_.LoadFrame(i);
+    if (k_ > 1) rays = SampleRayTrees(rays, k_);
     f.tree = TreeOf(rays);
     if (need_segments_) f.segments = std::make_unique<WorkGraph>(RaySegmentWork(rays, cells));
   }
