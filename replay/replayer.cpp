@@ -92,7 +92,6 @@ class SlotTree {
     for (std::uint32_t i = 0; i < leaves_; ++i) tree_[leaves_ + i] = i;
     for (std::uint32_t k = leaves_ - 1; k >= 1; --k) tree_[k] = Winner(k);
   }
-  const Slot& slot(std::uint32_t i) const { return slots_[i]; }
   // Slot i to be written in place, field by field (copying a whole slot just written would
   // stall on store forwarding); Update(i) afterwards.
   Slot& at(std::uint32_t i) { return slots_[i]; }
