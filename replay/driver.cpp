@@ -1,6 +1,12 @@
 #include "replay/driver.h"
 
-#include <memory>
+#include <algorithm>
+#include <atomic>
+#include <condition_variable>
+#include <exception>
+#include <map>
+#include <mutex>
+#include <thread>
 
 #include "base/check.h"
 #include "base/checked.h"
@@ -9,6 +15,110 @@
 
 namespace raycell {
 namespace {
+
+// Runs f(0) .. f(n - 1) on `threads` threads, the calling one among them; the first
+// exception any call throws is rethrown once all have stopped. The threads live as long as
+// the pool, so a frame's replays cost no thread creation.
+class WorkerPool {
+ public:
+  explicit WorkerPool(unsigned threads) {
+    for (unsigned i = 1; i < threads; ++i) workers_.emplace_back([this] { Loop(); });
+  }
+  ~WorkerPool() {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      quit_ = true;
+      ++generation_;
+    }
+    start_.notify_all();
+    for (std::thread& t : workers_) t.join();
+  }
+  WorkerPool(const WorkerPool&) = delete;
+  WorkerPool& operator=(const WorkerPool&) = delete;
+
+  void ParallelFor(std::size_t n, const std::function<void(std::size_t)>& f) {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      job_ = &f;
+      n_ = n;
+      next_ = 0;
+      error_ = nullptr;
+      busy_ = workers_.size();
+      ++generation_;
+    }
+    start_.notify_all();
+    Work();
+    std::unique_lock<std::mutex> lock(mu_);
+    done_.wait(lock, [this] { return busy_ == 0; });
+    job_ = nullptr;
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  void Loop() {
+    std::uint64_t seen = 0;
+    for (;;) {
+      {
+        std::unique_lock<std::mutex> lock(mu_);
+        start_.wait(lock, [&] { return generation_ != seen; });
+        seen = generation_;
+        if (quit_) return;
+      }
+      Work();
+      {
+        std::lock_guard<std::mutex> lock(mu_);
+        --busy_;
+      }
+      done_.notify_one();
+    }
+  }
+
+  void Work() {
+    for (std::size_t i; (i = next_++) < n_;) {
+      try {
+        (*job_)(i);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mu_);
+        if (!error_) error_ = std::current_exception();
+        next_ = n_;  // the others stop after their current call
+      }
+    }
+  }
+
+  std::vector<std::thread> workers_;
+  std::mutex mu_;
+  std::condition_variable start_, done_;
+  std::uint64_t generation_ = 0;
+  bool quit_ = false;
+  const std::function<void(std::size_t)>* job_ = nullptr;
+  std::size_t n_ = 0, busy_ = 0;
+  std::atomic<std::size_t> next_{0};
+  std::exception_ptr error_;
+};
+
+std::unique_ptr<CellTree> TreeOf(const RayBatch& rays) {
+  CellTreeBuilder builder;
+  builder.AddBatch(rays);
+  return std::make_unique<CellTree>(builder.Finish());
+}
+
+// Frame i's tree alone, of 1 in k ray trees: streamed batch by batch when k = 1.
+std::unique_ptr<CellTree> LoadTree(const TraceReader& reader, std::size_t i, std::uint32_t k) {
+  if (k == 1) return std::make_unique<CellTree>(BuildFrameTree(reader, i));
+  return TreeOf(SampleRayTrees(reader.LoadFrame(i), k));
+}
+
+void ScaleBack(ReplayResult& r, std::uint32_t k, std::uint32_t processors) {
+  if (k == 1) return;
+  const SimTime extra = r.work * (k - 1);
+  r.rays = CheckedMul(r.rays, k);
+  r.segments = CheckedMul(r.segments, k);
+  r.samples = CheckedMul(r.samples, k);
+  r.work = r.work * k;
+  r.time = r.time + SimTime::Picoseconds(extra.picoseconds() / processors);
+}
+
+}  // namespace
 
 void Accumulate(const ReplayResult& f, ReplayResult* t) {
   if (t->levels.empty()) t->levels.assign(f.levels.size(), {});
@@ -35,73 +145,165 @@ void Accumulate(const ReplayResult& f, ReplayResult* t) {
   t->min_converged = t->min_converged && f.min_converged;
 }
 
-}  // namespace
+void FinishTotal(std::uint32_t processors, ReplayResult* t) {
+  const double capacity = double(t->time.picoseconds()) * processors;
+  t->utilisation = capacity > 0 ? double(t->work.picoseconds()) / capacity : 0.0;
+}
 
-namespace {
+// ---- Frames ------------------------------------------------------------------------------
 
-// A frame's rays (sampled) and its Cell Tree.
-struct Frame {
-  RayBatch rays{false};
-  std::unique_ptr<CellTree> tree;
-};
+FrameWalker::FrameWalker(const TraceReader& reader, std::vector<std::size_t> frame_indices,
+                         bool need_segments, bool need_nodes, std::uint32_t sample_every,
+                         std::uint32_t history)
+    : reader_(reader),
+      indices_(std::move(frame_indices)),
+      need_segments_(need_segments),
+      need_nodes_(need_nodes),
+      k_(sample_every),
+      history_(history) {
+  if (k_ < 1) throw InputError("sampling: 1 in k ray trees needs k >= 1");
+  for (std::size_t p = 1; p < indices_.size(); ++p) RAYCELL_CHECK_LT(indices_[p - 1], indices_[p]);
+}
 
-Frame LoadFrame(const TraceReader& reader, std::size_t i, bool need_rays, std::uint32_t k) {
-  Frame f;
-  if (!need_rays && k == 1) {  // per node the tree is all the replay needs: stream it
-    f.tree = std::make_unique<CellTree>(BuildFrameTree(reader, i));
-    return f;
+const LoadedFrame* FrameWalker::Next() {
+  if (position_ == indices_.size()) return nullptr;
+  const std::size_t i = indices_[position_];
+  const CellId cells = reader_.header().cell_count();
+  LoadedFrame& f = frame_;
+  const bool follows = position_ > 0 && indices_[position_ - 1] == i - 1;
+  // Frame i - 2's tree, for schedulers that plan from the last two frames.
+  if (history_ < 2 || i < 2) {
+    f.before_previous.reset();
+  } else if (follows) {
+    f.before_previous = std::move(f.previous);
+  } else {
+    f.before_previous = LoadTree(reader_, i - 2, k_);
   }
-  f.rays = SampleRayTrees(reader.LoadFrame(i), k);
-  CellTreeBuilder builder;
-  builder.AddBatch(f.rays);
-  f.tree = std::make_unique<CellTree>(builder.Finish());
-  return f;
+  if (i == 0) {
+    f.previous.reset();
+  } else if (follows) {
+    f.previous = std::move(f.tree);  // Cell Tree scheduling needs frame i - 1's tree
+  } else {
+    f.previous = LoadTree(reader_, i - 1, k_);
+  }
+  f.segments.reset();
+  f.nodes.reset();
+  if (!need_segments_ && k_ == 1) {  // per node the tree is all the replay needs: stream it
+    f.tree = LoadTree(reader_, i, 1);
+  } else {
+    RayBatch rays = reader_.LoadFrame(i);
+    if (k_ > 1) rays = SampleRayTrees(rays, k_);
+    f.tree = TreeOf(rays);
+    if (need_segments_) f.segments = std::make_unique<WorkGraph>(RaySegmentWork(rays, cells));
+  }
+  if (need_nodes_) f.nodes = std::make_unique<WorkGraph>(NodeWork(*f.tree, cells));
+  f.bound = Bound(*f.tree);
+  f.position = position_++;
+  f.index = i;
+  f.number = reader_.frames()[i].frame;
+  return &f;
 }
 
-void ScaleBack(ReplayResult& r, std::uint32_t k, std::uint32_t processors) {
-  if (k == 1) return;
-  const SimTime extra = r.work * (k - 1);
-  r.rays = CheckedMul(r.rays, k);
-  r.segments = CheckedMul(r.segments, k);
-  r.samples = CheckedMul(r.samples, k);
-  r.work = r.work * k;
-  r.time = r.time + SimTime::Picoseconds(extra.picoseconds() / processors);
+ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& header,
+                               const ReplayConfig& config, Scheduler& scheduler,
+                               std::uint32_t sample_every, ReplayObserver* observer) {
+  const bool per_ray = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay;
+  const WorkGraph* work = per_ray ? frame.segments.get() : frame.nodes.get();
+  RAYCELL_CHECK(work != nullptr);  // the walker was asked for this granularity
+  const FrameInfo info{frame.index, frame.tree.get(), frame.previous.get(), header.cell_count(),
+                       frame.before_previous.get()};
+  ReplayResult r =
+      ReplayFrame(*work, header.footprints, config, scheduler, info, frame.bound, observer);
+  ScaleBack(r, sample_every, config.processors.count);
+  r.frame = frame.number;
+  return r;
 }
 
-}  // namespace
+// ---- Many configurations -----------------------------------------------------------------
+
+ReplayConfig CanonicalConfig(const ReplayConfig& config) {
+  ReplayConfig c = config;
+  c.granularity = EffectiveGranularity(config);
+  const bool random = c.scheduler == "random";
+  if (!random) c.seed = 0;
+  if (random) c.processors.prefetch = false;
+  c.processors.queue_record_bytes = 1;
+  return c;
+}
+
+ReplayFramesStats ReplayFrames(const TraceReader& reader,
+                               const std::vector<std::size_t>& frame_indices,
+                               const std::vector<ReplayConfig>& configs,
+                               const ReplayFramesOptions& options, const FrameResults& on_frame) {
+  if (options.sample_every < 1) throw InputError("sampling: 1 in k ray trees needs k >= 1");
+  // An observer sees one replay as it ran: one configuration, not sampled.
+  RAYCELL_CHECK(options.observer == nullptr || (configs.size() == 1 && options.sample_every == 1));
+  // Each canonical configuration once; `which` maps every configuration to its own.
+  std::vector<ReplayConfig> distinct;
+  std::vector<std::size_t> which(configs.size());
+  std::map<std::string, std::size_t> seen;
+  for (std::size_t i = 0; i < configs.size(); ++i) {
+    CheckReplayable(configs[i]);
+    ReplayConfig c = CanonicalConfig(configs[i]);
+    const auto it = seen.emplace(ToToml(c), distinct.size()).first;
+    if (it->second == distinct.size()) distinct.push_back(std::move(c));
+    which[i] = it->second;
+  }
+  bool need_segments = false, need_nodes = false;
+  std::uint32_t history = 1;  // earlier frames' trees the schedulers read
+  std::vector<std::unique_ptr<Scheduler>> schedulers;
+  std::vector<std::size_t> order;  // per-segment replays (the long ones) first
+  for (std::size_t d = 0; d < distinct.size(); ++d) {
+    const bool per_ray = distinct[d].granularity == ReplayConfig::Granularity::kRay;
+    (per_ray ? need_segments : need_nodes) = true;
+    schedulers.push_back(MakeScheduler(distinct[d].scheduler, distinct[d].seed));
+    history = std::max(history, SchedulerHistory(distinct[d].scheduler));
+    order.push_back(d);
+  }
+  std::stable_partition(order.begin(), order.end(), [&](std::size_t d) {
+    return distinct[d].granularity == ReplayConfig::Granularity::kRay;
+  });
+  const TraceHeader& header = reader.header();
+  FrameWalker walker(reader, frame_indices, need_segments, need_nodes, options.sample_every,
+                     history);
+  WorkerPool pool(unsigned(
+      std::clamp<std::size_t>(options.jobs, 1, std::max<std::size_t>(distinct.size(), 1))));
+  std::vector<ReplayResult> distinct_results(distinct.size()), results(configs.size());
+  ReplayFramesStats stats;
+  stats.distinct = distinct.size();
+  while (const LoadedFrame* frame = walker.Next()) {
+    pool.ParallelFor(distinct.size(), [&](std::size_t n) {
+      const std::size_t d = order[n];
+      distinct_results[d] = ReplayLoadedFrame(*frame, header, distinct[d], *schedulers[d],
+                                              options.sample_every, options.observer);
+    });
+    for (std::size_t i = 0; i < configs.size(); ++i) {
+      results[i] = distinct_results[which[i]];
+      results[i].peak_queued_bytes =
+          CheckedMul(results[i].peak_queued_rays, configs[i].processors.queue_record_bytes);
+    }
+    ++stats.frames;
+    if (options.progress) options.progress(double(stats.frames) / double(walker.size()));
+    if (!on_frame(*frame, results)) break;
+  }
+  return stats;
+}
 
 TraceReplay ReplayTrace(const TraceReader& reader, const std::vector<std::size_t>& frame_indices,
                         const ReplayConfig& config, const std::function<void(double)>& progress,
                         std::uint32_t sample_every, ReplayObserver* observer) {
-  if (sample_every < 1) throw InputError("sampling: 1 in k ray trees needs k >= 1");
-  RAYCELL_CHECK(observer == nullptr || sample_every == 1);
-  const TraceHeader& h = reader.header();
-  const CellId cells = h.cell_count();
-  const bool per_ray = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay;
-  std::unique_ptr<Scheduler> scheduler = MakeScheduler(config.scheduler, config.seed);
+  ReplayFramesOptions options;
+  options.sample_every = sample_every;
+  options.progress = progress;
+  options.observer = observer;
   TraceReplay out;
-  std::unique_ptr<CellTree> previous;
-  std::size_t previous_index = SIZE_MAX;
-  for (std::size_t k = 0; k < frame_indices.size(); ++k) {
-    const std::size_t i = frame_indices[k];
-    if (i > 0 && previous_index != i - 1) {  // Cell Tree scheduling needs frame i-1's tree
-      previous = LoadFrame(reader, i - 1, false, sample_every).tree;
-    }
-    Frame f = LoadFrame(reader, i, per_ray, sample_every);
-    const FrameInfo info{i, f.tree.get(), i > 0 ? previous.get() : nullptr, cells};
-    const WorkGraph work = per_ray ? RaySegmentWork(f.rays, cells) : NodeWork(*f.tree, cells);
-    ReplayResult r =
-        ReplayFrame(work, h.footprints, config, *scheduler, info, Bound(*f.tree), observer);
-    ScaleBack(r, sample_every, config.processors.count);
-    r.frame = reader.frames()[i].frame;
-    Accumulate(r, &out.total);
-    out.frames.push_back(std::move(r));
-    previous = std::move(f.tree);
-    previous_index = i;
-    if (progress) progress(double(k + 1) / frame_indices.size());
-  }
-  const double capacity = double(out.total.time.picoseconds()) * config.processors.count;
-  out.total.utilisation = capacity > 0 ? double(out.total.work.picoseconds()) / capacity : 0.0;
+  ReplayFrames(reader, frame_indices, {config}, options,
+               [&](const LoadedFrame&, const std::vector<ReplayResult>& results) {
+                 Accumulate(results[0], &out.total);
+                 out.frames.push_back(results[0]);
+                 return true;
+               });
+  FinishTotal(config.processors.count, &out.total);
   return out;
 }
 

@@ -1,13 +1,22 @@
 // Replaying the frames of a trace: each frame's rays, its Cell Tree (for the bound and the
 // Peel oracle) and the previous frame's (for Cell Tree scheduling).
+//
+// Decode once, replay many: ReplayFrames walks the frames once, decoding each and building
+// its trees and work graphs once, and replays every configuration on it (on `jobs` threads)
+// before it moves to the next frame. ReplayTrace, sweeps and the study all go through it.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "graph/cell_tree.h"
 #include "replay/config.h"
 #include "replay/replayer.h"
+#include "replay/work.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {
@@ -16,6 +25,91 @@ struct TraceReplay {
   std::vector<ReplayResult> frames;
   ReplayResult total;  // sums; peaks are maxima; bound summed where it holds
 };
+
+// Adds frame result `f` to the running total `t` as TraceReplay::total is formed: counts,
+// bytes and times summed, peaks and passes as maxima, the bound summed where it holds,
+// min_converged only if every frame's. Utilisation is not summed: FinishTotal sets it.
+void Accumulate(const ReplayResult& f, ReplayResult* t);
+// Sets a total's utilisation from its summed times: work / (time x processors), as a frame's.
+void FinishTotal(std::uint32_t processors, ReplayResult* t);
+
+// One frame as the replays need it, built once for all configurations.
+struct LoadedFrame {
+  std::size_t position = 0;  // in the list of frames being walked
+  std::size_t index = 0;     // into reader.frames()
+  std::int32_t number = 0;   // the frame number
+  std::unique_ptr<CellTree> tree;
+  std::unique_ptr<CellTree> previous;  // frame index - 1's; null for index 0
+  // Frame index - 2's, when a scheduler reads two earlier frames (SchedulerHistory); else null.
+  std::unique_ptr<CellTree> before_previous;
+  std::uint64_t bound = 0;              // of `tree`
+  std::unique_ptr<WorkGraph> segments;  // per ray segment, when some replay needs it
+  std::unique_ptr<WorkGraph> nodes;     // per Cell Tree node, when some replay needs it
+};
+
+// Walks the frames at `frame_indices` (indices into reader.frames(), increasing), loading
+// each once: its Cell Tree, the previous frame's (kept from the step before, or loaded when
+// the indices skip it), and the work graphs asked for. With sample_every = k > 1 the frame is
+// 1 in k ray trees (SampleRayTrees), the previous tree too. Rays are dropped once the work
+// graphs are built: memory holds one frame.
+class FrameWalker {
+ public:
+  // history: earlier frames' trees to keep (1: the previous; 2: also the one before it).
+  FrameWalker(const TraceReader& reader, std::vector<std::size_t> frame_indices, bool need_segments,
+              bool need_nodes, std::uint32_t sample_every = 1, std::uint32_t history = 1);
+  // The next frame, or nullptr after the last. Valid until the next call.
+  const LoadedFrame* Next();
+  std::size_t size() const { return indices_.size(); }
+
+ private:
+  const TraceReader& reader_;
+  std::vector<std::size_t> indices_;
+  bool need_segments_, need_nodes_;
+  std::uint32_t k_, history_;
+  std::size_t position_ = 0;
+  LoadedFrame frame_;
+};
+
+// Replays `frame` under `config` with `scheduler` (made by MakeScheduler for the config and
+// kept across frames): ReplayFrame on the frame's work graph of the config's granularity,
+// scaled back when the frame is sampled (see ReplayTrace), numbered.
+ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& header,
+                               const ReplayConfig& config, Scheduler& scheduler,
+                               std::uint32_t sample_every = 1, ReplayObserver* observer = nullptr);
+
+// What a frame's result cannot depend on, removed: granularity resolved (EffectiveGranularity),
+// the seed unless the scheduler is random (MakeScheduler uses it for random only), prefetch
+// for the random scheduler (it predicts nothing, Scheduler::Peek, so prefetch never
+// happens), and the queue record size, which only scales peak_queued_bytes (ReplayFrames
+// rescales it). Configurations with equal canonical forms have equal frame results up to
+// that rescaling, so ReplayFrames replays each canonical form once.
+ReplayConfig CanonicalConfig(const ReplayConfig& config);
+
+struct ReplayFramesOptions {
+  unsigned jobs = 1;               // threads replaying configurations of a frame, >= 1
+  std::uint32_t sample_every = 1;  // 1 in k ray trees (see ReplayTrace)
+  // Told the fraction of frames done, after each frame (may be empty).
+  std::function<void(double)> progress;
+  // Watches the replays (replay/observer.h); only with one configuration, not sampled.
+  ReplayObserver* observer = nullptr;
+};
+
+struct ReplayFramesStats {
+  std::size_t frames = 0;    // frames walked
+  std::size_t distinct = 0;  // canonical configurations replayed per frame
+};
+
+// Replays every configuration on every frame of `frame_indices`, each frame loaded once (see
+// FrameWalker), configurations that share a canonical form once (CanonicalConfig). After
+// each frame, calls on_frame(frame, results) with the result of every configuration, in
+// the order of `configs`, on the calling thread; it returns false to stop there. The
+// results are those of ReplayTrace for each configuration alone, whatever `jobs`.
+// InputError (CheckReplayable) before any work.
+using FrameResults = std::function<bool(const LoadedFrame&, const std::vector<ReplayResult>&)>;
+ReplayFramesStats ReplayFrames(const TraceReader& reader,
+                               const std::vector<std::size_t>& frame_indices,
+                               const std::vector<ReplayConfig>& configs,
+                               const ReplayFramesOptions& options, const FrameResults& on_frame);
 
 // Replays the frames at `frame_indices` (indices into reader.frames(), increasing).
 // `progress` (may be empty) is told the fraction done.

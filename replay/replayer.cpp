@@ -11,44 +11,55 @@ namespace raycell {
 namespace {
 
 // ---- Units ----------------------------------------------------------------------------
-// The core reads units through one of these: the packed breadth-first records when the
-// frame's values fit them (the usual case; queues then hold record indices), else the work
-// graph's columns (queues hold unit ids). Either way a unit x has samples, a cell, queued
-// rays and successors children_begin(x) .. children_end(x), the i-th being child(i).
+// Queues and worklists hold entries, one per unit, carrying what working the unit reads:
+// its samples and where its successors are. For the packed breadth-first records (the usual
+// case) an entry copies them from the unit's record when its predecessor releases it (that
+// record is then in cache, being read for the unit's cell), so working a unit reads only
+// its successors' records, which lie together: one cache miss per unit, not three. Without
+// packed records (values beyond 32 bits), an entry is the unit id and the columns are read.
+// Either way ForEachChild(e, f) calls f(child entry, child's cell, child's queued rays) in
+// the work graph's successor order.
 
 struct PackedUnits {
+  struct Entry {
+    std::uint32_t first_child, end_child, samples;
+  };
   const WorkGraph::Packed* p;
   UnitId roots;
+
+  Entry MakeEntry(UnitId x) const { return {p[x].first_child, p[x + 1].first_child, p[x].samples}; }
   template <typename F>
   void ForEachRoot(F f) const {
-    for (UnitId x = 0; x < roots; ++x) f(x);
+    for (UnitId x = 0; x < roots; ++x) f(MakeEntry(x), p[x].cell, std::uint64_t{p[x].queued_rays});
   }
-  std::uint64_t samples(UnitId x) const { return p[x].samples; }
-  CellId cell(UnitId x) const { return p[x].cell; }
-  std::uint64_t queued(UnitId x) const { return p[x].queued_rays; }
-  UnitId children_begin(UnitId x) const { return p[x].first_child; }
-  UnitId children_end(UnitId x) const { return p[x + 1].first_child; }
-  UnitId child(UnitId i) const { return i; }
-  // Starts loading what working x will read: its record, and (once that has arrived, so
-  // called later for the same x) its successors' records.
-  void PrefetchUnit(UnitId x) const { __builtin_prefetch(p + x); }
-  void PrefetchChildren(UnitId x) const { __builtin_prefetch(p + p[x].first_child); }
+  template <typename F>
+  void ForEachChild(const Entry& e, F f) const {
+    for (UnitId x = e.first_child; x < e.end_child; ++x) {
+      f(MakeEntry(x), p[x].cell, std::uint64_t{p[x].queued_rays});
+    }
+  }
+  std::uint64_t samples(const Entry& e) const { return e.samples; }
+  // Starts loading the successors' records of a unit about to be worked.
+  void Prefetch(const Entry& e) const { __builtin_prefetch(p + e.first_child); }
 };
 
 struct ColumnUnits {
+  using Entry = UnitId;
   const WorkGraph* w;
+
   template <typename F>
   void ForEachRoot(F f) const {
-    for (UnitId u : w->roots) f(u);
+    for (UnitId u : w->roots) f(u, w->cell[u], w->queued_rays[u]);
+  }
+  template <typename F>
+  void ForEachChild(UnitId u, F f) const {
+    for (UnitId i = w->succ_begin[u]; i < w->succ_begin[u + 1]; ++i) {
+      const UnitId s = w->succ[i];
+      f(s, w->cell[s], w->queued_rays[s]);
+    }
   }
   std::uint64_t samples(UnitId u) const { return w->samples[u]; }
-  CellId cell(UnitId u) const { return w->cell[u]; }
-  std::uint64_t queued(UnitId u) const { return w->queued_rays[u]; }
-  UnitId children_begin(UnitId u) const { return w->succ_begin[u]; }
-  UnitId children_end(UnitId u) const { return w->succ_begin[u + 1]; }
-  UnitId child(UnitId i) const { return w->succ[i]; }
-  void PrefetchUnit(UnitId) const {}
-  void PrefetchChildren(UnitId) const {}
+  void Prefetch(UnitId) const {}
 };
 
 // ---- Pending events -------------------------------------------------------------------
@@ -63,7 +74,6 @@ enum class Kind : std::uint8_t { kNone, kIdle, kFetched, kUnitDone };
 struct Slot {
   SimTime time;
   std::uint64_t seq = UINT64_MAX;  // UINT64_MAX with time Max: nothing pending
-  UnitId unit = 0;
   Kind kind = Kind::kNone;
 };
 
@@ -82,7 +92,6 @@ class SlotTree {
     for (std::uint32_t i = 0; i < leaves_; ++i) tree_[leaves_ + i] = i;
     for (std::uint32_t k = leaves_ - 1; k >= 1; --k) tree_[k] = Winner(k);
   }
-  const Slot& slot(std::uint32_t i) const { return slots_[i]; }
   // Slot i to be written in place, field by field (copying a whole slot just written would
   // stall on store forwarding); Update(i) afterwards.
   Slot& at(std::uint32_t i) { return slots_[i]; }
@@ -104,10 +113,12 @@ class SlotTree {
 
 // ---- The board ------------------------------------------------------------------------
 
+template <typename Entry>
 struct Processor {
-  std::optional<CellId> cell;    // locked and loaded while working; the last one after
-  std::vector<UnitId> worklist;  // units of `cell` to work in this fetch, from `head` on
+  std::optional<CellId> cell;   // locked and loaded while working; the last one after
+  std::vector<Entry> worklist;  // units of `cell` to work in this fetch, from `head` on
   std::size_t head = 0;
+  Entry unit{};          // the unit being worked
   bool waiting = false;  // idle, no cell had work
   SimTime work, stall;
 };
@@ -120,6 +131,8 @@ struct Processor {
 template <typename Units>
 class Board {
  public:
+  using Entry = typename Units::Entry;
+
   Board(const WorkGraph& w, Units units, const std::vector<std::uint64_t>& footprints,
         const ReplayConfig& config, Scheduler& scheduler, const MemoryHierarchy::Requests& futures,
         ReplayObserver* observer)
@@ -136,7 +149,7 @@ class Board {
         processors_(config.processors.count),
         slots_(config.processors.count),
         obs_(observer) {
-    u_.ForEachRoot([this](UnitId x) { Enqueue(x); });
+    u_.ForEachRoot([this](const Entry& e, CellId c, std::uint64_t q) { Enqueue(e, c, q); });
     memory_.set_observer(obs_);
   }
 
@@ -153,7 +166,6 @@ class Board {
       if (kind == Kind::kNone) break;
       RAYCELL_CHECK_LE(now_, slot.time);  // time never goes backwards
       now_ = slot.time;
-      const UnitId unit = slot.unit;
       slot.time = SimTime::Max();  // handled; the handlers may schedule p's next event
       slot.seq = UINT64_MAX;
       slot.kind = Kind::kNone;
@@ -167,7 +179,7 @@ class Board {
           OnFetched(p);
           break;
         case Kind::kUnitDone:
-          OnUnitDone(p, unit);
+          OnUnitDone(p);
           break;
         case Kind::kNone:
           break;
@@ -186,24 +198,21 @@ class Board {
  private:
   // The engine's watchdog (SimulatorOptions::watchdog_events).
   static constexpr std::uint64_t kWatchdogEvents = 10'000'000;
-  // How far ahead in a worklist units and their successors are prefetched.
-  static constexpr std::size_t kPrefetchUnit = 32, kPrefetchChildren = 12;
+  // How far ahead in a worklist the units' successors are prefetched.
+  static constexpr std::size_t kPrefetch = 16;
 
   // Schedules processor p's next event. p has none pending: it is the processor being
   // handled (its slot is brought up to date after the handler), or one that was waiting.
-  void Schedule(std::uint32_t p, SimTime when, Kind kind, UnitId unit = 0) {
+  void Schedule(std::uint32_t p, SimTime when, Kind kind) {
     Slot& s = slots_.at(p);
     RAYCELL_CHECK(s.kind == Kind::kNone);
     s.time = when;
     s.seq = next_seq_++;
-    s.unit = unit;
     s.kind = kind;
   }
 
-  void Enqueue(UnitId u) {
-    const CellId c = u_.cell(u);
-    const std::uint64_t q = u_.queued(u);
-    queues_[c].push_back(u);
+  void Enqueue(const Entry& e, CellId c, std::uint64_t q) {
+    queues_[c].push_back(e);
     queued_rays_[c] += q;
     queued_total_ += q;
     peak_queued_ = std::max(peak_queued_, queued_total_);
@@ -237,9 +246,9 @@ class Board {
   // Moves the queue of p's cell to the end of its worklist: a swap of arrays when the
   // worklist is used up, as it is whenever a queue is taken.
   void TakeQueue(std::uint32_t p) {
-    Processor& ps = processors_[p];
+    Processor<Entry>& ps = processors_[p];
     const CellId c = *ps.cell;
-    std::vector<UnitId>& q = queues_[c];
+    std::vector<Entry>& q = queues_[c];
     if (q.empty()) return;
     if (obs_) obs_->QueueTaken(p, c, queued_rays_[c], now_);
     queued_total_ -= queued_rays_[c];
@@ -264,7 +273,7 @@ class Board {
   }
 
   void StartNext(std::uint32_t p) {
-    Processor& ps = processors_[p];
+    Processor<Entry>& ps = processors_[p];
     if (ps.head == ps.worklist.size()) TakeQueue(p);  // units that arrived meanwhile
     if (ps.head == ps.worklist.size()) {
       if (obs_) obs_->BatchEnd(p, *ps.cell, now_);
@@ -272,35 +281,29 @@ class Board {
       Schedule(p, now_, Kind::kIdle);
       return;
     }
-    // The units a few places ahead are known: load them while this one is worked (the
-    // records are scattered over the frame, so each would otherwise be a cache miss).
-    if (ps.head + kPrefetchUnit < ps.worklist.size()) {
-      u_.PrefetchUnit(ps.worklist[ps.head + kPrefetchUnit]);
-    }
-    if (ps.head + kPrefetchChildren < ps.worklist.size()) {
-      u_.PrefetchChildren(ps.worklist[ps.head + kPrefetchChildren]);
-    }
-    const UnitId u = ps.worklist[ps.head++];
-    const SimTime dt = tps_ * u_.samples(u);
+    // The units a few places ahead are known: load their successors while this one is
+    // worked (the records are scattered over the frame, so each would be a cache miss).
+    if (ps.head + kPrefetch < ps.worklist.size()) u_.Prefetch(ps.worklist[ps.head + kPrefetch]);
+    ps.unit = ps.worklist[ps.head++];
+    const SimTime dt = tps_ * u_.samples(ps.unit);
     ps.work = ps.work + dt;
-    Schedule(p, now_ + dt, Kind::kUnitDone, u);
+    Schedule(p, now_ + dt, Kind::kUnitDone);
   }
 
-  void OnUnitDone(std::uint32_t p, UnitId u) {
+  void OnUnitDone(std::uint32_t p) {
     events_since_progress_ = 0;
     ++done_;
-    Processor& ps = processors_[p];
+    Processor<Entry>& ps = processors_[p];
     const CellId cell = *ps.cell;  // the unit's, as every unit of the worklist
     bool released = false;
-    for (UnitId i = u_.children_begin(u), end = u_.children_end(u); i < end; ++i) {
-      const UnitId s = u_.child(i);
-      if (u_.cell(s) == cell) {
-        ps.worklist.push_back(s);  // spawned in the loaded cell: worked now
+    u_.ForEachChild(ps.unit, [&](const Entry& e, CellId c, std::uint64_t q) {
+      if (c == cell) {
+        ps.worklist.push_back(e);  // spawned in the loaded cell: worked now
       } else {
-        Enqueue(s);
+        Enqueue(e, c, q);
         released = true;
       }
-    }
+    });
     if (released && waiting_ > 0) WakeWaiting();
     StartNext(p);
   }
@@ -329,10 +332,10 @@ class Board {
   SimTime tps_;
   Scheduler& scheduler_;
   MemoryHierarchy memory_;
-  std::vector<std::vector<UnitId>> queues_;
+  std::vector<std::vector<Entry>> queues_;
   std::vector<std::uint64_t> queued_rays_, view_;
   std::vector<bool> locked_;
-  std::vector<Processor> processors_;
+  std::vector<Processor<Entry>> processors_;
   SlotTree slots_;
   std::uint32_t waiting_ = 0;
   SimTime now_;
@@ -348,7 +351,7 @@ ReplayResult Board<Units>::Result() const {
   r.levels = memory_.stats();
   r.fetches = r.levels[0].fetches;
   r.time = now_;
-  for (const Processor& ps : processors_) {
+  for (const Processor<Entry>& ps : processors_) {
     r.work = r.work + ps.work;
     r.stall = r.stall + ps.stall;
     r.idle = r.idle + (now_ - ps.work - ps.stall);

@@ -8,8 +8,9 @@
 // order), so the results are those of running them on engine/simulator.h, as the replay
 // did before (tests/replay/reference_replayer.cpp, checked equal field by field, `events`
 // included). But since a processor has at most one pending event, the pending set is one slot
-// per processor, not a general event queue, and a cell's queue is handed to the processor as
-// a flat array of unit ids that it works through in its own loop: a batch per fetch.
+// per processor, not a general event queue, and a cell's queue (a flat array of units, each
+// carrying its samples and where its successors are) is handed to the processor whole, to
+// be worked through in its own loop: a batch per fetch.
 #pragma once
 
 #include <cstdint>

@@ -1,16 +1,15 @@
 #include "replay/sweep.h"
 
 #include <algorithm>
-#include <atomic>
+#include <chrono>
 #include <cstdio>
-#include <exception>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <map>
-#include <mutex>
+#include <optional>
 #include <set>
-#include <thread>
 
 #include "base/check.h"
 #include "base/file.h"
@@ -26,8 +25,12 @@ namespace {
 
 constexpr std::size_t kMaxCombinations = 10'000'000;
 constexpr char kCommentStart[] = "# raycell sweep ";
-constexpr char kShardPart[] = " shard=";
+constexpr char kFramesPart[] = " frames=";
 constexpr char kCombinationsPart[] = " combinations=";
+constexpr char kShardPart[] = " shard=";
+constexpr char kCheckpointStart[] = "# raycell sweep checkpoint ";
+// The totals' columns at the end of every row (replay/result_table.h, kSweepColumns).
+constexpr std::size_t kResultColumns = 12;
 
 // Whole decimal number, or false.
 bool ParseSize(const std::string& s, std::size_t* out) {
@@ -80,7 +83,93 @@ std::string RowContext(const std::string& path, std::size_t row) {
   return path + ": line " + std::to_string(row + 3);
 }
 
-// ---- Resuming ----------------------------------------------------------------------------
+StatsTable SweepRowTable(std::size_t index, const std::vector<Vary>& varies,
+                         const std::vector<std::string>& values, const ReplayResult& total) {
+  RAYCELL_CHECK_EQ(values.size(), varies.size());
+  StatsTable t;
+  t.AddCount("index", index);
+  for (std::size_t k = 0; k < varies.size(); ++k) t.AddText(varies[k].key, values[k]);
+  AddResult(total, kSweepColumns, &t);
+  return t;
+}
+
+// ---- Rows as totals ----------------------------------------------------------------------
+// A row splits into its head (index and values, as written) and the totals it prints. The
+// totals' columns hold no comma or quote, so they are the last kResultColumns fields.
+
+struct ParsedRow {
+  std::size_t index = SIZE_MAX;
+  std::string head;     // "index,values..." as written
+  ReplayResult totals;  // the counted columns; utilisation as printed (not used to add)
+};
+
+std::uint64_t Field(const std::string& text, const std::string& where) {
+  std::uint64_t v = 0;
+  if (!TryParseUint(text, &v))
+    throw InputError(where + ": expected a whole number, got '" + text + "'");
+  return v;
+}
+
+ParsedRow ParseRow(const std::string& row, const std::string& where) {
+  std::vector<std::string> fields;
+  std::size_t end = row.size();
+  for (std::size_t k = 0; k < kResultColumns; ++k) {
+    const std::size_t comma = row.rfind(',', end - 1);
+    if (end == 0 || comma == std::string::npos) {
+      throw InputError(where + ": expected a sweep row (index, values, " +
+                       std::to_string(kResultColumns) + " totals)");
+    }
+    fields.insert(fields.begin(), row.substr(comma + 1, end - comma - 1));
+    end = comma;
+  }
+  ParsedRow r;
+  r.head = row.substr(0, end);
+  r.index = RowIndex(r.head);
+  if (r.index == SIZE_MAX) throw InputError(where + ": the row does not start with an index");
+  ReplayResult& t = r.totals;
+  t.fetches = Field(fields[0], where);
+  if (!fields[1].empty()) t.bound = Field(fields[1], where);
+  t.time = SimTime::Picoseconds(Field(fields[2], where));
+  t.work = SimTime::Picoseconds(Field(fields[3], where));
+  t.stall = SimTime::Picoseconds(Field(fields[4], where));
+  t.idle = SimTime::Picoseconds(Field(fields[5], where));
+  // fields[6], utilisation, is recomputed from the times
+  t.peak_queued_rays = Field(fields[7], where);
+  t.peak_queued_bytes = Field(fields[8], where);
+  t.rays = Field(fields[9], where);
+  t.segments = Field(fields[10], where);
+  t.samples = Field(fields[11], where);
+  return r;
+}
+
+// Sets the utilisation of totals read back from rows. The processors are not in the row,
+// but every frame's idle time is (processors x time - work - stall), so they are
+// (work + stall + idle) / time.
+void FinishReadTotals(ReplayResult* t, const std::string& where) {
+  const std::uint64_t time = t->time.picoseconds();
+  if (time == 0) {
+    t->utilisation = 0;
+    return;
+  }
+  const std::uint64_t busy =
+      CheckedAdd(CheckedAdd(t->work.picoseconds(), t->stall.picoseconds()), t->idle.picoseconds());
+  if (busy % time != 0 || busy / time == 0 || busy / time > 1024) {
+    throw InputError(where + ": work + stall + idle (" + std::to_string(busy) +
+                     " ps) is not a whole number of processors times the time (" +
+                     std::to_string(time) + " ps)");
+  }
+  FinishTotal(std::uint32_t(busy / time), t);
+}
+
+// The row of `head` with `totals`, without its '\n': the bytes SweepRow writes for the same
+// totals.
+std::string RowWithTotals(const std::string& head, const ReplayResult& totals) {
+  std::string row = head + "," + ToCsvRow(ToStatsTable(totals, kSweepColumns));
+  row.pop_back();
+  return row;
+}
+
+// ---- Resuming rows -----------------------------------------------------------------------
 
 // Checks that `rows` are the first rows of `indices`.
 void CheckPrefix(const std::string& path, const std::vector<std::string>& rows,
@@ -118,130 +207,229 @@ std::size_t ResumePartial(const std::string& path, const std::string& prelude,
   return rows.size();
 }
 
-// ---- Running -----------------------------------------------------------------------------
+// ---- Checkpoints -------------------------------------------------------------------------
+// OUT.checkpoint: "# raycell sweep checkpoint block=FIRST+COUNT frames_done=K/N", the
+// sweep's comment line and header, then one row per combination of the block with its
+// totals over the first K of the N frames.
 
-// Receives rows in any order from the workers and appends them to the file in order.
-class RowWriter {
- public:
-  RowWriter(const std::string& path, std::size_t done, std::size_t total,
-            const SweepOptions& options)
-      : path_(path),
-        file_(path, std::ios::binary | std::ios::app),
-        done_(done),
-        total_(total),
-        options_(options) {
-    if (!file_) throw InputError(path + ": cannot open for appending");
+std::string CheckpointLine(std::size_t first, std::size_t count, std::size_t done,
+                           std::size_t frames) {
+  return kCheckpointStart + std::string("block=") + std::to_string(first) + "+" +
+         std::to_string(count) + " frames_done=" + std::to_string(done) + "/" +
+         std::to_string(frames) + "\n";
+}
+
+// The block being run: its combinations, configurations and totals so far.
+struct Block {
+  std::vector<std::size_t> indices;
+  std::vector<ReplayConfig> configs;
+  std::vector<ReplayResult> totals;
+  std::size_t frames_done = 0;
+};
+
+void WriteCheckpoint(const std::string& path, const std::string& prelude, const SweepSpec& spec,
+                     const Block& b) {
+  std::string text = CheckpointLine(b.indices.front(), b.indices.size(), b.frames_done,
+                                    spec.frame_indices.size()) +
+                     prelude;
+  for (std::size_t k = 0; k < b.indices.size(); ++k) {
+    ReplayResult t = b.totals[k];
+    FinishTotal(b.configs[k].processors.count, &t);
+    text += SweepRow(b.indices[k], spec.varies, CombinationValues(spec.varies, b.indices[k]), t);
   }
+  WriteFileAtomically(path, text);
+}
 
-  // Row `pos` of this run's list; writes every row that is now next in order.
-  void Put(std::size_t pos, std::string row) {
-    std::lock_guard<std::mutex> lock(mu_);
-    waiting_.emplace(pos, std::move(row));
-    while (!stopped() && !waiting_.empty() && waiting_.begin()->first == written_) {
-      WriteNext();
+// Loads the totals of OUT.checkpoint into `b` when it holds this block; returns the frames
+// it had done (0 when there is no checkpoint or it is another block's).
+std::size_t ReadCheckpoint(const std::string& path, const std::string& prelude,
+                           const SweepSpec& spec, Block* b) {
+  std::string text;
+  if (!ReadFile(path, &text)) return 0;
+  const std::vector<std::string> lines = Lines(text);
+  if (lines.size() < 3 || text.compare(lines[0].size() + 1, prelude.size(), prelude) != 0) {
+    throw InputError(path +
+                     ": left by a different sweep (its comment line or header is not "
+                     "this sweep's); rerun the command that wrote it to resume, or "
+                     "delete it");
+  }
+  const std::size_t frames = spec.frame_indices.size();
+  std::size_t done = 0;
+  for (; done <= frames; ++done) {
+    if (lines[0] + "\n" == CheckpointLine(b->indices.front(), b->indices.size(), done, frames)) {
+      break;
     }
   }
-
-  void Fail(std::exception_ptr error) {
-    std::lock_guard<std::mutex> lock(mu_);
-    if (!error_) error_ = error;
-    stop_ = true;
+  if (done > frames) return 0;  // another block's: stale
+  if (lines.size() != 3 + b->indices.size()) {
+    throw InputError(path + ": expected " + std::to_string(b->indices.size()) +
+                     " rows after the header; the checkpoint is damaged, delete it");
   }
+  for (std::size_t k = 0; k < b->indices.size(); ++k) {
+    const std::string where = path + ": line " + std::to_string(k + 4);
+    ParsedRow row = ParseRow(lines[3 + k], where);
+    if (row.index != b->indices[k]) {
+      throw InputError(where + ": expected the row of combination " +
+                       std::to_string(b->indices[k]) + "; the checkpoint is damaged, delete it");
+    }
+    b->totals[k] = row.totals;
+  }
+  return done;
+}
 
-  bool stopped() const { return stop_; }
-  std::size_t written() const { return written_; }
-  void RethrowError() const {
-    if (error_) std::rethrow_exception(error_);
+// ---- Running -----------------------------------------------------------------------------
+
+class Run {
+ public:
+  Run(const TraceReader& reader, const SweepSpec& spec, const std::string& out,
+      const SweepOptions& options)
+      : reader_(reader),
+        spec_(spec),
+        options_(options),
+        partial_(out + ".partial"),
+        checkpoint_(out + ".checkpoint"),
+        prelude_(SweepComment(spec) + SweepHeader(spec.varies)) {}
+
+  SweepOutcome Go(const std::string& out) {
+    const std::vector<std::size_t> indices =
+        ShardIndices(CombinationCount(spec_.varies), spec_.shard);
+    outcome_.resumed = ResumePartial(partial_, prelude_, indices);
+    const std::vector<std::size_t> todo(indices.begin() + outcome_.resumed, indices.end());
+    total_rows_ = indices.size();
+    rows_done_ = outcome_.resumed;
+    file_.open(partial_, std::ios::binary | std::ios::app);
+    if (!file_) throw InputError(partial_ + ": cannot open for appending");
+    const std::size_t size = std::max<std::size_t>(options_.block, 1);
+    for (std::size_t first = 0; first < todo.size() && !stopped_; first += size) {
+      Block b;
+      b.indices.assign(todo.begin() + first, todo.begin() + std::min(todo.size(), first + size));
+      RunBlock(b);
+    }
+    file_.close();
+    outcome_.complete = !stopped_;
+    if (outcome_.complete) {
+      RenameFile(partial_, out);
+      std::filesystem::remove(checkpoint_);
+    }
+    return outcome_;
   }
 
  private:
-  void WriteNext() {
-    auto it = waiting_.begin();
-    if (!(file_ << it->second) || !file_.flush()) throw InputError(path_ + ": cannot write");
-    waiting_.erase(it);
-    ++written_;
-    if (options_.progress) options_.progress(double(done_ + written_) / double(total_));
-    if (options_.stop && options_.stop(written_)) stop_ = true;
-  }
-
-  std::string path_;
-  std::ofstream file_;
-  std::size_t done_, total_;
-  const SweepOptions& options_;
-  std::mutex mu_;
-  std::map<std::size_t, std::string> waiting_;
-  std::size_t written_ = 0;
-  std::atomic<bool> stop_{false};
-  std::exception_ptr error_;
-};
-
-std::string ComputeRow(const TraceReader& reader, const SweepSpec& spec, std::size_t index) {
-  const ReplayConfig config = CombinationConfig(spec.base, spec.varies, index);
-  const TraceReplay replay = ReplayTrace(reader, spec.frame_indices, config);
-  return SweepRow(index, spec.varies, CombinationValues(spec.varies, index), replay.total);
-}
-
-void Work(const TraceReader& reader, const SweepSpec& spec, const std::vector<std::size_t>& todo,
-          std::atomic<std::size_t>& next, RowWriter& writer) {
-  for (std::size_t pos; !writer.stopped() && (pos = next++) < todo.size();) {
-    try {
-      writer.Put(pos, ComputeRow(reader, spec, todo[pos]));
-    } catch (...) {
-      writer.Fail(std::current_exception());
+  void RunBlock(Block& b) {
+    for (std::size_t index : b.indices) {
+      b.configs.push_back(CombinationConfig(spec_.base, spec_.varies, index));
+    }
+    b.totals.assign(b.indices.size(), ReplayResult{});
+    b.frames_done = ReadCheckpoint(checkpoint_, prelude_, spec_, &b);
+    outcome_.frames_resumed += b.frames_done;
+    const std::vector<std::size_t> frames(spec_.frame_indices.begin() + b.frames_done,
+                                          spec_.frame_indices.end());
+    ReplayFramesOptions o;
+    o.jobs = options_.jobs;
+    last_checkpoint_ = std::chrono::steady_clock::now();
+    const ReplayFramesStats stats = ReplayFrames(
+        reader_, frames, b.configs, o,
+        [&](const LoadedFrame&, const std::vector<ReplayResult>& results) {
+          for (std::size_t k = 0; k < results.size(); ++k) Accumulate(results[k], &b.totals[k]);
+          ++b.frames_done;
+          Progress(b);
+          stopped_ = options_.stop_after_frame && options_.stop_after_frame(b.frames_done);
+          if (stopped_ || CheckpointDue()) {
+            WriteCheckpoint(checkpoint_, prelude_, spec_, b);
+            last_checkpoint_ = std::chrono::steady_clock::now();
+          }
+          return !stopped_;
+        });
+    outcome_.distinct += stats.distinct;
+    if (stopped_) return;
+    for (std::size_t k = 0; k < b.indices.size() && !stopped_; ++k) {
+      FinishTotal(b.configs[k].processors.count, &b.totals[k]);
+      WriteRow(SweepRow(b.indices[k], spec_.varies, CombinationValues(spec_.varies, b.indices[k]),
+                        b.totals[k]));
     }
   }
-}
 
-// Runs the combinations `todo` on `options.jobs` threads; returns the rows written.
-std::size_t RunRows(const TraceReader& reader, const SweepSpec& spec,
-                    const std::vector<std::size_t>& todo, const std::string& path, std::size_t done,
-                    const SweepOptions& options) {
-  RowWriter writer(path, done, done + todo.size(), options);
-  std::atomic<std::size_t> next{0};
-  const std::size_t jobs =
-      std::clamp<std::size_t>(options.jobs, 1, std::max<std::size_t>(todo.size(), 1));
-  std::vector<std::thread> threads;
-  for (std::size_t j = 0; j < jobs; ++j) {
-    threads.emplace_back([&] { Work(reader, spec, todo, next, writer); });
+  bool CheckpointDue() const {
+    const double since =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint_).count();
+    return since >= options_.checkpoint_seconds;
   }
-  for (std::thread& t : threads) t.join();
-  writer.RethrowError();
-  return writer.written();
-}
+
+  void WriteRow(const std::string& row) {
+    if (!(file_ << row) || !file_.flush()) throw InputError(partial_ + ": cannot write");
+    ++outcome_.ran;
+    ++rows_done_;
+    if (options_.progress) options_.progress(double(rows_done_) / double(total_rows_));
+    stopped_ = options_.stop && options_.stop(outcome_.ran);
+  }
+
+  void Progress(const Block& b) const {
+    if (!options_.progress || spec_.frame_indices.empty()) return;
+    const double block =
+        double(b.indices.size()) * double(b.frames_done) / double(spec_.frame_indices.size());
+    options_.progress((double(rows_done_) + block) / double(total_rows_));
+  }
+
+  const TraceReader& reader_;
+  const SweepSpec& spec_;
+  const SweepOptions& options_;
+  std::string partial_, checkpoint_, prelude_;
+  std::ofstream file_;
+  SweepOutcome outcome_;
+  std::size_t total_rows_ = 0, rows_done_ = 0;
+  bool stopped_ = false;
+  std::chrono::steady_clock::time_point last_checkpoint_;
+};
 
 // ---- Merging -----------------------------------------------------------------------------
 
+// One file of a sharded sweep.
 struct ShardFile {
-  std::string path, comment_prefix, header;  // comment line without its shard part
+  std::string path;
+  std::string head;    // the comment line before its frames part
+  std::string frames;  // the frames part's value: "all" or a range as given
+  std::string header;
   Shard shard;
   std::size_t combinations = 0;
+  int first = 0, last = 0;  // the frames range, when not "all"
   std::vector<std::string> rows;
 };
 
-// The value of the part " NAME=VALUE" of `comment` found from the end.
-std::string PartValue(const std::string& path, const std::string& comment, const char* part) {
-  const auto at = comment.rfind(part);
-  if (at == std::string::npos) {
-    throw InputError(path + ": line 1: no" + std::string(part) + " in the sweep comment");
+// The JSON string value that starts `text` at `at` (a quote), without its quotes; the
+// sweep's values (paths aside, which are before the parts read here) have no escapes.
+std::string QuotedValue(const ShardFile& f, const std::string& comment, std::size_t at,
+                        const char* part) {
+  const std::size_t close = comment.find('"', at + 1);
+  if (at >= comment.size() || comment[at] != '"' || close == std::string::npos) {
+    throw InputError(f.path + ": line 1: bad" + std::string(part) + " in the sweep comment");
   }
-  const std::size_t begin = at + std::char_traits<char>::length(part);
-  return comment.substr(begin, comment.find(' ', begin) - begin);
+  return comment.substr(at + 1, close - at - 1);
 }
 
 void ParseComment(const std::string& comment, ShardFile* f) {
   if (comment.rfind(kCommentStart, 0) != 0) {
     throw InputError(f->path + ": line 1: expected '" + kCommentStart + "...' (a sweep file)");
   }
-  std::string shard = PartValue(f->path, comment, kShardPart);
-  if (shard.size() < 2 || shard.front() != '"' || shard.back() != '"') {
-    throw InputError(f->path + ": line 1: bad shard " + shard);
+  const std::size_t shard_at = comment.rfind(kShardPart);
+  const std::size_t count_at = comment.rfind(kCombinationsPart, shard_at);
+  const std::size_t frames_at = comment.rfind(kFramesPart, count_at);
+  if (shard_at == std::string::npos || count_at == std::string::npos ||
+      frames_at == std::string::npos) {
+    throw InputError(f->path + ": line 1: the sweep comment lacks frames, combinations or shard");
   }
-  shard = shard.substr(1, shard.size() - 2);
+  const std::string shard =
+      QuotedValue(*f, comment, shard_at + std::strlen(kShardPart), kShardPart);
   f->shard = shard == "all" ? Shard{} : Shard::Parse(shard, f->path + ": line 1: shard");
-  if (!ParseSize(PartValue(f->path, comment, kCombinationsPart), &f->combinations)) {
+  const std::size_t count_begin = count_at + std::strlen(kCombinationsPart);
+  if (!ParseSize(comment.substr(count_begin, shard_at - count_begin), &f->combinations)) {
     throw InputError(f->path + ": line 1: bad combinations count");
   }
-  f->comment_prefix = comment.substr(0, comment.rfind(kShardPart));
+  f->frames = QuotedValue(*f, comment, frames_at + std::strlen(kFramesPart), kFramesPart);
+  f->head = comment.substr(0, frames_at);
+  if (f->frames != "all") {
+    const std::vector<int> range = ParseFrameRange(f->frames, f->path + ": line 1: frames");
+    f->first = range.front(), f->last = range.back();
+  }
 }
 
 ShardFile ReadShard(const std::string& path) {
@@ -261,36 +449,93 @@ ShardFile ReadShard(const std::string& path) {
 }
 
 void CheckSameSweep(const ShardFile& a, const ShardFile& b) {
-  if (a.comment_prefix != b.comment_prefix || a.header != b.header) {
+  if (a.head != b.head || a.combinations != b.combinations || a.header != b.header) {
     throw InputError(b.path + ": not a shard of the same sweep as " + a.path +
-                     " (their comment lines or headers differ apart from the shard)");
+                     " (their comment lines or headers differ apart from the shard and frames)");
   }
 }
 
-// Places the rows of `f` at their indices; `owner` says which file holds each index.
-void PlaceRows(const ShardFile& f, std::vector<std::string>& rows,
-               std::vector<const ShardFile*>& owner) {
-  for (std::size_t k = 0; k < f.rows.size(); ++k) {
-    const std::size_t index = RowIndex(f.rows[k]);
-    if (index >= rows.size() || !f.shard.Owns(index)) {
-      throw InputError(RowContext(f.path, k) + ": no combination of shard " + f.shard.ToString() +
-                       " starts this row");
+// A row of one file: which file, and the frames it covers.
+struct Piece {
+  const ShardFile* file;
+  std::size_t row;
+};
+
+std::string FramesText(int first, int last) {
+  return std::to_string(first) + ".." + std::to_string(last);
+}
+
+// Rows per combination, from every file, checked against the files' shards.
+std::vector<std::vector<Piece>> Gather(const std::vector<ShardFile>& files, std::size_t n) {
+  std::vector<std::vector<Piece>> pieces(n);
+  for (const ShardFile& f : files) {
+    for (std::size_t k = 0; k < f.rows.size(); ++k) {
+      const std::size_t index = RowIndex(f.rows[k]);
+      if (index >= n || !f.shard.Owns(index)) {
+        throw InputError(RowContext(f.path, k) + ": no combination of shard " + f.shard.ToString() +
+                         " starts this row");
+      }
+      pieces[index].push_back({&f, k});
     }
-    if (owner[index]) {
-      throw InputError("combination " + std::to_string(index) + " is in both " +
-                       owner[index]->path + " and " + f.path + " (overlapping shards)");
+  }
+  return pieces;
+}
+
+// Checks that the pieces of combination `index` cover frames first..last once each.
+void CheckTiling(std::size_t index, std::vector<Piece>& p, bool ranges, int first, int last) {
+  const std::string what = "combination " + std::to_string(index);
+  if (p.empty()) {
+    throw InputError(what + " is in none of the shards (a shard missing or not finished?)");
+  }
+  if (!ranges) {  // one frames selection: every combination in exactly one file
+    if (p.size() > 1) {
+      throw InputError(what + " is in both " + p[0].file->path + " and " + p[1].file->path +
+                       " (overlapping shards)");
     }
-    rows[index] = f.rows[k];
-    owner[index] = &f;
+    return;
+  }
+  std::sort(p.begin(), p.end(),
+            [](const Piece& a, const Piece& b) { return a.file->first < b.file->first; });
+  long long next = first;
+  for (const Piece& piece : p) {
+    const ShardFile& f = *piece.file;
+    if (f.first < next) {
+      throw InputError(what + ": frames " +
+                       FramesText(f.first, int(std::min<long long>(f.last, next - 1))) +
+                       " are in " + f.path + " and another shard (overlapping frames)");
+    }
+    if (f.first > next) {
+      throw InputError(what + ": frames " + FramesText(int(next), f.first - 1) +
+                       " are in none of the shards (missing frames)");
+    }
+    next = (long long)f.last + 1;
+  }
+  if (next <= last) {
+    throw InputError(what + ": frames " + FramesText(int(next), last) +
+                     " are in none of the shards (missing frames)");
   }
 }
 
-void CheckCovered(const std::vector<const ShardFile*>& owner) {
-  for (std::size_t i = 0; i < owner.size(); ++i) {
-    if (owner[i]) continue;
-    throw InputError("combination " + std::to_string(i) + " of " + std::to_string(owner.size()) +
-                     " is in none of the shards (a shard missing or not finished?)");
+// The merged row of one combination: the one row, or the rows of its frame ranges added.
+std::string MergedRow(const std::vector<Piece>& p) {
+  if (p.size() == 1) return p[0].file->rows[p[0].row];
+  ReplayResult total;
+  std::string head;
+  for (const Piece& piece : p) {
+    const std::string where = RowContext(piece.file->path, piece.row);
+    const ParsedRow row = ParseRow(piece.file->rows[piece.row], where);
+    if (!head.empty() && row.head != head) {
+      throw InputError(where + ": the combination's values differ from " + p[0].file->path +
+                       "'s (not the same sweep)");
+    }
+    if (!head.empty() && row.totals.bound.has_value() != total.bound.has_value()) {
+      throw InputError(where + ": a bound in some frames' rows but not in others'");
+    }
+    head = row.head;
+    Accumulate(row.totals, &total);
   }
+  FinishReadTotals(&total, RowContext(p[0].file->path, p[0].row));
+  return RowWithTotals(head, total);
 }
 
 }  // namespace
@@ -383,7 +628,7 @@ void ValidateVaries(const ReplayConfig& base, const std::vector<Vary>& varies) {
   }
   for (std::size_t i = 0, n = CombinationCount(varies); i < n; ++i) {
     try {
-      CombinationConfig(base, varies, i);
+      CheckReplayable(CombinationConfig(base, varies, i));
     } catch (const InputError& e) {
       throw InputError("--vary: combination " + std::to_string(i) + ": " + e.what());
     }
@@ -398,6 +643,8 @@ std::vector<std::size_t> ShardIndices(std::size_t combinations, const Shard& sha
 
 // ---- The file ----------------------------------------------------------------------------
 
+// ---- The file ----------------------------------------------------------------------------
+
 std::string SweepComment(const SweepSpec& spec) {
   std::string s = kCommentStart;
   s += "schema=" + JsonQuote("raycell-sweep/1") + " ";
@@ -405,19 +652,9 @@ std::string SweepComment(const SweepSpec& spec) {
   s += " config=" + JsonQuote(spec.config.empty() ? "defaults" : spec.config);
   s += " config_hash=" + ConfigHash(spec.base);
   for (const Vary& v : spec.varies) s += " vary=" + JsonQuote(v.ToString());
-  s += " frames=" + JsonQuote(spec.frames.empty() ? "all" : spec.frames);
+  s += kFramesPart + JsonQuote(spec.frames.empty() ? "all" : spec.frames);
   s += kCombinationsPart + std::to_string(CombinationCount(spec.varies));
   return s + kShardPart + JsonQuote(spec.shard.ToString()) + "\n";
-}
-
-StatsTable SweepRowTable(std::size_t index, const std::vector<Vary>& varies,
-                         const std::vector<std::string>& values, const ReplayResult& total) {
-  RAYCELL_CHECK_EQ(values.size(), varies.size());
-  StatsTable t;
-  t.AddCount("index", index);
-  for (std::size_t k = 0; k < varies.size(); ++k) t.AddText(varies[k].key, values[k]);
-  AddResult(total, kSweepColumns, &t);
-  return t;
 }
 
 std::string SweepHeader(const std::vector<Vary>& varies) {
@@ -435,30 +672,39 @@ std::string SweepRow(std::size_t index, const std::vector<Vary>& varies,
 SweepOutcome RunSweep(const TraceReader& reader, const SweepSpec& spec, const std::string& out,
                       const SweepOptions& options) {
   ValidateVaries(spec.base, spec.varies);
-  const std::string partial = out + ".partial";
-  const std::vector<std::size_t> indices = ShardIndices(CombinationCount(spec.varies), spec.shard);
-  SweepOutcome outcome;
-  outcome.resumed = ResumePartial(partial, SweepComment(spec) + SweepHeader(spec.varies), indices);
-  const std::vector<std::size_t> todo(indices.begin() + outcome.resumed, indices.end());
-  outcome.ran = RunRows(reader, spec, todo, partial, outcome.resumed, options);
-  outcome.complete = outcome.ran == todo.size();
-  if (outcome.complete) RenameFile(partial, out);
-  return outcome;
+  return Run(reader, spec, out, options).Go(out);
 }
 
 void MergeSweepShards(const std::string& out, const std::vector<std::string>& shard_paths) {
   if (shard_paths.empty()) throw InputError("sweep merge: give the shard files to merge");
-  std::vector<ShardFile> shards;
-  for (const std::string& path : shard_paths) shards.push_back(ReadShard(path));
-  for (const ShardFile& s : shards) CheckSameSweep(shards.front(), s);
-  const std::size_t n = shards.front().combinations;
-  std::vector<std::string> rows(n);
-  std::vector<const ShardFile*> owner(n, nullptr);
-  for (const ShardFile& s : shards) PlaceRows(s, rows, owner);
-  CheckCovered(owner);
-  std::string text = shards.front().comment_prefix + kShardPart + JsonQuote("all") + "\n" +
-                     shards.front().header + "\n";
-  for (const std::string& row : rows) text += row + "\n";
+  std::vector<ShardFile> files;
+  for (const std::string& path : shard_paths) files.push_back(ReadShard(path));
+  for (const ShardFile& f : files) CheckSameSweep(files.front(), f);
+  // One frames selection in every file: shards of combinations only. Else frame ranges.
+  bool ranges = false;
+  int first = files.front().first, last = files.front().last;
+  for (const ShardFile& f : files) {
+    if (f.frames == files.front().frames) continue;
+    ranges = true;
+  }
+  if (ranges) {
+    for (const ShardFile& f : files) {
+      if (f.frames == "all") {
+        throw InputError(f.path +
+                         ": frames \"all\" cannot be merged with shards of frame "
+                         "ranges (run every shard with --frames A..B)");
+      }
+      first = std::min(first, f.first), last = std::max(last, f.last);
+    }
+  }
+  const std::size_t n = files.front().combinations;
+  std::vector<std::vector<Piece>> pieces = Gather(files, n);
+  for (std::size_t i = 0; i < n; ++i) CheckTiling(i, pieces[i], ranges, first, last);
+  std::string text = files.front().head + kFramesPart +
+                     JsonQuote(ranges ? FramesText(first, last) : files.front().frames) +
+                     kCombinationsPart + std::to_string(n) + kShardPart + JsonQuote("all") + "\n" +
+                     files.front().header + "\n";
+  for (std::size_t i = 0; i < n; ++i) text += MergedRow(pieces[i]) + "\n";
   WriteFileAtomically(out, text);
 }
 

@@ -3,8 +3,7 @@
 //
 // Combinations are numbered 0..K-1 row-major over the Vary list in the order given (the last
 // key varies fastest). A shard I/N (0-based, 0 <= I < N) runs the indices with
-// index % N == I; MergeSweepShards joins the N shard files into the bytes an unsharded run
-// writes.
+// index % N == I.
 //
 // The output file starts with a comment line that names the sweep exactly, then the header:
 //
@@ -15,15 +14,36 @@
 //     utilisation,peak_queued_rays,peak_queued_bytes,rays,segments,samples
 //   0,maxwork,1,...
 //
-// Values are totals over the selected frames, as `raycell replay` prints them; `bound` is
-// empty where it does not hold. Rows are written in index order whatever the number of
-// worker threads, so the file is byte-identical for any --jobs.
+// Values are totals over the selected frames, as `raycell replay` prints them
+// (replay/result_table.h); `bound` is empty where it does not hold. Rows are written in index
+// order, so the file is byte-identical for any --jobs.
 //
-// Resuming: rows are appended to OUT.partial, one flushed write per row, as soon as all
-// rows before them are done; OUT.partial is renamed to OUT when every row is written. An
-// interrupted sweep (Ctrl-C, a crash) leaves OUT.partial, and running the same sweep again
-// keeps its rows and runs only the rest. A .partial whose comment line or header differs
-// (another trace, config, vary list, frames or shard) is an InputError, never reused.
+// Decode once, replay many: the shard's combinations are taken in blocks of up to
+// kSweepBlock (4096) in index order; for each block the frames are the outer loop
+// (ReplayFrames): each frame is decoded and its trees and work graphs built once, every
+// combination of the block is replayed on it (on --jobs threads; combinations with equal
+// canonical configurations once, CanonicalConfig) and added to that combination's totals.
+// When the block's last frame is done its rows are appended. Memory: one frame (its rays
+// until its work graphs are built, the work graphs, two Cell Trees) plus, per combination,
+// its totals and scheduler: a few hundred bytes.
+//
+// Resuming works at two grains:
+//  - rows: rows are appended to OUT.partial, one flushed write per row, in order; OUT.partial
+//    is renamed to OUT when every row is written. A rerun of the same sweep keeps the rows
+//    of OUT.partial and runs only the rest.
+//  - frames: inside a block, the block's partial totals are written to OUT.checkpoint
+//    (atomically: temporary file, rename) after a frame when checkpoint_seconds have passed
+//    since the last one, and always when the sweep is stopped: the sweep's comment line, the
+//    block (its first combination, size, frames done) and one row per combination with its
+//    totals over the frames done, as a sweep row. A rerun whose first block is that block
+//    starts from those totals at the next frame; a checkpoint of another block (stale) is
+//    ignored and replaced. Totals add exactly (see MergeSweepShards), so a resumed sweep
+//    writes the same bytes as an uninterrupted one.
+// A .partial or .checkpoint whose comment line or header differs (another trace, config,
+// vary list, frames or shard) is an InputError, never reused.
+//
+// Frames can be sharded as well as combinations: runs with --frames A..B over disjoint
+// ranges are frame shards of one sweep, and MergeSweepShards adds their totals.
 #pragma once
 
 #include <cstddef>
@@ -84,19 +104,33 @@ struct SweepSpec {
   Shard shard;
 };
 
+// Combinations replayed together, frame by frame (see the top of this file).
+inline constexpr std::size_t kSweepBlock = 4096;
+
 struct SweepOptions {
   unsigned jobs = 1;  // worker threads, >= 1
-  // Told the fraction of this shard's rows done (called under a lock, from any thread).
+  // Told the fraction of this shard's work done, after each frame and row.
   std::function<void(double)> progress;
   // Asked after each row written; returning true stops the sweep as an interruption would
   // (rows written so far stay in OUT.partial). For tests.
   std::function<bool(std::size_t rows_written)> stop;
+  // Asked after each frame of a block (frames done in the block, this run and resumed);
+  // returning true stops the sweep there, with a checkpoint. For tests.
+  std::function<bool(std::size_t frames_done)> stop_after_frame;
+  // The least wall time between two checkpoints; 0: after every frame.
+  double checkpoint_seconds = 1.0;
+  // Combinations per block; tests use small blocks to see several.
+  std::size_t block = kSweepBlock;
 };
 
 struct SweepOutcome {
-  std::size_t resumed = 0;  // rows kept from an existing OUT.partial
-  std::size_t ran = 0;      // rows computed by this run
-  bool complete = false;    // OUT written (false: stopped, OUT.partial left)
+  std::size_t resumed = 0;         // rows kept from an existing OUT.partial
+  std::size_t ran = 0;             // rows computed by this run
+  std::size_t frames_resumed = 0;  // frames taken from an OUT.checkpoint
+  // Canonical configurations replayed (CanonicalConfig), summed over the blocks run: fewer
+  // than the combinations when some can only differ in what no frame's result depends on.
+  std::size_t distinct = 0;
+  bool complete = false;  // OUT written (false: stopped, OUT.partial left)
 };
 
 // The comment line (with '\n') and the CSV header line (with '\n') of `spec`.
@@ -109,14 +143,23 @@ std::string SweepRow(std::size_t index, const std::vector<Vary>& varies,
 // The combination indices `shard` owns, increasing.
 std::vector<std::size_t> ShardIndices(std::size_t combinations, const Shard& shard);
 
-// Runs the sweep into `out` (via out + ".partial", resumed when present). Validates the
-// varies first. InputError on bad input or a .partial from another sweep.
+// Runs the sweep into `out` (via out + ".partial" and out + ".checkpoint", resumed when
+// present). Validates the varies and checks every combination replayable first.
+// InputError on bad input or a .partial or .checkpoint from another sweep.
 SweepOutcome RunSweep(const TraceReader& reader, const SweepSpec& spec, const std::string& out,
                       const SweepOptions& options = {});
 
-// Joins the files of shards I/N (each exactly once, any order) into `out` (tmp + rename),
-// byte-identical to the unsharded run. InputError when the shards come from different
-// sweeps, overlap, miss indices or are incomplete.
+// Joins the files of one sweep's shards into `out` (tmp + rename): shards of combinations
+// (--shard I/N), of frames (--frames over disjoint ranges), or both. Every combination must
+// be in the files whose frames ranges tile one range A..B exactly (no frame twice, none
+// missing between A and B). Rows of one combination over different frames add up as a
+// frame's results add into a total: counts, bytes and times summed, peaks as maxima, the
+// bound summed where it holds, utilisation recomputed from the summed times (work /
+// (time x processors), processors = (work + stall + idle) / time). The result is
+// byte-identical to the unsharded run: with one frames range, to the run with that range;
+// with several, to the run with --frames A..B (the comment says frames="A..B").
+// InputError when the files come from different sweeps, overlap in combinations or frames,
+// miss some, or are incomplete; `out` is then not written.
 void MergeSweepShards(const std::string& out, const std::vector<std::string>& shards);
 
 }  // namespace raycell

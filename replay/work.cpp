@@ -38,26 +38,44 @@ void Resize(WorkGraph& w, std::size_t n) {
 void Finish(WorkGraph& w) {
   w.totals = {Sum(w.samples), Sum(w.segments), Sum(w.rays_started)};
   w.packed.clear();
+  // First the records in unit order, a sequential pass (succ_begin in first_child for now),
+  // so that the breadth-first pass below reads one record per unit, not four columns.
+  std::vector<WorkGraph::Packed> by_unit(w.size() + 1);
   for (std::size_t u = 0; u < w.size(); ++u) {
     if (w.samples[u] > UINT32_MAX || w.queued_rays[u] > UINT32_MAX) return;  // columns, then
+    by_unit[u] = {w.cell[u], std::uint32_t(w.samples[u]), std::uint32_t(w.queued_rays[u]),
+                  w.succ_begin[u]};
   }
+  by_unit.back().first_child = w.succ_begin.back();
   // Breadth first: entry i stands for unit order[i]; its successors get the next entries.
-  std::vector<UnitId> order(w.roots.begin(), w.roots.end());
+  // Every unit must be reached exactly once (a forest from the roots), else the columns.
+  std::vector<UnitId> order;
   order.reserve(w.size());
-  std::vector<std::uint32_t> first_child;
-  first_child.reserve(w.size() + 1);
-  for (std::size_t i = 0; i < order.size(); ++i) {
-    const UnitId u = order[i];
-    first_child.push_back(std::uint32_t(order.size()));
-    for (UnitId k = w.succ_begin[u]; k < w.succ_begin[u + 1]; ++k) order.push_back(w.succ[k]);
-    if (order.size() > w.size()) return;  // a unit reached twice: not a forest
+  std::vector<bool> reached(w.size(), false);
+  const auto reach = [&](UnitId u) {
+    if (reached[u]) return false;
+    reached[u] = true;
+    order.push_back(u);
+    return true;
+  };
+  for (UnitId u : w.roots) {
+    if (!reach(u)) return;
   }
-  if (order.size() != w.size()) return;  // some units unreachable
   w.packed.resize(w.size() + 1);
   for (std::size_t i = 0; i < order.size(); ++i) {
     const UnitId u = order[i];
-    w.packed[i] = {w.cell[u], std::uint32_t(w.samples[u]), std::uint32_t(w.queued_rays[u]),
-                   first_child[i]};
+    const WorkGraph::Packed r = by_unit[u];
+    w.packed[i] = {r.cell, r.samples, r.queued_rays, std::uint32_t(order.size())};
+    for (UnitId k = r.first_child; k < by_unit[u + 1].first_child; ++k) {
+      if (!reach(w.succ[k])) {
+        w.packed.clear();
+        return;
+      }
+    }
+  }
+  if (order.size() != w.size()) {  // some units unreachable
+    w.packed.clear();
+    return;
   }
   w.packed.back() = {kNoCell, 0, 0, std::uint32_t(w.size())};
 }

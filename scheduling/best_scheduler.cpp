@@ -83,23 +83,13 @@ void BestOracleScheduler::BeginFrame(const FrameInfo& frame) {
 }
 
 void CellTreeBestScheduler::BeginFrame(const FrameInfo& frame) {
-  // The tree before the previous one is known only when frames come one after another.
-  const bool consecutive = before_previous_ && frame.frame_index == last_frame_index_ + 1;
   std::vector<CellId> plan;
   if (frame.previous != nullptr) {
-    plan = union_frames_ && consecutive
-               ? PlanFor(UnionTree({&*before_previous_, frame.previous}), seed_)
+    plan = union_frames_ && frame.before_previous != nullptr
+               ? PlanFor(UnionTree({frame.before_previous, frame.previous}), seed_)
                : PlanFor(*frame.previous, seed_);
   }
   follower_.Reset(std::move(plan), frame.cells);
-  if (union_frames_) {
-    if (frame.previous != nullptr) {
-      before_previous_ = *frame.previous;
-    } else {
-      before_previous_.reset();
-    }
-  }
-  last_frame_index_ = frame.frame_index;
 }
 
 }  // namespace raycell

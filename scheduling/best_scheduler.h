@@ -5,9 +5,9 @@
 //  - `celltree-best`: frame i+1 follows the best schedule of frame i's tree, the paper's
 //    scheme with a better plan (frame 0 runs Max Work);
 //  - `celltree-union`: frame i+1 follows the best schedule of the union of frames i and
-//    i-1's trees (graph/cell_tree.h UnionTree): feasible for both, so a plan that holds
-//    whichever of the two the next frame resembles (frame 0 runs Max Work, frame 1 follows
-//    frame 0's tree alone).
+//    i-1's trees (graph/cell_tree.h UnionTree; FrameInfo::before_previous): feasible for
+//    both, so a plan that holds whichever of the two the next frame resembles (frame 0 runs
+//    Max Work, frame 1 follows frame 0's tree alone).
 // Entries with no queued work are skipped; when the plan is used up, Max Work.
 //
 // The plans use kPlanEffort, a small budget (a plan must be ready while the frame before it
@@ -52,8 +52,6 @@ class CellTreeBestScheduler : public FollowingScheduler {
  private:
   std::uint64_t seed_;
   bool union_frames_;
-  std::optional<CellTree> before_previous_;  // frame i-1's tree, for the union
-  std::size_t last_frame_index_ = 0;
 };
 
 }  // namespace raycell

@@ -113,7 +113,8 @@ const std::vector<SchedulerEntry>& SchedulerRegistry() {
        "frame i+1 follows the best schedule found for the union of frames i and i-1's trees",
        [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
          return std::make_unique<CellTreeBestScheduler>(seed, true);
-       }},
+       },
+       2},
   };
   return registry;
 }
@@ -131,6 +132,13 @@ std::string SchedulerNameList(const char* separator) {
   std::string out;
   for (const std::string& n : SchedulerNames()) out += (out.empty() ? "" : separator) + n;
   return out;
+}
+
+std::uint32_t SchedulerHistory(const std::string& name) {
+  for (const SchedulerEntry& e : SchedulerRegistry()) {
+    if (name == e.name) return e.history;
+  }
+  return 1;
 }
 
 std::unique_ptr<Scheduler> MakeScheduler(const std::string& name, std::uint64_t seed) {

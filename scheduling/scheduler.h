@@ -37,9 +37,15 @@ struct FrameInfo {
   const CellTree* current = nullptr;   // this frame's tree (the Peel oracle needs it)
   const CellTree* previous = nullptr;  // the previous frame's tree; null for frame 0
   CellId cells = 0;                    // cells of the grid; every tree's cell_count() <= cells
+  // Frame i-2's tree, for schedulers whose registry entry has history 2; else null.
+  const CellTree* before_previous = nullptr;
 };
 
 // A scheduling policy. Per frame: BeginFrame once, then Next once per fetch.
+//
+// A frame's choices depend only on the frame's FrameInfo and queues, never on what earlier
+// frames did: a replay of frames A..B then gives each frame what a replay of the whole trace
+// gives it (frame shards and resumed sweeps rely on this).
 //
 // Next returns a cell with queued work, or nullopt iff no cell has any. A scheduler may keep
 // state between calls (a cursor into a schedule), so the caller must call Next again only
@@ -106,12 +112,16 @@ class ScheduleFollower {
 struct SchedulerEntry {
   const char* name;     // as in configs and --scheduler: "maxwork"
   const char* meaning;  // one line for --help and the configuration's comments
-  std::unique_ptr<Scheduler> (*make)(std::uint64_t seed);  // seed: used by "random" only
+  std::unique_ptr<Scheduler> (*make)(std::uint64_t seed);  // seed: random and planners
+  // Earlier frames' trees it reads: 1 (FrameInfo::previous) or 2 (also before_previous).
+  std::uint32_t history = 1;
 };
 const std::vector<SchedulerEntry>& SchedulerRegistry();
 // The registry's names, in its order; and joined by `separator` ("maxwork | roundrobin ...").
 const std::vector<std::string>& SchedulerNames();
 std::string SchedulerNameList(const char* separator);
+// The history of the scheduler `name` (SchedulerEntry::history); 1 for an unknown name.
+std::uint32_t SchedulerHistory(const std::string& name);
 // A new scheduler by name. An unknown name is an InputError listing the valid names.
 std::unique_ptr<Scheduler> MakeScheduler(const std::string& name, std::uint64_t seed);
 

@@ -119,7 +119,9 @@ std::string Dims(const TraceHeader& h) {
          std::to_string(h.cells[2]);
 }
 
-// Analyses every frame's Cell Tree and replays the capture under each scheduler.
+// Analyses every frame's Cell Tree and replays the capture under each scheduler, in one pass
+// over the frames: each is decoded and its tree built once, for the analysis and the three
+// replays (ReplayFrames).
 GridStudy StudyTrace(const TraceReader& reader, GridStudy g, bool quiet) {
   std::vector<std::size_t> all;
   AnalyzeOptions exact;
@@ -131,21 +133,33 @@ GridStudy StudyTrace(const TraceReader& reader, GridStudy g, bool quiet) {
   exact.max_seconds = 600;
   Progress progress(!quiet);
   const std::size_t n = reader.frames().size();
-  for (std::size_t i = 0; i < n; ++i) {
-    progress.Update(double(i) / n, g.cells + ": Cell Tree of frame " + std::to_string(i + 1) + "/" +
-                                       std::to_string(n));
-    all.push_back(i);
-    FrameAnalysis fa = AnalyzeTree(BuildFrameTree(reader, i), exact);
-    fa.frame = reader.frames()[i].frame;
-    g.trees.push_back(std::move(fa));
-  }
-  progress.Done();
+  for (std::size_t i = 0; i < n; ++i) all.push_back(i);
+  std::vector<ReplayConfig> configs;
   for (const char* s : kSchedulers) {
     ReplayConfig config = DefaultConfig();
     config.scheduler = s;
     config.granularity = ReplayConfig::Granularity::kNode;  // exact with a one-cell cache
-    g.replays.push_back(ReplayTrace(reader, all, config));
+    configs.push_back(config);
   }
+  g.replays.assign(configs.size(), TraceReplay{});
+  ReplayFrames(reader, all, configs, {},
+               [&](const LoadedFrame& frame, const std::vector<ReplayResult>& results) {
+                 progress.Update(double(frame.position) / n,
+                                 g.cells + ": Cell Tree of frame " +
+                                     std::to_string(frame.position + 1) + "/" + std::to_string(n));
+                 FrameAnalysis fa = AnalyzeTree(*frame.tree, exact);
+                 fa.frame = frame.number;
+                 g.trees.push_back(std::move(fa));
+                 for (std::size_t k = 0; k < results.size(); ++k) {
+                   Accumulate(results[k], &g.replays[k].total);
+                   g.replays[k].frames.push_back(results[k]);
+                 }
+                 return true;
+               });
+  for (std::size_t k = 0; k < configs.size(); ++k) {
+    FinishTotal(configs[k].processors.count, &g.replays[k].total);
+  }
+  progress.Done();
   return g;
 }
 

@@ -55,6 +55,10 @@ void Run(const SweepArgs& a) {
     std::cerr << "raycell: resumed " << outcome.resumed << " rows from " << a.out
               << ".partial, ran " << outcome.ran << "\n";
   }
+  if (!a.quiet && outcome.frames_resumed > 0) {
+    std::cerr << "raycell: resumed " << outcome.frames_resumed << " frames of totals from " << a.out
+              << ".checkpoint\n";
+  }
 }
 
 constexpr char kFooter[] =
@@ -62,20 +66,30 @@ constexpr char kFooter[] =
     "row. Combinations are numbered from 0, row-major over the --vary options in the order\n"
     "given (the last one varies fastest); every combination is checked against the\n"
     "configuration before any replay runs.\n\n"
+    "Each frame is decoded once for up to 4096 combinations (a block): the frames are the\n"
+    "outer loop, every combination of the block is replayed on a frame (on --jobs threads)\n"
+    "before the next frame is decoded, and combinations that can only differ in what no\n"
+    "result depends on (the seed of a scheduler that is not random, the granularity auto\n"
+    "resolves to, ...) are replayed once.\n\n"
     "The file starts with a comment line naming the sweep (trace, config and its hash, varies,\n"
     "frames, combination count, shard), then the header\n"
     "  index,<varied keys>,fetches,bound,time_ps,work_ps,stall_ps,idle_ps,utilisation,\n"
     "  peak_queued_rays,peak_queued_bytes,rays,segments,samples\n"
     "with totals over the frames (bound empty where it does not hold). Rows come in index\n"
     "order and the file is byte-identical whatever --jobs is.\n\n"
-    "Interrupting: rows are appended to OUT.partial as they complete, in order; OUT.partial\n"
-    "becomes OUT when all are done. After Ctrl-C (or a crash) rerun the same command: it\n"
-    "keeps the rows in OUT.partial and runs the rest. A .partial of a different sweep is an\n"
-    "error, never reused; delete it to start again.\n\n"
+    "Interrupting: rows are appended to OUT.partial as their block completes, in order;\n"
+    "inside a block, the totals so far are saved to OUT.checkpoint after a frame (at most once\n"
+    "a second). OUT.partial becomes OUT when all are done. After Ctrl-C (or a crash) rerun the\n"
+    "same command: it keeps the rows in OUT.partial, resumes the block from OUT.checkpoint and\n"
+    "runs the rest, and writes the same bytes as an uninterrupted run. A .partial or\n"
+    ".checkpoint of a different sweep is an error, never reused; delete them to start again.\n\n"
     "Sharding: --shard I/N (0-based, 0 <= I < N) runs the combinations with index % N == I;\n"
-    "`raycell sweep merge OUT SHARD...` joins the N files into the file an unsharded run\n"
-    "writes, byte for byte, after checking they are shards of one sweep covering every\n"
-    "combination exactly once.\n\n"
+    "--frames A..B runs a range of frames, and runs over disjoint ranges are frame shards of\n"
+    "one sweep. `raycell sweep merge OUT SHARD...` checks that the files are shards of one\n"
+    "sweep covering every combination, and every frame of one range A..B, exactly once, and\n"
+    "writes the file an unsharded run writes, byte for byte: rows of one combination over\n"
+    "different frames add up (sums; peaks as maxima; utilisation from the summed times),\n"
+    "and the comment then says frames=\"A..B\", as a run with --frames A..B does.\n\n"
     "Examples:\n"
     "  raycell sweep capture.rct --vary scheduler=maxwork,celltree,peel \\\n"
     "      --vary processors.count=1,2 --jobs 2 --out sweep.csv\n"
@@ -83,11 +97,16 @@ constexpr char kFooter[] =
     "      --vary \"level.cache.capacity=1 cell,2 cells,64MiB\" --out cache.csv\n"
     "  raycell sweep capture.rct --vary scheduler=maxwork,peel --shard 0/2 --out s0.csv\n"
     "  raycell sweep capture.rct --vary scheduler=maxwork,peel --shard 1/2 --out s1.csv\n"
-    "  raycell sweep merge sweep.csv s0.csv s1.csv";
+    "  raycell sweep merge sweep.csv s0.csv s1.csv\n"
+    "  raycell sweep capture.rct --vary scheduler=maxwork,peel --frames 0..14 --out f0.csv\n"
+    "  raycell sweep capture.rct --vary scheduler=maxwork,peel --frames 15..29 --out f1.csv\n"
+    "  raycell sweep merge frames.csv f0.csv f1.csv";
 
 void AddMerge(CLI::App* cmd, const std::shared_ptr<SweepArgs>& args) {
   CLI::App* merge = cmd->add_subcommand(
-      "merge", "Join the files of `raycell sweep --shard I/N` runs into the unsharded file.");
+      "merge",
+      "Join the files of `raycell sweep --shard I/N` and `--frames A..B` runs into the "
+      "unsharded file.");
   merge->add_option("OUT", args->merge_out, "merged CSV file to write")->required();
   merge->add_option("SHARDS", args->merge_shards, "the shard files, each shard once")->required();
   merge->callback([args] { MergeSweepShards(args->merge_out, args->merge_shards); });
@@ -109,7 +128,8 @@ void AddSweepCommand(CLI::App& app) {
   cmd->add_option("--frames", args->frames, "frame numbers A..B (default: all)");
   cmd->add_option("--jobs", args->jobs, "worker threads (default: the hardware threads)");
   cmd->add_option("--shard", args->shard, "I/N: run only combinations with index % N == I");
-  cmd->add_option("--out", args->out, "CSV file to write (OUT.partial while running)");
+  cmd->add_option("--out", args->out,
+                  "CSV file to write (OUT.partial and OUT.checkpoint while running)");
   cmd->add_flag("--quiet", args->quiet, "no progress bar or resume message");
   AddMerge(cmd, args);
   cmd->callback([cmd, args] {

@@ -1,17 +1,21 @@
-// Sweeps (issue 4): --vary parsing and combination order, validation before any work,
-// byte-identical output for any --jobs, rows equal to single replays, shards merged into the
-// unsharded file, and resuming an interrupted sweep.
+// Sweeps (issue 4): --vary parsing and combination order, validation before any work, rows
+// equal to single replays (ReplayTrace) written out field by field, byte-identical output
+// for any --jobs, shards of combinations and of frames merged into the unsharded file,
+// resuming after an interruption at any row or frame, and configurations shared only where
+// no result can differ.
 #include "replay/sweep.h"
 
 #include <gtest/gtest.h>
 
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <random>
 #include <sstream>
 
 #include "base/check.h"
 #include "base/format.h"
+#include "base/parse.h"
 #include "replay/driver.h"
 #include "tests/test_util.h"
 #include "traces/trace_writer.h"
@@ -90,7 +94,7 @@ std::string WriteTrace(int frames) {
 class SweepTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    trace_path_ = new std::string(WriteTrace(3));
+    trace_path_ = new std::string(WriteTrace(4));
     reader_ = new TraceReader(TraceReader::Open(*trace_path_));
   }
   static void TearDownTestSuite() {
@@ -107,34 +111,72 @@ class SweepTest : public ::testing::Test {
     spec.varies = {Vary::Parse("scheduler=maxwork,roundrobin,peel"),
                    Vary::Parse("processors.count=1,2"),
                    Vary::Parse("level.cache.capacity=1 cell,2 cells")};
-    spec.frame_indices = {0, 1, 2};
+    spec.frame_indices = {0, 1, 2, 3};
     spec.shard = shard;
     return spec;
   }
 
+  // The mixed sweep: every scheduler, 1, 2 and 8 processors, caches of 2 and 4 cells,
+  // prefetch off and on, two board bandwidths: 5 x 3 x 2 x 2 x 2 = 120 combinations.
+  SweepSpec Mixed() const {
+    SweepSpec spec = Spec();
+    spec.varies = {Vary::Parse("scheduler=maxwork,roundrobin,random,peel,celltree"),
+                   Vary::Parse("processors.count=1,2,8"),
+                   Vary::Parse("level.cache.capacity=2 cells,4 cells"),
+                   Vary::Parse("processors.prefetch=false,true"),
+                   Vary::Parse("level.board.bandwidth=133MB/s,1GB/s")};
+    spec.frame_indices = {0, 1, 2, 3};
+    return spec;
+  }
+
+  // `spec` over the frames numbered `range` ("A..B"), as --frames selects them.
+  static SweepSpec Frames(SweepSpec spec, const std::string& range) {
+    const std::vector<int> f = ParseFrameRange(range);
+    spec.frames = range;
+    spec.frame_indices.clear();
+    for (int i = f.front(); i <= f.back(); ++i) spec.frame_indices.push_back(std::size_t(i));
+    return spec;
+  }
+
   // Runs `spec` into a fresh file named `name`; returns its bytes.
-  std::string Run(const SweepSpec& spec, const std::string& name, unsigned jobs = 1) {
+  std::string Run(const SweepSpec& spec, const std::string& name, unsigned jobs = 1,
+                  std::size_t block = kSweepBlock) {
     const std::string out = Fresh(name);
     SweepOptions options;
     options.jobs = jobs;
+    options.block = block;
     const SweepOutcome o = RunSweep(*reader_, spec, out, options);
     EXPECT_TRUE(o.complete);
     EXPECT_FALSE(Exists(out + ".partial"));
+    EXPECT_FALSE(Exists(out + ".checkpoint"));
     return ReadBytes(out);
+  }
+
+  // The file a sweep must write: comment, header, and each combination's ReplayTrace totals
+  // written out field by field.
+  std::string Expected(const SweepSpec& spec, const std::string& header) const {
+    std::string expected = SweepComment(spec) + header;
+    for (std::size_t i : ShardIndices(CombinationCount(spec.varies), spec.shard)) {
+      const TraceReplay r =
+          ReplayTrace(*reader_, spec.frame_indices, CombinationConfig(spec.base, spec.varies, i));
+      EXPECT_GT(r.total.rays, 0u);
+      expected += ExpectedRow(i, CombinationValues(spec.varies, i), r.total);
+    }
+    return expected;
   }
 
   std::string Fresh(const std::string& name) {
     const std::string path = TempPath(name);
-    std::remove(path.c_str());
-    std::remove((path + ".partial").c_str());
+    for (const char* suffix : {"", ".partial", ".checkpoint"}) {
+      std::remove((path + suffix).c_str());
+    }
     paths_.push_back(path);
     return path;
   }
 
   void TearDown() override {
     for (const std::string& p : paths_) {
-      std::remove(p.c_str());
-      std::remove((p + ".partial").c_str());
+      for (const char* suffix : {"", ".partial", ".checkpoint"}) std::remove((p + suffix).c_str());
     }
   }
 
@@ -195,27 +237,70 @@ TEST_F(SweepTest, BadValuesFailBeforeAnyWork) {
             std::string::npos);
   spec.varies.back() = Vary::Parse("scheduler=maxwork");
   EXPECT_NE(ErrorOf([&] { RunSweep(*reader_, spec, out); }).find("twice"), std::string::npos);
+  // Valid alone, not replayable together: prefetch needs a cache of two cells.
+  spec.varies.back() = Vary::Parse("processors.prefetch=false,true");
+  const std::string prefetch = ErrorOf([&] { RunSweep(*reader_, spec, out); });
+  EXPECT_NE(prefetch.find("combination 1: processors.prefetch = true needs a cache that holds "
+                          "two cells"),
+            std::string::npos)
+      << prefetch;
   EXPECT_FALSE(Exists(out + ".partial"));
 }
 
-TEST_F(SweepTest, RowsEqualSingleReplaysWhateverTheJobs) {
-  const SweepSpec spec = Spec();
+constexpr char kMixedHeader[] =
+    "index,scheduler,processors.count,level.cache.capacity,processors.prefetch,"
+    "level.board.bandwidth,fetches,bound,time_ps,work_ps,stall_ps,idle_ps,utilisation,"
+    "peak_queued_rays,peak_queued_bytes,rays,segments,samples\n";
+
+// Every row of the mixed sweep is its combination's ReplayTrace, whatever the jobs and the
+// blocks (several blocks of 7 combinations, or one).
+TEST_F(SweepTest, MixedSweepRowsEqualSingleReplaysWhateverTheJobs) {
+  const SweepSpec spec = Mixed();
   const std::string one = Run(spec, "jobs1.csv", 1);
+  EXPECT_EQ(one, Expected(spec, kMixedHeader));
+  EXPECT_EQ(Run(spec, "jobs2.csv", 2, 7), one);
   EXPECT_EQ(Run(spec, "jobs3.csv", 3), one);
-  std::string expected = SweepComment(spec) +
-                         "index,scheduler,processors.count,level.cache.capacity,fetches,bound,"
-                         "time_ps,work_ps,stall_ps,idle_ps,utilisation,peak_queued_rays,"
-                         "peak_queued_bytes,rays,segments,samples\n";
-  for (std::size_t i = 0; i < CombinationCount(spec.varies); ++i) {
-    const TraceReplay r =
-        ReplayTrace(*reader_, spec.frame_indices, CombinationConfig(spec.base, spec.varies, i));
-    EXPECT_GT(r.total.rays, 0u);
-    expected += ExpectedRow(i, CombinationValues(spec.varies, i), r.total);
-  }
-  EXPECT_EQ(one, expected);
   EXPECT_EQ(one.rfind("# raycell sweep schema=\"raycell-sweep/1\" trace=", 0), 0u);
-  EXPECT_NE(one.find("\n0,maxwork,1,1 cell,"), std::string::npos);
-  EXPECT_NE(one.find("\n11,peel,2,2 cells,"), std::string::npos);
+  EXPECT_NE(one.find("\n0,maxwork,1,2 cells,false,133MB/s,"), std::string::npos);
+  EXPECT_NE(one.find("\n119,celltree,8,4 cells,true,1GB/s,"), std::string::npos);
+}
+
+TEST_F(SweepTest, RowsEqualSingleReplaysWithTheBound) {
+  const SweepSpec spec = Spec();  // with one processor and one cell: the bound holds
+  const std::string rows = Run(spec, "bound.csv", 2);
+  EXPECT_EQ(rows, Expected(spec,
+                           "index,scheduler,processors.count,level.cache.capacity,fetches,bound,"
+                           "time_ps,work_ps,stall_ps,idle_ps,utilisation,peak_queued_rays,"
+                           "peak_queued_bytes,rays,segments,samples\n"));
+  EXPECT_NE(rows.find("\n0,maxwork,1,1 cell,"), std::string::npos);
+  EXPECT_NE(rows.find("\n11,peel,2,2 cells,"), std::string::npos);
+}
+
+// Combinations that differ in the seed of a scheduler that is not random, the granularity
+// auto resolves to (one processor: node), the queue record size, or prefetch under the random
+// scheduler (which predicts nothing) are replayed once, and each row still equals its own
+// ReplayTrace: 2 x 3 x 2 x 2 x 2 = 48 combinations, 2 + 3 replays (maxwork with and without
+// prefetch; random with each seed).
+TEST_F(SweepTest, CombinationsShareReplaysOnlyWhereNoResultCanDiffer) {
+  SweepSpec spec = Spec();
+  spec.varies = {Vary::Parse("scheduler=maxwork,random"), Vary::Parse("seed=1,2,3"),
+                 Vary::Parse("processors.prefetch=false,true"),
+                 Vary::Parse("processors.queue_record_bytes=16,32"),
+                 Vary::Parse("granularity=auto,node")};
+  spec.base.levels[0].capacity = 2;
+  const std::string out = Fresh("shared.csv");
+  const SweepOutcome o = RunSweep(*reader_, spec, out, {});
+  EXPECT_EQ(o.distinct, 5u);
+  EXPECT_EQ(ReadBytes(out), Expected(spec,
+                                     "index,scheduler,seed,processors.prefetch,"
+                                     "processors.queue_record_bytes,granularity,fetches,bound,"
+                                     "time_ps,work_ps,stall_ps,idle_ps,utilisation,"
+                                     "peak_queued_rays,peak_queued_bytes,rays,segments,"
+                                     "samples\n"));
+  // Two processors: granularity auto is ray, which node is not; every combination differs.
+  spec.base.processors.count = 2;
+  spec.varies = {Vary::Parse("scheduler=maxwork,random"), Vary::Parse("granularity=auto,node")};
+  EXPECT_EQ(RunSweep(*reader_, spec, Fresh("unshared.csv"), {}).distinct, 4u);
 }
 
 TEST_F(SweepTest, MergedShardsEqualTheUnshardedFile) {
@@ -239,6 +324,64 @@ TEST_F(SweepTest, MergedShardsEqualTheUnshardedFile) {
   const std::string missing = ErrorOf([&] { MergeSweepShards(bad, {shards[0], shards[2]}); });
   EXPECT_NE(missing.find("in none of the shards"), std::string::npos) << missing;
   EXPECT_FALSE(Exists(bad));
+}
+
+// Frame shards (and frame shards of combination shards) add up to the file of the run over
+// their whole range: sums, maxima, the bound where it holds, utilisation from the sums.
+TEST_F(SweepTest, MergedFrameShardsEqualTheRunOverTheirRange) {
+  for (const SweepSpec& base : {Spec(), Mixed()}) {
+    const std::string whole = Run(Frames(base, "0..3"), "frames_whole.csv", 2);
+    EXPECT_NE(whole.find(" frames=\"0..3\" "), std::string::npos);
+    std::vector<std::string> parts;
+    for (const char* range : {"2..3", "0..0", "1..1"}) {
+      parts.push_back(Fresh(std::string("frames_") + range + ".csv"));
+      RunSweep(*reader_, Frames(base, range), parts.back(), {});
+    }
+    const std::string merged = Fresh("frames_merged.csv");
+    MergeSweepShards(merged, parts);
+    EXPECT_EQ(ReadBytes(merged), whole);
+
+    std::vector<std::string> both;  // combination shards of frame shards
+    for (const char* range : {"0..1", "2..3"}) {
+      for (std::size_t i : {0, 1}) {
+        SweepSpec spec = Frames(base, range);
+        spec.shard = {i, 2};
+        both.push_back(Fresh(std::string("both_") + range + std::to_string(i) + ".csv"));
+        RunSweep(*reader_, spec, both.back(), {});
+      }
+    }
+    MergeSweepShards(merged, both);
+    EXPECT_EQ(ReadBytes(merged), whole);
+  }
+}
+
+TEST_F(SweepTest, MergeRefusesOverlappingOrMissingFrames) {
+  std::map<std::string, std::string> files;
+  for (const char* range : {"0..1", "1..3", "2..3", "3..3"}) {
+    files[range] = Fresh(std::string("ranges_") + range + ".csv");
+    RunSweep(*reader_, Frames(Spec(), range), files[range], {});
+  }
+  const std::string all = Fresh("ranges_all.csv");
+  RunSweep(*reader_, Spec(), all, {});
+  const std::string out = Fresh("ranges_merged.csv");
+  const std::string overlap = ErrorOf([&] {
+    MergeSweepShards(out, {files["0..1"], files["1..3"]});
+  });
+  EXPECT_NE(overlap.find("frames 1..1 are in"), std::string::npos) << overlap;
+  EXPECT_NE(overlap.find("(overlapping frames)"), std::string::npos) << overlap;
+  const std::string gap = ErrorOf([&] { MergeSweepShards(out, {files["0..1"], files["3..3"]}); });
+  EXPECT_NE(gap.find("frames 2..2 are in none of the shards (missing frames)"), std::string::npos)
+      << gap;
+  const std::string mixed = ErrorOf([&] { MergeSweepShards(out, {files["2..3"], all}); });
+  EXPECT_NE(mixed.find("frames \"all\" cannot be merged"), std::string::npos) << mixed;
+  // Frame shards of another sweep are refused like combination shards.
+  SweepSpec other = Frames(Spec(), "2..3");
+  other.varies[1] = Vary::Parse("processors.count=1,3");
+  const std::string foreign = Fresh("ranges_foreign.csv");
+  RunSweep(*reader_, other, foreign, {});
+  const std::string error = ErrorOf([&] { MergeSweepShards(out, {files["0..1"], foreign}); });
+  EXPECT_NE(error.find("not a shard of the same sweep"), std::string::npos) << error;
+  EXPECT_FALSE(Exists(out));
 }
 
 TEST_F(SweepTest, MergeRejectsShardsOfAnotherSweep) {
@@ -268,6 +411,59 @@ TEST_F(SweepTest, InterruptedSweepResumes) {
   EXPECT_TRUE(second.complete);
   EXPECT_EQ(second.resumed, 2u);
   EXPECT_EQ(second.ran, 10u);
+  EXPECT_EQ(ReadBytes(out), whole);
+}
+
+// Stopped after every row in turn and after every frame of every block in turn (blocks of 5
+// combinations, so that a checkpoint belongs to the first, middle or last block), then run to
+// the end: the same bytes as a sweep never interrupted.
+TEST_F(SweepTest, ResumesAfterAnInterruptionAtAnyRowOrFrame) {
+  const SweepSpec spec = Spec();
+  const std::string whole = Run(spec, "whole_for_resume.csv", 1, 5);
+  const std::size_t rows = 12, stops_at_frames = 3 * spec.frame_indices.size();
+  for (std::size_t stop = 1; stop <= rows + stops_at_frames; ++stop) {
+    SCOPED_TRACE("stop " + std::to_string(stop));
+    const std::string out = Fresh("any_stop.csv");
+    SweepOptions first;
+    first.block = 5;
+    first.checkpoint_seconds = 1e9;  // a checkpoint only when stopped
+    first.jobs = 1 + stop % 3;
+    std::size_t frames_seen = 0;
+    if (stop <= rows) {
+      first.stop = [stop](std::size_t written) { return written >= stop; };
+    } else {
+      first.stop_after_frame = [&](std::size_t) { return ++frames_seen == stop - rows; };
+    }
+    const SweepOutcome a = RunSweep(*reader_, spec, out, first);
+    ASSERT_FALSE(a.complete);
+    EXPECT_EQ(Exists(out + ".checkpoint"), stop > rows);
+    SweepOptions rest;
+    rest.block = 5;
+    rest.checkpoint_seconds = 0;  // a checkpoint after every frame
+    const SweepOutcome b = RunSweep(*reader_, spec, out, rest);
+    EXPECT_TRUE(b.complete);
+    if (stop > rows) {
+      EXPECT_EQ(b.frames_resumed, (stop - rows - 1) % spec.frame_indices.size() + 1);
+    }
+    EXPECT_EQ(a.ran + b.ran + b.resumed - a.ran, rows);
+    EXPECT_EQ(ReadBytes(out), whole);
+    EXPECT_FALSE(Exists(out + ".checkpoint"));
+  }
+}
+
+// Interrupted again and again, after one frame each time: every run resumes the last one's
+// checkpoint.
+TEST_F(SweepTest, ResumesChainsOfInterruptions) {
+  const SweepSpec spec = Mixed();
+  const std::string whole = Run(spec, "whole_for_chain.csv", 2, 50);
+  const std::string out = Fresh("chain.csv");
+  SweepOptions one_frame;
+  one_frame.block = 50;
+  one_frame.jobs = 2;
+  one_frame.stop_after_frame = [](std::size_t) { return true; };
+  std::size_t runs = 0;
+  while (!RunSweep(*reader_, spec, out, one_frame).complete) ASSERT_LT(++runs, 100u);
+  EXPECT_EQ(runs, 3 * spec.frame_indices.size());  // one frame each, then the last rows
   EXPECT_EQ(ReadBytes(out), whole);
 }
 
@@ -303,6 +499,39 @@ TEST_F(SweepTest, APartialOfAnotherSweepIsAnError) {
   const std::string prefix = ErrorOf([&] { RunSweep(*reader_, spec, out, {}); });
   EXPECT_NE(prefix.find("combination 0"), std::string::npos) << prefix;
   EXPECT_FALSE(Exists(out));
+}
+
+TEST_F(SweepTest, ACheckpointOfAnotherSweepIsAnErrorAndAStaleOneIgnored) {
+  const SweepSpec spec = Spec();
+  const std::string whole = Run(spec, "whole_for_checkpoint.csv", 1, 5);
+  const std::string out = Fresh("checkpoint.csv");
+  SweepOptions stop;
+  stop.block = 5;
+  stop.stop_after_frame = [](std::size_t frames) { return frames == 2; };
+  RunSweep(*reader_, spec, out, stop);
+  ASSERT_TRUE(Exists(out + ".checkpoint"));
+  const std::string checkpoint = ReadBytes(out + ".checkpoint");
+  EXPECT_EQ(checkpoint.rfind("# raycell sweep checkpoint block=0+5 frames_done=2/4\n", 0), 0u);
+  // Another sweep's .partial and .checkpoint: refused.
+  std::remove((out + ".partial").c_str());
+  SweepSpec other = spec;
+  other.varies[0] = Vary::Parse("scheduler=maxwork,roundrobin");
+  const std::string error = ErrorOf([&] { RunSweep(*reader_, other, out, {}); });
+  EXPECT_NE(error.find(".checkpoint: left by a different sweep"), std::string::npos) << error;
+  // A checkpoint of a block that is not the next one (here the first block again, after its
+  // rows were written): ignored, and the sweep ends with the right bytes.
+  std::remove((out + ".partial").c_str());
+  SweepOptions five_rows;
+  five_rows.block = 5;
+  five_rows.stop = [](std::size_t rows) { return rows == 5; };
+  RunSweep(*reader_, spec, out, five_rows);
+  WriteText(out + ".checkpoint", checkpoint);
+  SweepOptions rest;
+  rest.block = 5;
+  const SweepOutcome o = RunSweep(*reader_, spec, out, rest);
+  EXPECT_EQ(o.resumed, 5u);
+  EXPECT_EQ(o.frames_resumed, 0u);
+  EXPECT_EQ(ReadBytes(out), whole);
 }
 
 }  // namespace

@@ -248,7 +248,7 @@ TEST(BestSchedulersTest, CellTreeBestFollowsThePreviousFramesPlan) {
   EXPECT_EQ(s.follower().schedule(), PlanFor(t1, 3));
 }
 
-// The union plan of frames i-1 and i serves both; it is made only for consecutive frames.
+// The union plan of frames i-1 and i serves both; without frame i-1's tree, frame i's alone.
 TEST(BestSchedulersTest, CellTreeUnionPlansTheLastTwoFramesTogether) {
   const CellTree t0 = Rotations(), t1 = FromPaths({{3, 2, 1, 0}}), t2 = FromPaths({{0}});
   CellTreeBestScheduler s(3, true);
@@ -256,14 +256,16 @@ TEST(BestSchedulersTest, CellTreeUnionPlansTheLastTwoFramesTogether) {
   EXPECT_TRUE(s.follower().schedule().empty());
   s.BeginFrame(Frame(1, 4, &t1, &t0));
   EXPECT_EQ(s.follower().schedule(), PlanFor(t0, 3));  // no frame before 0: t0 alone
-  s.BeginFrame(Frame(2, 4, &t2, &t1));
+  FrameInfo two = Frame(2, 4, &t2, &t1);
+  two.before_previous = &t0;
+  s.BeginFrame(two);
   const Schedule plan = s.follower().schedule();
   EXPECT_EQ(plan, PlanFor(UnionTree({&t0, &t1}), 3));
   EXPECT_TRUE(IsFeasible(t0, plan));
   EXPECT_TRUE(IsFeasible(t1, plan));
   EXPECT_FALSE(IsFeasible(t1, PlanFor(t0, 3)));  // t0's plan alone would not serve t1
-  s.BeginFrame(Frame(7, 4, &t2, &t1));           // not consecutive: the previous tree alone
-  EXPECT_EQ(s.follower().schedule(), PlanFor(t1, 3));
+  EXPECT_EQ(SchedulerHistory("celltree-union"), 2u);
+  EXPECT_EQ(SchedulerHistory("celltree-best"), 1u);
 }
 
 // ------------------------------------------------------------------ factory

@@ -1,0 +1,169 @@
+// The frame walk under every replay (replay/driver.h): each frame's result equals ReplayFrame
+// on that frame's own work graph, tree and previous frame's tree built by hand, for
+// contiguous and skipping frame lists, sampled frames, both granularities and many
+// configurations at once on several threads; totals add up as documented.
+#include "replay/driver.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+#include <sstream>
+
+#include "scheduling/scheduler.h"
+#include "tests/graph/test_trees.h"
+#include "tests/replay/random_frame.h"
+#include "tests/test_util.h"
+#include "traces/trace_writer.h"
+
+namespace raycell {
+namespace {
+
+std::string Describe(const ReplayResult& r) {
+  std::ostringstream s;
+  s << r.frame << " " << r.fetches << " " << (r.bound ? std::to_string(*r.bound) : "-") << " "
+    << r.time << " " << r.work << " " << r.stall << " " << r.idle << " " << r.utilisation << " "
+    << r.peak_queued_rays << " " << r.peak_queued_bytes << " " << r.rays << " " << r.segments << " "
+    << r.samples << " " << r.events << " " << r.prefetches << " " << r.prefetch_hits;
+  for (const LevelStats& l : r.levels) s << " " << l.name << " " << l.fetches << " " << l.bytes;
+  return s.str();
+}
+
+class DriverTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    path_ = new std::string(testing::TempPath("driver", "trace.rct"));
+    TraceHeader h;
+    h.producer = "raycell test";
+    h.scene = "builtin:test";
+    h.cells = {2, 2, 1};
+    for (std::uint32_t c = 0; c < h.cell_count(); ++c) h.footprints.push_back(5000 * (c + 1));
+    for (int f = 0; f < 5; ++f)
+      h.cameras.push_back({f + 10, {1, 2, 3.0 + f}, {0, 0, 0}, {0, 1, 0}, 40});
+    h.settings.store_t = false;
+    TraceWriter w = TraceWriter::Create(*path_, h, 3);
+    std::mt19937 rng(3);
+    for (int f = 0; f < 5; ++f) {
+      w.BeginFrame(f + 10);
+      w.Append(testing::RandomReplayFrame(rng, h.cell_count(), 60));
+      w.EndFrame();
+    }
+    w.Finish();
+    reader_ = new TraceReader(TraceReader::Open(*path_));
+  }
+  static void TearDownTestSuite() {
+    delete reader_;
+    std::remove(path_->c_str());
+    delete path_;
+  }
+
+  // Frame i under `config`, everything built by hand; `k` samples 1 in k ray trees.
+  static ReplayResult ByHand(std::size_t i, const ReplayConfig& config, std::uint32_t k = 1) {
+    const TraceHeader& h = reader_->header();
+    const RayBatch rays = SampleRayTrees(reader_->LoadFrame(i), k);
+    const CellTree tree = testing::TreeOf(rays);
+    const CellTree previous =
+        testing::TreeOf(i > 0 ? SampleRayTrees(reader_->LoadFrame(i - 1), k) : RayBatch(false));
+    const CellTree before =
+        testing::TreeOf(i > 1 ? SampleRayTrees(reader_->LoadFrame(i - 2), k) : RayBatch(false));
+    const WorkGraph w = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay
+                            ? RaySegmentWork(rays, h.cell_count())
+                            : NodeWork(tree, h.cell_count());
+    auto s = MakeScheduler(config.scheduler, config.seed);
+    const bool two = SchedulerHistory(config.scheduler) == 2 && i > 1;
+    const FrameInfo info{i, &tree, i > 0 ? &previous : nullptr, h.cell_count(),
+                         two ? &before : nullptr};
+    ReplayResult r = ReplayFrame(w, h.footprints, config, *s, info, Bound(tree));
+    r.frame = reader_->frames()[i].frame;
+    if (k > 1) {  // as ReplayTrace scales a sample back
+      const SimTime extra = r.work * (k - 1);
+      r.rays *= k, r.segments *= k, r.samples *= k, r.work = r.work * k;
+      r.time = r.time + SimTime::Picoseconds(extra.picoseconds() / config.processors.count);
+    }
+    return r;
+  }
+
+  static ReplayConfig Config(const char* scheduler, std::uint32_t processors) {
+    ReplayConfig c = DefaultConfig();
+    c.scheduler = scheduler;
+    c.processors.count = processors;
+    c.levels[0].capacity = processors > 1 ? 2 : 1;
+    return c;
+  }
+
+  static std::string* path_;
+  static TraceReader* reader_;
+};
+
+std::string* DriverTest::path_ = nullptr;
+TraceReader* DriverTest::reader_ = nullptr;
+
+TEST_F(DriverTest, EveryFrameEqualsItsReplayBuiltByHand) {
+  for (const std::vector<std::size_t>& frames :
+       {std::vector<std::size_t>{0, 1, 2, 3, 4}, {1, 3}, {2}, {0, 2, 3}}) {
+    for (const char* scheduler :
+         {"celltree", "peel", "maxwork", "random", "best", "celltree-best", "celltree-union"}) {
+      for (std::uint32_t processors : {1u, 2u}) {
+        for (std::uint32_t k : {1u, 2u}) {
+          const ReplayConfig config = Config(scheduler, processors);
+          const TraceReplay t = ReplayTrace(*reader_, frames, config, {}, k);
+          ASSERT_EQ(t.frames.size(), frames.size());
+          ReplayResult total;
+          for (std::size_t n = 0; n < frames.size(); ++n) {
+            const ReplayResult expected = ByHand(frames[n], config, k);
+            EXPECT_EQ(Describe(t.frames[n]), Describe(expected))
+                << scheduler << " P" << processors << " k" << k << " frame " << frames[n];
+            Accumulate(expected, &total);
+          }
+          FinishTotal(processors, &total);
+          EXPECT_EQ(Describe(t.total), Describe(total));
+          EXPECT_EQ(t.total.frame, 0);
+        }
+      }
+    }
+  }
+}
+
+// Many configurations on two threads: each gets exactly what it gets alone, in order, and
+// configurations differing only in the queue record size get their own peak bytes.
+TEST_F(DriverTest, ManyConfigurationsAtOnceEqualEachAlone) {
+  std::vector<ReplayConfig> configs;
+  for (const std::string& s : SchedulerNames()) {
+    for (std::uint32_t p : {1u, 2u, 3u}) configs.push_back(Config(s.c_str(), p));
+  }
+  configs.push_back(configs[4]);
+  configs.back().processors.queue_record_bytes = 7;
+  const std::vector<std::size_t> frames = {1, 2, 4};
+  std::vector<std::vector<std::string>> got(configs.size());
+  ReplayFramesOptions options;
+  options.jobs = 2;
+  const ReplayFramesStats stats =
+      ReplayFrames(*reader_, frames, configs, options,
+                   [&](const LoadedFrame& f, const std::vector<ReplayResult>& results) {
+                     EXPECT_EQ(f.index, frames[f.position]);
+                     for (std::size_t c = 0; c < results.size(); ++c)
+                       got[c].push_back(Describe(results[c]));
+                     return true;
+                   });
+  EXPECT_EQ(stats.frames, 3u);
+  EXPECT_EQ(stats.distinct, configs.size() - 1);
+  for (std::size_t c = 0; c < configs.size(); ++c) {
+    const TraceReplay alone = ReplayTrace(*reader_, frames, configs[c]);
+    for (std::size_t n = 0; n < frames.size(); ++n) {
+      EXPECT_EQ(got[c][n], Describe(alone.frames[n])) << "config " << c << " frame " << n;
+    }
+  }
+  EXPECT_NE(got.back(), got[4]);  // peak bytes: 7 per ray, not 32
+}
+
+TEST_F(DriverTest, StopsWhenTold) {
+  std::size_t seen = 0;
+  const ReplayFramesStats stats = ReplayFrames(
+      *reader_, {0, 1, 2, 3}, {Config("maxwork", 1)}, {},
+      [&](const LoadedFrame&, const std::vector<ReplayResult>&) { return ++seen < 2; });
+  EXPECT_EQ(seen, 2u);
+  EXPECT_EQ(stats.frames, 2u);
+}
+
+}  // namespace
+}  // namespace raycell
