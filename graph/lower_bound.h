@@ -37,14 +37,14 @@ struct LowerBoundOptions {
   bool cuts = true;     // cuts for count vectors that a group cannot realise
   std::size_t max_triples = 3000;
   std::size_t max_blocks = 400;
-  std::uint64_t max_group_states = 50'000;      // per SCS search
-  std::uint64_t max_cut_states = 20'000;        // per budget search (cuts)
-  std::size_t max_cut_group_cells = 10;         // cuts only for groups of at most this many cells
-  std::uint32_t max_block_cells = 12;           // blocks of at most this many cells
-  std::size_t max_lift_cells = 4;               // cuts of larger groups are not lifted
-  std::uint64_t max_total_states = 10'000'000;  // all searches together
-  std::uint32_t max_cut_rounds = 200;           // solve-check-cut rounds
-  std::uint64_t max_ip_nodes = 200'000;         // branch-and-bound nodes per program
+  std::uint64_t max_group_states = 50'000;     // per SCS search
+  std::uint64_t max_cut_states = 20'000;       // per budget search (cuts)
+  std::size_t max_cut_group_cells = 10;        // cuts only for groups of at most this many cells
+  std::uint32_t max_block_cells = 12;          // blocks of at most this many cells
+  std::size_t max_lift_cells = 4;              // cuts of larger groups are not lifted
+  std::uint64_t max_total_states = 2'500'000;  // all searches together
+  std::uint32_t max_cut_rounds = 200;          // solve-check-cut rounds
+  std::uint64_t max_ip_nodes = 200'000;        // branch-and-bound nodes per program
 };
 
 // One group whose projection bounds its cells' fetches above the sum of their maxGen.
