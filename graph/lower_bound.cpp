@@ -30,13 +30,17 @@
 //  (3) for any S and any vector u over S such that the projections onto S have no common
 //      supersequence with at most u_c copies of each c in S (FitsBudget says kNotRealisable,
 //      a proof by exhaustive search), T restricted to S cannot have x_c <= u_c for every c:
-//      it would be such a supersequence. So some c in S has x_c >= u_c + 1 (a cut). A c for
-//      which even u_c = MostUseful(c) (copies beyond it are never needed) is not realisable
-//      is dropped from the disjunction: no number of copies of c helps.
+//      it would be such a supersequence. So some c in S has x_c >= u_c + 1 (a cut). A c with
+//      u_c >= MostUseful(c) is dropped from the disjunction: a supersequence with more copies
+//      of c keeps one with at most MostUseful(c) after dropping the copies no path uses, so
+//      more copies of c are no way out. Raising u (lifting) is checked by the same search at
+//      each step, and an unknown answer stops it. Unions of groups (UnionCuts) are sets S
+//      like any other.
 // So the count vector of T satisfies every constraint of the program below, and the program's
-// minimum of sum x_c is at most |T|. The matching stage is a special case: pairs with no cell
-// in common are disjoint groups, and their SCS bounds add (different cells are different
-// entries), plus maxGen for the cells outside the pairs.
+// minimum of sum x_c is at most |T|. When a group holds every cell with nodes, its projection
+// is the tree's paths themselves: its exact SCS is the optimum (result.optimal). The matching stage
+// is a special case: pairs with no cell in common are disjoint groups, and their SCS bounds add
+// (different cells are different entries), plus maxGen for the cells outside the pairs.
 //
 // The program is solved by GLPK's branch and bound. Its data are small integers and x is
 // integral, so the objective is integral: a branch-and-bound bound b proves >= ceil(b - 1e-6).

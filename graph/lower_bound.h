@@ -2,19 +2,26 @@
 // stronger than maxGen (DESIGN.md §1 "Lower bounds beyond maxGen").
 //
 // For groups S of cells, the SCS of the tree's paths projected onto S (graph/projection.h,
-// graph/scs.h) bounds the fetches of cells of S. The groups are combined by an integer program
-// over per-cell fetch counts x_c: x_c >= maxGen(c), sum_{c in S} x_c >= SCS(S) for every
-// group, minimise sum x_c. Then cuts: when the program's counts restricted to a group admit no
-// common supersequence of that group's projections, a constraint excluding them (and every
-// count vector below a maximal such one) is added and the program is solved again. Every step
-// keeps the count vector of an optimal schedule feasible, so the program's optimum never
+// graph/scs.h) bounds the fetches of cells of S. The groups (pairs and triples of cells that
+// share paths; blocks of neighbouring cells from the grid, or clusters of cells that share
+// many paths without it; all cells when there are at most max_block_cells) are combined by an
+// integer program over per-cell fetch counts x_c: x_c >= maxGen(c), sum_{c in S} x_c >= SCS(S)
+// for every group, minimise sum x_c. Then cuts: when the program's counts restricted to a
+// group admit no common supersequence of that group's projections (a budget search proves
+// it), a constraint "some c in S has x_c >= u_c + 1" excludes them and every count vector
+// below u (u: the counts, raised cell by cell while still not realisable, for groups of at
+// most max_lift_cells), and the program is solved again. When no group cuts the counts,
+// unions of two intersecting groups whose rows the counts meet with equality are tried. Every
+// step keeps the count vector of an optimal schedule feasible, so the program's optimum never
 // exceeds the optimal schedule length; the argument for each is beside its code in
 // lower_bound.cpp.
 //
-// Cost: dominated by the SCS and budget searches, each limited in states (deterministic); the
-// defaults take a few seconds to ~30 s on a 27-cell frame of ~3,400 nodes (BENCHMARKS.md
-// "Lower bounds"). Trees with many cells and few nodes are cheap: pairs and triples are taken
-// only among cells that share a root-to-leaf path, and their number is limited.
+// Cost: dominated by the SCS and budget searches, each limited in states, and all together by
+// max_total_states (deterministic: no time limit). With the defaults, a 27-cell frame of
+// ~3,000-3,600 nodes takes about 15-30 s of CPU and under 100 MB (BENCHMARKS.md "Lower
+// bounds"); an 8-cell frame well under a second. Trees with many cells and few nodes are cheap:
+// pairs and triples are taken only among cells that share a root-to-leaf path (at most
+// max_triples triples), blocks only where cells have nodes. Single-threaded.
 #pragma once
 
 #include <array>
@@ -37,14 +44,14 @@ struct LowerBoundOptions {
   bool cuts = true;     // cuts for count vectors that a group cannot realise
   std::size_t max_triples = 3000;
   std::size_t max_blocks = 400;
-  std::uint64_t max_group_states = 50'000;      // per SCS search
-  std::uint64_t max_cut_states = 20'000;        // per budget search (cuts)
-  std::size_t max_cut_group_cells = 10;         // cuts only for groups of at most this many cells
-  std::uint32_t max_block_cells = 12;           // blocks of at most this many cells
-  std::size_t max_lift_cells = 4;               // cuts of larger groups are not lifted
-  std::uint64_t max_total_states = 10'000'000;  // all searches together
-  std::uint32_t max_cut_rounds = 200;           // solve-check-cut rounds
-  std::uint64_t max_ip_nodes = 200'000;         // branch-and-bound nodes per program
+  std::uint64_t max_group_states = 50'000;     // per SCS search
+  std::uint64_t max_cut_states = 20'000;       // per budget search (cuts)
+  std::size_t max_cut_group_cells = 10;        // cuts only for groups of at most this many cells
+  std::uint32_t max_block_cells = 12;          // blocks of at most this many cells
+  std::size_t max_lift_cells = 4;              // cuts of larger groups are not lifted
+  std::uint64_t max_total_states = 2'500'000;  // all searches together
+  std::uint32_t max_cut_rounds = 200;          // solve-check-cut rounds
+  std::uint64_t max_ip_nodes = 200'000;        // branch-and-bound nodes per program
 };
 
 // One group whose projection bounds its cells' fetches above the sum of their maxGen.

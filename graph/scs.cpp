@@ -654,12 +654,8 @@ class AStar {
 class BudgetSearch {
  public:
   BudgetSearch(const Dag& dag, std::vector<std::uint32_t> budget, const ScsLimits& limits,
-               std::vector<PartTable>* parts = nullptr, std::vector<PartTable>* checks = nullptr)
-      : dag_(dag),
-        moves_(dag, parts),
-        budget_(std::move(budget)),
-        limits_(limits),
-        checks_(checks) {}
+               std::vector<PartTable>* parts = nullptr)
+      : dag_(dag), moves_(dag, parts), budget_(std::move(budget)), limits_(limits) {}
 
   BudgetResult Run() {
     BudgetResult r;
@@ -700,13 +696,6 @@ class BudgetSearch {
       for (Symbol a : (*moves_.parts())[i].part()) left_in_part += budget_[a] - used[a];
       if (e.parts[i] > left_in_part) return kFail;
     }
-    if (checks_ != nullptr) {
-      for (PartTable& p : *checks_) {
-        std::uint64_t left_in_part = 0;
-        for (Symbol a : p.part()) left_in_part += budget_[a] - used[a];
-        if (p.Remaining(f) > left_in_part) return kFail;
-      }
-    }
     std::vector<std::uint32_t>& key = keys_[depth];
     key.assign(f.begin(), f.end());
     key.push_back(kNoSymbol);  // separates the frontier from the copies used
@@ -745,7 +734,6 @@ class BudgetSearch {
   StateStore failed_;
   std::uint64_t states_ = 0;
   std::vector<Symbol> path_;
-  std::vector<PartTable>* checks_;
   std::vector<Eval> evals_;                       // per depth
   std::vector<std::vector<std::uint32_t>> keys_;  // per depth
 };
@@ -855,7 +843,6 @@ class ScsSolver::Instance {
   Dag dag;
   // The heuristic's memo tables fill as searches run (not thread-safe; see scs.h).
   mutable std::vector<PartTable> parts;
-  mutable std::vector<PartTable> checks;  // AddChecks
 };
 
 ScsSolver::ScsSolver(const std::vector<CellString>& strings)
@@ -870,20 +857,6 @@ const std::vector<CellId>& ScsSolver::symbols() const { return in_->dag.cells();
 std::uint32_t ScsSolver::MostUseful(CellId cell) const {
   const Symbol a = in_->dag.Dense(cell);
   return a == kNoSymbol ? 0 : in_->dag.total(a);
-}
-
-void ScsSolver::AddChecks(const std::vector<std::vector<CellId>>& groups) {
-  const Dag& dag = in_->dag;
-  for (const std::vector<CellId>& g : groups) {
-    std::vector<Symbol> part;
-    for (CellId c : g) {
-      const Symbol a = dag.Dense(c);
-      if (a != kNoSymbol) part.push_back(a);
-    }
-    std::sort(part.begin(), part.end());
-    part.erase(std::unique(part.begin(), part.end()), part.end());
-    if (part.size() >= 2) in_->checks.emplace_back(dag, part, Instance::kSubStates);
-  }
 }
 
 ScsResult ScsSolver::Shortest(const ScsLimits& limits) const {
@@ -903,7 +876,7 @@ BudgetResult ScsSolver::FitsBudget(const std::vector<std::uint32_t>& budget,
     RAYCELL_CHECK_LT(std::size_t{dag.cell(a)}, budget.size());
     dense[a] = budget[dag.cell(a)];
   }
-  return BudgetSearch(dag, std::move(dense), limits, &in_->parts, &in_->checks).Run();
+  return BudgetSearch(dag, std::move(dense), limits, &in_->parts).Run();
 }
 
 ScsResult ShortestCommonSupersequence(const std::vector<CellString>& strings,

@@ -3,9 +3,12 @@
 // lower bounds of graph/lower_bound.h feed them projections (graph/projection.h), and an
 // exact schedule search can use them on any sub-forest's paths.
 //
-// Both searches run over position vectors (how far each string is matched) and are exact
-// unless a state limit stops them; the limit is counted in states, so the answers are
-// deterministic. The problem is NP-hard: what a limit buys depends on the strings.
+// Both searches run over frontiers of a DAG of the strings (a trie whose identical subtrees are
+// merged; a frontier is the set of nodes still to match, without nodes whose paths are
+// subsequences of another's) and are exact unless a state limit stops them; the limit is
+// counted in states, so the answers are deterministic. The problem is NP-hard: what a limit
+// buys depends on the strings. An ScsSolver keeps memo tables that its searches fill, so one
+// solver must not be used by two threads at once (separate solvers may).
 #pragma once
 
 #include <cstdint>
@@ -63,23 +66,20 @@ class ScsSolver {
   // together (drop from any common supersequence the copies no string is matched to).
   std::uint32_t MostUseful(CellId cell) const;
 
-  // The SCS length, by A* over position vectors with the largest of three admissible
-  // heuristics (the longest remaining string; the sum over symbols of the most copies any
-  // remaining string needs; the exact SCS of a few fixed pairs of strings), a greedy
-  // supersequence as the incumbent, and forced moves (a symbol that every string still
-  // needing it wants next is taken without branching). max_states counts stored states;
-  // each takes about strings * bits per position / 8 + 40 bytes.
+  // The SCS length, by A* over frontiers with the largest of three admissible, consistent
+  // heuristics (the longest remaining path; the sum over symbols of the most copies one
+  // remaining path needs; for 4 to 40 symbols, the sum over disjoint pairs of symbols, chosen
+  // by their gain at the start, of the pair's remaining SCS, memoised), a greedy
+  // supersequence as the incumbent, and forced moves (a symbol that every path still needing
+  // it wants next is taken without branching). max_states counts stored states; each takes
+  // about 4 bytes per frontier node plus 40. Building the solver costs one small SCS search
+  // per pair of symbols (for 4 to 40 symbols).
   ScsResult Shortest(const ScsLimits& limits = {}) const;
-
-  // Groups of symbols whose remaining SCS FitsBudget also compares, at every state, with the
-  // copies their budgets leave (a state where it exceeds them is a dead end). Costs memory per
-  // group and node; not used by Shortest.
-  void AddChecks(const std::vector<std::vector<CellId>>& groups);
 
   // Is there a common supersequence with at most budget[c] copies of every symbol c?
   // `budget` is indexed by cell id and must cover every symbol (RAYCELL_CHECK). Depth-first
-  // search over (position vector, copies used) with a memo of failed states, pruned by the
-  // heuristics per symbol and in total; kUnknown when max_states (states visited) is reached.
+  // search over (frontier, copies used) with a memo of failed states, pruned per symbol, per
+  // pair of the heuristic and in total; kUnknown when max_states (states visited) is reached.
   BudgetResult FitsBudget(const std::vector<std::uint32_t>& budget,
                           const ScsLimits& limits = {}) const;
 

@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <map>
 #include <random>
+#include <set>
 
 #include "graph/cell_tree.h"
 #include "tests/graph/test_trees.h"
@@ -79,6 +81,38 @@ bool BruteForceFits(const Strings& strings, const std::vector<std::uint32_t>& bu
   return false;
 }
 
+// The SCS length by breadth-first search over position vectors (no heuristic, no pruning):
+// each level appends every symbol of the alphabet. With `budget`, only within it (returns
+// SIZE_MAX when nothing fits).
+std::size_t BfsScs(const Strings& strings, const std::vector<std::uint32_t>* budget = nullptr) {
+  const std::vector<CellId> alphabet = Alphabet(strings);
+  using State = std::pair<std::vector<std::size_t>, std::vector<std::uint32_t>>;
+  State start{std::vector<std::size_t>(strings.size(), 0),
+              std::vector<std::uint32_t>(alphabet.size(), 0)};
+  std::set<State> seen{start};
+  std::vector<State> level{start};
+  for (std::size_t depth = 0; !level.empty(); ++depth) {
+    std::vector<State> next;
+    for (const State& s : level) {
+      bool done = true;
+      for (std::size_t i = 0; i < strings.size(); ++i)
+        done = done && s.first[i] == strings[i].size();
+      if (done) return depth;
+      for (std::size_t a = 0; a < alphabet.size(); ++a) {
+        State t = s;
+        if (budget != nullptr && ++t.second[a] > (*budget)[alphabet[a]]) continue;
+        if (budget == nullptr) t.second.clear();
+        for (std::size_t i = 0; i < strings.size(); ++i) {
+          if (t.first[i] < strings[i].size() && strings[i][t.first[i]] == alphabet[a]) ++t.first[i];
+        }
+        if (seen.insert(t).second) next.push_back(t);
+      }
+    }
+    level = std::move(next);
+  }
+  return SIZE_MAX;
+}
+
 Strings RandomStrings(std::mt19937& rng, CellId symbols, int count, int max_length) {
   Strings out;
   for (int i = 0; i < count; ++i) {
@@ -116,6 +150,26 @@ TEST(ScsTest, ExactAgainstBruteForceOnRandomSets) {
     ASSERT_EQ(r.upper_bound, expected);
     ASSERT_EQ(r.supersequence.size(), expected);
     ASSERT_TRUE(CoversAll(r.supersequence, strings)) << trial;
+  }
+}
+
+// Four to six symbols: the pair heuristic and its memo tables are in play.
+TEST(ScsTest, ExactWithThePairHeuristicAgainstBreadthFirstSearch) {
+  std::mt19937 rng(16);
+  for (int trial = 0; trial < 100; ++trial) {
+    const CellId symbols = 4 + rng() % 2;
+    const Strings strings = RandomStrings(rng, symbols, 2 + rng() % 4, 6);
+    const ScsSolver solver(strings);
+    const ScsResult r = solver.Shortest();
+    ASSERT_TRUE(r.exact);
+    ASSERT_EQ(r.lower_bound, BfsScs(strings)) << trial;
+    ASSERT_TRUE(CoversAll(r.supersequence, strings));
+    // And a budget search with the same heuristic tables.
+    std::vector<std::uint32_t> budget(symbols);
+    for (auto& b : budget) b = rng() % 3 + 1;
+    const BudgetResult fits = solver.FitsBudget(budget);
+    ASSERT_EQ(fits.answer == Realisability::kRealisable, BfsScs(strings, &budget) != SIZE_MAX)
+        << trial;
   }
 }
 
