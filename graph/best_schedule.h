@@ -25,7 +25,7 @@ namespace raycell {
 struct BestScheduleOptions {
   std::uint64_t seed = 1;
   std::size_t beam_width = 256;                        // 0: no beam search
-  std::uint64_t beam_max_node_visits = 1'000'000'000;  // BeamOptions::max_node_visits
+  std::uint64_t beam_max_node_visits = 500'000'000;  // BeamOptions::max_node_visits
   // Local search: `chains` independent chains (0: none), each with `local` (its seed is
   // derived from `seed` and the chain number).
   std::size_t chains = 4;

@@ -40,9 +40,9 @@ struct LocalSearchOptions {
   std::uint64_t max_windows = 20000;  // windows re-solved: the iteration limit
   // Work limit, in node visits (window searches, re-timing the schedule after a change), so
   // that huge trees stop early instead of running for hours: a 27-cell frame of the study
-  // (3,400 nodes) needs 2e8-8e8 for 20000 windows, a tree of 10^5 nodes 2e9 for its
+  // (3,400 nodes) needs 2e8-1e9 for 20000 windows, a tree of 10^5 nodes 2e9 for its
   // re-timings alone.
-  std::uint64_t max_work = 2'000'000'000;
+  std::uint64_t max_work = 1'000'000'000;
   // Memory of one window's exact search (its states and open list); past it the window goes
   // to the beam.
   std::size_t exact_bytes = std::size_t{64} << 20;
