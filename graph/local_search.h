@@ -66,7 +66,8 @@ struct LocalSearchResult {
   std::string ToString() const;
 };
 
-// Improves `schedule`, which must be feasible for `forest` (RAYCELL_CHECK).
+// Improves `schedule`, which must be feasible for `forest` (RAYCELL_CHECK). InputError when
+// the window lengths are inconsistent (min_window 0 or above max_window).
 LocalSearchResult ImproveSchedule(const CellForest& forest, std::vector<CellId> schedule,
                                   const LocalSearchOptions& options = {});
 
