@@ -21,9 +21,10 @@
 //
 // Cost. Scoring the children of one state is one pass over the forest's nodes (each cell's
 // nodes once: its ready nodes and the change of its maxGen term); a layer costs
-// O(width * nodes) plus sorting its children. The width shrinks (never below 1) when
-// width * nodes * (moves still expected) would pass max_node_visits, so huge forests
-// degrade to a greedy search instead of blowing up; every limit counts work, not time.
+// O(width * nodes) plus picking its best 2 * width children (nth_element, then a sort). The width
+// shrinks (never below 1) when width * nodes * (moves still expected) would pass max_node_visits,
+// so huge forests degrade to a greedy search instead of blowing up; every limit counts work, not
+// time.
 #pragma once
 
 #include <cstddef>

@@ -68,6 +68,16 @@ std::vector<LocalSearchResult> RunChains(const CellForest& forest, const std::ve
   return results;
 }
 
+// OptimumResult::ToString without the schedule and the wall time (not reproducible).
+std::string Status(const OptimumResult& r) {
+  std::ostringstream s;
+  s << ToString(r.status);
+  if (r.status == OptimumResult::kOptimal) s << " " << r.length;
+  if (r.status == OptimumResult::kUnknown) s << " in [" << r.lower << ", " << r.upper << "]";
+  s << " (" << r.states_expanded << " states): " << r.reason;
+  return s.str();
+}
+
 class Best {
  public:
   Best(const CellTree& tree, const BestScheduleOptions& o) : tree_(tree), o_(o) {}
@@ -139,7 +149,7 @@ class Best {
     eo.limits.max_nodes = o_.exact_max_nodes;
     const OptimumResult r = ExactOptimum(tree_, eo);
     out_.exact_states += r.states_expanded;
-    out_.exact_status = r.ToString();
+    out_.exact_status = Status(r);
     if (r.status == OptimumResult::kTooLarge) return;
     out_.lower = std::max(out_.lower, r.lower);
     if (r.status == OptimumResult::kOptimal) Offer(r.schedule, out_.method + "+exact");

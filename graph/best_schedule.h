@@ -24,8 +24,8 @@ namespace raycell {
 
 struct BestScheduleOptions {
   std::uint64_t seed = 1;
-  std::size_t beam_width = 256;                        // 0: no beam search
-  std::uint64_t beam_max_node_visits = 1'000'000'000;  // BeamOptions::max_node_visits
+  std::size_t beam_width = 256;                      // 0: no beam search
+  std::uint64_t beam_max_node_visits = 500'000'000;  // BeamOptions::max_node_visits
   // Local search: `chains` independent chains (0: none), each with `local` (its seed is
   // derived from `seed` and the chain number).
   std::size_t chains = 4;
@@ -56,7 +56,9 @@ struct BestScheduleResult {
   // bound and what the exact search proved. optimal when lower == length.
   std::uint64_t lower = 0;
   bool optimal = false;
-  std::string exact_status = "not run";  // or ExactOptimum's status and reason
+  // Or the exact search's last answer: "optimal 22 (55 states): ..." or
+  // "unknown in [71, 83] (50000 states): ...".
+  std::string exact_status = "not run";
   std::uint64_t beam_states = 0, windows = 0, work = 0, exact_states = 0;
   // "84 (beam(256)+lns(4x20000); Peel 114, beam 99, local search 84, bound 63, lower 63)".
   std::string ToString() const;

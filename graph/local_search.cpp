@@ -26,7 +26,11 @@ class LocalSearch {
  public:
   LocalSearch(const CellForest& f, std::vector<CellId> schedule, const LocalSearchOptions& o)
       : f_(f), o_(o), timer_(f), rng_(o.seed), schedule_(std::move(schedule)) {
-    RAYCELL_CHECK(o.min_window >= 1 && o.min_window <= o.max_window);
+    if (o.min_window < 1 || o.min_window > o.max_window) {
+      throw InputError("local search: min_window (" + std::to_string(o.min_window) +
+                       ") must be at least 1 and at most max_window (" +
+                       std::to_string(o.max_window) + ")");
+    }
   }
 
   LocalSearchResult Run() {

@@ -66,6 +66,7 @@ TEST(BestScheduleTest, ExactSearchProvesTheOptimum) {
   EXPECT_TRUE(r.optimal);
   EXPECT_EQ(r.lower, 7u);
   EXPECT_EQ(r.exact_status.substr(0, 9), "optimal 7");
+  EXPECT_EQ(r.exact_status.find(" s)"), std::string::npos);  // no wall time
   BestScheduleOptions no_exact = Small();
   no_exact.exact_states = 0;
   const BestScheduleResult n = BestSchedule(t, no_exact);

@@ -4,6 +4,7 @@
 
 #include <random>
 
+#include "base/check.h"
 #include "graph/peel.h"
 #include "graph/schedule.h"
 #include "tests/graph/test_trees.h"
@@ -62,6 +63,15 @@ TEST(LocalSearchTest, StopsAtTheLowerBound) {
   const LocalSearchResult r = Improve(t, {A, B, A}, o);
   EXPECT_EQ(r.windows, 0u);
   EXPECT_EQ(r.schedule, (Schedule{A, B, A}));
+}
+
+TEST(LocalSearchTest, InconsistentWindowsAreAnInputError) {
+  LocalSearchOptions o;
+  o.min_window = 12;
+  o.max_window = 10;
+  EXPECT_THROW(Improve(FromPaths({{A, B}}), {A, B}, o), InputError);
+  o.min_window = 0;
+  EXPECT_THROW(Improve(FromPaths({{A, B}}), {A, B}, o), InputError);
 }
 
 TEST(LocalSearchTest, ToString) {

@@ -15,6 +15,9 @@
 //   --cells N           cells of the synthetic trees (27)
 //   --max-nodes N       largest synthetic tree (100000)
 //   --schedules         also print each best schedule
+//   --exact-compare     instead: the exact search per frame (Peel as incumbent) with the
+//                       maxGen heuristic alone (the search before the pair heuristic) and
+//                       with pairs, --exact-states states each: status and states expanded
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -32,6 +35,7 @@
 #include "base/parse.h"
 #include "graph/analysis.h"
 #include "graph/best_schedule.h"
+#include "graph/optimum.h"
 #include "graph/peel.h"
 #include "traces/trace_reader.h"
 
@@ -40,7 +44,7 @@ namespace {
 
 struct Args {
   std::string capture;
-  bool synthetic = false, schedules = false;
+  bool synthetic = false, schedules = false, exact_compare = false;
   std::vector<int> frames;  // empty: all
   BestScheduleOptions options;
   CellId cells = 27;
@@ -69,6 +73,8 @@ Args Parse(int argc, char** argv) {
       a.synthetic = true;
     } else if (arg == "--schedules") {
       a.schedules = true;
+    } else if (arg == "--exact-compare") {
+      a.exact_compare = true;
     } else if (arg == "--frames") {
       for (const std::string& part : Split(value(i), ',')) {
         for (int f : ParseFrameRange(part, arg)) a.frames.push_back(f);
@@ -172,20 +178,62 @@ void Print(const std::string& label, const Row& r, double peak) {
   std::fflush(stdout);
 }
 
+std::string Exact(const OptimumResult& r) {
+  char text[96];
+  if (r.status == OptimumResult::kOptimal) {
+    std::snprintf(text, sizeof text, "optimal %llu in %llu states", (unsigned long long)r.length,
+                  (unsigned long long)r.states_expanded);
+  } else {
+    std::snprintf(text, sizeof text, "[%llu, %llu] after %llu states", (unsigned long long)r.lower,
+                  (unsigned long long)r.upper, (unsigned long long)r.states_expanded);
+  }
+  return text;
+}
+
+int ExactCompare(const TraceReader& reader, const std::vector<int>& frames, const Args& a) {
+  std::printf("%s: exact search, Peel as incumbent, %llu states at most\n%5s %7s %5s %5s  %-36s %s\n",
+              a.capture.c_str(), (unsigned long long)a.options.exact_states, "frame", "nodes",
+              "bound", "peel", "maxGen heuristic", "pair heuristic");
+  int proved_old = 0, proved_new = 0;
+  for (const int f : frames) {
+    const CellTree tree = BuildFrameTree(reader, std::size_t(f));
+    OptimumOptions o;
+    o.limits.max_states = a.options.exact_states;
+    o.limits.max_seconds = 1e30;
+    o.limits.max_nodes = 1'000'000;
+    o.pair_heuristic = false;
+    const OptimumResult old = ExactOptimum(tree, o);
+    o.pair_heuristic = true;
+    const OptimumResult now = ExactOptimum(tree, o);
+    proved_old += old.status == OptimumResult::kOptimal;
+    proved_new += now.status == OptimumResult::kOptimal;
+    std::printf("%5d %7zu %5llu %5zu  %-36s %s\n", reader.frames()[f].frame, tree.node_count(),
+                (unsigned long long)Bound(tree), Peel(tree).schedule.size(), Exact(old).c_str(),
+                Exact(now).c_str());
+    std::fflush(stdout);
+  }
+  std::printf("proved optimal: %d of %zu frames with the maxGen heuristic, %d with pairs\n",
+              proved_old, frames.size(), proved_new);
+  return 0;
+}
+
 int Capture(const Args& a) {
   const TraceReader reader = TraceReader::Open(a.capture);
   std::vector<int> frames = a.frames;
   if (frames.empty()) {
     for (std::size_t f = 0; f < reader.frames().size(); ++f) frames.push_back(int(f));
   }
-  std::printf("%s: %zu frames\n%s", a.capture.c_str(), frames.size(), kHeader);
-  double peel = 0, best = 0, lower = 0, ratio = 0, gap = 0, seconds = 0, peak_max = 0;
-  int n = 0, optimal = 0;
   for (const int f : frames) {
     if (std::size_t(f) >= reader.frames().size()) {
       throw InputError("--frames: frame index " + std::to_string(f) + " past the capture's " +
                        std::to_string(reader.frames().size()) + " frames");
     }
+  }
+  if (a.exact_compare) return ExactCompare(reader, frames, a);
+  std::printf("%s: %zu frames\n%s", a.capture.c_str(), frames.size(), kHeader);
+  double peel = 0, best = 0, lower = 0, ratio = 0, gap = 0, seconds = 0, peak_max = 0;
+  int n = 0, optimal = 0;
+  for (const int f : frames) {
     double peak = 0;
     const Row r = InChild([&] { return BuildFrameTree(reader, std::size_t(f)); }, a, peak);
     Print(std::to_string(reader.frames()[f].frame), r, peak);
