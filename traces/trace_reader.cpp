@@ -299,6 +299,15 @@ TraceHeader ToHeader(schema::Header::Reader r) {
     throw BadData("format version " + Str(h.format_version) + " is not supported (this reader " +
                   "reads 1.." + Str(kTraceFormatVersion) + ")");
   }
+  // Lists of empty structs cost the message nothing: check their lengths before reading.
+  if (r.getGrids().size() > kTraceMaxGrids) {
+    throw BadData(Str(r.getGrids().size()) + " grids exceed the trace format's limit of " +
+                  Str(kTraceMaxGrids) + " (kTraceMaxGrids)");
+  }
+  if (r.getCameras().size() > kTraceMaxFrames) {
+    throw BadData(Str(r.getCameras().size()) + " cameras (frames) exceed the trace format's " +
+                  "limit of " + Str(kTraceMaxFrames) + " (kTraceMaxFrames)");
+  }
   h.producer = ToStd(r.getProducer());
   h.scene = ToStd(r.getScene());
   for (auto g : r.getGrids()) h.grids.push_back(ToGrid(g));
@@ -313,6 +322,10 @@ TraceHeader ToHeader(schema::Header::Reader r) {
   const auto footprints = r.getFootprints();
   if (h.format_version >= 2 && footprints.size() != 0) {
     throw BadData("version 2 header with footprints in it");
+  }
+  if (h.format_version == 1 && footprints.size() != TraceCellCount(h.cells)) {
+    throw BadData(Str(footprints.size()) + " footprints for " + Str(TraceCellCount(h.cells)) +
+                  " cells");
   }
   for (std::uint64_t f : footprints) h.footprints.push_back(f);
   return h;
