@@ -11,6 +11,7 @@ packages=(
   libcli11-dev libpng-dev libboost-graph-dev libtomlplusplus-dev     # CLI, images, graphs, configs
   libgtest-dev libgmock-dev                                          # tests
   python3 python3-matplotlib bc graphviz                             # plots, DOT, benchmarks
+  clang libclang-rt-14-dev  # .ci/run: the ASan/UBSan build and libFuzzer targets (RAYCELL_FUZZ)
 )
 
 missing=()
