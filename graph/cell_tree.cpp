@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "base/check.h"
+#include "traces/format.h"
 
 namespace raycell {
 
@@ -208,6 +209,13 @@ NodeId CellTreeBuilder::StartNode(const RayView& ray) {
 }
 
 void CellTreeBuilder::AddRay(const RayView& ray) {
+  for (std::size_t v = 0; v < ray.visit_count; ++v) {
+    // The tree keeps arrays indexed by cell: cells are bounded as in a trace.
+    if (ray.cells[v] >= kTraceMaxCells) {
+      RayError(ray.id, "cell " + std::to_string(ray.cells[v]) + " is beyond the largest cell " +
+                           "grid (" + std::to_string(kTraceMaxCells) + " cells, kTraceMaxCells)");
+    }
+  }
   if (any_ray_ && ray.id <= last_id_) {
     RayError(ray.id, "ids must increase; previous ray was " + std::to_string(last_id_));
   }

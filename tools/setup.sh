@@ -12,6 +12,7 @@ packages=(
   libgtest-dev libgmock-dev                                          # tests
   libglpk-dev                    # the lower bound's integer program (graph/lower_bound.cpp)
   python3 python3-matplotlib bc graphviz                             # plots, DOT, benchmarks
+  clang libclang-rt-14-dev  # .ci/run: the ASan/UBSan build and libFuzzer targets (RAYCELL_FUZZ)
 )
 
 missing=()

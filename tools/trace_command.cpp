@@ -82,7 +82,7 @@ std::string Unreadable(const TraceReader& r) {
     lost += " and bytes " + std::to_string(begin) + ".." + std::to_string(end) + " (" +
             std::to_string(end - begin) + " bytes) after " + after;
   }
-  return lost + " are unreadable: " + r.warning();
+  return lost + (begin < end ? " are" : " is") + " unreadable: " + r.warning();
 }
 
 // Reads and checks every frame (zstd and frame checksums, content), streaming, and reports

@@ -47,18 +47,27 @@ auto Guarded(const std::string& path, Where&& where, Body&& body) {
 
 // ---- Input file --------------------------------------------------------------------------
 
+// The file's bytes, read with pread from a file or copied from memory.
 class FileIn {
  public:
   explicit FileIn(const std::string& path) {
     fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd_ < 0) throw InputError(path + ": cannot open: " + std::strerror(errno));
     struct stat st;
-    if (::fstat(fd_, &st) != 0) throw InputError(path + ": cannot stat: " + std::strerror(errno));
+    if (::fstat(fd_, &st) != 0) {
+      const int error = errno;
+      ::close(fd_);
+      throw InputError(path + ": cannot stat: " + std::strerror(error));
+    }
     size_ = static_cast<std::uint64_t>(st.st_size);
   }
+  // Reads `bytes` instead of a file.
+  explicit FileIn(std::string&& bytes) : memory_(std::move(bytes)), size_(memory_.size()) {}
   FileIn(const FileIn&) = delete;
   FileIn& operator=(const FileIn&) = delete;
-  ~FileIn() { ::close(fd_); }
+  ~FileIn() {
+    if (fd_ >= 0) ::close(fd_);
+  }
 
   std::uint64_t size() const { return size_; }
 
@@ -67,6 +76,10 @@ class FileIn {
     if (offset > size_ || n > size_ - offset) {
       throw BadData("truncated: needs bytes " + Str(offset) + ".." + Str(offset + n) +
                     " but the file has " + Str(size_));
+    }
+    if (fd_ < 0) {
+      if (n > 0) std::memcpy(dst, memory_.data() + offset, n);
+      return;
     }
     auto* p = static_cast<char*>(dst);
     while (n > 0) {
@@ -88,6 +101,7 @@ class FileIn {
 
  private:
   int fd_ = -1;
+  std::string memory_;
   std::uint64_t size_ = 0;
 };
 
@@ -99,6 +113,48 @@ std::uint64_t LoadU64(const unsigned char* b) {
 
 // ---- One zstd frame, decompressed on demand ----------------------------------------------
 
+// Decompression contexts kept per thread for reuse: creating one per frame costs a
+// 100 KB allocation and, for each new frame, its window buffer again. A reader takes one
+// (Acquire) and gives it back (Release), so nested readings on a thread each have their own.
+class DCtxPool {
+ public:
+  static ZSTD_DCtx* Acquire() {
+    std::vector<ZSTD_DCtx*>& free = Free().contexts;
+    ZSTD_DCtx* dctx = nullptr;
+    if (free.empty()) {
+      dctx = ZSTD_createDCtx();
+      RAYCELL_CHECK(dctx != nullptr);
+    } else {
+      dctx = free.back();
+      free.pop_back();
+      ZSTD_DCtx_reset(dctx, ZSTD_reset_session_and_parameters);
+    }
+    ZSTD_DCtx_setParameter(dctx, ZSTD_d_windowLogMax, kTraceMaxWindowLog);
+    return dctx;
+  }
+  static void Release(ZSTD_DCtx* dctx) {
+    std::vector<ZSTD_DCtx*>& free = Free().contexts;
+    if (free.size() < kKept) {
+      free.push_back(dctx);
+    } else {
+      ZSTD_freeDCtx(dctx);
+    }
+  }
+
+ private:
+  static constexpr std::size_t kKept = 4;
+  struct List {
+    std::vector<ZSTD_DCtx*> contexts;
+    ~List() {
+      for (ZSTD_DCtx* d : contexts) ZSTD_freeDCtx(d);
+    }
+  };
+  static List& Free() {
+    thread_local List list;
+    return list;
+  }
+};
+
 class ZstdFrameReader {
  public:
   ZstdFrameReader(const FileIn& file, std::uint64_t offset, std::uint64_t end)
@@ -106,14 +162,14 @@ class ZstdFrameReader {
     if (file.U32At(offset) != ZSTD_MAGICNUMBER) {
       throw BadData("no zstd frame starts at offset " + Str(offset));
     }
-    dctx_ = ZSTD_createDCtx();
-    RAYCELL_CHECK(dctx_ != nullptr);
-    ZSTD_DCtx_setParameter(dctx_, ZSTD_d_windowLogMax, kTraceMaxWindowLog);
-    buffer_.resize(ZSTD_DStreamInSize());
+    // No larger than the bytes there are to read (small frames are common).
+    buffer_.resize(
+        static_cast<std::size_t>(std::min<std::uint64_t>(ZSTD_DStreamInSize(), end_ - offset)));
+    dctx_ = DCtxPool::Acquire();
   }
   ZstdFrameReader(const ZstdFrameReader&) = delete;
   ZstdFrameReader& operator=(const ZstdFrameReader&) = delete;
-  ~ZstdFrameReader() { ZSTD_freeDCtx(dctx_); }
+  ~ZstdFrameReader() { DCtxPool::Release(dctx_); }
 
   // Reads up to `n` bytes; fewer only when the zstd frame ends (its checksum then verified).
   std::size_t Read(void* dst, std::size_t n) {
@@ -243,6 +299,15 @@ TraceHeader ToHeader(schema::Header::Reader r) {
     throw BadData("format version " + Str(h.format_version) + " is not supported (this reader " +
                   "reads 1.." + Str(kTraceFormatVersion) + ")");
   }
+  // Lists of empty structs cost the message nothing: check their lengths before reading.
+  if (r.getGrids().size() > kTraceMaxGrids) {
+    throw BadData(Str(r.getGrids().size()) + " grids exceed the trace format's limit of " +
+                  Str(kTraceMaxGrids) + " (kTraceMaxGrids)");
+  }
+  if (r.getCameras().size() > kTraceMaxFrames) {
+    throw BadData(Str(r.getCameras().size()) + " cameras (frames) exceed the trace format's " +
+                  "limit of " + Str(kTraceMaxFrames) + " (kTraceMaxFrames)");
+  }
   h.producer = ToStd(r.getProducer());
   h.scene = ToStd(r.getScene());
   for (auto g : r.getGrids()) h.grids.push_back(ToGrid(g));
@@ -257,6 +322,10 @@ TraceHeader ToHeader(schema::Header::Reader r) {
   const auto footprints = r.getFootprints();
   if (h.format_version >= 2 && footprints.size() != 0) {
     throw BadData("version 2 header with footprints in it");
+  }
+  if (h.format_version == 1 && footprints.size() != TraceCellCount(h.cells)) {
+    throw BadData(Str(footprints.size()) + " footprints for " + Str(TraceCellCount(h.cells)) +
+                  " cells");
   }
   for (std::uint64_t f : footprints) h.footprints.push_back(f);
   return h;
@@ -775,6 +844,7 @@ struct TraceReader::Impl {
   std::uint64_t readable_end = 0;
 
   explicit Impl(const std::string& p) : path(p), file(p) {}
+  Impl(const std::string& name, std::string&& bytes) : path(name), file(std::move(bytes)) {}
 
   void ReadHeaderFrame() {
     header = Guarded(
@@ -837,6 +907,13 @@ TraceReader::~TraceReader() = default;
 
 TraceReader TraceReader::Open(const std::string& path) {
   auto impl = std::make_unique<Impl>(path);
+  impl->ReadHeaderFrame();
+  impl->ReadFrameList();
+  return TraceReader(std::move(impl));
+}
+
+TraceReader TraceReader::OpenBytes(std::string bytes, const std::string& name) {
+  auto impl = std::make_unique<Impl>(name, std::move(bytes));
   impl->ReadHeaderFrame();
   impl->ReadFrameList();
   return TraceReader(std::move(impl));

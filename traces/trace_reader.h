@@ -33,6 +33,8 @@ class TraceReader {
  public:
   // Throws InputError when the file cannot be opened or its header is unreadable.
   static TraceReader Open(const std::string& path);
+  // The same for a trace held in memory; `name` stands for the path in messages.
+  static TraceReader OpenBytes(std::string bytes, const std::string& name);
 
   TraceReader(TraceReader&&) noexcept;
   TraceReader& operator=(TraceReader&&) noexcept;

@@ -29,19 +29,47 @@ namespace {
 
 std::string ErrnoText() { return std::strerror(errno); }
 
-// An owned file descriptor opened for writing, with full writes and a byte count.
+// An owned file descriptor for writing `path`, with full writes and a byte count. The file
+// gets its name only at Publish(): it is opened unnamed (O_TMPFILE) and linked to `path`
+// then, so a process killed before leaves nothing and one killed after leaves `path` with at
+// least what was written before Publish() (the complete header). Where O_TMPFILE is not
+// supported it is written as `path.new.PID` and renamed by Publish() (a kill before leaves
+// that file behind).
 class FileOut {
  public:
   explicit FileOut(std::string path) : path_(std::move(path)) {
-    fd_ = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    const auto slash = path_.rfind('/');
+    const std::string dir = slash == std::string::npos ? "." : path_.substr(0, slash + 1);
+    fd_ = ::open(dir.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0644);
+    if (fd_ < 0 && (errno == EOPNOTSUPP || errno == EISDIR || errno == EINVAL)) {
+      staging_ = path_ + ".new." + std::to_string(::getpid());
+      fd_ = ::open(staging_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    }
     if (fd_ < 0) throw InputError(path_ + ": cannot open for writing: " + ErrnoText());
   }
   FileOut(const FileOut&) = delete;
   FileOut& operator=(const FileOut&) = delete;
   ~FileOut() {
     if (fd_ >= 0) ::close(fd_);
+    if (!published_ && !staging_.empty()) ::unlink(staging_.c_str());
   }
 
+  // Gives the file its name `path`, replacing what was there.
+  void Publish() {
+    if (!staging_.empty()) {
+      if (std::rename(staging_.c_str(), path_.c_str()) != 0) {
+        throw InputError(path_ + ": cannot create: " + ErrnoText());
+      }
+      published_ = true;
+      return;
+    }
+    if (Link() == 0) return;
+    if (errno == EEXIST) {
+      ::unlink(path_.c_str());
+      if (Link() == 0) return;
+    }
+    throw InputError(path_ + ": cannot create: " + ErrnoText());
+  }
   void Write(const void* data, std::size_t size) {
     const auto* p = static_cast<const char*>(data);
     while (size > 0) {
@@ -62,8 +90,21 @@ class FileOut {
   const std::string& path() const { return path_; }
 
  private:
+  // Links the unnamed file to `path`: through /proc, else by descriptor. 0 on success (and
+  // published_ set); otherwise -1 with errno set.
+  int Link() {
+    char proc[64];
+    std::snprintf(proc, sizeof proc, "/proc/self/fd/%d", fd_);
+    int r = ::linkat(AT_FDCWD, proc, AT_FDCWD, path_.c_str(), AT_SYMLINK_FOLLOW);
+    if (r != 0 && errno == ENOENT) r = ::linkat(fd_, "", AT_FDCWD, path_.c_str(), AT_EMPTY_PATH);
+    if (r == 0) published_ = true;
+    return r;
+  }
+
   std::string path_;
+  std::string staging_;  // the fallback's named temporary, when O_TMPFILE is unsupported
   int fd_ = -1;
+  bool published_ = false;
   std::uint64_t bytes_ = 0;
 };
 
@@ -435,6 +476,7 @@ struct TraceWriter::Impl {
     WriteFootprints();
     sink.EndFrame();
     header_length = file.bytes();
+    file.Publish();  // the .tmp appears now, holding the complete header
   }
 
   // The footprints as records of at most options.footprint_runs_per_record runs.

@@ -112,7 +112,7 @@ TEST_F(TraceCommandTest, VerifyFailsAFileWithoutItsIndex) {
   const Result r = Raycell("trace verify " + path);
   EXPECT_EQ(r.code, 2) << r.out << r.err;
   EXPECT_EQ(Lines(r.out, "frame "), 3u) << r.out;
-  EXPECT_TRUE(Contains(r.err, "the index are unreadable: " + path + ": index: missing")) << r.err;
+  EXPECT_TRUE(Contains(r.err, "the index is unreadable: " + path + ": index: missing")) << r.err;
 }
 
 TEST_F(TraceCommandTest, VerifyFailsADamagedIndexOrFrame) {

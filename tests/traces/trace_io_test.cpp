@@ -3,10 +3,12 @@
 // trace is a benchmark: tools/bench/trace_size.cpp.)
 #include <capnp/serialize.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <unistd.h>
 #include <zstd.h>
 
 #include <algorithm>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -15,6 +17,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "base/check.h"
@@ -186,6 +189,53 @@ TEST(TraceIoTest, OpensAFrameThroughTheIndexWithoutDecodingOthers) {
   std::remove(path.c_str());
 }
 
+TEST(TraceIoTest, BytesInMemoryReadAsTheFile) {
+  const std::string path = TempPath("memory.rct");
+  const std::vector<Frame> frames = RandomFrames(true, 14);
+  WriteTrace(path, TestHeader({3, 3, 3}, true), frames);
+  const std::string bytes = ReadBytes(path);
+  const TraceReader file = TraceReader::Open(path);
+  const TraceReader memory = TraceReader::OpenBytes(bytes, path);
+  EXPECT_EQ(memory.warning(), "");
+  EXPECT_EQ(memory.path(), path);
+  EXPECT_TRUE(memory.header() == file.header());
+  ASSERT_EQ(memory.frames().size(), frames.size());
+  for (std::size_t k = 0; k < frames.size(); ++k) EXPECT_EQ(memory.LoadFrame(k), frames[k].rays);
+  // Damage reads the same way too: a truncated copy warns as the truncated file does.
+  const std::string cut = bytes.substr(0, file.frames()[3].offset + 5);
+  testing::WriteBytes(path, cut);
+  EXPECT_EQ(TraceReader::OpenBytes(cut, path).warning(), TraceReader::Open(path).warning());
+  EXPECT_NE(TraceReader::OpenBytes(cut, path).warning(), "");
+  EXPECT_EQ(TraceReader::OpenBytes(cut, path).frames().size(), 3u);
+  std::remove(path.c_str());
+}
+
+// trace_reader.h: several threads may read frames of one TraceReader at once (run under
+// ThreadSanitizer in CI).
+TEST(TraceIoTest, ThreadsReadFramesOfOneReaderAtOnce) {
+  const std::string path = TempPath("threads.rct");
+  const std::vector<Frame> frames = RandomFrames(false, 15);
+  TraceWriterOptions options;
+  options.max_batch_rays = 500;
+  WriteTrace(path, TestHeader({3, 3, 3}, false), frames, options);
+  const TraceReader reader = TraceReader::Open(path);
+  std::vector<int> wrong(4, 0);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t) {
+    threads.emplace_back([&, t] {
+      for (int round = 0; round < 3; ++round) {
+        for (std::size_t k = 0; k < frames.size(); ++k) {
+          wrong[t] +=
+              !(reader.LoadFrame((k + t) % frames.size()) == frames[(k + t) % frames.size()].rays);
+        }
+      }
+    });
+  }
+  for (std::thread& t : threads) t.join();
+  EXPECT_EQ(wrong, std::vector<int>(4, 0));
+  std::remove(path.c_str());
+}
+
 TEST(TraceIoTest, WritesToTmpAndRenamesOnFinish) {
   const std::string path = TempPath("tmp.rct");
   const std::vector<Frame> frames = RandomFrames(true, 4);
@@ -201,6 +251,59 @@ TEST(TraceIoTest, WritesToTmpAndRenamesOnFinish) {
   }
   EXPECT_EQ(TraceReader::Open(path).frames().size(), 2u);
   std::remove(path.c_str());
+}
+
+TEST(TraceIoTest, TmpAppearsWithItsCompleteHeader) {
+  const std::string path = TempPath("tmp_header.rct");
+  testing::WriteBytes(path + ".tmp", "a stale .tmp of an earlier capture");
+  // A header the writer refuses: nothing is written, the stale file is left alone.
+  TraceHeader bad = TestHeader();
+  bad.cells = {1000, 1000, 1000};
+  EXPECT_THROW(TraceWriter::Create(path, bad), InputError);
+  EXPECT_EQ(ReadBytes(path + ".tmp"), "a stale .tmp of an earlier capture");
+  // The .tmp is replaced, at once, by one that holds the complete header (and no frame).
+  TraceWriter w = TraceWriter::Create(path, TestHeader());
+  const TraceReader tmp = TraceReader::Open(path + ".tmp");
+  EXPECT_TRUE(tmp.header() == TestHeader());
+  EXPECT_EQ(tmp.frames().size(), 0u);
+  EXPECT_EQ(tmp.readable_end(), tmp.file_size());
+  w.Finish();
+  std::remove(path.c_str());
+}
+
+// Limits the size of files this process writes, for one scope (SIGXFSZ ignored: a write
+// beyond the limit then fails with EFBIG).
+class FileSizeLimit {
+ public:
+  explicit FileSizeLimit(rlim_t bytes) {
+    getrlimit(RLIMIT_FSIZE, &old_);
+    old_handler_ = std::signal(SIGXFSZ, SIG_IGN);
+    rlimit r = old_;
+    r.rlim_cur = bytes;
+    setrlimit(RLIMIT_FSIZE, &r);
+  }
+  ~FileSizeLimit() {
+    setrlimit(RLIMIT_FSIZE, &old_);
+    std::signal(SIGXFSZ, old_handler_);
+  }
+
+ private:
+  rlimit old_{};
+  void (*old_handler_)(int) = nullptr;
+};
+
+TEST(TraceIoTest, AFailureWhileWritingTheHeaderLeavesNoUnreadableTmp) {
+  const std::string path = TempPath("header_fails.rct");
+  std::remove((path + ".tmp").c_str());
+  TraceHeader h = TestHeader({64, 64, 64});
+  std::mt19937_64 rng(3);
+  for (std::uint64_t& f : h.footprints) f = rng();  // incompressible: the header is 2 MB
+  {
+    const FileSizeLimit limit(4096);
+    EXPECT_THROW(TraceWriter::Create(path, h), InputError);
+  }
+  // Either no .tmp, or one that opens: here none, since the header never completed.
+  EXPECT_FALSE(Exists(path + ".tmp"));
 }
 
 TEST(TraceIoTest, InterruptedCaptureLeavesReadableTmp) {
