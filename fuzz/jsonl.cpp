@@ -6,13 +6,20 @@
 
 #include "base/check.h"
 #include "graph/cell_tree.h"
+#include "traces/jsonl.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace raycell;
   std::istringstream in(std::string(reinterpret_cast<const char*>(data), size));
   try {
-    const CellTree tree = FromJsonl(in, "fuzz.jsonl");
-    RAYCELL_CHECK_LE(std::size_t{1}, tree.size());  // the root
+    JsonlReader reader(in, "fuzz.jsonl");
+    JsonlFrame frame;
+    while (reader.Next(frame)) {
+      CellTreeBuilder builder;
+      builder.AddBatch(frame.rays);
+      const CellTree tree = builder.Finish();
+      RAYCELL_CHECK_LE(std::size_t{1}, tree.size());  // the root
+    }
   } catch (const InputError&) {
   }
   return 0;

@@ -22,6 +22,7 @@
 #include <ostream>
 #include <string>
 
+#include "traces/format.h"
 #include "traces/ray_batch.h"
 #include "traces/trace_reader.h"
 
@@ -69,8 +70,9 @@ struct JsonlReadOptions {
   std::string cells_what;
 };
 
-// The largest cell count the reader accepts without a grid: the trace format's (2^30).
-inline constexpr std::uint64_t kJsonlMaxCells = std::uint64_t{1} << 30;
+// The largest cell count the reader accepts without a grid: the trace format's
+// (kTraceMaxCells, 2^24), which is also the most a Cell Tree holds.
+inline constexpr std::uint64_t kJsonlMaxCells = kTraceMaxCells;
 
 // One frame as read.
 struct JsonlFrame {

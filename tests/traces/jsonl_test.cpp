@@ -185,8 +185,8 @@ TEST(JsonlTest, MalformedLinesNameTheLine) {
             "r.jsonl:2: ray 1: \"pixel\" must have 2 elements");
   EXPECT_EQ(Error(Ray1(R"("parent":0,"spawn":1,"cells":[1,1],"samples":[1,1])")),
             "r.jsonl:2: ray 1: cell 1 repeated at visit 1");
-  EXPECT_EQ(Error(Ray1(R"("parent":0,"spawn":1,"cells":[1,1073741824])")),
-            "r.jsonl:2: ray 1: cell 1073741824 out of range (at most 1073741824 cells)");
+  EXPECT_EQ(Error(Ray1(R"("parent":0,"spawn":1,"cells":[1,16777216])")),
+            "r.jsonl:2: ray 1: cell 16777216 out of range (at most 16777216 cells)");
   JsonlReadOptions grid;
   grid.cell_count = 8;
   grid.cells_what = "--cells 2x2x2";
