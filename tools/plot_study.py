@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""Plots of a `raycell study` folder: fetches per frame per scheduler and Cell Tree size per
-frame, one PNG each per cell grid. Reads the CSVs the study wrote; exits non-zero (and the
+"""Plots of a `raycell study` folder: fetches per frame per scheduler, the bracket of each
+frame's optimum, and Cell Tree size per frame, one PNG each per cell grid. Reads the CSVs the study wrote; exits non-zero (and the
 study fails) if anything cannot be drawn.
 
 Usage: plot_study.py STUDY_DIR CELLS [CELLS ...]     e.g. plot_study.py study 2x2x2 3x3x3
@@ -24,7 +24,10 @@ def plot_fetches(folder, cells):
     frames = [int(r["frame"]) for r in rows]
     fig, ax = plt.subplots(figsize=(7, 4))
     for key, label, style in [("maxwork", "Max Work", "o-"), ("celltree", "Cell Tree", "s-"),
-                              ("peel", "Peel oracle", "^-"), ("bound", "maxGen bound", "k--")]:
+                              ("celltree-best", "Cell Tree, best of frame i", "D-"),
+                              ("celltree-union", "Cell Tree, best of frames i-1, i", "v-"),
+                              ("peel", "Peel oracle", "^:"), ("best", "best oracle", "x:"),
+                              ("bound", "maxGen bound", "k--")]:
         ax.plot(frames, [int(r[key]) for r in rows], style, label=label, markersize=4)
     ax.set_xlabel("frame")
     ax.set_ylabel("cell fetches (one-cell cache)")
@@ -33,6 +36,34 @@ def plot_fetches(folder, cells):
     ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(f"{folder}/fetches_{cells}.png", dpi=100)
+    plt.close(fig)
+
+
+def plot_bracket(folder, cells):
+    trees = read(f"{folder}/cell_trees_{cells}.csv")
+    fetches = read(f"{folder}/fetches_{cells}.csv")
+    frames = [int(r["frame"]) for r in trees]
+    fig, ax = plt.subplots(figsize=(7, 4))
+    lower = [int(r["lower_bound"]) for r in trees]
+    best = [int(r["best_length"]) for r in trees]
+    ax.fill_between(frames, lower, best, color="tab:green", alpha=0.2, label="the optimum lies here")
+    for values, label, style in [
+            ([int(r["bound"]) for r in trees], "maxGen bound", "k--"),
+            (lower, "best lower bound", "g^-"),
+            (best, "best schedule found", "gv-"),
+            ([int(r["peel_length"]) for r in trees], "Peel", "r.-"),
+            ([int(r["maxwork"]) for r in fetches], "Max Work (fetches)", "o:"),
+            ([int(r["celltree"]) for r in fetches], "Cell Tree (fetches)", "s:"),
+            ([int(r["celltree-best"]) for r in fetches], "Cell Tree, best of frame i", "D:"),
+            ([int(r["celltree-union"]) for r in fetches], "Cell Tree, best of frames i-1, i", "x:")]:
+        ax.plot(frames, values, style, label=label, markersize=4)
+    ax.set_xlabel("frame")
+    ax.set_ylabel("cell fetches (one-cell cache)")
+    ax.set_title(f"Bracket of the optimum per frame, {cells} cells")
+    ax.legend(fontsize=7, ncol=2)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(f"{folder}/bracket_{cells}.png", dpi=100)
     plt.close(fig)
 
 
@@ -60,6 +91,7 @@ def main():
     folder = sys.argv[1]
     for cells in sys.argv[2:]:
         plot_fetches(folder, cells)
+        plot_bracket(folder, cells)
         plot_trees(folder, cells)
     return 0
 

@@ -3,14 +3,19 @@
 // oracle, and writes a report with its tables, their CSVs, the frame images and plots.
 #include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <sstream>
+#include <thread>
 
 #include "base/check.h"
 #include "base/file.h"
@@ -38,6 +43,7 @@ struct StudyArgs {
   std::vector<int> frame_numbers;   // what `frames` says, set by Run
   int accuracy_frames = 2;          // 0: no run time against error section
   std::vector<std::string> traces;  // reused captures instead of recording
+  std::string effort = "quick";     // the bracket's budget (BracketEffort)
   // Degrees the camera turns over the frames. Default: 90 for one volume (3.75 degrees per
   // frame over 24: consecutive frames alike, as in an animation), 0 for a sequence, whose
   // volumes are the animation.
@@ -73,15 +79,30 @@ std::vector<int> StudyFrames(const StudyArgs& a) {
   return frames;
 }
 
-const char* kSchedulers[] = {"maxwork", "celltree", "peel"};
-constexpr std::uint64_t kOptimumStates = 50'000;
+// The schedulers the study replays, in the report's order. Online ones plan frame i+1 from
+// what frame i showed (as hardware could); oracles know the frame itself.
+struct StudyScheduler {
+  const char* name;  // as MakeScheduler knows it, and the column in fetches_CELLS.csv
+  const char* label;
+  bool online;
+};
+constexpr StudyScheduler kStudySchedulers[] = {
+    {"maxwork", "Max Work", true},
+    {"celltree", "Cell Tree scheduling (Peel of frame i's tree)", true},
+    {"celltree-best", "Cell Tree, best schedule of frame i's tree", true},
+    {"celltree-union", "Cell Tree, best schedule of frames i-1 and i together", true},
+    {"peel", "Peel oracle (the frame's own Peel schedule)", false},
+    {"best", "best-schedule oracle (the frame's own best schedule)", false},
+};
 
 // The results for one cell grid (recorded) or one given trace.
 struct GridStudy {
   std::string cells;  // the label in file names: "3x3x3", or the given trace's file stem
   std::string heading, capture, images;  // images: empty for a given trace
   std::vector<FrameAnalysis> trees{};
-  std::vector<TraceReplay> replays{};  // in kSchedulers order
+  std::map<std::string, TraceReplay> replays{};  // by scheduler name
+
+  const TraceReplay& replay(const std::string& scheduler) const { return replays.at(scheduler); }
 };
 
 std::vector<std::string> SplitList(const std::string& text) {
@@ -119,55 +140,85 @@ std::string Dims(const TraceHeader& h) {
          std::to_string(h.cells[2]);
 }
 
-// Analyses every frame's Cell Tree and replays the capture under each scheduler, in one pass
-// over the frames: each is decoded and its tree built once, for the analysis and the three
-// replays (ReplayFrames).
-GridStudy StudyTrace(const TraceReader& reader, GridStudy g, bool quiet) {
-  std::vector<std::size_t> all;
-  AnalyzeOptions exact;
-  exact.exact = true;
-  // Limited by expanded states, not time, so that the report is the same on any machine and
-  // load (50 000 states take about a second on a 27-cell tree of the built-in scene); the
-  // time limit is only a safety net far above that.
-  exact.max_states = kOptimumStates;
-  exact.max_seconds = 600;
+// Brackets the optimum of every tree (AnalyzeTree with --bracket), frames in parallel on the
+// machine's threads; each frame's result depends only on its tree, so on no thread count.
+std::vector<FrameAnalysis> AnalyzeTrees(const std::vector<CellTree>& trees,
+                                        const AnalyzeOptions& options, const std::string& label,
+                                        bool quiet) {
+  std::vector<FrameAnalysis> out(trees.size());
+  std::atomic<std::size_t> next{0}, done{0};
+  std::mutex mutex;
   Progress progress(!quiet);
+  const auto work = [&] {
+    for (std::size_t i; (i = next++) < trees.size();) {
+      out[i] = AnalyzeTree(trees[i], options);
+      std::lock_guard<std::mutex> lock(mutex);
+      progress.Update(double(++done) / double(trees.size()),
+                      label + ": bracketing the optimum, " + std::to_string(done) + "/" +
+                          std::to_string(trees.size()) + " frames");
+    }
+  };
+  std::vector<std::thread> threads;
+  const unsigned n = std::max(1u, std::min(std::thread::hardware_concurrency(), 8u));
+  for (unsigned t = 1; t < n; ++t) threads.emplace_back(work);
+  work();
+  for (std::thread& t : threads) t.join();
+  progress.Done();
+  return out;
+}
+
+// Replays the capture under each scheduler in one pass over the frames (ReplayFrames: each
+// frame decoded and its tree built once), keeping the trees; then brackets every tree's
+// optimum with the study's budget.
+GridStudy StudyTrace(const TraceReader& reader, GridStudy g, const StudyArgs& a) {
+  std::vector<std::size_t> all;
   const std::size_t n = reader.frames().size();
   for (std::size_t i = 0; i < n; ++i) all.push_back(i);
   std::vector<ReplayConfig> configs;
-  for (const char* s : kSchedulers) {
+  for (const StudyScheduler& s : kStudySchedulers) {
     ReplayConfig config = DefaultConfig();
-    config.scheduler = s;
+    config.scheduler = s.name;
     config.granularity = ReplayConfig::Granularity::kNode;  // exact with a one-cell cache
     configs.push_back(config);
   }
-  g.replays.assign(configs.size(), TraceReplay{});
-  ReplayFrames(reader, all, configs, {},
-               [&](const LoadedFrame& frame, const std::vector<ReplayResult>& results) {
-                 progress.Update(double(frame.position) / n,
-                                 g.cells + ": Cell Tree of frame " +
-                                     std::to_string(frame.position + 1) + "/" + std::to_string(n));
-                 FrameAnalysis fa = AnalyzeTree(*frame.tree, exact);
-                 fa.frame = frame.number;
-                 g.trees.push_back(std::move(fa));
-                 for (std::size_t k = 0; k < results.size(); ++k) {
-                   Accumulate(results[k], &g.replays[k].total);
-                   g.replays[k].frames.push_back(results[k]);
-                 }
-                 return true;
-               });
-  for (std::size_t k = 0; k < configs.size(); ++k) {
-    FinishTotal(configs[k].processors.count, &g.replays[k].total);
+  std::vector<CellTree> trees;
+  std::vector<std::int32_t> numbers;
+  {
+    Progress progress(!a.quiet);
+    std::vector<TraceReplay> replays(configs.size());
+    ReplayFrames(reader, all, configs, {},
+                 [&](const LoadedFrame& frame, const std::vector<ReplayResult>& results) {
+                   progress.Update(double(frame.position + 1) / n,
+                                   g.cells + ": replayed frame " +
+                                       std::to_string(frame.position + 1) + "/" +
+                                       std::to_string(n));
+                   trees.push_back(*frame.tree);
+                   numbers.push_back(frame.number);
+                   for (std::size_t k = 0; k < results.size(); ++k) {
+                     Accumulate(results[k], &replays[k].total);
+                     replays[k].frames.push_back(results[k]);
+                   }
+                   return true;
+                 });
+    for (std::size_t k = 0; k < configs.size(); ++k) {
+      FinishTotal(configs[k].processors.count, &replays[k].total);
+      g.replays[configs[k].scheduler] = std::move(replays[k]);
+    }
   }
-  progress.Done();
+  AnalyzeOptions options;
+  options.bracket = true;
+  options.bracket_options = BracketEffort(a.effort);
+  options.bracket_options.lower.grid = reader.header().cells;
+  options.bracket_options.best.threads = 1;  // the frames run in parallel instead
+  g.trees = AnalyzeTrees(trees, options, g.cells, a.quiet);
+  for (std::size_t i = 0; i < n; ++i) g.trees[i].frame = numbers[i];
   return g;
 }
 
 GridStudy StudyGrid(const StudyArgs& a, const std::string& cells) {
   const TraceReader reader = RecordGrid(a, cells);
-  return StudyTrace(reader,
-                    {cells, cells + " cells", "capture_" + cells + ".rct", "images_" + cells + "/"},
-                    a.quiet);
+  return StudyTrace(
+      reader, {cells, cells + " cells", "capture_" + cells + ".rct", "images_" + cells + "/"}, a);
 }
 
 std::string Stem(const std::string& path) { return fs::path(path).stem().string(); }
@@ -200,8 +251,7 @@ std::vector<GridStudy> StudyGivenTraces(const StudyArgs& a,
     std::cerr << "reusing " << path << ": " << reader.frames().size() << " frames in "
               << Dims(reader.header()) << " cells\n";
     grids.push_back(StudyTrace(
-        reader, {Stem(path), "`" + path + "` (" + Dims(reader.header()) + " cells)", path, ""},
-        a.quiet));
+        reader, {Stem(path), "`" + path + "` (" + Dims(reader.header()) + " cells)", path, ""}, a));
   }
   return grids;
 }
@@ -213,22 +263,28 @@ void WriteFile(const std::string& dir, const std::string& name, const std::strin
 
 std::string TreesCsv(const GridStudy& g) {
   std::ostringstream s;
-  s << "frame,rays,nodes,rays_per_node,bound,peel_length,splits,optimum\n";
+  s << "frame,rays,nodes,rays_per_node,bound,peel_length,splits,optimum,lower_bound,"
+       "best_length,gap\n";
   for (const FrameAnalysis& t : g.trees) {
     s << t.frame << ',' << t.rays << ',' << t.nodes << ',' << FormatFixed(t.rays_per_node(), 2)
       << ',' << t.bound << ',' << t.peel_length() << ',' << t.splits << ','
-      << (t.optimum ? std::to_string(*t.optimum) : "") << '\n';
+      << (t.optimum ? std::to_string(*t.optimum) : "") << ',' << *t.lower_bound << ','
+      << *t.best_length << ',' << FormatFixed(*t.gap(), 4) << '\n';
   }
   return s.str();
 }
 
+// Fetches per frame of every scheduler, and the bracket of the optimum.
 std::string FetchesCsv(const GridStudy& g) {
   std::ostringstream s;
-  s << "frame,maxwork,celltree,peel,bound\n";
+  s << "frame";
+  for (const StudyScheduler& k : kStudySchedulers) s << ',' << k.name;
+  s << ",bound,lower_bound,best_length\n";
   for (std::size_t i = 0; i < g.trees.size(); ++i) {
     s << g.trees[i].frame;
-    for (const TraceReplay& r : g.replays) s << ',' << r.frames[i].fetches;
-    s << ',' << g.trees[i].bound << '\n';
+    for (const StudyScheduler& k : kStudySchedulers) s << ',' << g.replay(k.name).frames[i].fetches;
+    s << ',' << g.trees[i].bound << ',' << *g.trees[i].lower_bound << ',' << *g.trees[i].best_length
+      << '\n';
   }
   return s.str();
 }
@@ -239,15 +295,20 @@ double Mean(const std::vector<FrameAnalysis>& t, double (*f)(const FrameAnalysis
   return t.empty() ? 0 : sum / double(t.size());
 }
 
+std::string Percent(double part, double whole) {
+  return FormatFixed(whole != 0 ? 100.0 * part / whole : 0.0, 1) + "%";
+}
+
 std::string GridReport(const GridStudy& g) {
   std::ostringstream s;
   const auto& tr = g.trees;
-  const std::uint64_t mw = g.replays[0].total.fetches, ct = g.replays[1].total.fetches,
-                      po = g.replays[2].total.fetches;
-  std::uint64_t bound = 0, peel = 0, proved = 0, opt = 0, peel_proved = 0;
+  const std::uint64_t mw = g.replay("maxwork").total.fetches;
+  std::uint64_t bound = 0, peel = 0, lower = 0, best = 0, proved = 0;
+  double gap = 0;
   for (const FrameAnalysis& t : tr) {
-    bound += t.bound, peel += t.peel_length();
-    if (t.optimum) ++proved, opt += *t.optimum, peel_proved += t.peel_length();
+    bound += t.bound, peel += t.peel_length(), lower += *t.lower_bound, best += *t.best_length;
+    gap += *t.gap();
+    proved += t.optimum ? 1 : 0;
   }
   s << "## " << g.heading << "\n\n"
     << "![fetches per frame](fetches_" << g.cells << ".png)\n\n"
@@ -258,20 +319,37 @@ std::string GridReport(const GridStudy& g) {
     << "| Cell Tree nodes per frame (mean) | "
     << FormatFixed(Mean(tr, [](const FrameAnalysis& x) { return double(x.nodes); }), 1) << " |\n"
     << "| rays per node (mean; the paper: about 100) | "
-    << FormatFixed(Mean(tr, [](const FrameAnalysis& x) { return x.rays_per_node(); }), 1) << " |\n"
-    << "| fetches, Max Work | " << mw << " |\n"
-    << "| fetches, Cell Tree scheduling | " << ct << " |\n"
-    << "| fetches, Peel oracle | " << po << " |\n"
-    << "| maxGen bound | " << bound << " |\n"
-    << "| Cell Tree against Max Work (the paper: 30% fewer) | "
-    << FormatFixed(mw ? 100.0 * (double(ct) - double(mw)) / double(mw) : 0.0, 1) << "% |\n"
-    << "| Peel length minus bound (summed) | " << peel - bound << " |\n"
+    << FormatFixed(Mean(tr, [](const FrameAnalysis& x) { return x.rays_per_node(); }), 1) << " |\n";
+  for (const StudyScheduler& k : kStudySchedulers) {
+    s << "| fetches, " << k.label << " | " << g.replay(k.name).total.fetches << " |\n";
+  }
+  s << "| maxGen bound (summed) | " << bound << " |\n";
+  for (const StudyScheduler& k : kStudySchedulers) {
+    if (!k.online || std::string(k.name) == "maxwork") continue;
+    const double f = double(g.replay(k.name).total.fetches);
+    s << "| " << k.label << " against Max Work"
+      << (std::string(k.name) == "celltree" ? " (the paper: 30% fewer)" : "") << " | "
+      << Percent(f - double(mw), double(mw)) << " |\n";
+  }
+  s << "\nThe optimum of each frame's Cell Tree (fewest fetches with a one-cell cache) lies "
+       "between the best lower bound and the best schedule found:\n\n"
+    << "![bracket of the optimum](bracket_" << g.cells << ".png)\n\n"
+    << "| | value |\n|---|---:|\n"
+    << "| maxGen bound (summed) | " << bound << " |\n"
+    << "| best lower bound (summed) | " << lower << " |\n"
+    << "| best schedule found (summed) | " << best << " |\n"
+    << "| Peel schedule (summed) | " << peel << " |\n"
+    << "| best schedule against Peel | " << Percent(double(best) - double(peel), double(peel))
+    << " |\n"
+    << "| share of Peel's distance to the lower bound closed by the best schedule | "
+    << Percent(double(peel) - double(best), double(peel) - double(lower)) << " |\n"
+    << "| gap (best - lower) / lower, mean over frames | "
+    << Percent(gap, double(std::max<std::size_t>(tr.size(), 1))) << " |\n"
     << "| frames whose optimum was proved | " << proved << " of " << tr.size() << " |\n";
-  if (proved) s << "| Peel minus optimum on them (summed) | " << peel_proved - opt << " |\n";
   s << "\n![Cell Tree size](cell_trees_" << g.cells << ".png)\n\n"
     << "Per frame: `cell_trees_" << g.cells
-    << ".csv` (rays, nodes, bound, Peel, optimum), `fetches_" << g.cells
-    << ".csv` (fetches per scheduler and the bound)"
+    << ".csv` (rays, nodes, bound, Peel, optimum, lower bound, best schedule, gap), `fetches_"
+    << g.cells << ".csv` (fetches per scheduler, the bound and the bracket)"
     << (g.images.empty() ? "" : "; images in `" + g.images + "`") << "; the capture `" << g.capture
     << "`.\n\n";
   return s.str();
@@ -292,11 +370,23 @@ std::string Report(const StudyArgs& a, const std::vector<GridStudy>& grids) {
   }
   s << "Replays use the default GI-Cube configuration (one block "
     << "processor with a one-cell cache; `raycell replay --print-config`), per Cell Tree "
-    << "node (exact for this configuration). Max Work, Cell Tree scheduling (frame i+1 "
-    << "follows the Peel schedule of frame i's tree; frame 0 runs Max Work) and the Peel "
-    << "oracle (each frame's own Peel schedule) against the maxGen lower bound. The "
-    << "optimum comes from an A* search limited to " << kOptimumStates
-    << " expanded states per frame.\n\n";
+    << "node (exact for this configuration). Online schedulers: Max Work, Cell Tree "
+    << "scheduling (frame i+1 follows the Peel schedule of frame i's tree; frame 0 runs Max "
+    << "Work), and the same with the best schedule found for frame i's tree, or for frames "
+    << "i-1 and i together, instead of Peel's. Oracles: each frame's own Peel schedule, and "
+    << "its own best schedule. Each frame's optimum is bracketed as `raycell analyze "
+    << "--bracket --effort " << a.effort << "` does (lower bound: projections of the paths "
+    << "on groups of cells combined by an integer program; upper: beam and local search, "
+    << "exact search on small trees)"
+    << (a.effort == "quick"
+            ? ", with the study's small budget: `raycell study --effort default` (about ten "
+              "times the work) or `raycell analyze CAPTURE --bracket` narrow it further"
+            : "")
+    << ". Every budget counts states, not seconds: the numbers are the same on any "
+    << "machine. An oracle's replay can fetch fewer cells than its schedule is long (an "
+    << "entry whose cell has no ready ray is skipped), and the best-schedule oracle replays "
+    << "the plan the online schedulers make (`raycell replay --scheduler best`), whose budget "
+    << "is smaller than the bracket's.\n\n";
   for (const GridStudy& g : grids) s << GridReport(g);
   return s.str();
 }
@@ -365,7 +455,7 @@ void Plot(const std::string& out, const std::vector<std::string>& cells) {
                      "package python3-matplotlib, installed by tools/setup.sh)");
   }
   for (const auto& c : cells) {
-    for (const char* p : {"fetches_", "cell_trees_"}) {
+    for (const char* p : {"fetches_", "cell_trees_", "bracket_"}) {
       if (!fs::exists(fs::path(out) / (p + c + ".png"))) throw InputError("plot missing: " + c);
     }
   }
@@ -377,6 +467,7 @@ void Run(StudyArgs& a) {
     throw InputError("--accuracy-frames: must be in 0..1000");
   }
   ParseResolution(a.accuracy_res);  // InputError naming it, before any work
+  BracketEffort(a.effort);          // likewise
   if (!std::isfinite(a.orbit_degrees())) {
     throw InputError("--orbit: must be a finite number of degrees");
   }
@@ -413,15 +504,18 @@ void AddStudyCommand(CLI::App& app) {
       "study", "The main job: record, analyse and replay a scene; write a report with plots.");
   cmd->footer(
       "For each cell grid: records an orbit of the scene (trace and PNG per frame), analyses\n"
-      "every frame's Cell Tree (rays per node, maxGen bound, Peel, the optimum where an A*\n"
-      "search proves it within 50 000 states), replays the capture under Max Work, Cell Tree\n"
-      "scheduling and the Peel oracle, and writes OUT/report.md with the tables, the CSV\n"
-      "behind each, and plots of fetches and Cell Tree size per frame (matplotlib).\n"
+      "every frame's Cell Tree (rays per node, maxGen bound, Peel, and the optimum bracketed\n"
+      "between the best lower bound and the best schedule found, as analyze --bracket with\n"
+      "--effort, quick by default), replays the capture under Max Work, Cell Tree scheduling,\n"
+      "the same with the best schedule of frame i or of frames i-1 and i (celltree-best,\n"
+      "celltree-union), and the Peel and best-schedule oracles, and writes OUT/report.md\n"
+      "with the tables, the CSV behind each, and plots of fetches, the bracket and Cell Tree\n"
+      "size per frame (matplotlib).\n"
       "Then measures run time against error for the renderer's step, cutoff and precision\n"
       "and the replay's granularity and sampling on a short capture of the same scene\n"
       "(tools/bench/accuracy.py; --accuracy-frames 0 skips it).\n"
       "With no options: the built-in scene, 24 frames over 90 degrees, 2x2x2 and 3x3x3\n"
-      "cells, 256x256; about a minute on 2 cores.\n"
+      "cells, 256x256; about two minutes on 2 cores.\n"
       "--frames N records frames 0..N-1 of one volume; --frames A..B records frames A to B,\n"
       "as record does: a sequence pattern (--scene 'fluid_%04d.vdb') needs this form, one\n"
       "file per frame, and then the camera stays still unless --orbit is given (the run\n"
@@ -459,6 +553,10 @@ void AddStudyCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--accuracy-res", args->accuracy_res,
                   "image size of the run time against error capture")
+      ->capture_default_str();
+  cmd->add_option("--effort", args->effort,
+                  "budget of the bracket of each frame's optimum: quick (the study's), default "
+                  "(analyze --bracket's, about ten times the work) or thorough")
       ->capture_default_str();
   cmd->add_flag("--quiet", args->quiet, "no progress bars");
   CLI::Option* orbit = recording[3];

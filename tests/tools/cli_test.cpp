@@ -238,7 +238,9 @@ TEST(Cli, ReplayAndSweepAreDeterministicWhateverTheJobs) {
 }
 
 TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
-  if (std::system("python3 -c 'import matplotlib' >/dev/null 2>&1") != 0) {
+  // The interpreter the study runs (tools/study_command.cpp: /usr/bin/python3 where it exists).
+  const char* python = std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  if (std::system((std::string(python) + " -c 'import matplotlib' >/dev/null 2>&1").c_str()) != 0) {
     GTEST_SKIP() << "the study's plots need python3 with matplotlib (tools/setup.sh installs it)";
   }
   const auto out = Dir() / "study";
@@ -253,13 +255,45 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
       EXPECT_TRUE(std::filesystem::exists(out / (f + cells + ".csv"))) << f << cells;
       EXPECT_GT(std::filesystem::file_size(out / (f + cells + ".png")), 1000u) << f << cells;
     }
+    EXPECT_GT(std::filesystem::file_size(out / ("bracket_" + std::string(cells) + ".png")), 1000u);
     EXPECT_TRUE(std::filesystem::exists(out / ("images_" + std::string(cells)) / "frame_0002.png"));
   }
   const std::string report = raycell::testing::ReadBytes((out / "report.md").string());
-  EXPECT_NE(report.find("| fetches, Cell Tree scheduling |"), std::string::npos);
+  EXPECT_NE(report.find("| fetches, Cell Tree scheduling (Peel of frame i's tree) |"),
+            std::string::npos);
   EXPECT_NE(report.find("![fetches per frame](fetches_2x2x2.png)"), std::string::npos);
+  EXPECT_NE(report.find("![bracket of the optimum](bracket_2x2x2.png)"), std::string::npos);
   const std::string fetches = raycell::testing::ReadBytes((out / "fetches_2x2x2.csv").string());
   EXPECT_EQ(std::count(fetches.begin(), fetches.end(), '\n'), 4);  // header + 3 frames
+  EXPECT_EQ(fetches.substr(0, fetches.find('\n')),
+            "frame,maxwork,celltree,celltree-best,celltree-union,peel,best,bound,lower_bound,"
+            "best_length");
+  // Per frame: maxGen bound <= best lower bound <= best schedule found <= Peel's length, and
+  // the optimum, where proved, is both ends.
+  std::istringstream trees(raycell::testing::ReadBytes((out / "cell_trees_2x2x2.csv").string()));
+  std::string row;
+  std::getline(trees, row);
+  EXPECT_EQ(row,
+            "frame,rays,nodes,rays_per_node,bound,peel_length,splits,optimum,lower_bound,"
+            "best_length,gap");
+  int frames = 0;
+  while (std::getline(trees, row)) {
+    std::vector<std::string> v;
+    std::istringstream cols(row);
+    for (std::string c; std::getline(cols, c, ',');) v.push_back(c);
+    ASSERT_EQ(v.size(), 11u) << row;
+    const int bound = std::stoi(v[4]), peel = std::stoi(v[5]), lower = std::stoi(v[8]),
+              best = std::stoi(v[9]);
+    EXPECT_LE(bound, lower) << row;
+    EXPECT_LE(lower, best) << row;
+    EXPECT_LE(best, peel) << row;
+    if (!v[7].empty()) {
+      EXPECT_EQ(std::stoi(v[7]), lower) << row;
+      EXPECT_EQ(std::stoi(v[7]), best) << row;
+    }
+    ++frames;
+  }
+  EXPECT_EQ(frames, 3);
   // Run time against error: every knob's rows, finite, with their plot.
   EXPECT_NE(report.find("## Run time against error"), std::string::npos);
   EXPECT_NE(report.find("| renderer precision | single |"), std::string::npos) << report;
