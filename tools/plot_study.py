@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Plots of a `raycell study` folder: fetches per frame per scheduler, the bracket of each
-frame's optimum, and Cell Tree size per frame, one PNG each per cell grid. Reads the CSVs the study wrote; exits non-zero (and the
-study fails) if anything cannot be drawn.
+frame's optimum, and Cell Tree size per frame, one PNG each per cell grid. Reads the CSVs the
+study wrote; exits non-zero (and the study fails) if anything cannot be drawn.
 
 Usage: plot_study.py STUDY_DIR CELLS [CELLS ...]     e.g. plot_study.py study 2x2x2 3x3x3
 """
@@ -22,7 +22,7 @@ def read(path):
 def plot_fetches(folder, cells):
     rows = read(f"{folder}/fetches_{cells}.csv")
     frames = [int(r["frame"]) for r in rows]
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = plt.subplots(figsize=(7, 5))
     for key, label, style in [("maxwork", "Max Work", "o-"), ("celltree", "Cell Tree", "s-"),
                               ("celltree-best", "Cell Tree, best of frame i", "D-"),
                               ("celltree-union", "Cell Tree, best of frames i-1, i", "v-"),
@@ -32,7 +32,7 @@ def plot_fetches(folder, cells):
     ax.set_xlabel("frame")
     ax.set_ylabel("cell fetches (one-cell cache)")
     ax.set_title(f"Fetches per frame, {cells} cells")
-    ax.legend()
+    ax.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.13))
     ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(f"{folder}/fetches_{cells}.png", dpi=100)
@@ -43,7 +43,7 @@ def plot_bracket(folder, cells):
     trees = read(f"{folder}/cell_trees_{cells}.csv")
     fetches = read(f"{folder}/fetches_{cells}.csv")
     frames = [int(r["frame"]) for r in trees]
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = plt.subplots(figsize=(7, 5))
     lower = [int(r["lower_bound"]) for r in trees]
     best = [int(r["best_length"]) for r in trees]
     ax.fill_between(frames, lower, best, color="tab:green", alpha=0.2, label="the optimum lies here")
@@ -60,7 +60,7 @@ def plot_bracket(folder, cells):
     ax.set_xlabel("frame")
     ax.set_ylabel("cell fetches (one-cell cache)")
     ax.set_title(f"Bracket of the optimum per frame, {cells} cells")
-    ax.legend(fontsize=7, ncol=2)
+    ax.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.13))
     ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(f"{folder}/bracket_{cells}.png", dpi=100)
