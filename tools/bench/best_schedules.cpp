@@ -15,6 +15,8 @@
 //   --cells N           cells of the synthetic trees (27)
 //   --max-nodes N       largest synthetic tree (100000)
 //   --schedules         also print each best schedule
+//   --plan-effort       the budget of the online schedulers' plans (scheduling/
+//                       best_scheduler.h PlanEffort) instead: the planning time per frame
 //   --exact-compare     instead: the exact search per frame (Peel as incumbent) with the
 //                       maxGen heuristic alone (the search before the pair heuristic) and
 //                       with pairs, --exact-states states each: status and states expanded
@@ -37,6 +39,7 @@
 #include "graph/best_schedule.h"
 #include "graph/optimum.h"
 #include "graph/peel.h"
+#include "scheduling/best_scheduler.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {
@@ -44,7 +47,7 @@ namespace {
 
 struct Args {
   std::string capture;
-  bool synthetic = false, schedules = false, exact_compare = false;
+  bool synthetic = false, schedules = false, exact_compare = false, plan_effort = false;
   std::vector<int> frames;  // empty: all
   BestScheduleOptions options;
   CellId cells = 27;
@@ -71,6 +74,8 @@ Args Parse(int argc, char** argv) {
     auto number = [&] { return ParseUint(value(i), arg); };
     if (arg == "--synthetic") {
       a.synthetic = true;
+    } else if (arg == "--plan-effort") {
+      a.plan_effort = true;
     } else if (arg == "--schedules") {
       a.schedules = true;
     } else if (arg == "--exact-compare") {
@@ -112,6 +117,7 @@ Args Parse(int argc, char** argv) {
     }
   }
   if (a.capture.empty() && !a.synthetic) throw InputError("expected a capture or --synthetic");
+  if (a.plan_effort) a.options = PlanEffort(a.options.seed);
   return a;
 }
 
@@ -191,9 +197,10 @@ std::string Exact(const OptimumResult& r) {
 }
 
 int ExactCompare(const TraceReader& reader, const std::vector<int>& frames, const Args& a) {
-  std::printf("%s: exact search, Peel as incumbent, %llu states at most\n%5s %7s %5s %5s  %-36s %s\n",
-              a.capture.c_str(), (unsigned long long)a.options.exact_states, "frame", "nodes",
-              "bound", "peel", "maxGen heuristic", "pair heuristic");
+  std::printf(
+      "%s: exact search, Peel as incumbent, %llu states at most\n%5s %7s %5s %5s  %-36s %s\n",
+      a.capture.c_str(), (unsigned long long)a.options.exact_states, "frame", "nodes", "bound",
+      "peel", "maxGen heuristic", "pair heuristic");
   int proved_old = 0, proved_new = 0;
   for (const int f : frames) {
     const CellTree tree = BuildFrameTree(reader, std::size_t(f));
