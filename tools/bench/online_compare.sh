@@ -5,9 +5,8 @@
 # frames i-1 and i), and the two oracles peel and best (each frame its own schedule), with
 # the replay's defaults (one block processor with a one-cell cache: the paper's setup)
 # unless --set says otherwise. Prints a Markdown table: fetches, against Max Work, the
-# simulated time, and each replay's wall time; the planning time per frame of
-# celltree-best / celltree-union is their wall time minus celltree's (same replay, plans
-# from Peel instead), over the frames that have a plan (all but frame 0).
+# simulated time, and each replay's wall time (on a loaded machine too noisy to derive the
+# planning time from: `bench_best_schedules TRACE --plan-effort` measures that per frame).
 #
 # Usage: tools/bench/online_compare.sh TRACE [--set KEY=VALUE ...]
 # e.g.   tools/bench/online_compare.sh /work/captures/study/capture_3x3x3.rct
@@ -41,11 +40,6 @@ for s in "${schedulers[@]}"; do
     "$(echo "($f - $mw) * 100 / $mw" | bc -l)" "$(echo "$t / 1000000000" | bc -l)" "${wall[$s]}"
 done
 echo "| maxGen bound (one-cell cache) | $bound | | | |"
-echo
-for s in celltree-best celltree-union; do
-  printf '%s planning: %.3f s per frame (wall time minus celltree'"'"'s, over %d plans)\n' "$s" \
-    "$(echo "(${wall[$s]} - ${wall[celltree]}) / ($frames - 1)" | bc -l)" "$((frames - 1))"
-done
 echo
 echo "per frame fetches (frame: maxwork celltree celltree-best celltree-union peel best bound):"
 paste -d' ' <(jq -r '.frames[] | "\(.frame): \(.fetches)"' "$work/maxwork.json") \
