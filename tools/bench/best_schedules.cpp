@@ -17,6 +17,8 @@
 //   --schedules         also print each best schedule
 //   --plan-effort       the budget of the online schedulers' plans (scheduling/
 //                       best_scheduler.h PlanEffort) instead: the planning time per frame
+//   --union             the tree of each frame f >= 1 is the union of frames f-1 and f
+//                       (graph/cell_tree.h UnionTree), as celltree-union plans
 //   --exact-compare     instead: the exact search per frame (Peel as incumbent) with the
 //                       maxGen heuristic alone (the search before the pair heuristic) and
 //                       with pairs, --exact-states states each: status and states expanded
@@ -49,7 +51,8 @@ namespace {
 struct Args {
   std::string capture;
   bool synthetic = false, schedules = false, exact_compare = false, plan_effort = false;
-  std::vector<int> frames;  // empty: all
+  bool union_frames = false;  // the union of frames f-1 and f (celltree-union's plans)
+  std::vector<int> frames;    // empty: all
   BestScheduleOptions options;
   CellId cells = 27;
   std::size_t max_nodes = 100000;
@@ -75,6 +78,8 @@ Args Parse(int argc, char** argv) {
     auto number = [&] { return ParseUint(value(i), arg); };
     if (arg == "--synthetic") {
       a.synthetic = true;
+    } else if (arg == "--union") {
+      a.union_frames = true;
     } else if (arg == "--plan-effort") {
       a.plan_effort = true;
     } else if (arg == "--schedules") {
@@ -253,7 +258,15 @@ int Capture(const Args& a) {
   int n = 0, optimal = 0;
   for (const int f : frames) {
     double peak = 0;
-    const Row r = InChild([&] { return BuildFrameTree(reader, std::size_t(f)); }, a, peak);
+    if (a.union_frames && f == 0) continue;  // no frame before it
+    const Row r = InChild(
+        [&] {
+          if (!a.union_frames) return BuildFrameTree(reader, std::size_t(f));
+          const CellTree before = BuildFrameTree(reader, std::size_t(f - 1));
+          const CellTree tree = BuildFrameTree(reader, std::size_t(f));
+          return UnionTree({&before, &tree});
+        },
+        a, peak);
     Print(std::to_string(reader.frames()[f].frame), r, peak);
     ++n, peel += r.peel, best += r.best, lower += r.lower, seconds += r.seconds;
     ratio += double(r.best) / r.peel, gap += double(r.best - r.lower) / r.lower;
