@@ -154,7 +154,10 @@ const std::vector<Key<ReplayConfig>>& ConfigKeys() {
          c.scheduler = ParseScheduler(Trim(t), what);
        },
        [](const ReplayConfig& c) { return c.scheduler; }, "the paper's Cell Tree scheduler"},
-      {"seed", "seed of the random scheduler", TomlKind::kIntegerOrString, "an integer", 0, kMax64,
+      {"seed",
+       "seed of the random scheduler and of the planners' searches (best, celltree-best, "
+       "celltree-union)",
+       TomlKind::kIntegerOrString, "an integer", 0, kMax64,
        [](std::string_view t, const std::string& what, ReplayConfig& c) {
          c.seed = ParseCount(t, what, 0, kMax64);
        },

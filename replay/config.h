@@ -81,7 +81,8 @@ struct ReplayConfig {
   // Default "celltree" (the paper's Cell Tree scheduler); a name of SchedulerRegistry()
   // (scheduling/scheduler.h).
   std::string scheduler = "celltree";
-  // Default 1: seeds the random scheduler; any fixed value keeps replays deterministic.
+  // Default 1: seeds the random scheduler and the planners' schedule searches
+  // (scheduling/best_scheduler.h); any fixed value keeps replays deterministic.
   std::uint64_t seed = 1;
   // Default kAuto: per Cell Tree node (fast) where it gives exactly what per ray segment
   // gives, i.e. with one processor; per ray segment otherwise.

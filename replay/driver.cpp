@@ -225,7 +225,7 @@ ReplayConfig CanonicalConfig(const ReplayConfig& config) {
   ReplayConfig c = config;
   c.granularity = EffectiveGranularity(config);
   const bool random = c.scheduler == "random";
-  if (!random) c.seed = 0;
+  if (!SchedulerUsesSeed(c.scheduler)) c.seed = 0;
   if (random) c.processors.prefetch = false;
   c.processors.queue_record_bytes = 1;
   return c;

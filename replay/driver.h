@@ -78,7 +78,7 @@ ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& head
                                std::uint32_t sample_every = 1, ReplayObserver* observer = nullptr);
 
 // What a frame's result cannot depend on, removed: granularity resolved (EffectiveGranularity),
-// the seed unless the scheduler is random (MakeScheduler uses it for random only), prefetch
+// the seed unless the scheduler uses it (SchedulerUsesSeed: random and the planners), prefetch
 // for the random scheduler (it predicts nothing, Scheduler::Peek, so prefetch never
 // happens), and the queue record size, which only scales peak_queued_bytes (ReplayFrames
 // rescales it). Configurations with equal canonical forms have equal frame results up to

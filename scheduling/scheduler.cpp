@@ -92,7 +92,8 @@ const std::vector<SchedulerEntry>& SchedulerRegistry() {
       {"random", "a seeded random cell with work (a baseline)",
        [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
          return std::make_unique<RandomScheduler>(seed);
-       }},
+       },
+       1, true},
       {"peel", "the Peel oracle: each frame follows its own tree's Peel schedule",
        [](std::uint64_t) -> std::unique_ptr<Scheduler> {
          return std::make_unique<PeelOracleScheduler>();
@@ -104,17 +105,19 @@ const std::vector<SchedulerEntry>& SchedulerRegistry() {
       {"best", "the best-schedule oracle: each frame follows the best schedule found for its tree",
        [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
          return std::make_unique<BestOracleScheduler>(seed);
-       }},
+       },
+       1, true},
       {"celltree-best", "frame i+1 follows the best schedule found for frame i's tree",
        [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
          return std::make_unique<CellTreeBestScheduler>(seed, false);
-       }},
+       },
+       1, true},
       {"celltree-union",
        "frame i+1 follows the best schedule found for the union of frames i and i-1's trees",
        [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
          return std::make_unique<CellTreeBestScheduler>(seed, true);
        },
-       2},
+       2, true},
   };
   return registry;
 }
@@ -139,6 +142,13 @@ std::uint32_t SchedulerHistory(const std::string& name) {
     if (name == e.name) return e.history;
   }
   return 1;
+}
+
+bool SchedulerUsesSeed(const std::string& name) {
+  for (const SchedulerEntry& e : SchedulerRegistry()) {
+    if (name == e.name) return e.seeded;
+  }
+  return false;
 }
 
 std::unique_ptr<Scheduler> MakeScheduler(const std::string& name, std::uint64_t seed) {

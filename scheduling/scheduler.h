@@ -115,6 +115,8 @@ struct SchedulerEntry {
   std::unique_ptr<Scheduler> (*make)(std::uint64_t seed);  // seed: random and planners
   // Earlier frames' trees it reads: 1 (FrameInfo::previous) or 2 (also before_previous).
   std::uint32_t history = 1;
+  // Whether its choices depend on the seed (random, and the planners' seeded searches).
+  bool seeded = false;
 };
 const std::vector<SchedulerEntry>& SchedulerRegistry();
 // The registry's names, in its order; and joined by `separator` ("maxwork | roundrobin ...").
@@ -122,6 +124,8 @@ const std::vector<std::string>& SchedulerNames();
 std::string SchedulerNameList(const char* separator);
 // The history of the scheduler `name` (SchedulerEntry::history); 1 for an unknown name.
 std::uint32_t SchedulerHistory(const std::string& name);
+// Whether the scheduler `name` uses its seed (SchedulerEntry::seeded); false for an unknown name.
+bool SchedulerUsesSeed(const std::string& name);
 // A new scheduler by name. An unknown name is an InputError listing the valid names.
 std::unique_ptr<Scheduler> MakeScheduler(const std::string& name, std::uint64_t seed);
 

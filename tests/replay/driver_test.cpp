@@ -156,6 +156,23 @@ TEST_F(DriverTest, ManyConfigurationsAtOnceEqualEachAlone) {
   EXPECT_NE(got.back(), got[4]);  // peak bytes: 7 per ray, not 32
 }
 
+// The seed reaches every scheduler whose choices depend on it (random, and the planners'
+// seeded schedule searches): configurations that differ only in it are replayed apart, and
+// the canonical form keeps it; for the others it is dropped, so they are replayed once.
+TEST_F(DriverTest, TheSeedIsKeptForEverySchedulerThatUsesIt) {
+  for (const std::string& s : SchedulerNames()) {
+    const bool seeded =
+        s == "random" || s == "best" || s == "celltree-best" || s == "celltree-union";
+    ReplayConfig a = Config(s.c_str(), 1), b = a;
+    a.seed = 7, b.seed = 8;
+    EXPECT_EQ(CanonicalConfig(a).seed, seeded ? 7u : 0u) << s;
+    const ReplayFramesStats stats =
+        ReplayFrames(*reader_, {1}, {a, b}, {},
+                     [](const LoadedFrame&, const std::vector<ReplayResult>&) { return true; });
+    EXPECT_EQ(stats.distinct, seeded ? 2u : 1u) << s;
+  }
+}
+
 TEST_F(DriverTest, StopsWhenTold) {
   std::size_t seen = 0;
   const ReplayFramesStats stats = ReplayFrames(

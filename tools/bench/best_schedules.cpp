@@ -15,6 +15,10 @@
 //   --cells N           cells of the synthetic trees (27)
 //   --max-nodes N       largest synthetic tree (100000)
 //   --schedules         also print each best schedule
+//   --plan-effort       the budget of the online schedulers' plans (scheduling/
+//                       best_scheduler.h PlanEffort) instead: the planning time per frame
+//   --union             the tree of each frame f >= 1 is the union of frames f-1 and f
+//                       (graph/cell_tree.h UnionTree), as celltree-union plans
 //   --exact-compare     instead: the exact search per frame (Peel as incumbent) with the
 //                       maxGen heuristic alone (the search before the pair heuristic) and
 //                       with pairs, --exact-states states each: status and states expanded
@@ -27,6 +31,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <random>
 #include <string>
 #include <vector>
@@ -37,6 +42,7 @@
 #include "graph/best_schedule.h"
 #include "graph/optimum.h"
 #include "graph/peel.h"
+#include "scheduling/best_scheduler.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {
@@ -44,8 +50,9 @@ namespace {
 
 struct Args {
   std::string capture;
-  bool synthetic = false, schedules = false, exact_compare = false;
-  std::vector<int> frames;  // empty: all
+  bool synthetic = false, schedules = false, exact_compare = false, plan_effort = false;
+  bool union_frames = false;  // the union of frames f-1 and f (celltree-union's plans)
+  std::vector<int> frames;    // empty: all
   BestScheduleOptions options;
   CellId cells = 27;
   std::size_t max_nodes = 100000;
@@ -55,7 +62,7 @@ struct Args {
 struct Row {
   std::uint64_t nodes, bound, peel, beam, local, best, lower;
   bool optimal;
-  double seconds;
+  double seconds, cpu_seconds;  // wall; CPU of every thread (less sensitive to the load)
   std::uint64_t beam_states, windows, work, exact_states;
   char exact[96];
 };
@@ -71,6 +78,10 @@ Args Parse(int argc, char** argv) {
     auto number = [&] { return ParseUint(value(i), arg); };
     if (arg == "--synthetic") {
       a.synthetic = true;
+    } else if (arg == "--union") {
+      a.union_frames = true;
+    } else if (arg == "--plan-effort") {
+      a.plan_effort = true;
     } else if (arg == "--schedules") {
       a.schedules = true;
     } else if (arg == "--exact-compare") {
@@ -112,14 +123,24 @@ Args Parse(int argc, char** argv) {
     }
   }
   if (a.capture.empty() && !a.synthetic) throw InputError("expected a capture or --synthetic");
+  if (a.plan_effort) a.options = PlanEffort(a.options.seed);
   return a;
+}
+
+// CPU time of the whole process (every thread), in seconds.
+double CpuSeconds() {
+  timespec t{};
+  RAYCELL_CHECK(clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t) == 0);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
 }
 
 Row Measure(const CellTree& tree, const Args& a) {
   Row r{};
   const auto t0 = std::chrono::steady_clock::now();
+  const double cpu0 = CpuSeconds();
   const BestScheduleResult b = BestSchedule(tree, a.options);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.cpu_seconds = CpuSeconds() - cpu0;
   r.nodes = tree.node_count(), r.bound = b.bound, r.peel = b.peel_length;
   r.beam = b.beam_length, r.local = b.local_length, r.best = b.length, r.lower = b.lower;
   r.optimal = b.optimal;
@@ -164,17 +185,18 @@ Row InChild(const Make& make, const Args& a, double& peak_mib) {
 }
 
 const char* kHeader =
-    "frame   nodes bound  peel  beam   lns  best lower  best/peel  seconds  peak MiB  "
+    "frame   nodes bound  peel  beam   lns  best lower  best/peel  seconds    cpu s  peak MiB  "
     "beam states   windows        work  exact\n";
 
 void Print(const std::string& label, const Row& r, double peak) {
   std::printf(
-      "%5s %7llu %5llu %5llu %5llu %5llu %5llu %5llu %10.3f %8.2f %9.1f %12llu %9llu %11.3g  %s\n",
+      "%5s %7llu %5llu %5llu %5llu %5llu %5llu %5llu %10.3f %8.2f %8.2f %9.1f %12llu %9llu %11.3g  "
+      "%s\n",
       label.c_str(), (unsigned long long)r.nodes, (unsigned long long)r.bound,
       (unsigned long long)r.peel, (unsigned long long)r.beam, (unsigned long long)r.local,
       (unsigned long long)r.best, (unsigned long long)r.lower, double(r.best) / r.peel, r.seconds,
-      peak, (unsigned long long)r.beam_states, (unsigned long long)r.windows, double(r.work),
-      r.exact);
+      r.cpu_seconds, peak, (unsigned long long)r.beam_states, (unsigned long long)r.windows,
+      double(r.work), r.exact);
   std::fflush(stdout);
 }
 
@@ -191,9 +213,10 @@ std::string Exact(const OptimumResult& r) {
 }
 
 int ExactCompare(const TraceReader& reader, const std::vector<int>& frames, const Args& a) {
-  std::printf("%s: exact search, Peel as incumbent, %llu states at most\n%5s %7s %5s %5s  %-36s %s\n",
-              a.capture.c_str(), (unsigned long long)a.options.exact_states, "frame", "nodes",
-              "bound", "peel", "maxGen heuristic", "pair heuristic");
+  std::printf(
+      "%s: exact search, Peel as incumbent, %llu states at most\n%5s %7s %5s %5s  %-36s %s\n",
+      a.capture.c_str(), (unsigned long long)a.options.exact_states, "frame", "nodes", "bound",
+      "peel", "maxGen heuristic", "pair heuristic");
   int proved_old = 0, proved_new = 0;
   for (const int f : frames) {
     const CellTree tree = BuildFrameTree(reader, std::size_t(f));
@@ -235,7 +258,15 @@ int Capture(const Args& a) {
   int n = 0, optimal = 0;
   for (const int f : frames) {
     double peak = 0;
-    const Row r = InChild([&] { return BuildFrameTree(reader, std::size_t(f)); }, a, peak);
+    if (a.union_frames && f == 0) continue;  // no frame before it
+    const Row r = InChild(
+        [&] {
+          if (!a.union_frames) return BuildFrameTree(reader, std::size_t(f));
+          const CellTree before = BuildFrameTree(reader, std::size_t(f - 1));
+          const CellTree tree = BuildFrameTree(reader, std::size_t(f));
+          return UnionTree({&before, &tree});
+        },
+        a, peak);
     Print(std::to_string(reader.frames()[f].frame), r, peak);
     ++n, peel += r.peel, best += r.best, lower += r.lower, seconds += r.seconds;
     ratio += double(r.best) / r.peel, gap += double(r.best - r.lower) / r.lower;
