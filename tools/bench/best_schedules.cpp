@@ -191,9 +191,10 @@ std::string Exact(const OptimumResult& r) {
 }
 
 int ExactCompare(const TraceReader& reader, const std::vector<int>& frames, const Args& a) {
-  std::printf("%s: exact search, Peel as incumbent, %llu states at most\n%5s %7s %5s %5s  %-36s %s\n",
-              a.capture.c_str(), (unsigned long long)a.options.exact_states, "frame", "nodes",
-              "bound", "peel", "maxGen heuristic", "pair heuristic");
+  std::printf(
+      "%s: exact search, Peel as incumbent, %llu states at most\n%5s %7s %5s %5s  %-36s %s\n",
+      a.capture.c_str(), (unsigned long long)a.options.exact_states, "frame", "nodes", "bound",
+      "peel", "maxGen heuristic", "pair heuristic");
   int proved_old = 0, proved_new = 0;
   for (const int f : frames) {
     const CellTree tree = BuildFrameTree(reader, std::size_t(f));
