@@ -30,28 +30,12 @@ CalendarQueue::CalendarQueue(std::size_t reserve) : CalendarQueue() {
   far_.reserve(std::min<std::size_t>(reserve, 1024));
 }
 
-void CalendarQueue::Place(const Event& event) const {
-  const std::uint64_t day = Day(event);
+void CalendarQueue::PlaceSlow(const Event& event, std::uint64_t day) const {
   if (day <= day_) {  // usually the latest of its time (largest seq): near the back
     front_.insert(std::upper_bound(front_.begin(), front_.end(), event, After()), event);
-  } else if (day - day_ < bins_.size()) {
-    bins_[day & (bins_.size() - 1)].push_back(event);
-    ++in_bins_;
   } else {
     far_.push_back(event);
     far_day_ = std::min(far_day_, day);
-  }
-}
-
-void CalendarQueue::Push(const Event& event) {
-  if (size_ == 0) day_ = Day(event);
-  Place(event);
-  ++size_;
-  ++ops_;
-  if (size_ > 2 * bins_.size()) {
-    Rebuild(bins_.size() * 2, true);
-  } else {
-    Adapt();
   }
 }
 
@@ -97,25 +81,6 @@ void CalendarQueue::Advance() const {
   }
 }
 
-const Event& CalendarQueue::Top() const {
-  if (front_.empty()) Advance();
-  return front_.back();
-}
-
-Event CalendarQueue::Pop() {
-  if (front_.empty()) Advance();
-  const Event top = front_.back();
-  front_.pop_back();
-  --size_;
-  ++ops_;
-  if (bins_.size() > kMinBins && size_ < bins_.size() / 4) {
-    Rebuild(bins_.size() / 2, true);
-  } else {
-    Adapt();
-  }
-  return top;
-}
-
 void CalendarQueue::EstimateDay(std::vector<std::uint64_t> times) {
   const std::size_t k = std::min(kSpacingSample, times.size());
   std::nth_element(times.begin(), times.begin() + (k - 1), times.end());
@@ -151,6 +116,7 @@ void CalendarQueue::Rebuild(std::size_t bins, bool estimate) {
   far_.clear();
   RAYCELL_CHECK_EQ(all.size(), size_);
   bins_.resize(bins);
+  shrink_below_ = bins > kMinBins ? bins / 4 : 0;
   in_bins_ = 0;
   far_day_ = UINT64_MAX;
   ops_ = walked_ = days_sorted_ = sorted_ = 0;
@@ -165,7 +131,6 @@ void CalendarQueue::Rebuild(std::size_t bins, bool estimate) {
 }
 
 void CalendarQueue::Adapt() {
-  if (ops_ < std::max<std::uint64_t>(1024, size_)) return;
   // Per pop (about half the operations): more than 4 days walked or far events scanned
   // means short days; more than 8 events a sorted day means long ones.
   if (walked_ > 2 * ops_ && shift_ < 63) {

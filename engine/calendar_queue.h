@@ -40,9 +40,37 @@ class CalendarQueue final : public EventQueue {
  public:
   CalendarQueue();
   explicit CalendarQueue(std::size_t reserve);
-  void Push(const Event& event) override;
-  const Event& Top() const override;
-  Event Pop() override;
+  // Push, Top and Pop are inline (their usual cases: an event into its bin, the front's last
+  // event), so that the Simulator, which calls them on a CalendarQueue* (final), pays no
+  // call for them; the rarer work (a new day, a rebuild) is out of line.
+  void Push(const Event& event) override {
+    if (size_ == 0) day_ = Day(event);
+    Place(event);
+    ++size_;
+    ++ops_;
+    if (size_ > 2 * bins_.size()) {
+      Rebuild(bins_.size() * 2, true);
+    } else if (ops_ >= 1024 && ops_ >= size_) {
+      Adapt();
+    }
+  }
+  const Event& Top() const override {
+    if (front_.empty()) Advance();
+    return front_.back();
+  }
+  Event Pop() override {
+    if (front_.empty()) Advance();
+    const Event top = front_.back();
+    front_.pop_back();
+    --size_;
+    ++ops_;
+    if (size_ < shrink_below_) {
+      Rebuild(bins_.size() / 2, true);
+    } else if (ops_ >= 1024 && ops_ >= size_) {
+      Adapt();
+    }
+    return top;
+  }
   std::size_t Size() const override { return size_; }
   std::string Name() const override { return "calendar"; }
 
@@ -54,14 +82,25 @@ class CalendarQueue final : public EventQueue {
   static constexpr std::size_t kMinBins = 4;
 
   std::uint64_t Day(const Event& e) const { return e.time.picoseconds() >> shift_; }
-  void Place(const Event& event) const;  // into the front, its bin or far, by day
-  void Advance() const;                  // makes the front non-empty; size_ > 0
-  void PullFar() const;                  // far events within the year into bins
+  // Into the front, its bin or far, by day.
+  void Place(const Event& event) const {
+    const std::uint64_t day = Day(event);
+    const std::uint64_t ahead = day - day_;  // wraps for days before the front's
+    if (ahead - 1 < bins_.size() - 1) {      // 0 < ahead < B: a bin (the usual case)
+      bins_[day & (bins_.size() - 1)].push_back(event);
+      ++in_bins_;
+    } else {
+      PlaceSlow(event, day);
+    }
+  }
+  void PlaceSlow(const Event& event, std::uint64_t day) const;  // the front or far
+  void Advance() const;  // makes the front non-empty; size_ > 0
+  void PullFar() const;  // far events within the year into bins
   // Moves every event again into `bins` bins; the day length is estimated anew when
   // `estimate`, else kept.
   void Rebuild(std::size_t bins, bool estimate);
   void EstimateDay(std::vector<std::uint64_t> times);
-  void Adapt();
+  void Adapt();  // called when ops_ >= max(1024, size_)
 
   // Mutable: Top() may have to sort the next day into the front.
   mutable std::vector<Event> front_;              // sorted, earliest last
@@ -75,6 +114,8 @@ class CalendarQueue final : public EventQueue {
   // Costs since the last adaptation: operations, days walked and far events scanned (too
   // short days), days sorted and events sorted (too long days).
   std::uint64_t ops_ = 0;
+  // The bins halve when size_ falls below this: B / 4, or 0 at the fewest bins.
+  std::size_t shrink_below_ = 0;
   mutable std::uint64_t walked_ = 0, days_sorted_ = 0, sorted_ = 0;
 };
 

@@ -23,6 +23,7 @@ Simulator::Simulator(SimulatorOptions options, std::unique_ptr<EventQueue> queue
     : options_(options), queue_(std::move(queue)) {
   RAYCELL_CHECK(queue_ != nullptr);
   RAYCELL_CHECK(queue_->Empty());
+  calendar_ = dynamic_cast<CalendarQueue*>(queue_.get());
 }
 
 ComponentId Simulator::Add(Component& component) {
@@ -32,15 +33,21 @@ ComponentId Simulator::Add(Component& component) {
 }
 
 RunStatus Simulator::Run(SimTime until) {
+  if (calendar_ != nullptr) return RunOn(*calendar_, until);  // Push/Pop inline, not virtual
+  return RunOn(*queue_, until);
+}
+
+template <typename Queue>
+RunStatus Simulator::RunOn(Queue& queue, SimTime until) {
   stop_requested_ = false;
   const bool bounded = until != SimTime::Max();  // else no event can lie after `until`
   while (pending_ != 0) {  // the queue's size, without a virtual call per event
-    if (bounded && queue_->Top().time > until) {
+    if (bounded && queue.Top().time > until) {
       now_ = until;
       return RunStatus::kReachedUntil;
     }
     --pending_;
-    Dispatch(queue_->Pop());
+    Dispatch(queue.Pop());
     if (stop_requested_) return RunStatus::kStopped;
   }
   CheckQueueDryWithoutWork();

@@ -67,7 +67,12 @@ class Simulator {
     RAYCELL_CHECK_LT(target, components_.size());
     const std::uint64_t seq = next_seq_;
     next_seq_ = CheckedAdd(next_seq_, 1);
-    queue_->Push(Event{when, priority, seq, target, kind, payload});
+    const Event event{when, priority, seq, target, kind, payload};
+    if (calendar_ != nullptr) {
+      calendar_->Push(event);  // a direct, inline call: CalendarQueue is final
+    } else {
+      queue_->Push(event);
+    }
     ++pending_;
     return seq;
   }
@@ -93,12 +98,17 @@ class Simulator {
   std::string DumpComponents() const;
 
  private:
+  template <typename Queue>
+  RunStatus RunOn(Queue& queue, SimTime until);
   void Dispatch(const Event& event);
   void CheckQueueDryWithoutWork() const;
   [[noreturn]] void Stall(const std::string& reason) const;
 
   SimulatorOptions options_;
   std::unique_ptr<EventQueue> queue_;
+  // queue_ when it is a CalendarQueue (the default), else null: the loop calls it without
+  // a virtual call per push and pop.
+  CalendarQueue* calendar_ = nullptr;
   std::vector<Component*> components_;  // not owned
   std::function<void(const Event&)> observer_;
   SimTime now_;

@@ -77,38 +77,54 @@ struct Slot {
   Kind kind = Kind::kNone;
 };
 
-bool SlotBefore(const Slot& a, const Slot& b) {
-  return a.time != b.time ? a.time < b.time : a.seq < b.seq;
-}
-
-// A winner tree over the slots: the earliest slot in O(1), a slot changed in O(log P).
+// A winner tree over the slots: the earliest slot in O(1), a slot changed in O(log P). Each
+// node holds a copy of its winner's (time, seq) next to the winner's index, so that an
+// update walks from the leaf to the root comparing the changed slot's key with one sibling
+// node per level (one load, no indirection through the slots).
 class SlotTree {
  public:
   explicit SlotTree(std::uint32_t n) : slots_(n) {
     while (leaves_ < n) leaves_ *= 2;
     slots_.resize(leaves_);  // padding slots stay empty forever
     for (auto& s : slots_) s.time = SimTime::Max();
-    tree_.assign(2 * leaves_, 0);
-    for (std::uint32_t i = 0; i < leaves_; ++i) tree_[leaves_ + i] = i;
-    for (std::uint32_t k = leaves_ - 1; k >= 1; --k) tree_[k] = Winner(k);
+    nodes_.assign(2 * leaves_, Node{});
+    for (std::uint32_t i = 0; i < leaves_; ++i) nodes_[leaves_ + i] = NodeOf(i);
+    for (std::uint32_t k = leaves_ - 1; k >= 1; --k) {
+      const Node& a = nodes_[2 * k];
+      const Node& b = nodes_[2 * k + 1];
+      nodes_[k] = Before(b, a) ? b : a;  // the left one on ties
+    }
   }
   // Slot i to be written in place, field by field (copying a whole slot just written would
   // stall on store forwarding); Update(i) afterwards.
   Slot& at(std::uint32_t i) { return slots_[i]; }
   // The earliest slot's index; its kind is kNone when nothing is pending.
-  std::uint32_t top() const { return tree_[1]; }
+  std::uint32_t top() const { return nodes_[1].index; }
   void Update(std::uint32_t i) {
-    for (std::uint32_t k = (leaves_ + i) / 2; k >= 1; k /= 2) tree_[k] = Winner(k);
+    Node cur = NodeOf(i);
+    std::uint32_t k = leaves_ + i;
+    nodes_[k] = cur;
+    for (; k > 1; k /= 2) {
+      const Node& sibling = nodes_[k ^ 1];
+      // The left one wins ties, as in the order of the slots: k odd means cur is the right.
+      if ((k & 1) != 0 ? !Before(cur, sibling) : Before(sibling, cur)) cur = sibling;
+      nodes_[k / 2] = cur;
+    }
   }
 
  private:
-  std::uint32_t Winner(std::uint32_t k) const {
-    const std::uint32_t a = tree_[2 * k], b = tree_[2 * k + 1];
-    return SlotBefore(slots_[b], slots_[a]) ? b : a;
+  struct Node {
+    std::uint64_t time = UINT64_MAX, seq = UINT64_MAX;
+    std::uint32_t index = 0;
+  };
+  static bool Before(const Node& a, const Node& b) {
+    return a.time != b.time ? a.time < b.time : a.seq < b.seq;
   }
+  Node NodeOf(std::uint32_t i) const { return {slots_[i].time.picoseconds(), slots_[i].seq, i}; }
+
   std::uint32_t leaves_ = 1;
   std::vector<Slot> slots_;
-  std::vector<std::uint32_t> tree_;  // tree_[1] the root; slot i's leaf at leaves_ + i
+  std::vector<Node> nodes_;  // nodes_[1] the root; slot i's leaf at leaves_ + i
 };
 
 // ---- The board ------------------------------------------------------------------------

@@ -1,5 +1,8 @@
 #include "replay/work.h"
 
+#include <sys/mman.h>
+
+#include <cstdlib>
 #include <numeric>
 
 #include "base/check.h"
@@ -33,6 +36,17 @@ void Resize(WorkGraph& w, std::size_t n) {
 }
 
 }  // namespace
+
+void* AllocateHugePages(std::size_t bytes) {
+  constexpr std::size_t kHuge = std::size_t{2} << 20;
+  const std::size_t rounded = (bytes + kHuge - 1) / kHuge * kHuge;
+  void* p = std::aligned_alloc(kHuge, rounded);
+  if (p == nullptr) throw std::bad_alloc();
+  madvise(p, rounded, MADV_HUGEPAGE);  // a hint: without huge pages, 4 KiB pages as before
+  return p;
+}
+
+void FreeHugePages(void* p, std::size_t) { std::free(p); }
 
 // The totals and the packed units, once the columns are complete.
 void Finish(WorkGraph& w) {

@@ -7,7 +7,9 @@
 // same fetch, never queued (DESIGN.md §1 "Max Work").
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <new>
 #include <vector>
 
 #include "graph/cell_tree.h"
@@ -16,6 +18,36 @@
 namespace raycell {
 
 using UnitId = std::uint32_t;
+
+// Blocks of 2 MiB and more come from AllocateHugePages (2 MiB aligned, whole 2 MiB pages,
+// marked for transparent huge pages with madvise, which this kernel setting needs), smaller
+// ones from operator new. For the packed unit records, read at random by the replay: on
+// 4 KiB pages nearly every such read also misses the TLB.
+void* AllocateHugePages(std::size_t bytes);
+void FreeHugePages(void* p, std::size_t bytes);
+template <typename T>
+struct HugePageAllocator {
+  using value_type = T;
+  static constexpr std::size_t kHuge = std::size_t{2} << 20;
+  HugePageAllocator() = default;
+  template <typename U>
+  HugePageAllocator(const HugePageAllocator<U>&) {}
+  T* allocate(std::size_t n) {
+    const std::size_t bytes = n * sizeof(T);
+    if (bytes < kHuge) return static_cast<T*>(::operator new(bytes));
+    return static_cast<T*>(AllocateHugePages(bytes));
+  }
+  void deallocate(T* p, std::size_t n) {
+    const std::size_t bytes = n * sizeof(T);
+    if (bytes < kHuge) {
+      ::operator delete(p);
+    } else {
+      FreeHugePages(p, bytes);
+    }
+  }
+  friend bool operator==(const HugePageAllocator&, const HugePageAllocator&) { return true; }
+  friend bool operator!=(const HugePageAllocator&, const HugePageAllocator&) { return false; }
+};
 
 struct WorkGraph {
   CellId cells = 0;                         // of the grid
@@ -41,7 +73,7 @@ struct WorkGraph {
     std::uint32_t queued_rays;
     std::uint32_t first_child;
   };
-  std::vector<Packed> packed;
+  std::vector<Packed, HugePageAllocator<Packed>> packed;
 
   // Sums over the units.
   struct Totals {

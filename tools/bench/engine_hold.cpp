@@ -9,7 +9,8 @@
 // queues in turn (so that the load of a shared machine touches them alike), and the medians are
 // printed.
 //
-// Usage: bench_engine_hold [MAX_N=1000000] [SEED=1] [REPS=5] [MIN_N=100]
+// Usage: bench_engine_hold [MAX_N=1000000] [SEED=1] [REPS=5] [MIN_N=100] [QUEUES=all]
+//   QUEUES: "all", or one of binary-heap, 4-ary-heap, calendar (for profiling one queue).
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
@@ -132,16 +133,18 @@ void Print(const std::string& name, std::size_t n, const Rates& r) {
 
 // The three queues measured in turn, `reps` times, so that a change in the machine's load
 // touches all of them alike; medians printed.
-void Rows(std::size_t n, std::uint64_t seed, int reps) {
+void Rows(std::size_t n, std::uint64_t seed, int reps, const std::string& queues) {
+  const auto on = [&](const EventQueue& q) { return queues == "all" || queues == q.Name(); };
+  const bool b = on(BinaryHeapQueue()), f = on(QuaternaryHeapQueue()), c = on(CalendarQueue());
   Rates binary, quaternary, calendar;
   for (int i = 0; i < reps; ++i) {
-    Measure<BinaryHeapQueue>(n, seed, &binary);
-    Measure<QuaternaryHeapQueue>(n, seed, &quaternary);
-    Measure<CalendarQueue>(n, seed, &calendar);
+    if (b) Measure<BinaryHeapQueue>(n, seed, &binary);
+    if (f) Measure<QuaternaryHeapQueue>(n, seed, &quaternary);
+    if (c) Measure<CalendarQueue>(n, seed, &calendar);
   }
-  Print(BinaryHeapQueue().Name(), n, binary);
-  Print(QuaternaryHeapQueue().Name(), n, quaternary);
-  Print(CalendarQueue().Name(), n, calendar);
+  if (b) Print(BinaryHeapQueue().Name(), n, binary);
+  if (f) Print(QuaternaryHeapQueue().Name(), n, quaternary);
+  if (c) Print(CalendarQueue().Name(), n, calendar);
 }
 
 }  // namespace
@@ -152,10 +155,12 @@ int main(int argc, char** argv) {
   const std::uint64_t seed = argc > 2 ? std::strtoull(argv[2], nullptr, 10) : 1;
   const int reps = argc > 3 ? std::atoi(argv[3]) : 5;
   const std::size_t min_n = argc > 4 ? std::strtoull(argv[4], nullptr, 10) : 100;
+  const std::string queues = argc > 5 ? argv[5] : "all";
   std::printf("hold model, delay uniform [0, 2000] ps, seed %llu, median of %d runs\n",
               (unsigned long long)seed, reps);
   std::printf("%-11s %10s %5s %14s %14s %10s %13s\n", "queue", "N", "runs", "queue Mev/s",
               "engine Mev/s", "ns/event", "queue share");
-  for (std::size_t n = min_n; n <= max_n; n *= 10) raycell::Rows(n, seed, std::max(1, reps));
+  for (std::size_t n = min_n; n <= max_n; n *= 10)
+    raycell::Rows(n, seed, std::max(1, reps), queues);
   return 0;
 }
