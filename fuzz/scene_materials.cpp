@@ -13,6 +13,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   using namespace raycell;
   SceneSpec spec;
   spec.source = RAYCELL_FUZZ_DATA "/tiny.vdb";
+  spec.all_grids = true;  // both grids, so that a material may name either
   spec.materials = Split(std::string(reinterpret_cast<const char*>(data), size), '\n');
   try {
     const auto scene = Scene::Load(spec, 0);
