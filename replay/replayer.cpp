@@ -433,11 +433,22 @@ void CheckReplayable(const ReplayConfig& config) {
   }
 }
 
+void CheckModelSize(const ReplayConfig& config, std::uint64_t cells) {
+  const std::uint64_t n = std::uint64_t{config.processors.count} * cells;
+  if (n > kMaxProcessorCells) {
+    throw InputError("processors.count " + std::to_string(config.processors.count) + " x " +
+                     std::to_string(cells) + " cells of the trace = " + std::to_string(n) +
+                     " exceeds the limit of " + std::to_string(kMaxProcessorCells) +
+                     " processor-cells (the memory model keeps 8 bytes per processor and cell)");
+  }
+}
+
 ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                          const ReplayConfig& config, Scheduler& scheduler, const FrameInfo& frame,
                          std::uint64_t bound, ReplayObserver* observer) {
   RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
   CheckReplayable(config);
+  CheckModelSize(config, work.cells);
   if (!work.packed.empty()) {
     return Replay(work, PackedUnits{work.packed.data(), UnitId(work.roots.size())}, footprints,
                   config, scheduler, frame, bound, observer);

@@ -68,4 +68,14 @@ bool BoundHolds(const ReplayConfig& config);
 // combination before any work.
 void CheckReplayable(const ReplayConfig& config);
 
+// Largest processors x cells of a replay. The memory model keeps, per processor and cell, an
+// arrival time (8 bytes) and a prefetch flag: 1 GiB at this limit (e.g. 8 processors at
+// 256x256x256 cells).
+inline constexpr std::uint64_t kMaxProcessorCells = std::uint64_t{1} << 27;
+
+// InputError naming processors.count, the cell count and the limit when `config` on a trace
+// of `cells` cells exceeds kMaxProcessorCells. `replay` checks it when the trace is opened,
+// `sweep` for every combination, both before any frame is read; ReplayFrame checks it too.
+void CheckModelSize(const ReplayConfig& config, std::uint64_t cells);
+
 }  // namespace raycell

@@ -672,6 +672,16 @@ std::string SweepRow(std::size_t index, const std::vector<Vary>& varies,
 SweepOutcome RunSweep(const TraceReader& reader, const SweepSpec& spec, const std::string& out,
                       const SweepOptions& options) {
   ValidateVaries(spec.base, spec.varies);
+  const std::uint64_t cells = reader.header().cell_count();
+  for (std::size_t i = 0, n = CombinationCount(spec.varies); i < n; ++i) {
+    try {
+      CheckModelSize(CombinationConfig(spec.base, spec.varies, i), cells);
+    } catch (const InputError& e) {
+      throw InputError((spec.varies.empty() ? "--config " + spec.config
+                                            : "--vary: combination " + std::to_string(i)) +
+                       ": " + e.what());
+    }
+  }
   return Run(reader, spec, out, options).Go(out);
 }
 

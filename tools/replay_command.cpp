@@ -31,21 +31,6 @@ struct ReplayArgs {
   bool print_config = false, quiet = false;
 };
 
-// Largest processors x cells of a replay. The memory model keeps, per processor and cell, an
-// arrival time (8 bytes) and a prefetch flag: 1 GiB at this limit (e.g. 8 processors at
-// 256x256x256 cells). Checked when the trace is opened, before any frame is read.
-constexpr std::uint64_t kMaxProcessorCells = std::uint64_t{1} << 27;
-
-void CheckModelSize(const TraceHeader& h, const ReplayConfig& c) {
-  const std::uint64_t n = std::uint64_t{c.processors.count} * h.cell_count();
-  if (n > kMaxProcessorCells) {
-    throw InputError("processors.count " + std::to_string(c.processors.count) + " x " +
-                     std::to_string(h.cell_count()) + " cells of the trace = " + std::to_string(n) +
-                     " exceeds the limit of " + std::to_string(kMaxProcessorCells) +
-                     " (the memory model keeps 8 bytes per processor and cell)");
-  }
-}
-
 // Every output below prints the result's StatsTable (replay/result_table.h).
 
 StatsTable FrameTable(const ReplayResult& r, const ResultColumns& columns) {
@@ -142,7 +127,7 @@ void Run(const ReplayArgs& a) {
   }
   if (a.sample < 1) throw InputError("--sample: must be at least 1");
   const TraceReader reader = TraceReader::Open(a.trace);
-  CheckModelSize(reader.header(), config);
+  CheckModelSize(config, reader.header().cell_count());
   if (!reader.warning().empty()) std::cerr << "raycell: warning: " << reader.warning() << "\n";
   Progress progress(!a.quiet);
   if (!a.timeline.empty() && a.sample > 1) {

@@ -284,9 +284,42 @@ TEST(CellDDATest, ForcedStartCell) {
   EXPECT_THROW(CellDDA(g, {0.25, 0.25, 0.25}, d, 0, kInf, 8), InputError);
 }
 
-TEST(CellDDADeathTest, ForcedStartCellFarFromTheStartPoint) {
+// A spawned ray starts half a voxel off the surface its parent hit, which in cells smaller
+// than that lies cells away from the parent's cell: the forced cell comes first with zero
+// length, then the ray goes on from where it really is. (These aborted on a CHECK that the
+// start point was at most one cell from the forced cell: `raycell record --cells 255x255x255`.)
+TEST(CellDDATest, ForcedStartCellFarFromTheStartPoint) {
   const auto g = UnitGrid(3);
-  EXPECT_DEATH(CellDDA(g, {0.1, 0.1, 0.1}, {1, 0, 0}, 0, kInf, 2), "CHECK failed");
+  const Vec3d d{1, 0, 0};
+  const double p1 = 1.0 / 3, p2 = 2 * (1.0 / 3);  // interior planes
+  // Behind the forced cell (x = 2): the ray crosses cells 0, 1 and 2 after it.
+  EXPECT_EQ(Trace(g, {0.1, 0.1, 0.1}, d, 0, kInf, 2),
+            (std::vector<CellSegment>{
+                {2, 0, 0}, {0, 0, p1 - 0.1}, {1, p1 - 0.1, p2 - 0.1}, {2, p2 - 0.1, 0.9}}));
+  // Two cells past it.
+  EXPECT_EQ(Trace(g, {0.9, 0.1, 0.1}, d, 0, kInf, 0),
+            (std::vector<CellSegment>{{0, 0, 0}, {2, 0, 1 - 0.9}}));
+  // Off its slab on an axis the ray is parallel to (y = 2, not 0): cells 6, 7, 8.
+  EXPECT_EQ(Trace(g, {0.1, 0.9, 0.1}, d, 0, kInf, 0),
+            (std::vector<CellSegment>{
+                {0, 0, 0}, {6, 0, p1 - 0.1}, {7, p1 - 0.1, p2 - 0.1}, {8, p2 - 0.1, 0.9}}));
+  // Outside the box, entering it later: in the forced cell (one segment from tmin) ...
+  EXPECT_EQ(
+      Trace(g, {-0.5, 0.1, 0.1}, d, 0, kInf, 0),
+      (std::vector<CellSegment>{{0, 0, p1 + 0.5}, {1, p1 + 0.5, p2 + 0.5}, {2, p2 + 0.5, 1.5}}));
+  // ... or elsewhere (the forced cell until the box entry).
+  EXPECT_EQ(Trace(g, {-0.5, 0.1, 0.1}, d, 0, kInf, 4),
+            (std::vector<CellSegment>{
+                {4, 0, 0.5}, {0, 0.5, p1 + 0.5}, {1, p1 + 0.5, p2 + 0.5}, {2, p2 + 0.5, 1.5}}));
+  // Outside the box, never entering it: the forced cell alone.
+  EXPECT_EQ(Trace(g, {0.1, 2, 0.1}, d, 0, kInf, 0), (std::vector<CellSegment>{{0, 0, 0}}));
+  EXPECT_EQ(Trace(g, {0.1, 0.1, 0.1}, {-1, 0, 0}, 0, 0.05, 2),
+            (std::vector<CellSegment>{{2, 0, 0}, {0, 0, 0.05}}));
+  // Within 1e-3 of a cell of the forced cell is rounding: the forced cell holds the ray.
+  EXPECT_EQ(
+      Trace(g, {p1 - 1e-4, 0.1, 0.1}, d, 0, kInf, 1),
+      (std::vector<CellSegment>{{1, 0, p2 - (p1 - 1e-4)}, {2, p2 - (p1 - 1e-4), 1 - (p1 - 1e-4)}}));
+  EXPECT_EQ(TraceCells(g, {p1 - 1e-3, 0.1, 0.1}, d, 0, kInf, 1), (Cells{1, 0, 1, 2}));
 }
 
 TEST(CellDDATest, InvalidRays) {

@@ -252,6 +252,44 @@ Rendered RenderIn(const Scene& scene, std::array<std::uint32_t, 3> dims) {
   return out;
 }
 
+// `r` (finer cells) shows the same picture bit for bit as `one` (1x1x1) and does the same
+// work: finer cells fit the fog closer, so more primary rays miss every non-empty cell (they
+// are not recorded), but the same are traced, with the same spawned rays and samples.
+void ExpectSamePictureAndWork(const Rendered& r, const Rendered& one) {
+  EXPECT_EQ(r.stats.rays + r.stats.primary_missed, one.stats.rays + one.stats.primary_missed);
+  EXPECT_GE(r.stats.primary_missed, one.stats.primary_missed);
+  for (int k = 1; k < kRayKindCount; ++k) {
+    EXPECT_EQ(r.stats.rays_by_kind[k], one.stats.rays_by_kind[k]) << ToString(RayKind(k));
+  }
+  EXPECT_EQ(r.stats.samples, one.stats.samples);
+  std::size_t differing = 0;
+  for (std::size_t i = 0; i < one.image.pixels().size(); ++i) {
+    const Rgb &p = r.image.pixels()[i], &q = one.image.pixels()[i];
+    differing += p.r != q.r || p.g != q.g || p.b != q.b;
+  }
+  EXPECT_EQ(differing, 0u);
+}
+
+// Every visit is to a non-empty cell, consecutive visits differ, and spawned rays start in
+// their parent's cell (DESIGN.md §1).
+void ExpectWellFormedRecord(const Rendered& r) {
+  const RayBatch& rays = r.rays;
+  ASSERT_EQ(rays.size(), r.stats.rays);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const RayView ray = rays.ray(i);
+    for (std::size_t v = 0; v < ray.visit_count; ++v) {
+      ASSERT_GT(r.footprints[ray.cells[v]], 0u) << "ray " << i << " visits an empty cell";
+      if (v > 0) {
+        ASSERT_NE(ray.cells[v], ray.cells[v - 1]) << "ray " << i;
+      }
+    }
+    if (ray.is_primary()) continue;
+    const RayView p = rays.ray(ray.parent);
+    ASSERT_LT(ray.spawn, p.visit_count);
+    ASSERT_EQ(ray.cells[0], p.cells[ray.spawn]) << "ray " << i;
+  }
+}
+
 // The cell grid changes the record, never the picture: a fog scene rendered in 1x1x1,
 // 3x3x3 and 256x256x256 cells gives the same image bit for bit and the same rays and
 // samples. At 256^3 (the largest grid a trace holds, kMaxCaptureCells) every visit is
@@ -274,39 +312,10 @@ TEST(RecorderAtScale, CellGridsUpTo256CubedChangeTheRecordNotThePicture) {
   const Rendered fine = RenderIn(*scene, {256, 256, 256});
   const Rendered coarse = RenderIn(*scene, {2, 2, 2});
   ASSERT_GT(one.stats.rays_by_kind[int(RayKind::kShadow)], 1000u);
-  for (const Rendered* r : {&three, &fine}) {
-    // Finer cells fit the fog closer: more primary rays miss every non-empty cell (they
-    // are not recorded), the same are traced.
-    EXPECT_EQ(r->stats.rays + r->stats.primary_missed, one.stats.rays + one.stats.primary_missed);
-    EXPECT_GE(r->stats.primary_missed, one.stats.primary_missed);
-    for (int k = 1; k < kRayKindCount; ++k) {
-      EXPECT_EQ(r->stats.rays_by_kind[k], one.stats.rays_by_kind[k]) << ToString(RayKind(k));
-    }
-    EXPECT_EQ(r->stats.samples, one.stats.samples);
-    std::size_t differing = 0;
-    for (std::size_t i = 0; i < one.image.pixels().size(); ++i) {
-      const Rgb &p = r->image.pixels()[i], &q = one.image.pixels()[i];
-      differing += p.r != q.r || p.g != q.g || p.b != q.b;
-    }
-    EXPECT_EQ(differing, 0u);
-  }
+  for (const Rendered* r : {&three, &fine}) ExpectSamePictureAndWork(*r, one);
   EXPECT_LT(one.stats.visits, three.stats.visits);
   EXPECT_LT(three.stats.visits, fine.stats.visits);
-  const RayBatch& rays = fine.rays;
-  ASSERT_EQ(rays.size(), fine.stats.rays);
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    const RayView r = rays.ray(i);
-    for (std::size_t v = 0; v < r.visit_count; ++v) {
-      ASSERT_GT(fine.footprints[r.cells[v]], 0u) << "ray " << i << " visits an empty cell";
-      if (v > 0) {
-        ASSERT_NE(r.cells[v], r.cells[v - 1]) << "ray " << i;
-      }
-    }
-    if (r.is_primary()) continue;
-    const RayView p = rays.ray(r.parent);
-    ASSERT_LT(r.spawn, p.visit_count);
-    ASSERT_EQ(r.cells[0], p.cells[r.spawn]) << "ray " << i;
-  }
+  ExpectWellFormedRecord(fine);
   std::uint64_t nonempty = 0;
   for (CellId c = 0; c < fine.footprints.size(); ++c) {
     if (fine.footprints[c] == 0) continue;
@@ -316,6 +325,21 @@ TEST(RecorderAtScale, CellGridsUpTo256CubedChangeTheRecordNotThePicture) {
   }
   EXPECT_GT(nonempty, 1000u);
   EXPECT_LT(nonempty, fine.footprints.size());
+}
+
+// Rays spawned at a surface start half a voxel off it (0.0125 in the built-in scene), in
+// their parent's cell. In cells smaller than that (y: 2.05 / 256 = 0.008) the start point lies
+// cells away from that cell: `raycell record --cells 255x255x255` aborted in the cell DDA.
+// Now the spawned ray's first visit is its parent's cell and it goes on from where it
+// starts, and the picture is the one of 1x1x1 cells.
+TEST(RecorderAtScale, SpawnedRaysInCellsSmallerThanTheirOffset) {
+  const auto scene = Scene::Load(SceneSpec{}, 0);  // the built-in scene: fog and surfaces
+  const Rendered one = RenderIn(*scene, {1, 1, 1});
+  const Rendered fine = RenderIn(*scene, {32, 256, 32});
+  ASSERT_GT(one.stats.rays_by_kind[int(RayKind::kReflection)], 50u);
+  ASSERT_GT(one.stats.rays_by_kind[int(RayKind::kRefraction)], 50u);
+  ExpectSamePictureAndWork(fine, one);
+  ExpectWellFormedRecord(fine);
 }
 
 TEST(Recorder, RealSmokePlumeRecordsAndShowsInTheImage) {

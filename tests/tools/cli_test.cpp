@@ -393,6 +393,27 @@ TEST(Cli, SizesBeyondTheLimitsFailUpFrontNamingTheOptionAndTheLimit) {
                        "the limit of 134217728"),
             std::string::npos)
       << r.out;
+  // sweep checks every combination, from --vary or the configuration, before it writes
+  // anything (it used to start replaying, allocating 2 GiB per combination).
+  const auto sweep_out = d / "sweep.csv";
+  r = Raycell("sweep " + trace + " --vary processors.count=1,1024 --quiet --out " +
+              sweep_out.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("--vary: combination 1: processors.count 1024 x 262144 cells of the trace "
+                       "= 268435456 exceeds the limit of 134217728"),
+            std::string::npos)
+      << r.out;
+  const auto toml = d / "many.toml";
+  std::ofstream(toml) << "[processors]\ncount = 600\n";
+  r = Raycell("sweep " + trace + " --config " + toml.string() + " --quiet --out " +
+              sweep_out.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("--config " + toml.string() + ": processors.count 600 x 262144 cells"),
+            std::string::npos)
+      << r.out;
+  for (const char* suffix : {"", ".partial", ".checkpoint"}) {
+    EXPECT_FALSE(std::filesystem::exists(sweep_out.string() + suffix)) << suffix;
+  }
 }
 
 TEST(Cli, RecordInSinglePrecisionSaysSoInTheTrace) {

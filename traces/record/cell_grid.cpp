@@ -237,6 +237,16 @@ void CellDDA::InitForced(CellId start, double tmin, double tmax) {
   if (!std::isfinite(tmin))
     throw InputError("ray with forced start cell " + std::to_string(start) +
                      ": tmin must be finite, not " + Num(tmin));
+  const auto xyz = grid_.CellCoords(start);
+  if (StartsOutside(xyz, tmin)) {
+    InitFree(tmin, tmax);
+    if (!done_ && Cell() == start) {  // the ray enters the box in the given cell
+      t_ = tmin;
+    } else {
+      pending_ = CellSegment{start, tmin, done_ ? tmin : t_};
+    }
+    return;
+  }
   // Axes the ray is parallel to do not clip: the start cell says where the ray lies.
   t_ = tmin;
   t_end_ = tmax;
@@ -247,12 +257,24 @@ void CellDDA::InitForced(CellId start, double tmin, double tmax) {
   }
   t_end_ = std::max(t_, t_end_);
   done_ = false;
-  const auto xyz = grid_.CellCoords(start);
   for (int a = 0; a < 3; ++a) {
     idx_[a] = xyz[a];
     t_next_[a] = NextCrossing(a);
-    RAYCELL_CHECK_LE(std::abs(NaturalIndex(a, t_, t_u_) - idx_[a]), 1);
   }
+}
+
+bool CellDDA::StartsOutside(const std::array<std::uint32_t, 3>& xyz, double tmin) const {
+  for (int a = 0; a < 3; ++a) {
+    if (step_[a] == 0) {
+      if (grid_.Plane(a, xyz[a]) - o_[a] > cap_[a] || o_[a] - grid_.Plane(a, xyz[a] + 1) > cap_[a])
+        return true;
+      continue;
+    }
+    // Past the cell's exit plane is fine: the ray leaves the cell at once (Advance).
+    const double t_in = CrossingT(a, step_[a] > 0 ? xyz[a] : xyz[a] + 1);
+    if ((t_in - tmin) * abs_d_[a] > cap_[a]) return true;
+  }
+  return false;
 }
 
 double CellDDA::CrossingT(int axis, std::uint32_t plane) const {
@@ -292,6 +314,12 @@ std::int64_t CellDDA::NaturalIndex(int axis, double t, double ut) const {
 }
 
 bool CellDDA::Next(CellSegment* segment) {
+  if (pending_) {
+    *segment = *pending_;
+    pending_.reset();
+    ++emitted_;
+    return true;
+  }
   if (done_) return false;
   RAYCELL_CHECK_LT(emitted_, max_segments_);
   ++emitted_;
@@ -337,7 +365,7 @@ std::string CellDDA::ToString() const {
     << ", d " << raycell::ToString({d_[0], d_[1], d_[2]}) << ", cell (" << idx_[0] << ", "
     << idx_[1] << ", " << idx_[2] << "), t " << Num(t_) << ", end " << Num(t_end_) << ", next ("
     << Num(t_next_[0]) << ", " << Num(t_next_[1]) << ", " << Num(t_next_[2]) << "), segments "
-    << emitted_ << (done_ ? ", done]" : "]");
+    << emitted_ << (pending_ ? ", first " + pending_->ToString() : "") << (done_ ? ", done]" : "]");
   return s.str();
 }
 

@@ -31,9 +31,13 @@
 //    the box entry, and the first segment is always the given cell, from tmin to where the
 //    ray leaves that cell (clamped to [tmin, min(tmax, box exit)]). It is the one segment
 //    that may have zero length: when the start point lies on the face the ray leaves by,
-//    or when the ray leaves the box right away. The start point must lie in or on the
-//    given cell up to rounding (checked: its natural cell is at most one step away on
-//    every axis).
+//    or when the ray leaves the box right away. A start point outside the given cell by at
+//    most 1e-3 of a cell on each axis (rounding) counts as inside it. A start point farther
+//    out (a ray spawned half a voxel off a surface, in cells smaller than that) is reached
+//    at once: the first segment is the given cell with zero length, and the ray goes on
+//    from the cell holding its start point as if it had no start cell. When that cell is
+//    the given one again the two are one segment; when the ray only enters the box later,
+//    the given cell's segment lasts until it does.
 #pragma once
 
 #include <array>
@@ -131,7 +135,7 @@ class CellDDA {
   // Writes the next segment and returns true, or returns false when the ray has left the
   // box or reached tmax.
   bool Next(CellSegment* segment);
-  bool done() const { return done_; }
+  bool done() const { return done_ && !pending_; }
 
   // The iterator's state, for logging.
   std::string ToString() const;
@@ -140,6 +144,10 @@ class CellDDA {
   void InitAxes(const Vec3d& origin, const Vec3d& dir);
   void InitFree(double tmin, double tmax);
   void InitForced(CellId start, double tmin, double tmax);
+  // True when the point at parameter tmin lies outside the cell `xyz` by more than
+  // kTolCellFraction of a cell on some axis: before the cell's entry plane on an axis the
+  // ray moves along, or off its slab on an axis the ray is parallel to.
+  bool StartsOutside(const std::array<std::uint32_t, 3>& xyz, double tmin) const;
   // Parameter range [entry, exit] of the slab of `axis`; empty (entry > exit) when the ray
   // is parallel to it and outside.
   void Slab(int axis, double* entry, double* exit) const;
@@ -165,6 +173,8 @@ class CellDDA {
   std::array<int, 3> step_{};
   double t_ = 0, t_end_ = 0, t_u_ = 0, end_u_ = 0;  // current and last parameter, uncertainties
   bool done_ = true;
+  // A forced start cell away from the start point: its segment, not emitted yet.
+  std::optional<CellSegment> pending_;
   std::uint32_t emitted_ = 0, max_segments_ = 0;
 };
 
