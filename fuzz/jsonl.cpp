@@ -1,12 +1,13 @@
 // Fuzz target: the JSON Lines path reader (`raycell analyze --paths`), then the tree it
 // built. Bad lines must give an InputError naming the line, never a crash, a leak or a hang.
+#include "traces/jsonl.h"
+
 #include <cstdint>
 #include <sstream>
 #include <string>
 
 #include "base/check.h"
 #include "graph/cell_tree.h"
-#include "traces/jsonl.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace raycell;
