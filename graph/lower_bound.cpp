@@ -377,7 +377,10 @@ class Bounder {
     for (CellId c : cells) g.bound.max_gen_sum += max_gen_[c];
     g.solver = std::make_unique<ScsSolver>(Project(cells));
     g.bound.strings = static_cast<std::uint32_t>(g.solver->strings());
-    const ScsLimits limits = Limits();
+    ScsLimits limits = Limits();
+    if (cells.size() >= options_.large_group_cells) {
+      limits.max_states = std::min(limits.max_states, options_.max_large_group_states);
+    }
     if (limits.max_states == 0) {
       r_.limits_reached = true;
       g.bound.scs_lower = g.bound.max_gen_sum;  // (1) summed over the group

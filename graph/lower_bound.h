@@ -17,10 +17,12 @@
 // lower_bound.cpp.
 //
 // Cost: dominated by the SCS and budget searches, each limited in states, and all together by
-// max_total_states (deterministic: no time limit). With the defaults, a 27-cell frame of
-// ~3,000-3,600 nodes takes about 15-30 s of CPU and under 100 MB (BENCHMARKS.md "Lower
-// bounds"); an 8-cell frame well under a second. Trees with many cells and few nodes are cheap:
-// pairs and triples are taken only among cells that share a root-to-leaf path (at most
+// max_total_states (deterministic: no time limit), and for groups of at least
+// large_group_cells cells by max_large_group_states. With the defaults, a 27-cell frame of
+// ~2,700-3,600 nodes takes a few seconds of CPU (BENCHMARKS.md "Lower bounds at 27 cells");
+// an 8-cell frame well under a second. The SCS heuristic's sub-searches (graph/scs.h) are
+// limited per sub-search, not counted in max_total_states. Trees with many cells and few nodes are
+// cheap: pairs and triples are taken only among cells that share a root-to-leaf path (at most
 // max_triples triples), blocks only where cells have nodes. Single-threaded.
 #pragma once
 
@@ -44,7 +46,12 @@ struct LowerBoundOptions {
   bool cuts = true;     // cuts for count vectors that a group cannot realise
   std::size_t max_triples = 3000;
   std::size_t max_blocks = 400;
-  std::uint64_t max_group_states = 50'000;     // per SCS search
+  std::uint64_t max_group_states = 50'000;  // per SCS search
+  // Groups of at least large_group_cells cells: their SCS search's heuristic merges pairs
+  // into parts of up to 4 cells (graph/scs.h), about 5-10x dearer per state and much
+  // stronger, so they get fewer states.
+  std::size_t large_group_cells = 8;
+  std::uint64_t max_large_group_states = 5'000;
   std::uint64_t max_cut_states = 20'000;       // per budget search (cuts)
   std::size_t max_cut_group_cells = 10;        // cuts only for groups of at most this many cells
   std::uint32_t max_block_cells = 12;          // blocks of at most this many cells
