@@ -338,8 +338,13 @@ struct Eval {
 // one. A sub-search stopped by its limit gives a smaller (still admissible) value.
 class PartTable {
  public:
-  PartTable(const Dag& dag, std::vector<Symbol> part, std::uint64_t sub_states)
-      : dag_(dag), part_(std::move(part)), sub_states_(sub_states) {
+  // sub_states: per sub-search; total_states: all sub-searches of this table together (states
+  // stored), after which new sets get hc's terms instead (max copies of each symbol of P on
+  // one remaining string, a weaker but still admissible value; A* stays correct with an
+  // admissible h that is not consistent, as it reopens states, see above).
+  PartTable(const Dag& dag, std::vector<Symbol> part, std::uint64_t sub_states,
+            std::uint64_t total_states = std::numeric_limits<std::uint64_t>::max())
+      : dag_(dag), part_(std::move(part)), sub_states_(sub_states), left_(total_states) {
     std::vector<bool> in(dag.symbols(), false);
     for (Symbol a : part_) in[a] = true;
     sets_.emplace_back();  // id 0: the empty set
@@ -379,6 +384,7 @@ class PartTable {
   const Dag& dag_;
   std::vector<Symbol> part_;
   std::uint64_t sub_states_;
+  std::uint64_t left_;  // states the sub-searches may still store
   std::vector<std::uint32_t> phi_;
   std::vector<std::vector<CellString>> sets_;
   std::unordered_map<std::vector<std::uint32_t>, std::uint32_t, VectorHash> ids_, memo_;
@@ -751,9 +757,23 @@ std::uint32_t PartTable::Remaining(const Frontier& f) {
   std::vector<CellString> strings;
   for (std::uint32_t id : key_) strings.insert(strings.end(), sets_[id].begin(), sets_[id].end());
   ScsLimits limits;
-  limits.max_states = sub_states_;
-  const Dag sub(strings);
-  const std::uint32_t value = AStar(sub, limits).Run().lower_bound;
+  limits.max_states = std::min(sub_states_, left_);
+  std::uint32_t value = 0;
+  if (limits.max_states == 0) {
+    for (Symbol a : part_) {
+      std::uint32_t most = 0;
+      for (const CellString& s : strings) {
+        most = std::max<std::uint32_t>(
+            most, static_cast<std::uint32_t>(std::count(s.begin(), s.end(), dag_.cell(a))));
+      }
+      value += most;
+    }
+  } else {
+    const Dag sub(strings);
+    const ScsResult r = AStar(sub, limits).Run();
+    value = r.lower_bound;
+    left_ -= std::min(left_, r.states + 1);
+  }
   memo_.emplace(key_, value);
   return value;
 }
@@ -814,7 +834,7 @@ std::vector<PartTable> ChooseParts(const Dag& dag, const std::vector<CellString>
   constexpr std::uint32_t kMostSymbols = 40;
   constexpr std::uint32_t kMergeSymbols = 8;
   constexpr std::size_t kMostPartSymbols = 4;
-  constexpr std::uint64_t kMergedSubStates = 2000;
+  constexpr std::uint64_t kMergedSubStates = 2000, kMergedTotalStates = 50'000;
   std::vector<PartTable> parts;
   const std::uint32_t k = dag.symbols();
   if (k < 4 || k > kMostSymbols) return parts;
@@ -884,7 +904,7 @@ std::vector<PartTable> ChooseParts(const Dag& dag, const std::vector<CellString>
   }
   for (auto& g : groups) {
     if (g.size() == 2) parts.emplace_back(dag, std::move(g), sub_states);
-    if (g.size() > 2) parts.emplace_back(dag, std::move(g), kMergedSubStates);
+    if (g.size() > 2) parts.emplace_back(dag, std::move(g), kMergedSubStates, kMergedTotalStates);
   }
   return parts;
 }
