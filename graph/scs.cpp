@@ -830,7 +830,7 @@ void Moves::EvaluateInto(const Frontier& f, Eval& e) {
 // at the start h never drops, and the merges chosen raise it. Only for 4 to kMostSymbols
 // symbols.
 std::vector<PartTable> ChooseParts(const Dag& dag, const std::vector<CellString>& strings,
-                                   std::uint64_t sub_states) {
+                                   std::uint64_t sub_states, bool merge) {
   constexpr std::uint32_t kMostSymbols = 40;
   constexpr std::uint32_t kMergeSymbols = 8;
   constexpr std::size_t kMostPartSymbols = 4;
@@ -869,7 +869,7 @@ std::vector<PartTable> ChooseParts(const Dag& dag, const std::vector<CellString>
     groups.push_back({a, b});
     value.push_back(g.first + root.need[a] + root.need[b]);
   }
-  if (k >= kMergeSymbols) {
+  if (merge && k >= kMergeSymbols) {
     for (Symbol a = 0; a < k; ++a) {
       if (!used[a]) groups.push_back({a}), value.push_back(root.need[a]);
     }
@@ -913,16 +913,16 @@ std::vector<PartTable> ChooseParts(const Dag& dag, const std::vector<CellString>
 
 class ScsSolver::Instance {
  public:
-  explicit Instance(const std::vector<CellString>& strings)
-      : dag(strings), parts(ChooseParts(dag, strings, kSubStates)) {}
+  Instance(const std::vector<CellString>& strings, bool merge_parts)
+      : dag(strings), parts(ChooseParts(dag, strings, kSubStates, merge_parts)) {}
   static constexpr std::uint64_t kSubStates = 20'000;
   Dag dag;
   // The heuristic's memo tables fill as searches run (not thread-safe; see scs.h).
   mutable std::vector<PartTable> parts;
 };
 
-ScsSolver::ScsSolver(const std::vector<CellString>& strings)
-    : in_(std::make_unique<const Instance>(strings)) {}
+ScsSolver::ScsSolver(const std::vector<CellString>& strings, bool merge_parts)
+    : in_(std::make_unique<const Instance>(strings, merge_parts)) {}
 ScsSolver::~ScsSolver() = default;
 ScsSolver::ScsSolver(ScsSolver&&) noexcept = default;
 ScsSolver& ScsSolver::operator=(ScsSolver&&) noexcept = default;

@@ -190,7 +190,7 @@ TEST(ScsTest, MergedPartsStayAdmissible) {
       strings.push_back(s);
     }
     const std::size_t expected = BfsScs(strings);
-    const ScsSolver solver(strings);
+    const ScsSolver solver(strings, /*merge_parts=*/true);
     ScsLimits limits;
     limits.max_states = 1 + rng() % 3;
     const ScsResult stopped = solver.Shortest(limits);

@@ -14,7 +14,8 @@
 //   --effort E            start from BracketEffort(E).lower (quick|default|thorough); give it
 //                         before the options it should not override
 //   --block-cells N       max_block_cells       --cut-cells N      max_cut_group_cells
-//   --groups              also print every stage and every group with a gain
+//   --merged-parts        merged_parts          --groups           also print every stage
+//                                                                  and every group with a gain
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -69,6 +70,8 @@ Args Parse(int argc, char** argv) {
       a.options.max_block_cells = static_cast<std::uint32_t>(ParseUint(value(), k, 1, 27));
     } else if (k == "--cut-cells") {
       a.options.max_cut_group_cells = ParseUint(value(), k, 1, 27);
+    } else if (k == "--merged-parts") {
+      a.options.merged_parts = true;
     } else if (k == "--groups") {
       a.groups = true;
     } else if (k == "--max-nodes") {
