@@ -375,9 +375,12 @@ class Bounder {
     Group g;
     g.bound.cells = cells;
     for (CellId c : cells) g.bound.max_gen_sum += max_gen_[c];
-    g.solver = std::make_unique<ScsSolver>(Project(cells));
+    g.solver = std::make_unique<ScsSolver>(Project(cells), options_.merged_parts);
     g.bound.strings = static_cast<std::uint32_t>(g.solver->strings());
-    const ScsLimits limits = Limits();
+    ScsLimits limits = Limits();
+    if (options_.merged_parts && cells.size() >= options_.large_group_cells) {
+      limits.max_states = std::min(limits.max_states, options_.max_large_group_states);
+    }
     if (limits.max_states == 0) {
       r_.limits_reached = true;
       g.bound.scs_lower = g.bound.max_gen_sum;  // (1) summed over the group
@@ -603,7 +606,7 @@ class Bounder {
         g.bound.cells = either;
         for (CellId c : either) g.bound.max_gen_sum += max_gen_[c];
         g.bound.scs_lower = g.bound.max_gen_sum;  // (1); no SCS search for these
-        g.solver = std::make_unique<ScsSolver>(Project(either));
+        g.solver = std::make_unique<ScsSolver>(Project(either), options_.merged_parts);
         g.bound.strings = static_cast<std::uint32_t>(g.solver->strings());
         g.union_of_tight = true;
         std::vector<std::uint32_t> u;

@@ -18,10 +18,12 @@
 //
 // Cost: dominated by the SCS and budget searches, each limited in states, and all together by
 // max_total_states (deterministic: no time limit). With the defaults, a 27-cell frame of
-// ~3,000-3,600 nodes takes about 15-30 s of CPU and under 100 MB (BENCHMARKS.md "Lower
-// bounds"); an 8-cell frame well under a second. Trees with many cells and few nodes are cheap:
-// pairs and triples are taken only among cells that share a root-to-leaf path (at most
-// max_triples triples), blocks only where cells have nodes. Single-threaded.
+// ~2,700-3,600 nodes takes about 15-30 s of CPU and under 100 MB (BENCHMARKS.md "Lower
+// bounds at 27 cells"); an 8-cell frame well under a second. The SCS heuristic's
+// sub-searches (graph/scs.h) are limited per sub-search, not counted in max_total_states. Trees
+// with many cells and few nodes are cheap: pairs and triples are taken only among cells that share
+// a root-to-leaf path (at most max_triples triples), blocks only where cells have nodes.
+// Single-threaded.
 #pragma once
 
 #include <array>
@@ -44,7 +46,15 @@ struct LowerBoundOptions {
   bool cuts = true;     // cuts for count vectors that a group cannot realise
   std::size_t max_triples = 3000;
   std::size_t max_blocks = 400;
-  std::uint64_t max_group_states = 50'000;     // per SCS search
+  std::uint64_t max_group_states = 50'000;  // per SCS search
+  // The SCS searches' heuristic merges pairs into parts of up to 4 cells (ScsSolver's
+  // merge_parts) for groups of 8 cells or more: group bounds rise by 2-3 on 8-12-cell blocks
+  // of a 27-cell frame, but the whole bound did not (BENCHMARKS.md "Lower bounds at 27
+  // cells") and the cost varies a lot between frames, so it is off by default. Groups of at
+  // least large_group_cells cells then get max_large_group_states states.
+  bool merged_parts = false;
+  std::size_t large_group_cells = 8;
+  std::uint64_t max_large_group_states = 5'000;
   std::uint64_t max_cut_states = 20'000;       // per budget search (cuts)
   std::size_t max_cut_group_cells = 10;        // cuts only for groups of at most this many cells
   std::uint32_t max_block_cells = 12;          // blocks of at most this many cells

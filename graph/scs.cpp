@@ -338,8 +338,13 @@ struct Eval {
 // one. A sub-search stopped by its limit gives a smaller (still admissible) value.
 class PartTable {
  public:
-  PartTable(const Dag& dag, std::vector<Symbol> part, std::uint64_t sub_states)
-      : dag_(dag), part_(std::move(part)), sub_states_(sub_states) {
+  // sub_states: per sub-search; total_states: all sub-searches of this table together (states
+  // stored), after which new sets get hc's terms instead (max copies of each symbol of P on
+  // one remaining string, a weaker but still admissible value; A* stays correct with an
+  // admissible h that is not consistent, as it reopens states, see above).
+  PartTable(const Dag& dag, std::vector<Symbol> part, std::uint64_t sub_states,
+            std::uint64_t total_states = std::numeric_limits<std::uint64_t>::max())
+      : dag_(dag), part_(std::move(part)), sub_states_(sub_states), left_(total_states) {
     std::vector<bool> in(dag.symbols(), false);
     for (Symbol a : part_) in[a] = true;
     sets_.emplace_back();  // id 0: the empty set
@@ -379,6 +384,7 @@ class PartTable {
   const Dag& dag_;
   std::vector<Symbol> part_;
   std::uint64_t sub_states_;
+  std::uint64_t left_;  // states the sub-searches may still store
   std::vector<std::uint32_t> phi_;
   std::vector<std::vector<CellString>> sets_;
   std::unordered_map<std::vector<std::uint32_t>, std::uint32_t, VectorHash> ids_, memo_;
@@ -751,9 +757,23 @@ std::uint32_t PartTable::Remaining(const Frontier& f) {
   std::vector<CellString> strings;
   for (std::uint32_t id : key_) strings.insert(strings.end(), sets_[id].begin(), sets_[id].end());
   ScsLimits limits;
-  limits.max_states = sub_states_;
-  const Dag sub(strings);
-  const std::uint32_t value = AStar(sub, limits).Run().lower_bound;
+  limits.max_states = std::min(sub_states_, left_);
+  std::uint32_t value = 0;
+  if (limits.max_states == 0) {
+    for (Symbol a : part_) {
+      std::uint32_t most = 0;
+      for (const CellString& s : strings) {
+        most = std::max<std::uint32_t>(
+            most, static_cast<std::uint32_t>(std::count(s.begin(), s.end(), dag_.cell(a))));
+      }
+      value += most;
+    }
+  } else {
+    const Dag sub(strings);
+    const ScsResult r = AStar(sub, limits).Run();
+    value = r.lower_bound;
+    left_ -= std::min(left_, r.states + 1);
+  }
   memo_.emplace(key_, value);
   return value;
 }
@@ -798,12 +818,23 @@ void Moves::EvaluateInto(const Frontier& f, Eval& e) {
   }
 }
 
-// Disjoint pairs of symbols for the heuristic: each pair's SCS at the start minus its two
-// maxima is its gain; pairs are taken greedily, the largest gain first (then the smaller
-// symbols), while both symbols are free. Only for 4 to kMostSymbols symbols.
+// Disjoint groups of symbols for the heuristic (PartTable). First pairs: each pair's SCS at the
+// start minus its two maxima is its gain; pairs are taken greedily, the largest gain first
+// (then the smaller symbols), while both symbols are free. Then, with at least kMergeSymbols
+// symbols, parts (the pairs and the symbols left alone) are merged two at a time, up to
+// kMostPartSymbols symbols a part: the merge whose union's SCS at the start exceeds the sum of
+// the two parts' values the most (then the first in part order), while some merge gains. The
+// sum of disjoint parts' remaining SCS is admissible and consistent for any partition (see
+// PartTable), so merging only changes how strong h is: a union's SCS is at least the sum of
+// its parts' (a supersequence restricted to each part is one of the part's projections), so
+// at the start h never drops, and the merges chosen raise it. Only for 4 to kMostSymbols
+// symbols.
 std::vector<PartTable> ChooseParts(const Dag& dag, const std::vector<CellString>& strings,
-                                   std::uint64_t sub_states) {
+                                   std::uint64_t sub_states, bool merge) {
   constexpr std::uint32_t kMostSymbols = 40;
+  constexpr std::uint32_t kMergeSymbols = 8;
+  constexpr std::size_t kMostPartSymbols = 4;
+  constexpr std::uint64_t kMergedSubStates = 2000, kMergedTotalStates = 50'000;
   std::vector<PartTable> parts;
   const std::uint32_t k = dag.symbols();
   if (k < 4 || k > kMostSymbols) return parts;
@@ -812,10 +843,15 @@ std::vector<PartTable> ChooseParts(const Dag& dag, const std::vector<CellString>
   std::vector<std::pair<std::uint32_t, std::pair<Symbol, Symbol>>> gains;
   ScsLimits limits;
   limits.max_states = sub_states;
+  auto start_scs = [&](const std::vector<Symbol>& group) {
+    std::vector<CellId> cells;
+    for (Symbol a : group) cells.push_back(dag.cell(a));
+    const Dag sub(ProjectStrings(strings, cells));
+    return AStar(sub, limits).Run().lower_bound;
+  };
   for (Symbol a = 0; a < k; ++a) {
     for (Symbol b = a + 1; b < k; ++b) {
-      const Dag pair(ProjectStrings(strings, {dag.cell(a), dag.cell(b)}));
-      const std::uint32_t scs = AStar(pair, limits).Run().lower_bound;
+      const std::uint32_t scs = start_scs({a, b});
       if (scs > root.need[a] + root.need[b]) {
         gains.push_back({scs - root.need[a] - root.need[b], {a, b}});
       }
@@ -824,11 +860,51 @@ std::vector<PartTable> ChooseParts(const Dag& dag, const std::vector<CellString>
   std::stable_sort(gains.begin(), gains.end(),
                    [](const auto& x, const auto& y) { return x.first > y.first; });
   std::vector<bool> used(k, false);
+  std::vector<std::vector<Symbol>> groups;
+  std::vector<std::uint32_t> value;  // each group's SCS at the start (a lower bound of it)
   for (const auto& g : gains) {
     const auto [a, b] = g.second;
     if (used[a] || used[b]) continue;
     used[a] = used[b] = true;
-    parts.emplace_back(dag, std::vector<Symbol>{a, b}, sub_states);
+    groups.push_back({a, b});
+    value.push_back(g.first + root.need[a] + root.need[b]);
+  }
+  if (merge && k >= kMergeSymbols) {
+    for (Symbol a = 0; a < k; ++a) {
+      if (!used[a]) groups.push_back({a}), value.push_back(root.need[a]);
+    }
+    std::map<std::vector<Symbol>, std::uint32_t> known;
+    for (;;) {
+      std::uint32_t best_gain = 0;
+      std::size_t bi = 0, bj = 0;
+      std::uint32_t best_value = 0;
+      for (std::size_t i = 0; i < groups.size(); ++i) {
+        for (std::size_t j = i + 1; j < groups.size(); ++j) {
+          if (groups[i].size() + groups[j].size() > kMostPartSymbols) continue;
+          std::vector<Symbol> both;
+          std::merge(groups[i].begin(), groups[i].end(), groups[j].begin(), groups[j].end(),
+                     std::back_inserter(both));
+          auto it = known.find(both);
+          if (it == known.end()) it = known.emplace(both, start_scs(both)).first;
+          if (it->second > value[i] + value[j] + best_gain) {
+            best_gain = it->second - value[i] - value[j];
+            bi = i, bj = j, best_value = it->second;
+          }
+        }
+      }
+      if (best_gain == 0) break;
+      std::vector<Symbol> both;
+      std::merge(groups[bi].begin(), groups[bi].end(), groups[bj].begin(), groups[bj].end(),
+                 std::back_inserter(both));
+      groups[bi] = both;
+      value[bi] = best_value;
+      groups.erase(groups.begin() + static_cast<std::ptrdiff_t>(bj));
+      value.erase(value.begin() + static_cast<std::ptrdiff_t>(bj));
+    }
+  }
+  for (auto& g : groups) {
+    if (g.size() == 2) parts.emplace_back(dag, std::move(g), sub_states);
+    if (g.size() > 2) parts.emplace_back(dag, std::move(g), kMergedSubStates, kMergedTotalStates);
   }
   return parts;
 }
@@ -837,16 +913,16 @@ std::vector<PartTable> ChooseParts(const Dag& dag, const std::vector<CellString>
 
 class ScsSolver::Instance {
  public:
-  explicit Instance(const std::vector<CellString>& strings)
-      : dag(strings), parts(ChooseParts(dag, strings, kSubStates)) {}
+  Instance(const std::vector<CellString>& strings, bool merge_parts)
+      : dag(strings), parts(ChooseParts(dag, strings, kSubStates, merge_parts)) {}
   static constexpr std::uint64_t kSubStates = 20'000;
   Dag dag;
   // The heuristic's memo tables fill as searches run (not thread-safe; see scs.h).
   mutable std::vector<PartTable> parts;
 };
 
-ScsSolver::ScsSolver(const std::vector<CellString>& strings)
-    : in_(std::make_unique<const Instance>(strings)) {}
+ScsSolver::ScsSolver(const std::vector<CellString>& strings, bool merge_parts)
+    : in_(std::make_unique<const Instance>(strings, merge_parts)) {}
 ScsSolver::~ScsSolver() = default;
 ScsSolver::ScsSolver(ScsSolver&&) noexcept = default;
 ScsSolver& ScsSolver::operator=(ScsSolver&&) noexcept = default;

@@ -54,7 +54,9 @@ struct BudgetResult {
 class ScsSolver {
  public:
   // Any number of strings over any cell ids.
-  explicit ScsSolver(const std::vector<CellString>& strings);
+  // merge_parts: Shortest's heuristic also merges pairs into parts of up to 4 symbols (see
+  // there).
+  explicit ScsSolver(const std::vector<CellString>& strings, bool merge_parts = false);
   ~ScsSolver();
   ScsSolver(ScsSolver&&) noexcept;
   ScsSolver& operator=(ScsSolver&&) noexcept;
@@ -69,7 +71,10 @@ class ScsSolver {
   // The SCS length, by A* over frontiers with the largest of three admissible, consistent
   // heuristics (the longest remaining path; the sum over symbols of the most copies one
   // remaining path needs; for 4 to 40 symbols, the sum over disjoint pairs of symbols, chosen
-  // by their gain at the start, of the pair's remaining SCS, memoised), a greedy
+  // by their gain at the start, of the pair's remaining SCS, memoised; with merge_parts and 8 or
+  // more symbols the pairs and lone symbols are then merged greedily into parts of up to 4 symbols
+  // while a part's SCS at the start exceeds its two halves' sum: a stronger h, each state several
+  // times dearer), a greedy
   // supersequence as the incumbent, and forced moves (a symbol that every path still needing
   // it wants next is taken without branching). max_states counts stored states; each takes
   // about 4 bytes per frontier node plus 40. Building the solver costs one small SCS search

@@ -173,6 +173,35 @@ TEST(ScsTest, ExactWithThePairHeuristicAgainstBreadthFirstSearch) {
   }
 }
 
+// Eight to nine symbols: pairs of the heuristic are merged into parts of up to four symbols.
+// Searches stopped after a few states report the heuristic's own value at the start, which
+// must never exceed the SCS; unlimited ones must find it.
+TEST(ScsTest, MergedPartsStayAdmissible) {
+  std::mt19937 rng(17);
+  for (int trial = 0; trial < 60; ++trial) {
+    // Orders of the same symbols that disagree: pairs, and groups of pairs, gain.
+    const CellId symbols = 8 + rng() % 2;
+    Strings strings;
+    for (int i = 3 + rng() % 2; i > 0; --i) {
+      CellString s;
+      for (CellId c = 0; c < symbols; ++c) s.push_back(c);
+      std::shuffle(s.begin(), s.end(), rng);
+      s.resize(5 + rng() % 3);
+      strings.push_back(s);
+    }
+    const std::size_t expected = BfsScs(strings);
+    const ScsSolver solver(strings, /*merge_parts=*/true);
+    ScsLimits limits;
+    limits.max_states = 1 + rng() % 3;
+    const ScsResult stopped = solver.Shortest(limits);
+    ASSERT_LE(stopped.lower_bound, expected) << trial;
+    const ScsResult r = solver.Shortest();
+    ASSERT_TRUE(r.exact);
+    ASSERT_EQ(r.lower_bound, expected) << trial;
+    ASSERT_TRUE(CoversAll(r.supersequence, strings));
+  }
+}
+
 TEST(ScsTest, LimitedSearchStillBracketsTheOptimum) {
   std::mt19937 rng(12);
   int stopped = 0;

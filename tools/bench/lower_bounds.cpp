@@ -11,6 +11,11 @@
 //   --frames A-B          frame indices to run (default all)
 //   --total-states N      max_total_states      --group-states N   max_group_states
 //   --cut-states N        max_cut_states        --max-nodes N      largest synthetic tree
+//   --effort E            start from BracketEffort(E).lower (quick|default|thorough); give it
+//                         before the options it should not override
+//   --block-cells N       max_block_cells       --cut-cells N      max_cut_group_cells
+//   --merged-parts        merged_parts          --groups           also print every stage
+//                                                                  and every group with a gain
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -37,6 +42,7 @@ struct Args {
   bool synthetic = false;
   std::string frames;
   std::uint64_t max_nodes = 16000;
+  bool groups = false;
   LowerBoundOptions options;
 };
 
@@ -58,6 +64,16 @@ Args Parse(int argc, char** argv) {
       a.options.max_group_states = ParseUint(value(), k);
     } else if (k == "--cut-states") {
       a.options.max_cut_states = ParseUint(value(), k);
+    } else if (k == "--effort") {
+      a.options = BracketEffort(value()).lower;
+    } else if (k == "--block-cells") {
+      a.options.max_block_cells = static_cast<std::uint32_t>(ParseUint(value(), k, 1, 27));
+    } else if (k == "--cut-cells") {
+      a.options.max_cut_group_cells = ParseUint(value(), k, 1, 27);
+    } else if (k == "--merged-parts") {
+      a.options.merged_parts = true;
+    } else if (k == "--groups") {
+      a.groups = true;
     } else if (k == "--max-nodes") {
       a.max_nodes = ParseUint(value(), k, 1);
     } else if (!k.empty() && k[0] != '-' && a.capture.empty()) {
@@ -114,7 +130,8 @@ CellTree Synthetic(std::size_t target, std::mt19937_64& rng) {
 double Seconds(const timeval& t) { return double(t.tv_sec) + double(t.tv_usec) * 1e-6; }
 
 // Runs the bound on `tree` in this (child) process and prints one line.
-void Row(const std::string& label, const CellTree& tree, const LowerBoundOptions& options) {
+void Row(const std::string& label, const CellTree& tree, const LowerBoundOptions& options,
+         bool groups) {
   const std::size_t peel = Peel(tree).schedule.size();
   rusage before{};
   getrusage(RUSAGE_SELF, &before);
@@ -125,11 +142,17 @@ void Row(const std::string& label, const CellTree& tree, const LowerBoundOptions
   getrusage(RUSAGE_SELF, &after);
   std::printf("%8s %7zu %5zu %6llu", label.c_str(), tree.node_count(), peel,
               (unsigned long long)r.max_gen);
-  for (const char* stage : {"pairs matching", "ip(pairs,triples)", "ip(pairs,triples,blocks)",
-                            "ip(pairs,triples,blocks)+cuts"}) {
+  // The stages by kind (their names depend on the options: "ip(pairs)" without triples).
+  auto kind = [](const std::string& name) {
+    if (name == "pairs matching") return 0;
+    if (name.rfind("ip(", 0) != 0) return -1;
+    if (name.size() > 5 && name.compare(name.size() - 5, 5, "+cuts") == 0) return 3;
+    return name.find("blocks") != std::string::npos ? 2 : 1;
+  };
+  for (int k = 0; k < 4; ++k) {
     unsigned long long v = 0;
     for (const LowerBoundStage& s : r.stages) {
-      if (s.name == stage) v = s.value;
+      if (kind(s.name) == k) v = s.value;
     }
     std::printf(" %6llu", v);
   }
@@ -137,6 +160,19 @@ void Row(const std::string& label, const CellTree& tree, const LowerBoundOptions
               Seconds(after.ru_utime) - Seconds(before.ru_utime), wall,
               (unsigned long long)r.states, r.cuts, double(after.ru_maxrss) / 1024.0,
               r.limits_reached ? " limits" : "");
+  for (const LowerBoundStage& s : r.stages) {
+    if (groups)
+      std::printf("#   stage %-40s %4llu %10llu states %6.1f s\n", s.name.c_str(),
+                  (unsigned long long)s.value, (unsigned long long)s.states, s.seconds);
+  }
+  for (const GroupBound& g : r.groups) {
+    if (!groups) break;
+    std::printf("#   group %2zu cells %4u strings maxgen %3u scs >= %3u %s %8llu states:",
+                g.cells.size(), g.strings, g.max_gen_sum, g.scs_lower, g.exact ? "exact" : "     ",
+                (unsigned long long)g.states);
+    for (CellId c : g.cells) std::printf(" %u", c);
+    std::printf("\n");
+  }
   std::fflush(stdout);
 }
 
@@ -174,7 +210,7 @@ int Main(int argc, char** argv) {
     for (std::size_t n = 500; n <= a.max_nodes; n *= 2) {
       InChild([&] {
         std::mt19937_64 rng(n);
-        Row(std::to_string(n), Synthetic(n, rng), a.options);
+        Row(std::to_string(n), Synthetic(n, rng), a.options, a.groups);
       });
     }
     return 0;
@@ -191,7 +227,9 @@ int Main(int argc, char** argv) {
     if (f < 0 || std::size_t(f) >= reader.frames().size()) {
       throw InputError("--frames: frame " + std::to_string(f) + " is not in the capture");
     }
-    InChild([&] { Row(std::to_string(f), BuildFrameTree(reader, std::size_t(f)), a.options); });
+    InChild([&] {
+      Row(std::to_string(f), BuildFrameTree(reader, std::size_t(f)), a.options, a.groups);
+    });
   }
   return 0;
 }
