@@ -112,7 +112,7 @@ int ForSmallRandomTrees(std::mt19937& rng, int count, Check check) {
 // reference every bound and schedule of graph/ is tested against; small trees only.
 inline std::size_t BruteForceOptimum(const CellTree& t) {
   std::vector<bool> start(t.size(), false);
-  start[kRootNode] = true;
+  start[kRootNode.index()] = true;
   std::set<std::vector<bool>> seen{start};
   std::vector<std::vector<bool>> level{start};
   for (std::size_t depth = 0;; ++depth) {
@@ -121,8 +121,9 @@ inline std::size_t BruteForceOptimum(const CellTree& t) {
       if (std::all_of(done.begin(), done.end(), [](bool d) { return d; })) return depth;
       for (CellId c = 0; c < t.cell_count(); ++c) {
         std::vector<bool> after = done;
-        for (NodeId n = 1; n < t.size(); ++n) {
-          if (!done[n] && done[t.parent(n)] && t.cell(n) == c) after[n] = true;
+        for (NodeId n : t.nodes()) {
+          if (!done[n.index()] && done[t.parent(n).index()] && t.cell(n) == c)
+            after[n.index()] = true;
         }
         if (seen.insert(after).second) next.push_back(after);
       }
