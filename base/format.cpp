@@ -61,4 +61,10 @@ std::string FormatFixed(double v, int digits) {
   return s.str();
 }
 
+std::string FormatHex64(std::uint64_t v) {
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
 }  // namespace raycell

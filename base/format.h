@@ -2,6 +2,7 @@
 // Deterministic: the same value gives the same text on every machine.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 namespace raycell {
@@ -16,5 +17,7 @@ std::string CsvField(const std::string& s);
 std::string FormatReal(double v);
 // Fixed-point with `digits` decimals, as printf("%.*f"): FormatFixed(2.5, 2) == "2.50".
 std::string FormatFixed(double v, int digits);
+// 16 lowercase hexadecimal digits, no prefix: FormatHex64(255) == "00000000000000ff".
+std::string FormatHex64(std::uint64_t v);
 
 }  // namespace raycell

@@ -24,20 +24,21 @@ CellTree::CellTree()
 
 std::vector<NodeId> CellTree::children(NodeId n) const {
   std::vector<NodeId> out;
-  for (NodeId c = first_child_[n]; c != kNoNode; c = next_sibling_[c]) out.push_back(c);
+  for (NodeId c = first_child_[n.index()]; c != kNoNode; c = next_sibling_[c.index()])
+    out.push_back(c);
   return out;
 }
 
 NodeId CellTree::FindChild(NodeId n, CellId cell) const {
-  for (NodeId c = first_child_[n]; c != kNoNode; c = next_sibling_[c]) {
-    if (cell_[c] == cell) return c;
+  for (NodeId c = first_child_[n.index()]; c != kNoNode; c = next_sibling_[c.index()]) {
+    if (cell_[c.index()] == cell) return c;
   }
   return kNoNode;
 }
 
 NodeId CellTree::AddNode(NodeId parent, CellId cell) {
-  RAYCELL_CHECK_LT(cell_.size(), std::size_t{kNoNode});
-  const auto id = static_cast<NodeId>(cell_.size());
+  RAYCELL_CHECK_LT(cell_.size(), std::size_t{kNoNode.index()});
+  const NodeId id(static_cast<std::uint32_t>(cell_.size()));
   cell_.push_back(cell);
   parent_.push_back(parent);
   enter_.push_back(0);
@@ -46,12 +47,12 @@ NodeId CellTree::AddNode(NodeId parent, CellId cell) {
   first_child_.push_back(kNoNode);
   next_sibling_.push_back(kNoNode);
   last_child_.push_back(kNoNode);
-  if (last_child_[parent] == kNoNode) {
-    first_child_[parent] = id;
+  if (last_child_[parent.index()] == kNoNode) {
+    first_child_[parent.index()] = id;
   } else {
-    next_sibling_[last_child_[parent]] = id;
+    next_sibling_[last_child_[parent.index()].index()] = id;
   }
-  last_child_[parent] = id;
+  last_child_[parent.index()] = id;
   cell_count_ = std::max(cell_count_, cell + 1);
   return id;
 }
@@ -61,15 +62,15 @@ CellTree UnionTree(const std::vector<const CellTree*>& trees) {
   CellTree u;
   for (const CellTree* t : trees) {
     std::vector<NodeId> image(t->size(), kNoNode);  // t's node -> u's node
-    image[kRootNode] = kRootNode;
-    for (NodeId n = 1; n < t->size(); ++n) {  // parents before children
-      const NodeId p = image[t->parent(n)];
+    image[kRootNode.index()] = kRootNode;
+    for (NodeId n : t->nodes()) {  // parents before children
+      const NodeId p = image[t->parent(n).index()];
       NodeId m = u.FindChild(p, t->cell(n));
       if (m == kNoNode) m = u.AddNode(p, t->cell(n));
-      image[n] = m;
-      u.enter_[m] += t->enter(n);
-      u.samples_[m] += t->samples(n);
-      u.visits_[m] += t->visits(n);
+      image[n.index()] = m;
+      u.enter_[m.index()] += t->enter(n);
+      u.samples_[m.index()] += t->samples(n);
+      u.visits_[m.index()] += t->visits(n);
     }
     u.rays_ += t->rays();
   }
@@ -82,19 +83,19 @@ void CellTree::ComputeGenerations() {
   generation_.assign(size(), 0);
   std::vector<std::uint32_t> on_path(cell_count_, 0);
   std::vector<std::pair<NodeId, bool>> stack;  // (node, leaving)
-  for (NodeId c = first_child_[kRootNode]; c != kNoNode; c = next_sibling_[c]) {
+  for (NodeId c = first_child_[kRootNode.index()]; c != kNoNode; c = next_sibling_[c.index()]) {
     stack.push_back({c, false});
   }
   while (!stack.empty()) {
     const auto [n, leaving] = stack.back();
     stack.pop_back();
     if (leaving) {
-      --on_path[cell_[n]];
+      --on_path[cell_[n.index()]];
       continue;
     }
-    generation_[n] = ++on_path[cell_[n]];
+    generation_[n.index()] = ++on_path[cell_[n.index()]];
     stack.push_back({n, true});
-    for (NodeId c = first_child_[n]; c != kNoNode; c = next_sibling_[c])
+    for (NodeId c = first_child_[n.index()]; c != kNoNode; c = next_sibling_[c.index()])
       stack.push_back({c, false});
   }
 }
@@ -108,8 +109,9 @@ std::string CellTree::ToString() const {
   while (!stack.empty()) {
     const auto [n, depth] = stack.back();
     stack.pop_back();
-    s << std::string(2 * depth, ' ') << "cell " << cell_[n] << " gen " << generation_[n]
-      << " enter " << enter_[n] << " samples " << samples_[n] << "\n";
+    s << std::string(2 * depth, ' ') << "cell " << cell_[n.index()] << " gen "
+      << generation_[n.index()] << " enter " << enter_[n.index()] << " samples "
+      << samples_[n.index()] << "\n";
     std::vector<NodeId> kids = children(n);
     for (auto it = kids.rbegin(); it != kids.rend(); ++it) stack.push_back({*it, depth + 1});
   }
@@ -118,7 +120,7 @@ std::string CellTree::ToString() const {
 
 std::vector<std::uint32_t> MaxGenerations(const CellTree& tree) {
   std::vector<std::uint32_t> max_gen(tree.cell_count(), 0);
-  for (NodeId n = 1; n < tree.size(); ++n) {
+  for (NodeId n : tree.nodes()) {
     max_gen[tree.cell(n)] = std::max(max_gen[tree.cell(n)], tree.generation(n));
   }
   return max_gen;
@@ -149,8 +151,8 @@ void CellTreeBuilder::AddBatch(const RayBatch& batch) {
 // Children are found by walking the sibling list while a node has few of them (the common
 // case: a handful of cells follow any cell), and through a hash index once it has many.
 NodeId CellTreeBuilder::Child(NodeId parent, CellId cell) {
-  const std::uint64_t key = (std::uint64_t{parent} << 32) | cell;
-  if (child_counts_[parent] <= kScanChildren) {
+  const std::uint64_t key = (std::uint64_t{parent.index()} << 32) | cell;
+  if (child_counts_[parent.index()] <= kScanChildren) {
     const NodeId found = tree_.FindChild(parent, cell);
     if (found != kNoNode) return found;
   } else {
@@ -159,11 +161,11 @@ NodeId CellTreeBuilder::Child(NodeId parent, CellId cell) {
   }
   const NodeId n = tree_.AddNode(parent, cell);
   child_counts_.push_back(0);
-  if (++child_counts_[parent] == kScanChildren + 1) {
+  if (++child_counts_[parent.index()] == kScanChildren + 1) {
     for (NodeId c = tree_.first_child(parent); c != kNoNode; c = tree_.next_sibling(c)) {
-      child_index_.emplace((std::uint64_t{parent} << 32) | tree_.cell(c), c);
+      child_index_.emplace((std::uint64_t{parent.index()} << 32) | tree_.cell(c), c);
     }
-  } else if (child_counts_[parent] > kScanChildren) {
+  } else if (child_counts_[parent.index()] > kScanChildren) {
     child_index_.emplace(key, n);
   }
   return n;
@@ -195,7 +197,7 @@ NodeId CellTreeBuilder::ParentVisitNode(const RayView& ray) const {
 NodeId CellTreeBuilder::StartNode(const RayView& ray) {
   if (ray.is_primary()) {
     const NodeId n = Child(kRootNode, ray.cells[0]);
-    ++tree_.enter_[n];
+    ++tree_.enter_[n.index()];
     return n;
   }
   const NodeId n = ParentVisitNode(ray);
@@ -239,10 +241,10 @@ void CellTreeBuilder::AddRay(const RayView& ray) {
                              std::to_string(v));
       }
       n = Child(n, ray.cells[v]);
-      ++tree_.enter_[n];
+      ++tree_.enter_[n.index()];
     }
-    tree_.samples_[n] += ray.samples[v];
-    ++tree_.visits_[n];
+    tree_.samples_[n.index()] += ray.samples[v];
+    ++tree_.visits_[n.index()];
     visit_nodes_.push_back(n);
   }
 }

@@ -13,7 +13,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <ostream>
 #include <string>
+#include <type_traits>
 #include <unordered_map>
 #include <vector>
 
@@ -21,15 +23,40 @@
 
 namespace raycell {
 
-using NodeId = std::uint32_t;
-inline constexpr NodeId kRootNode = 0;
-inline constexpr NodeId kNoNode = std::numeric_limits<NodeId>::max();
+// A node of a Cell Tree: its index in the tree's flat arrays. A type of its own, not a plain
+// number, so that a node and a cell (CellId, also 32 bits) never convert into each other:
+// a NodeId is made from a number only explicitly, NodeId(i), and gives it back only through
+// index(). Four bytes, trivially copyable: it costs nothing over the number it holds.
+class NodeId {
+ public:
+  NodeId() = default;  // uninitialised, as a plain number; NodeId{} is node 0
+  constexpr explicit NodeId(std::uint32_t index) : index_(index) {}
+  constexpr std::uint32_t index() const { return index_; }
+  friend constexpr bool operator==(NodeId a, NodeId b) { return a.index_ == b.index_; }
+  friend constexpr bool operator!=(NodeId a, NodeId b) { return a.index_ != b.index_; }
+  friend constexpr bool operator<(NodeId a, NodeId b) { return a.index_ < b.index_; }
+  friend constexpr bool operator>(NodeId a, NodeId b) { return a.index_ > b.index_; }
+  friend constexpr bool operator<=(NodeId a, NodeId b) { return a.index_ <= b.index_; }
+  friend constexpr bool operator>=(NodeId a, NodeId b) { return a.index_ >= b.index_; }
+  friend std::ostream& operator<<(std::ostream& out, NodeId n) { return out << n.index_; }
+
+ private:
+  std::uint32_t index_;
+};
+static_assert(sizeof(NodeId) == sizeof(std::uint32_t) && std::is_trivially_copyable_v<NodeId>);
+
+inline constexpr NodeId kRootNode{0};
+inline constexpr NodeId kNoNode{std::numeric_limits<std::uint32_t>::max()};
 inline constexpr CellId kNoCell = std::numeric_limits<CellId>::max();
 
 class CellTree {
  public:
   // Nodes including the root; node ids are 0 .. size()-1.
   std::size_t size() const { return cell_.size(); }
+  // The nodes without the root, in creation order (parents before children):
+  // for (NodeId n : tree.nodes()).
+  class NodeRange;
+  NodeRange nodes() const;
   // Nodes without the root.
   std::size_t node_count() const { return cell_.size() - 1; }
   // One more than the largest cell of any node (0 for an empty tree).
@@ -37,18 +64,20 @@ class CellTree {
   // Rays the tree was built from (rays with no visit included).
   std::uint64_t rays() const { return rays_; }
 
-  CellId cell(NodeId n) const { return cell_[n]; }           // kNoCell for the root
-  NodeId parent(NodeId n) const { return parent_[n]; }       // kNoNode for the root
-  std::uint64_t enter(NodeId n) const { return enter_[n]; }  // rays entering from the parent
-  std::uint64_t samples(NodeId n) const { return samples_[n]; }
+  CellId cell(NodeId n) const { return cell_[n.index()]; }      // kNoCell for the root
+  NodeId parent(NodeId n) const { return parent_[n.index()]; }  // kNoNode for the root
+  std::uint64_t enter(NodeId n) const {
+    return enter_[n.index()];
+  }  // rays entering from the parent
+  std::uint64_t samples(NodeId n) const { return samples_[n.index()]; }
   // Ray visits (segments) worked in the node: its entering rays plus rays spawned in it.
-  std::uint64_t visits(NodeId n) const { return visits_[n]; }
+  std::uint64_t visits(NodeId n) const { return visits_[n.index()]; }
   // Nodes on the path root..n (inclusive) whose cell is cell(n); 0 for the root.
-  std::uint32_t generation(NodeId n) const { return generation_[n]; }
+  std::uint32_t generation(NodeId n) const { return generation_[n.index()]; }
   // Children in creation order: first_child, then next_sibling until kNoNode.
-  NodeId first_child(NodeId n) const { return first_child_[n]; }
-  NodeId next_sibling(NodeId n) const { return next_sibling_[n]; }
-  bool is_leaf(NodeId n) const { return first_child_[n] == kNoNode; }
+  NodeId first_child(NodeId n) const { return first_child_[n.index()]; }
+  NodeId next_sibling(NodeId n) const { return next_sibling_[n.index()]; }
+  bool is_leaf(NodeId n) const { return first_child_[n.index()] == kNoNode; }
   std::vector<NodeId> children(NodeId n) const;
   // The child of `n` in `cell`, or kNoNode. Linear in the number of children.
   NodeId FindChild(NodeId n, CellId cell) const;
@@ -72,6 +101,32 @@ class CellTree {
   CellId cell_count_ = 0;
   std::uint64_t rays_ = 0;
 };
+
+class CellTree::NodeRange {
+ public:
+  class Iterator {
+   public:
+    constexpr explicit Iterator(std::uint32_t i) : i_(i) {}
+    constexpr NodeId operator*() const { return NodeId(i_); }
+    Iterator& operator++() {
+      ++i_;
+      return *this;
+    }
+    constexpr bool operator!=(Iterator o) const { return i_ != o.i_; }
+
+   private:
+    std::uint32_t i_;
+  };
+  constexpr explicit NodeRange(std::uint32_t end) : end_(end) {}
+  constexpr Iterator begin() const { return Iterator(1); }
+  constexpr Iterator end() const { return Iterator(end_); }
+
+ private:
+  std::uint32_t end_;
+};
+inline CellTree::NodeRange CellTree::nodes() const {
+  return NodeRange(static_cast<std::uint32_t>(size()));  // AddNode keeps size() below 2^32
+}
 
 // The union of several trees (e.g. two consecutive frames'): a node for every distinct
 // root-to-node cell path of any of them, its enter, samples and visits summed, rays summed.

@@ -20,10 +20,11 @@ DependencyGraph QuotientGraph(const CellTree& tree, const std::vector<std::uint3
                               std::size_t classes) {
   RAYCELL_CHECK_EQ(class_of.size(), tree.size());
   std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
-  for (NodeId n = 1; n < tree.size(); ++n) {
-    RAYCELL_CHECK_LT(class_of[n], classes);
+  for (NodeId n : tree.nodes()) {
+    RAYCELL_CHECK_LT(class_of[n.index()], classes);
     const NodeId p = tree.parent(n);
-    if (p != kRootNode && class_of[p] != class_of[n]) edges.emplace_back(class_of[p], class_of[n]);
+    if (p != kRootNode && class_of[p.index()] != class_of[n.index()])
+      edges.emplace_back(class_of[p.index()], class_of[n.index()]);
   }
   std::sort(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());

@@ -20,8 +20,8 @@ namespace raycell {
 using DependencyGraph = boost::adjacency_list<boost::vecS, boost::vecS, boost::directedS>;
 using DependencyVertex = DependencyGraph::vertex_descriptor;
 
-inline DependencyVertex VertexOf(NodeId n) { return static_cast<DependencyVertex>(n) - 1; }
-inline NodeId NodeOf(DependencyVertex v) { return static_cast<NodeId>(v + 1); }
+inline DependencyVertex VertexOf(NodeId n) { return DependencyVertex{n.index()} - 1; }
+inline NodeId NodeOf(DependencyVertex v) { return NodeId(static_cast<std::uint32_t>(v + 1)); }
 
 // The tree's own dependency graph: vertex VertexOf(n) per node n != root, tree edges.
 DependencyGraph BuildDependencyGraph(const CellTree& tree);

@@ -46,9 +46,9 @@ CellForest CellForest::FromTree(const CellTree& tree) {
   const std::size_t n = tree.node_count();
   f.cell_.resize(n);
   f.parent_.resize(n);
-  for (NodeId t = 1; t < tree.size(); ++t) {
-    f.cell_[t - 1] = tree.cell(t);
-    f.parent_[t - 1] = tree.parent(t) == kRootNode ? kNone : tree.parent(t) - 1;
+  for (NodeId t : tree.nodes()) {
+    f.cell_[t.index() - 1] = tree.cell(t);
+    f.parent_[t.index() - 1] = tree.parent(t) == kRootNode ? kNone : tree.parent(t).index() - 1;
   }
   f.Finish();
   return f;

@@ -31,7 +31,7 @@ std::vector<std::int64_t> ScheduleGroups(const CellTree& tree,
     if (c >= tree.cell_count()) continue;
     batch.clear();
     std::swap(batch, ready[c]);  // processing c's nodes makes no node of c ready
-    for (NodeId n : batch) fetch[n] = static_cast<std::int64_t>(i), make_ready(n);
+    for (NodeId n : batch) fetch[n.index()] = static_cast<std::int64_t>(i), make_ready(n);
   }
   return fetch;
 }
@@ -39,8 +39,8 @@ std::vector<std::int64_t> ScheduleGroups(const CellTree& tree,
 std::vector<Link> LinksOf(const CellTree& tree, const std::vector<CellId>& schedule) {
   const std::vector<std::int64_t> fetch = ScheduleGroups(tree, schedule);
   std::vector<std::pair<std::int64_t, NodeId>> by_fetch;  // (fetch, node), processed nodes
-  for (NodeId n = 1; n < tree.size(); ++n) {
-    if (fetch[n] >= 0) by_fetch.emplace_back(fetch[n], n);
+  for (NodeId n : tree.nodes()) {
+    if (fetch[n.index()] >= 0) by_fetch.emplace_back(fetch[n.index()], n);
   }
   std::sort(by_fetch.begin(), by_fetch.end());
   std::vector<Link> links;
@@ -60,19 +60,21 @@ namespace {
 void CheckLink(const CellTree& tree, const Link& l) {
   RAYCELL_CHECK_LT(l.a, l.b);
   RAYCELL_CHECK_LT(kRootNode, l.a);
-  RAYCELL_CHECK_LT(l.b, tree.size());
+  RAYCELL_CHECK_LT(l.b.index(), tree.size());
   RAYCELL_CHECK_EQ(tree.cell(l.a), tree.cell(l.b));
 }
 
 // Union-find with path halving; the representative of a class is not its smallest node.
 struct UnionFind {
   std::vector<NodeId> up;
-  explicit UnionFind(std::size_t n) : up(n) { std::iota(up.begin(), up.end(), NodeId{0}); }
+  explicit UnionFind(std::size_t n) : up(n) {
+    for (std::size_t i = 0; i < n; ++i) up[i] = NodeId(static_cast<std::uint32_t>(i));
+  }
   NodeId Find(NodeId x) {
-    while (up[x] != x) x = up[x] = up[up[x]];
+    while (up[x.index()] != x) x = up[x.index()] = up[up[x.index()].index()];
     return x;
   }
-  void Unite(NodeId x, NodeId y) { up[Find(x)] = Find(y); }
+  void Unite(NodeId x, NodeId y) { up[Find(x).index()] = Find(y); }
 };
 
 }  // namespace
@@ -83,16 +85,16 @@ Contraction ContractLinks(const CellTree& tree, const std::vector<Link>& links) 
   std::vector<std::uint32_t> class_of(tree.size(), Contraction::kNoClass);
   std::vector<std::uint32_t> class_of_root(tree.size(), Contraction::kNoClass);
   std::vector<CellId> class_cell;
-  for (NodeId n = 1; n < tree.size(); ++n) {
-    std::uint32_t& k = class_of_root[uf.Find(n)];
+  for (NodeId n : tree.nodes()) {
+    std::uint32_t& k = class_of_root[uf.Find(n).index()];
     if (k == Contraction::kNoClass) {
       k = static_cast<std::uint32_t>(class_cell.size());
       class_cell.push_back(tree.cell(n));
     }
-    class_of[n] = k;
+    class_of[n.index()] = k;
   }
   std::vector<std::uint32_t> partition = class_of;
-  if (!partition.empty()) partition[kRootNode] = 0;  // ignored by QuotientGraph
+  if (!partition.empty()) partition[kRootNode.index()] = 0;  // ignored by QuotientGraph
   // Built in place: copying an adjacency_list trips GCC 12's -Wmaybe-uninitialized in Boost.
   return Contraction{QuotientGraph(tree, partition, class_cell.size()), std::move(class_of),
                      std::move(class_cell)};
@@ -125,15 +127,15 @@ namespace {
 // parent(n) < n, so one pass in id order suffices.
 std::vector<std::uint64_t> AncestorBits(const CellTree& tree) {
   std::vector<std::uint64_t> anc(tree.size(), 0);
-  for (NodeId n = 1; n < tree.size(); ++n) {
+  for (NodeId n : tree.nodes()) {
     const NodeId p = tree.parent(n);
-    if (p != kRootNode) anc[n] = anc[p] | (std::uint64_t{1} << (p - 1));
+    if (p != kRootNode) anc[n.index()] = anc[p.index()] | (std::uint64_t{1} << (p.index() - 1));
   }
   return anc;
 }
 
 bool IsAncestor(const std::vector<std::uint64_t>& anc, NodeId u, NodeId v) {
-  return (anc[v] >> (u - 1)) & 1u;
+  return (anc[v.index()] >> (u.index() - 1)) & 1u;
 }
 
 bool Related(const std::vector<std::uint64_t>& anc, NodeId u, NodeId v) {
@@ -152,7 +154,7 @@ bool CandidatesConflict(const std::vector<std::uint64_t>& anc, const Link& l1, c
   for (NodeId s : x) {
     for (NodeId t : y) {
       if (s != t) continue;
-      return Related(anc, l1.a + l1.b - s, l2.a + l2.b - t);
+      return Related(anc, s == l1.a ? l1.b : l1.a, t == l2.a ? l2.b : l2.a);
     }
   }
   bool down = false, up = false;
@@ -177,8 +179,8 @@ LinkCandidates CandidateLinks(const CellTree& tree) {
   }
   const std::vector<std::uint64_t> anc = AncestorBits(tree);
   LinkCandidates out;
-  for (NodeId a = 1; a < tree.size(); ++a) {
-    for (NodeId b = a + 1; b < tree.size(); ++b) {
+  for (NodeId a : tree.nodes()) {
+    for (NodeId b(a.index() + 1); b.index() < tree.size(); b = NodeId(b.index() + 1)) {
       if (tree.cell(a) == tree.cell(b) && !Related(anc, a, b)) out.links.push_back({a, b});
     }
   }
@@ -233,15 +235,15 @@ struct GraphWriter {
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 void WriteDot(std::ostream& out, const CellTree& tree, const std::vector<Link>& links) {
   DotGraph g(tree.node_count());
-  for (NodeId n = 1; n < tree.size(); ++n) {
+  for (NodeId n : tree.nodes()) {
     if (tree.parent(n) != kRootNode) boost::add_edge(VertexOf(tree.parent(n)), VertexOf(n), g);
   }
   for (const Link& l : links) {
     CheckLink(tree, l);
     boost::add_edge(VertexOf(l.a), VertexOf(l.b), DotEdge{true}, g);
   }
-  std::vector<NodeId> ids(tree.node_count());
-  std::iota(ids.begin(), ids.end(), NodeId{1});
+  std::vector<std::uint32_t> ids(tree.node_count());  // vertex v is node v + 1 (VertexOf)
+  std::iota(ids.begin(), ids.end(), 1u);
   const auto id_map = boost::make_iterator_property_map(ids.begin(), get(boost::vertex_index, g));
   boost::write_graphviz(out, g, VertexWriter{&tree}, EdgeWriter{&g}, GraphWriter{}, id_map);
 }

@@ -50,9 +50,11 @@ namespace raycell {
 // A cache-saving link between two distinct nodes of the same cell, a < b (neither the root).
 // Functions taking links CHECK this.
 struct Link {
-  NodeId a = 0, b = 0;
+  NodeId a{0}, b{0};
   static Link Create(NodeId x, NodeId y) { return x < y ? Link{x, y} : Link{y, x}; }
-  std::string ToString() const { return std::to_string(a) + "-" + std::to_string(b); }
+  std::string ToString() const {
+    return std::to_string(a.index()) + "-" + std::to_string(b.index());
+  }
   friend bool operator==(const Link& l, const Link& r) { return l.a == r.a && l.b == r.b; }
   friend bool operator!=(const Link& l, const Link& r) { return !(l == r); }
   friend bool operator<(const Link& l, const Link& r) { return l.a != r.a ? l.a < r.a : l.b < r.b; }

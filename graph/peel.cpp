@@ -36,7 +36,7 @@ class Peeler {
  public:
   explicit Peeler(const CellTree& tree) : t_(tree), cells_(tree.cell_count()) {
     InitCounts();
-    for (NodeId n = 1; n < t_.size(); ++n) {
+    for (NodeId n : t_.nodes()) {
       if (t_.is_leaf(n)) AddLeaf(n);
     }
     for (CellId c = 0; c < cells_; ++c) UpdateReady(c);
@@ -72,9 +72,9 @@ class Peeler {
     count_.assign(total, 0);
     leaf_count_.assign(total, 0);
     children_.assign(t_.size(), 0);
-    for (NodeId n = 1; n < t_.size(); ++n) {
+    for (NodeId n : t_.nodes()) {
       ++count_[Slot(n)];
-      if (t_.parent(n) != kRootNode) ++children_[t_.parent(n)];
+      if (t_.parent(n) != kRootNode) ++children_[t_.parent(n).index()];
     }
     non_leaf_top_.assign(cells_, 0);
     for (CellId c = 0; c < cells_; ++c)
@@ -116,7 +116,7 @@ class Peeler {
     --count_[Slot(n)];
     --leaf_count_[Slot(n)];
     const NodeId p = t_.parent(n);
-    if (p == kRootNode || --children_[p] > 0) return;
+    if (p == kRootNode || --children_[p.index()] > 0) return;
     AddLeaf(p);
     UpdateReady(t_.cell(p));
   }

@@ -96,9 +96,9 @@ std::vector<CellString> ProjectPaths(const CellTree& tree, const std::vector<Cel
   // Parents come before children (parent(n) < n), so one pass maps every node.
   ProjectionTrie trie;
   std::vector<std::uint32_t> trie_node(tree.size(), 0);
-  for (NodeId n = 1; n < tree.size(); ++n) {
-    const std::uint32_t up = trie_node[tree.parent(n)];
-    trie_node[n] = in[tree.cell(n)] ? trie.Child(up, tree.cell(n)) : up;
+  for (NodeId n : tree.nodes()) {
+    const std::uint32_t up = trie_node[tree.parent(n).index()];
+    trie_node[n.index()] = in[tree.cell(n)] ? trie.Child(up, tree.cell(n)) : up;
   }
   // Every trie node was made for some tree node, under which some leaf's projection extends
   // it; so a trie node with a child is a proper prefix (a subsequence) of a projection, and
@@ -123,7 +123,7 @@ std::vector<CellString> ProjectStrings(const std::vector<CellString>& strings,
 
 std::vector<CellString> TreePaths(const CellTree& tree) {
   std::vector<CellString> out;
-  for (NodeId n = 1; n < tree.size(); ++n) {
+  for (NodeId n : tree.nodes()) {
     if (!tree.is_leaf(n)) continue;
     CellString s;
     for (NodeId a = n; a != kRootNode; a = tree.parent(a)) s.push_back(tree.cell(a));

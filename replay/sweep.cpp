@@ -40,17 +40,11 @@ bool ParseSize(const std::string& s, std::size_t* out) {
   return true;
 }
 
-std::string Hex(std::uint64_t v) {
-  char buf[20];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
-  return buf;
-}
-
 std::string ConfigHash(const ReplayConfig& config) {
   const std::string toml = ToToml(config);
   Hash64 h;
   h.AddBytes(toml.data(), toml.size());
-  return Hex(h.Finish());
+  return FormatHex64(h.Finish());
 }
 
 bool ReadFile(const std::string& path, std::string* text) {

@@ -130,8 +130,8 @@ WorkGraph NodeWork(const CellTree& tree, CellId cells) {
   w.cells = cells;
   Resize(w, tree.node_count());
   std::vector<std::pair<UnitId, UnitId>> edges;
-  for (NodeId n = 1; n < tree.size(); ++n) {
-    const UnitId u = n - 1;
+  for (NodeId n : tree.nodes()) {
+    const UnitId u = n.index() - 1;
     w.cell[u] = tree.cell(n);
     w.samples[u] = tree.samples(n);
     w.queued_rays[u] = tree.enter(n);
@@ -143,7 +143,7 @@ WorkGraph NodeWork(const CellTree& tree, CellId cells) {
     if (tree.parent(n) == kRootNode) {
       w.roots.push_back(u);
     } else {
-      edges.emplace_back(tree.parent(n) - 1, u);
+      edges.emplace_back(tree.parent(n).index() - 1, u);
     }
   }
   BuildSuccessors(w, edges);

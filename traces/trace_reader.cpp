@@ -18,6 +18,7 @@
 #include <utility>
 
 #include "base/check.h"
+#include "base/format.h"
 #include "traces/columns.h"
 #include "traces/format.h"
 #include "traces/frame_checksum.h"
@@ -644,11 +645,7 @@ FrameSummary ToSummary(schema::FrameEnd::Reader r) {
   return s;
 }
 
-std::string Hex(std::uint64_t v) {
-  char buf[19];
-  std::snprintf(buf, sizeof buf, "0x%016llx", static_cast<unsigned long long>(v));
-  return buf;
-}
+std::string Hex(std::uint64_t v) { return "0x" + FormatHex64(v); }
 
 std::string Describe(const FrameSummary& s) {
   std::string kinds;

@@ -113,6 +113,9 @@ TEST(Format, JsonCsvAndNumbers) {
   EXPECT_EQ(FormatReal(-1.0 / 0.0), "-inf");
   EXPECT_EQ(FormatFixed(2.5, 2), "2.50");
   EXPECT_EQ(FormatFixed(0.125, 0), "0");
+  EXPECT_EQ(FormatHex64(0), "0000000000000000");
+  EXPECT_EQ(FormatHex64(0xABCDEF0123456789ull), "abcdef0123456789");
+  EXPECT_EQ(FormatHex64(~0ull), "ffffffffffffffff");
 }
 
 // The hash is part of the trace format: its values must never change. The expected values

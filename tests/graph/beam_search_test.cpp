@@ -11,11 +11,8 @@
 namespace raycell {
 namespace {
 
-using testing::BruteForceOptimum;
-using testing::FromPaths;
-using testing::RandomTree;
-using Schedule = std::vector<CellId>;
-constexpr CellId A = 0, B = 1, C = 2, D = 3;
+using namespace testing;
+using namespace testing::cells;
 
 // Paths C A D B and A C A (tests/graph/optimum_test.cpp, BeatsPeel): Peel splits and gives
 // A C A D B A (6); A C A D B (5, the bound) is the only schedule of length 5, by hand: the
@@ -83,12 +80,8 @@ TEST(BeamSearchTest, ToString) {
 // Peel.
 TEST(BeamSearchPropertyTest, FeasibleAndExactWhenWide) {
   std::mt19937 rng(20240601);
-  int below_peel = 0, tried = 0;
-  for (int i = 0; i < 1500; ++i) {
-    const CellTree t = RandomTree(rng, 2 + rng() % 4, 1 + rng() % 8);
-    if (t.node_count() > 22) continue;
-    ++tried;
-    SCOPED_TRACE(t.ToString());
+  int below_peel = 0;
+  const int tried = ForSmallRandomTrees(rng, 1500, [&](const CellTree& t) {
     const std::size_t optimum = BruteForceOptimum(t);
     BeamOptions narrow;
     narrow.width = 4;
@@ -104,7 +97,7 @@ TEST(BeamSearchPropertyTest, FeasibleAndExactWhenWide) {
     const BeamResult c = BeamSearch(t);
     EXPECT_TRUE(IsFeasible(t, c.schedule));
     below_peel += c.schedule.size() < Peel(t).schedule.size();
-  }
+  });
   EXPECT_GT(tried, 1000);
   EXPECT_GT(below_peel, 20);
 }

@@ -11,11 +11,8 @@
 namespace raycell {
 namespace {
 
-using testing::BruteForceOptimum;
-using testing::FromPaths;
-using testing::RandomTree;
-using Schedule = std::vector<CellId>;
-constexpr CellId A = 0, B = 1, C = 2, D = 3;
+using namespace testing;
+using namespace testing::cells;
 
 BestScheduleOptions Small() {
   BestScheduleOptions o;

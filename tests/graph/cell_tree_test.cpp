@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <type_traits>
 
 #include "base/check.h"
 #include "graph/peel.h"
@@ -11,6 +12,17 @@
 
 namespace raycell {
 namespace {
+
+// Typed ids (CONVENTIONS.md): a node and a cell, both 32-bit numbers, never convert into each
+// other, in either direction, by construction or assignment; a number becomes a node only
+// explicitly, NodeId(i). Checked at compile time: this file does not build if they do.
+static_assert(!std::is_convertible_v<NodeId, CellId> && !std::is_convertible_v<CellId, NodeId>);
+static_assert(!std::is_assignable_v<CellId&, NodeId> && !std::is_assignable_v<NodeId&, CellId>);
+static_assert(!std::is_convertible_v<std::uint32_t, NodeId> &&
+              !std::is_convertible_v<std::size_t, NodeId>);
+static_assert(std::is_constructible_v<NodeId, std::uint32_t> && NodeId(7).index() == 7);
+// And no cost: four bytes, copied as the number they hold.
+static_assert(sizeof(NodeId) == sizeof(std::uint32_t) && std::is_trivially_copyable_v<NodeId>);
 
 constexpr CellId A = 0, B = 1, C = 2;
 
@@ -62,7 +74,7 @@ TEST(CellTreeTest, TwoCrossedPaths) {
   const CellTree t = Build({{kNoParent, 0, {A, B}, {}}, {kNoParent, 0, {B, A}, {}}});
   EXPECT_EQ(t.node_count(), 4u);
   EXPECT_EQ(t.cell_count(), 2u);
-  for (NodeId n = 1; n < t.size(); ++n) EXPECT_EQ(t.generation(n), 1u);
+  for (NodeId n : t.nodes()) EXPECT_EQ(t.generation(n), 1u);
   EXPECT_EQ(MaxGenerations(t), (std::vector<std::uint32_t>{1, 1}));
   EXPECT_EQ(Bound(t), 2u);
   EXPECT_EQ(t.children(kRootNode), (std::vector<NodeId>{Find(t, {A}), Find(t, {B})}));
@@ -209,7 +221,8 @@ void ExpectSameTree(const CellTree& a, const CellTree& b) {
   ASSERT_EQ(a.size(), b.size());
   EXPECT_EQ(a.rays(), b.rays());
   EXPECT_EQ(a.cell_count(), b.cell_count());
-  for (NodeId n = 0; n < a.size(); ++n) {
+  for (std::uint32_t i = 0; i < a.size(); ++i) {  // the root too
+    const NodeId n(i);
     EXPECT_EQ(a.cell(n), b.cell(n)) << n;
     EXPECT_EQ(a.parent(n), b.parent(n)) << n;
     EXPECT_EQ(a.enter(n), b.enter(n)) << n;

@@ -34,6 +34,9 @@ NodeId At(const CellTree& t, const Schedule& path) {
 }
 
 Link L(NodeId x, NodeId y) { return Link::Create(x, y); }
+Link L(std::uint32_t x, std::uint32_t y) { return L(NodeId(x), NodeId(y)); }
+// The link between nodes a and b as written, a < b.
+Link N(std::uint32_t a, std::uint32_t b) { return {NodeId(a), NodeId(b)}; }
 
 // ------------------------------------------------------------------- brute force
 
@@ -44,7 +47,7 @@ Link L(NodeId x, NodeId y) { return Link::Create(x, y); }
 // schedule of up to `nodes` useful fetches. Trees of at most 16 nodes.
 bool Realisable(const CellTree& t, const Links& links, bool greedy) {
   RAYCELL_CHECK_LE(t.node_count(), 16u);
-  const auto bit = [](NodeId n) { return std::uint32_t{1} << (n - 1); };
+  const auto bit = [](NodeId n) { return std::uint32_t{1} << (n.index() - 1); };
   const std::uint32_t all = (std::uint32_t{1} << t.node_count()) - 1;
   std::vector<bool> seen(all + 1, false);
   std::vector<std::uint32_t> queue{0};
@@ -54,7 +57,7 @@ bool Realisable(const CellTree& t, const Links& links, bool greedy) {
     if (done == all) return true;
     for (CellId c = 0; c < t.cell_count(); ++c) {
       std::uint32_t ready = 0;
-      for (NodeId n = 1; n < t.size(); ++n) {
+      for (NodeId n : t.nodes()) {
         const NodeId p = t.parent(n);
         if (t.cell(n) == c && !(done & bit(n)) && (p == kRootNode || (done & bit(p)))) {
           ready |= bit(n);
@@ -93,9 +96,9 @@ void ForRandomTrees(int count, std::size_t max_nodes, Fn fn) {
 // Every pair of distinct nodes of one cell, ancestor pairs included.
 Links SameCellPairs(const CellTree& t) {
   Links out;
-  for (NodeId a = 1; a < t.size(); ++a) {
-    for (NodeId b = a + 1; b < t.size(); ++b) {
-      if (t.cell(a) == t.cell(b)) out.push_back({a, b});
+  for (NodeId a : t.nodes()) {
+    for (NodeId b : t.nodes()) {
+      if (a < b && t.cell(a) == t.cell(b)) out.push_back({a, b});
     }
   }
   return out;
@@ -142,16 +145,16 @@ TEST(LinksTest, GroupsAndLinksOfASchedule) {
   ASSERT_EQ(t.node_count(), 4u);
   EXPECT_EQ(ScheduleGroups(t, {A, B, A}), (std::vector<std::int64_t>{-1, 0, 1, 1, 2}));
   EXPECT_EQ(ScheduleGroups(t, {9, B, A}), (std::vector<std::int64_t>{-1, 2, -1, 1, 2}));
-  EXPECT_EQ(LinksOf(t, {A, B, A}), (Links{{2, 3}}));
-  EXPECT_EQ(LinksOf(t, {B, A, B}), (Links{{1, 4}}));
+  EXPECT_EQ(LinksOf(t, {A, B, A}), (Links{N(2, 3)}));
+  EXPECT_EQ(LinksOf(t, {B, A, B}), (Links{N(1, 4)}));
   EXPECT_EQ(RunSchedule(t, {A, B, A}).useful_fetches, t.node_count() - 1);
-  EXPECT_TRUE(LinksFeasible(t, {{2, 3}}));
-  EXPECT_TRUE(LinksFeasible(t, {{1, 4}}));
+  EXPECT_TRUE(LinksFeasible(t, {N(2, 3)}));
+  EXPECT_TRUE(LinksFeasible(t, {N(1, 4)}));
   // Both links: A1 -> B2 ~ B3 -> A4 ~ A1 is a cycle; the two links conflict.
-  EXPECT_FALSE(LinksFeasible(t, {{2, 3}, {1, 4}}));
-  EXPECT_TRUE(Conflict(t, {2, 3}, {1, 4}));
+  EXPECT_FALSE(LinksFeasible(t, {N(2, 3), N(1, 4)}));
+  EXPECT_TRUE(Conflict(t, N(2, 3), N(1, 4)));
   const LinkCandidates cand = CandidateLinks(t);
-  EXPECT_EQ(cand.links, (Links{{1, 4}, {2, 3}}));
+  EXPECT_EQ(cand.links, (Links{N(1, 4), N(2, 3)}));
   EXPECT_EQ(cand.conflicts, (std::vector<std::pair<std::size_t, std::size_t>>{{0, 1}}));
   EXPECT_EQ(cand.ToString(), "2 candidate links, 1 conflicts");
   EXPECT_EQ(L(4, 1).ToString(), "1-4");
@@ -175,10 +178,10 @@ TEST(LinksTest, GroupOfKNodesGivesKMinusOneLinks) {
 // Path A B A: the link between A1 and its descendant A3 contracts to {A1 A3} -> B2 -> {A1 A3}.
 TEST(LinksTest, AncestorLinkIsInfeasibleAndNoCandidate) {
   const CellTree t = FromPaths({{A, B, A}});
-  EXPECT_FALSE(LinksFeasible(t, {{1, 3}}));
-  EXPECT_FALSE(ScheduleFromLinks(t, {{1, 3}}).has_value());
+  EXPECT_FALSE(LinksFeasible(t, {N(1, 3)}));
+  EXPECT_FALSE(ScheduleFromLinks(t, {N(1, 3)}).has_value());
   EXPECT_TRUE(CandidateLinks(t).links.empty());
-  const Contraction k = ContractLinks(t, {{1, 3}});
+  const Contraction k = ContractLinks(t, {N(1, 3)});
   EXPECT_EQ(k.classes(), 2u);
   EXPECT_EQ(k.class_of, (std::vector<std::uint32_t>{Contraction::kNoClass, 0, 1, 0}));
   EXPECT_EQ(k.class_cell, (std::vector<CellId>{A, B}));
@@ -193,10 +196,10 @@ TEST(LinksTest, DependencyGraphHasTreeEdgesWithoutTheRoot) {
   const auto order = TopologicalOrder(g);
   ASSERT_TRUE(order.has_value());
   std::vector<std::size_t> pos(t.size());
-  for (std::size_t i = 0; i < order->size(); ++i) pos[NodeOf((*order)[i])] = i;
-  for (NodeId n = 1; n < t.size(); ++n) {
+  for (std::size_t i = 0; i < order->size(); ++i) pos[NodeOf((*order)[i]).index()] = i;
+  for (NodeId n : t.nodes()) {
     if (t.parent(n) != kRootNode) {
-      EXPECT_LT(pos[t.parent(n)], pos[n]);
+      EXPECT_LT(pos[t.parent(n).index()], pos[n.index()]);
     }
   }
 }
@@ -302,7 +305,7 @@ TEST(LinksChainTest, SeveralChains) {
 // comes before B7. ScheduleFromLinks still gives a feasible greedy schedule of 5 fetches.
 TEST(LinksTest, GreedyRuleCannotRealiseEveryFeasibleLinkSet) {
   const CellTree t = FromPaths({{A, B}, {C, A, B, D, B}});
-  const Links links{{1, 4}, {2, 7}};
+  const Links links{N(1, 4), N(2, 7)};
   EXPECT_TRUE(LinksFeasible(t, links));
   EXPECT_TRUE(Realisable(t, links, false));
   EXPECT_FALSE(Realisable(t, links, true));
@@ -352,7 +355,7 @@ std::size_t CountNodeLines(const std::string& text) {
 TEST(LinksDotTest, GoldenOutput) {
   const CellTree t = FromPaths({{A, B}, {B, A}});
   std::ostringstream out;
-  WriteDot(out, t, {{2, 3}});
+  WriteDot(out, t, {N(2, 3)});
   EXPECT_EQ(out.str(),
             "digraph G {\n"
             "node [style=filled, shape=box];\n"
@@ -379,13 +382,14 @@ TEST(LinksDotTest, OneNodeLinePerNodeOneDashedEdgePerLink) {
   EXPECT_EQ(CountNodeLines(dot), t.node_count());
   EXPECT_EQ(CountLines(dot, "style=dashed, dir=none, constraint=false"), links.size());
   std::size_t tree_edges = 0;
-  for (NodeId n = 1; n < t.size(); ++n) tree_edges += t.parent(n) != kRootNode ? 1 : 0;
+  for (NodeId n : t.nodes()) tree_edges += t.parent(n) != kRootNode ? 1 : 0;
   EXPECT_EQ(CountLines(dot, "->"), tree_edges + links.size());
   EXPECT_EQ(CountLines(dot, "style=solid"), tree_edges);
-  for (NodeId n = 1; n < t.size(); ++n) {
+  for (NodeId n : t.nodes()) {
     if (t.cell(n) == 12) {
-      EXPECT_NE(dot.find(std::to_string(n) + "[label=\"cell12 g"), std::string::npos);
-      EXPECT_NE(dot.find("fillcolor=\"#8dd3c7\"]", dot.find(std::to_string(n) + "[label=\"cell12")),
+      EXPECT_NE(dot.find(std::to_string(n.index()) + "[label=\"cell12 g"), std::string::npos);
+      EXPECT_NE(dot.find("fillcolor=\"#8dd3c7\"]",
+                         dot.find(std::to_string(n.index()) + "[label=\"cell12")),
                 std::string::npos);
     }
   }
@@ -430,8 +434,8 @@ TEST(LinksPropertyTest, LinksOfRandomSchedulesAreFeasible) {
     EXPECT_EQ(run.useful_fetches, run.processed_nodes - links.size());
     const auto fetch = ScheduleGroups(t, s);
     for (const Link& l : links) {
-      EXPECT_EQ(fetch[l.a], fetch[l.b]);
-      EXPECT_EQ(t.cell(l.a), s[static_cast<std::size_t>(fetch[l.a])]);
+      EXPECT_EQ(fetch[l.a.index()], fetch[l.b.index()]);
+      EXPECT_EQ(t.cell(l.a), s[static_cast<std::size_t>(fetch[l.a.index()])]);
     }
   });
 }

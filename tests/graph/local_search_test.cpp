@@ -12,11 +12,8 @@
 namespace raycell {
 namespace {
 
-using testing::BruteForceOptimum;
-using testing::FromPaths;
-using testing::RandomTree;
-using Schedule = std::vector<CellId>;
-constexpr CellId A = 0, B = 1, C = 2;
+using namespace testing;
+using namespace testing::cells;
 
 LocalSearchResult Improve(const CellTree& t, const Schedule& s, const LocalSearchOptions& o) {
   return ImproveSchedule(CellForest::FromTree(t), s, o);
@@ -85,12 +82,8 @@ TEST(LocalSearchTest, ToString) {
 // and must reach the optimum from Peel's schedule.
 TEST(LocalSearchPropertyTest, WholeWindowIsExact) {
   std::mt19937 rng(424242);
-  int below_peel = 0, tried = 0;
-  for (int i = 0; i < 1200; ++i) {
-    const CellTree t = RandomTree(rng, 2 + rng() % 4, 1 + rng() % 8);
-    if (t.node_count() > 22) continue;
-    ++tried;
-    SCOPED_TRACE(t.ToString());
+  int below_peel = 0;
+  const int tried = ForSmallRandomTrees(rng, 1200, [&](const CellTree& t) {
     const Schedule peel = Peel(t).schedule;
     LocalSearchOptions o;
     o.min_window = o.max_window = o.exact_window = 64;
@@ -100,7 +93,7 @@ TEST(LocalSearchPropertyTest, WholeWindowIsExact) {
     EXPECT_TRUE(IsFeasible(t, r.schedule));
     EXPECT_EQ(r.schedule.size(), BruteForceOptimum(t));
     below_peel += r.schedule.size() < peel.size();
-  }
+  });
   EXPECT_GT(tried, 800);
   EXPECT_GT(below_peel, 20);
 }

@@ -14,20 +14,9 @@ namespace {
 using testing::BruteForceOptimum;
 using testing::FromPaths;
 using testing::RandomTree;
-using Path = std::vector<CellId>;
+using testing::Rotations;
 
 constexpr CellId A = 0, B = 1, C = 2, D = 3;
-
-// The `cells` rotations of 0 1 .. cells-1: maxGen `cells`, optimum 2 cells - 1.
-CellTree Rotations(CellId cells) {
-  std::vector<Path> paths;
-  for (CellId r = 0; r < cells; ++r) {
-    Path p;
-    for (CellId i = 0; i < cells; ++i) p.push_back((r + i) % cells);
-    paths.push_back(p);
-  }
-  return FromPaths(paths);
-}
 
 void ExpectValid(const CellTree& t, const LowerBoundResult& r) {
   EXPECT_EQ(r.max_gen, Bound(t));

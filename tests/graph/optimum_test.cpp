@@ -15,12 +15,8 @@
 namespace raycell {
 namespace {
 
-using testing::BruteForceOptimum;
-using testing::FromPaths;
-using testing::RandomTree;
-
-constexpr CellId A = 0, B = 1, C = 2, D = 3;
-using Schedule = std::vector<CellId>;
+using namespace testing;
+using namespace testing::cells;
 
 void ExpectOptimal(const CellTree& t, std::uint64_t length) {
   const OptimumResult r = ExactOptimum(t);
@@ -31,17 +27,6 @@ void ExpectOptimal(const CellTree& t, std::uint64_t length) {
 }
 
 // ------------------------------------------------------------------ hand-made trees
-
-// Primary paths: the `cells` rotations of 0 1 .. cells-1. Bound `cells`, Peel above it.
-CellTree Rotations(CellId cells) {
-  std::vector<Schedule> paths;
-  for (CellId r = 0; r < cells; ++r) {
-    Schedule p;
-    for (CellId i = 0; i < cells; ++i) p.push_back((r + i) % cells);
-    paths.push_back(p);
-  }
-  return FromPaths(paths);
-}
 
 // A B and B A: bound 2, but no schedule of two entries covers both paths; A B A does.
 TEST(OptimumTest, TwoCrossedPaths) {

@@ -25,14 +25,14 @@ struct NaiveRun {
 };
 NaiveRun RunNaive(const CellTree& t, const Schedule& schedule) {
   std::vector<bool> done(t.size(), false);
-  done[kRootNode] = true;
+  done[kRootNode.index()] = true;
   std::size_t useful = 0;
   for (CellId c : schedule) {
     std::vector<NodeId> now;
-    for (NodeId n = 1; n < t.size(); ++n) {
-      if (!done[n] && t.cell(n) == c && done[t.parent(n)]) now.push_back(n);
+    for (NodeId n : t.nodes()) {
+      if (!done[n.index()] && t.cell(n) == c && done[t.parent(n).index()]) now.push_back(n);
     }
-    for (NodeId n : now) done[n] = true;
+    for (NodeId n : now) done[n.index()] = true;
     useful += now.empty() ? 0 : 1;
   }
   return {std::all_of(done.begin(), done.end(), [](bool d) { return d; }), useful};
@@ -42,32 +42,33 @@ NaiveRun RunNaive(const CellTree& t, const Schedule& schedule) {
 // (O(nodes^2)): the reference the bucketed Peel must match entry for entry.
 PeelResult NaivePeel(const CellTree& t) {
   std::vector<bool> gone(t.size(), false);
-  gone[kRootNode] = true;
+  gone[kRootNode.index()] = true;
   PeelResult out;
   for (std::size_t left = t.node_count(); left > 0;) {
     std::vector<bool> leaf(t.size(), true);
-    for (NodeId n = 1; n < t.size(); ++n) {
-      if (!gone[n]) leaf[t.parent(n)] = false;
+    for (NodeId n : t.nodes()) {
+      if (!gone[n.index()]) leaf[t.parent(n).index()] = false;
     }
     std::vector<std::uint32_t> top(t.cell_count(), 0);
     std::vector<std::size_t> leaves(t.cell_count(), 0);
-    for (NodeId n = 1; n < t.size(); ++n) {
-      if (gone[n]) continue;
+    for (NodeId n : t.nodes()) {
+      if (gone[n.index()]) continue;
       top[t.cell(n)] = std::max(top[t.cell(n)], t.generation(n));
-      leaves[t.cell(n)] += leaf[n] ? 1 : 0;
+      leaves[t.cell(n)] += leaf[n.index()] ? 1 : 0;
     }
     std::vector<bool> ready(t.cell_count());
     for (CellId c = 0; c < t.cell_count(); ++c) ready[c] = top[c] > 0;
-    for (NodeId n = 1; n < t.size(); ++n) {
-      if (!gone[n] && !leaf[n] && t.generation(n) == top[t.cell(n)]) ready[t.cell(n)] = false;
+    for (NodeId n : t.nodes()) {
+      if (!gone[n.index()] && !leaf[n.index()] && t.generation(n) == top[t.cell(n)])
+        ready[t.cell(n)] = false;
     }
     const auto r = std::find(ready.begin(), ready.end(), true);
     const bool completion = r != ready.end();
     const auto c = static_cast<CellId>(completion ? r - ready.begin()
                                                   : std::max_element(leaves.begin(), leaves.end()) -
                                                         leaves.begin());
-    for (NodeId n = 1; n < t.size(); ++n) {
-      if (!gone[n] && leaf[n] && t.cell(n) == c) gone[n] = true, --left;
+    for (NodeId n : t.nodes()) {
+      if (!gone[n.index()] && leaf[n.index()] && t.cell(n) == c) gone[n.index()] = true, --left;
     }
     out.schedule.insert(out.schedule.begin(), c);
     out.kinds.insert(out.kinds.begin(), completion ? kC : kS);

@@ -29,7 +29,7 @@ bool SubsequenceReference(const CellString& a, std::size_t i, const CellString& 
 // subsequence of a different one dropped, by comparing all pairs.
 std::set<CellString> ProjectionReference(const CellTree& t, const std::set<CellId>& cells) {
   std::set<CellString> all;
-  for (NodeId n = 1; n < t.size(); ++n) {
+  for (NodeId n : t.nodes()) {
     if (!t.is_leaf(n)) continue;
     CellString s;
     for (NodeId a = n; a != kRootNode; a = t.parent(a)) {

@@ -1,6 +1,8 @@
 // Cell Trees for the tests: from given paths, and random ones.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <random>
 #include <set>
@@ -9,6 +11,12 @@
 #include "graph/cell_tree.h"
 
 namespace raycell::testing {
+
+// The vocabulary of hand-made trees: cells A..F and a schedule (or path) of cells.
+namespace cells {
+inline constexpr CellId A = 0, B = 1, C = 2, D = 3, E = 4, F = 5;
+}  // namespace cells
+using Schedule = std::vector<CellId>;
 
 // One ray of a hand-made frame: its parent (kNoParent for a primary ray), the parent's visit
 // it was spawned at, and its cells. Rays come one ray tree at a time.
@@ -71,12 +79,40 @@ inline CellTree RandomTree(std::mt19937& rng, CellId cells, int rays, int max_le
   return builder.Finish();
 }
 
+// Primary paths: the `cells` rotations of 0 1 .. cells-1. maxGen (the bound) `cells`,
+// optimum 2 cells - 1, Peel above the bound.
+inline CellTree Rotations(CellId cells) {
+  std::vector<Schedule> paths;
+  for (CellId r = 0; r < cells; ++r) {
+    Schedule p;
+    for (CellId i = 0; i < cells; ++i) p.push_back((r + i) % cells);
+    paths.push_back(p);
+  }
+  return FromPaths(paths);
+}
+
+// Calls `check(tree)` on `count` random trees of 2..5 cells and 1..8 rays, skipping those of
+// more than 22 nodes (where BruteForceOptimum gets slow), each under a SCOPED_TRACE of the
+// tree; returns how many trees it checked.
+template <typename Check>
+int ForSmallRandomTrees(std::mt19937& rng, int count, Check check) {
+  int tried = 0;
+  for (int i = 0; i < count; ++i) {
+    const CellTree t = RandomTree(rng, 2 + rng() % 4, 1 + rng() % 8);
+    if (t.node_count() > 22) continue;
+    ++tried;
+    SCOPED_TRACE(t.ToString());
+    check(t);
+  }
+  return tried;
+}
+
 // The fewest fetches (one-cell cache) by breadth-first search over sets of processed nodes,
 // no heuristic, no incumbent: each level tries every cell, scanning every node. The
 // reference every bound and schedule of graph/ is tested against; small trees only.
 inline std::size_t BruteForceOptimum(const CellTree& t) {
   std::vector<bool> start(t.size(), false);
-  start[kRootNode] = true;
+  start[kRootNode.index()] = true;
   std::set<std::vector<bool>> seen{start};
   std::vector<std::vector<bool>> level{start};
   for (std::size_t depth = 0;; ++depth) {
@@ -85,8 +121,9 @@ inline std::size_t BruteForceOptimum(const CellTree& t) {
       if (std::all_of(done.begin(), done.end(), [](bool d) { return d; })) return depth;
       for (CellId c = 0; c < t.cell_count(); ++c) {
         std::vector<bool> after = done;
-        for (NodeId n = 1; n < t.size(); ++n) {
-          if (!done[n] && done[t.parent(n)] && t.cell(n) == c) after[n] = true;
+        for (NodeId n : t.nodes()) {
+          if (!done[n.index()] && done[t.parent(n).index()] && t.cell(n) == c)
+            after[n.index()] = true;
         }
         if (seen.insert(after).second) next.push_back(after);
       }

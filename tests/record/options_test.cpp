@@ -153,13 +153,8 @@ TEST(RecordCamera, FramingAndUpProblemsNameTheOptionsAndTheFrame) {
 
 // Material and light texts name the option, the key and the valid range.
 TEST(RecordMaterials, BadMaterialsAndLightsNameTheOptionKeyAndRange) {
-  const auto message = [](const SceneSpec& spec) -> std::string {
-    try {
-      Scene::Load(spec, 0);
-    } catch (const InputError& e) {
-      return e.what();
-    }
-    return "accepted";
+  const auto message = [](const SceneSpec& spec) {
+    return testing::ErrorOf([&] { Scene::Load(spec, 0); });  // "" when accepted
   };
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"cloud:absorb=-1", "--material 'cloud:absorb=-1' key 'absorb': must not be negative"},

@@ -22,10 +22,7 @@
 namespace raycell {
 namespace {
 
-using testing::Compare;
-using testing::ImageDiff;
-using testing::SmallBuiltin;
-using testing::TempDir;
+using namespace testing;
 
 // A fog ball of radius 1 around `centre`, named `name`.
 openvdb::FloatGrid::Ptr Ball(const std::string& name, openvdb::Vec3f centre) {

@@ -9,6 +9,7 @@
 #include "base/check.h"
 #include "base/checked.h"
 #include "engine/simulator.h"
+#include "replay/replayer.h"
 
 namespace raycell {
 namespace {
@@ -212,14 +213,7 @@ ReplayResult ReferenceReplayFrame(const WorkGraph& work,
                                   const ReplayConfig& config, Scheduler& scheduler,
                                   const FrameInfo& frame, std::uint64_t bound) {
   RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
-  const LevelConfig& cache = config.levels.front();
-  if (config.processors.prefetch && cache.capacity_unit == LevelConfig::CapacityUnit::kCells &&
-      cache.capacity < 2) {
-    throw InputError(
-        "processors.prefetch = true needs a cache that holds two cells (double "
-        "buffering), but level '" +
-        cache.name + "' holds " + FormatCapacity(cache));
-  }
+  CheckReplayable(config);
   const bool min = UsesMin(config);
   const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
   MemoryHierarchy::Requests futures;

@@ -12,12 +12,14 @@
 #include "replay/work.h"
 #include "scheduling/scheduler.h"
 #include "tests/graph/test_trees.h"
+#include "tests/replay/random_frame.h"
 
 namespace raycell {
 namespace {
 
 constexpr CellId A = 0, B = 1, C = 2;
 
+using testing::RandomReplayFrame;
 using testing::TestRay;
 using testing::TreeOf;
 
@@ -79,30 +81,6 @@ TEST(Replay, SpawnedRaysAreWorkedInPlace) {
   }
 }
 
-RayBatch RandomFrame(std::mt19937& rng, CellId cells) {
-  RayBatch b(false);
-  std::uniform_int_distribution<CellId> cell(0, cells - 1);
-  const int rays = 2 + int(rng() % 40);
-  int tree_start = 0;
-  for (int i = 0; i < rays; ++i) {
-    const bool primary = i == 0 || rng() % 3 == 0;
-    if (primary) tree_start = i;
-    const RayId parent = primary ? kNoParent : tree_start + rng() % (i - tree_start);
-    const std::uint32_t spawn =
-        primary ? 0 : std::uint32_t(rng() % (b.visit_end(parent) - b.visit_begin(parent)));
-    CellId prev = primary ? cell(rng) : b.cells()[b.visit_begin(parent) + spawn];
-    b.BeginRay(primary ? RayKind::kPrimary : RayKind::kReflection, parent, spawn, 0, 0);
-    b.AddVisit(prev, std::uint32_t(rng() % 20), 0, 0);
-    for (int v = int(rng() % 5); v > 0; --v) {
-      CellId next;
-      do next = cell(rng);
-      while (next == prev);
-      b.AddVisit(prev = next, std::uint32_t(rng() % 20), 0, 0);
-    }
-  }
-  return b;
-}
-
 std::uint64_t TotalSamples(const RayBatch& b) {
   std::uint64_t s = 0;
   for (auto x : b.samples()) s += x;
@@ -117,8 +95,8 @@ TEST(Replay, ConservationBoundsGranularityAndDeterminismOnRandomFrames) {
   std::mt19937 rng(7);
   for (int trial = 0; trial < 400; ++trial) {
     const CellId cells = 2 + rng() % 5;
-    const RayBatch f = RandomFrame(rng, cells);
-    const CellTree previous = TreeOf(RandomFrame(rng, cells));
+    const RayBatch f = RandomReplayFrame(rng, cells);
+    const CellTree previous = TreeOf(RandomReplayFrame(rng, cells));
     for (const std::string& s : SchedulerNames()) {
       SCOPED_TRACE(s + " trial " + std::to_string(trial));
       // One processor: per node is exact whatever the cache and prefetch.
@@ -157,7 +135,7 @@ TEST(Replay, ConservationBoundsGranularityAndDeterminismOnRandomFrames) {
 TEST(Replay, TimingSanity) {
   std::mt19937 rng(11);
   for (int trial = 0; trial < 100; ++trial) {
-    const RayBatch f = RandomFrame(rng, 4);
+    const RayBatch f = RandomReplayFrame(rng, 4);
     ReplayConfig slow = DefaultConfig(), fast = DefaultConfig(), inf = DefaultConfig();
     for (LevelConfig& l : fast.levels) l.bandwidth_below = ParseBandwidth("100GB/s", "test");
     for (LevelConfig& l : inf.levels) {
@@ -182,7 +160,7 @@ TEST(Replay, MinNeverFetchesMoreThanLruOrFifo) {
   std::mt19937 rng(5);
   for (int trial = 0; trial < 200; ++trial) {
     const CellId cells = 3 + rng() % 4;
-    const RayBatch f = RandomFrame(rng, cells);
+    const RayBatch f = RandomReplayFrame(rng, cells);
     std::uint64_t fetches[3];
     int k = 0;
     for (auto policy : {LevelConfig::Replacement::kLru, LevelConfig::Replacement::kFifo,
@@ -231,10 +209,10 @@ TEST(Replay, PrefetchNeedsRoomForTwoCellsAndKeepsConservation) {
   std::mt19937 rng(13);
   ReplayConfig one_cell = DefaultConfig();
   one_cell.processors.prefetch = true;
-  const RayBatch f = RandomFrame(rng, 4);
+  const RayBatch f = RandomReplayFrame(rng, 4);
   EXPECT_THROW(Replay(f, "maxwork", one_cell, nullptr, 4), InputError);
   for (int trial = 0; trial < 100; ++trial) {
-    const RayBatch g = RandomFrame(rng, 4);
+    const RayBatch g = RandomReplayFrame(rng, 4);
     for (const char* s : {"maxwork", "roundrobin", "random", "peel", "celltree"}) {
       ReplayConfig config = DefaultConfig();
       config.levels[0].capacity = 2;
@@ -256,7 +234,7 @@ TEST(Replay, PrefetchNeedsRoomForTwoCellsAndKeepsConservation) {
 TEST(Replay, TwoProcessorsNeverTakeLongerWhenFetchesAreFree) {
   std::mt19937 rng(17);
   for (int trial = 0; trial < 200; ++trial) {
-    const RayBatch f = RandomFrame(rng, 5);
+    const RayBatch f = RandomReplayFrame(rng, 5);
     for (const char* s : {"maxwork", "roundrobin", "peel", "celltree"}) {
       ReplayConfig one = DefaultConfig();
       for (LevelConfig& l : one.levels) {

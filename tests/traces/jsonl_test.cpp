@@ -12,12 +12,7 @@
 namespace raycell {
 namespace {
 
-using testing::CanonicalJsonl;
-using testing::Disguise;
-using testing::DisguisedLines;
-using testing::ErrorOf;
-using testing::Join;
-using testing::RandomFrame;
+using namespace testing;
 
 std::vector<JsonlFrame> ReadAll(const std::string& text, JsonlReadOptions options = {}) {
   std::istringstream in(text);

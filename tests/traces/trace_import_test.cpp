@@ -19,13 +19,7 @@
 namespace raycell {
 namespace {
 
-using testing::CanonicalJsonl;
-using testing::Disguise;
-using testing::DisguisedLines;
-using testing::ErrorOf;
-using testing::Join;
-using testing::RandomFrame;
-using testing::ReadBytes;
+using namespace testing;
 
 std::string Temp(const std::string& name) { return testing::TempPath("import", name); }
 
