@@ -172,6 +172,23 @@ TEST(RecordMaterials, BadMaterialsAndLightsNameTheOptionKeyAndRange) {
     s.materials = {text};
     EXPECT_NE(message(s).find(expected), std::string::npos) << text << ": " << message(s);
   }
+  // Scene::WithMaterials (the fuzz target's way, one file read for many inputs) applies a
+  // material exactly as Load does: the same messages, and a good material accepted by both.
+  const std::unique_ptr<Scene> builtin = Scene::Load(SceneSpec{}, 0);
+  for (const auto& [text, expected] : cases) {
+    SceneSpec s;
+    s.materials = {text};
+    EXPECT_EQ(testing::ErrorOf([&] { builtin->WithMaterials({text}, "builtin"); }), message(s))
+        << text;
+  }
+  SceneSpec good;
+  good.materials = {"cloud:absorb=0.5:scatter=2", "mirror:reflect=0.5"};
+  EXPECT_EQ(message(good), "");
+  EXPECT_EQ(testing::ErrorOf([&] {
+              EXPECT_EQ(builtin->WithMaterials(good.materials, "builtin")->grids().size(),
+                        builtin->grids().size());
+            }),
+            "");
   SceneSpec s;
   s.grids = {"mirror"};
   s.materials = {"cloud:absorb=1"};

@@ -463,6 +463,13 @@ std::unique_ptr<Scene> Scene::Load(const SceneSpec& spec, int frame) {
   return std::unique_ptr<Scene>(new Scene(std::move(s)));
 }
 
+std::unique_ptr<Scene> Scene::WithMaterials(const std::vector<std::string>& materials,
+                                            const std::string& source) const {
+  auto s = std::make_unique<Impl>(*impl_);
+  for (const auto& m : materials) ApplyMaterial(*s, m, source);
+  return std::unique_ptr<Scene>(new Scene(std::move(s)));
+}
+
 const std::vector<GridInfo>& Scene::grids() const { return impl_->infos; }
 Vec3d Scene::box_lo() const { return {impl_->lo.x(), impl_->lo.y(), impl_->lo.z()}; }
 Vec3d Scene::box_hi() const { return {impl_->hi.x(), impl_->hi.y(), impl_->hi.z()}; }

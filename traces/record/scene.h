@@ -65,6 +65,11 @@ class Scene {
   // spec.all_grids are read. Throws InputError for a missing file, a file with no float grid,
   // a chosen grid it lacks, an unknown material key, and so on.
   static std::unique_ptr<Scene> Load(const SceneSpec& spec, int frame);
+  // This scene (its grids shared, not copied) with `materials` applied on top, each as a
+  // --material value is in Load (`source` names the scene in messages): the same checks and
+  // InputErrors. Cheap: no file is read.
+  std::unique_ptr<Scene> WithMaterials(const std::vector<std::string>& materials,
+                                       const std::string& source) const;
   ~Scene();
 
   const std::vector<GridInfo>& grids() const;
