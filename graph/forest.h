@@ -48,8 +48,8 @@ class CellForest {
   // Nodes of the same cell on the path from its root to n, inclusive.
   std::uint32_t generation(Index n) const { return generation_[n]; }
   // Children of n: child_begin(n) .. child_end(n) into children().
-  const Index* child_begin(Index n) const { return &children_[child_start_[n]]; }
-  const Index* child_end(Index n) const { return &children_[child_start_[n + 1]]; }
+  const Index* child_begin(Index n) const { return children_.data() + child_start_[n]; }
+  const Index* child_end(Index n) const { return children_.data() + child_start_[n + 1]; }
   std::size_t child_count(Index n) const { return child_start_[n + 1] - child_start_[n]; }
   // Nodes of cell c, increasing (ancestors first). Empty for c >= cell_count().
   const std::vector<Index>& nodes_of(CellId c) const;

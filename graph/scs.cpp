@@ -143,11 +143,11 @@ class Dag {
   std::size_t size() const { return symbol_.size(); }
   const Frontier& start() const { return start_; }
   Symbol symbol(Node v) const { return symbol_[v]; }
-  const Node* children_begin(Node v) const { return &children_[child_begin_[v]]; }
-  const Node* children_end(Node v) const { return &children_[child_begin_[v + 1]]; }
+  const Node* children_begin(Node v) const { return children_.data() + child_begin_[v]; }
+  const Node* children_end(Node v) const { return children_.data() + child_begin_[v + 1]; }
   std::uint32_t height(Node v) const { return height_[v]; }
   // Most copies of symbol a on one path of v.
-  const std::uint32_t* need(Node v) const { return &need_[std::size_t{v} * k_]; }
+  const std::uint32_t* need(Node v) const { return need_.data() + std::size_t{v} * k_; }
   // Copies of symbol a over all the strings.
   std::uint32_t total(Symbol a) const { return total_[a]; }
 
@@ -240,7 +240,7 @@ class Dag {
     child_begin_.push_back(static_cast<std::uint32_t>(children_.size()));
     std::uint32_t h = 0;
     need_.resize(need_.size() + k_, 0);
-    std::uint32_t* n = &need_[std::size_t{v} * k_];
+    std::uint32_t* n = need_.data() + std::size_t{v} * k_;
     for (auto c = key.begin() + 1; c != key.end(); ++c) {
       h = std::max(h, height_[*c]);
       const std::uint32_t* nc = need(*c);

@@ -47,7 +47,7 @@ class BitsTable {
 
   explicit BitsTable(std::size_t words) : words_(words), table_(64, kNone) {}
   std::size_t size() const { return hash_.size(); }
-  const Word* bits(Id s) const { return &bits_[std::size_t(s) * words_]; }
+  const Word* bits(Id s) const { return bits_.data() + std::size_t(s) * words_; }
   Id Find(const Word* bits, std::uint64_t hash) const {
     for (std::size_t i = hash & (table_.size() - 1);; i = (i + 1) & (table_.size() - 1)) {
       const Id s = table_[i];

@@ -175,11 +175,11 @@ TEST(RecordMaterials, BadMaterialsAndLightsNameTheOptionKeyAndRange) {
   // Scene::WithMaterials (the fuzz target's way, one file read for many inputs) applies a
   // material exactly as Load does: the same messages, and a good material accepted by both.
   const std::unique_ptr<Scene> builtin = Scene::Load(SceneSpec{}, 0);
-  for (const auto& [text, expected] : cases) {
+  for (const auto& c : cases) {
     SceneSpec s;
-    s.materials = {text};
-    EXPECT_EQ(testing::ErrorOf([&] { builtin->WithMaterials({text}, "builtin"); }), message(s))
-        << text;
+    s.materials = {c.first};
+    EXPECT_EQ(testing::ErrorOf([&] { builtin->WithMaterials({c.first}, "builtin"); }), message(s))
+        << c.first;
   }
   SceneSpec good;
   good.materials = {"cloud:absorb=0.5:scatter=2", "mirror:reflect=0.5"};
