@@ -19,6 +19,18 @@ def read(path):
         return list(csv.DictReader(f))
 
 
+def save_fetches_plot(fig, ax, title, path):
+    """Axes in fetches per frame, the legend below them (it would hide the curves)."""
+    ax.set_xlabel("frame")
+    ax.set_ylabel("cell fetches (one-cell cache)")
+    ax.set_title(title)
+    ax.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.13))
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
 def plot_fetches(folder, cells):
     rows = read(f"{folder}/fetches_{cells}.csv")
     frames = [int(r["frame"]) for r in rows]
@@ -29,14 +41,7 @@ def plot_fetches(folder, cells):
                               ("peel", "Peel oracle", "^:"), ("best", "best oracle", "x:"),
                               ("bound", "maxGen bound", "k--")]:
         ax.plot(frames, [int(r[key]) for r in rows], style, label=label, markersize=4)
-    ax.set_xlabel("frame")
-    ax.set_ylabel("cell fetches (one-cell cache)")
-    ax.set_title(f"Fetches per frame, {cells} cells")
-    ax.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.13))
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(f"{folder}/fetches_{cells}.png", dpi=100)
-    plt.close(fig)
+    save_fetches_plot(fig, ax, f"Fetches per frame, {cells} cells", f"{folder}/fetches_{cells}.png")
 
 
 def plot_bracket(folder, cells):
@@ -57,14 +62,8 @@ def plot_bracket(folder, cells):
             ([int(r["celltree-best"]) for r in fetches], "Cell Tree, best of frame i", "D:"),
             ([int(r["celltree-union"]) for r in fetches], "Cell Tree, best of frames i-1, i", "x:")]:
         ax.plot(frames, values, style, label=label, markersize=4)
-    ax.set_xlabel("frame")
-    ax.set_ylabel("cell fetches (one-cell cache)")
-    ax.set_title(f"Bracket of the optimum per frame, {cells} cells")
-    ax.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.13))
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(f"{folder}/bracket_{cells}.png", dpi=100)
-    plt.close(fig)
+    save_fetches_plot(fig, ax, f"Bracket of the optimum per frame, {cells} cells",
+                      f"{folder}/bracket_{cells}.png")
 
 
 def plot_trees(folder, cells):
