@@ -304,10 +304,8 @@ std::string GridReport(const GridStudy& g) {
   const auto& tr = g.trees;
   const std::uint64_t mw = g.replay("maxwork").total.fetches;
   std::uint64_t bound = 0, peel = 0, lower = 0, best = 0, proved = 0;
-  double gap = 0;
   for (const FrameAnalysis& t : tr) {
     bound += t.bound, peel += t.peel_length(), lower += *t.lower_bound, best += *t.best_length;
-    gap += *t.gap();
     proved += t.optimum ? 1 : 0;
   }
   s << "## " << g.heading << "\n\n"
@@ -344,7 +342,7 @@ std::string GridReport(const GridStudy& g) {
     << "| share of Peel's distance to the lower bound closed by the best schedule | "
     << Percent(double(peel) - double(best), double(peel) - double(lower)) << " |\n"
     << "| gap (best - lower) / lower, mean over frames | "
-    << Percent(gap, double(std::max<std::size_t>(tr.size(), 1))) << " |\n"
+    << Percent(Mean(tr, [](const FrameAnalysis& x) { return *x.gap(); }), 1) << " |\n"
     << "| frames whose optimum was proved | " << proved << " of " << tr.size() << " |\n";
   s << "\n![Cell Tree size](cell_trees_" << g.cells << ".png)\n\n"
     << "Per frame: `cell_trees_" << g.cells
