@@ -15,6 +15,8 @@ std::string_view Trim(std::string_view s);
 // The fields between separators, empty ones kept: "" -> {""}, "a,,b" -> {"a", "", "b"},
 // "a," -> {"a", ""}.
 std::vector<std::string> Split(std::string_view s, char sep);
+// The parts with `sep` between each two: {"a", "b"} and ", " -> "a, b"; {} -> "".
+std::string Join(const std::vector<std::string>& parts, std::string_view sep);
 
 // A whole decimal integer: digits with an optional leading '-', nothing else (no white
 // space, no '+', no trailing text), within [lo, hi]. InputError "WHAT: 'TEXT' is not an

@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "base/check.h"
+#include "base/parse.h"
 #include "graph/projection.h"
 #include "graph/scs.h"
 
@@ -303,17 +304,17 @@ class Bounder {
     if (options_.triples && options_.pairs) AddTriples(program);
     if (options_.pairs) parts.push_back("pairs");
     if (options_.triples && options_.pairs) parts.push_back("triples");
-    if (!parts.empty()) Solve(program, "ip(" + Join(parts) + ")");
+    if (!parts.empty()) Solve(program, "ip(" + Join(parts, ",") + ")");
     if (options_.blocks) {
       AddBlocks(program);
       parts.push_back("blocks");
-      Solve(program, "ip(" + Join(parts) + ")");
+      Solve(program, "ip(" + Join(parts, ",") + ")");
     }
     if (options_.cuts && !parts.empty()) {
       if (Complete()) {
-        Stage("ip(" + Join(parts) + ")+cuts", r_.value);  // nothing left to gain
+        Stage("ip(" + Join(parts, ",") + ")+cuts", r_.value);  // nothing left to gain
       } else {
-        CutLoop(program, "ip(" + Join(parts) + ")+cuts");
+        CutLoop(program, "ip(" + Join(parts, ",") + ")+cuts");
       }
     }
     r_.optimal = Complete() && r_.value == complete_value_;
@@ -336,12 +337,6 @@ class Bounder {
       }
     }
     return active == 0;
-  }
-
-  static std::string Join(const std::vector<std::string>& v) {
-    std::string s;
-    for (const std::string& p : v) s += (s.empty() ? "" : ",") + p;
-    return s;
   }
 
   void Stage(const std::string& name, std::uint64_t value) {

@@ -26,6 +26,14 @@ TEST(Parse, TrimRemovesWhiteSpaceAtBothEndsOnly) {
   EXPECT_EQ(Trim(" a b\t"), "a b");
 }
 
+TEST(Parse, JoinPutsTheSeparatorBetweenEachTwoParts) {
+  EXPECT_EQ(Join({}, ", "), "");
+  EXPECT_EQ(Join({"a"}, ", "), "a");
+  EXPECT_EQ(Join({"a", "b", "c"}, ", "), "a, b, c");
+  EXPECT_EQ(Join({"", "b", ""}, ","), ",b,");
+  EXPECT_EQ(Join(Split("x,,y", ','), ","), "x,,y");  // the inverse of Split
+}
+
 TEST(Parse, SplitKeepsEveryEmptyField) {
   EXPECT_EQ(Split("", ','), std::vector<std::string>{""});
   EXPECT_EQ(Split("a,,b", ','), (std::vector<std::string>{"a", "", "b"}));

@@ -20,12 +20,6 @@
 namespace raycell {
 namespace {
 
-std::string Join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
-
 double ParseNumber(const std::string& text, const std::string& what) {
   std::size_t used = 0;
   double v = 0;
@@ -130,7 +124,7 @@ void ApplyMaterial(Scene::Impl& s, const std::string& text, const std::string& s
                        grid + ", or --all-grids)");
     }
     throw InputError(what + ": " + source + " has no float grid '" + grid +
-                     "' (float grids: " + Join(s.float_grids) + ")");
+                     "' (float grids: " + Join(s.float_grids, ", ") + ")");
   }
   for (std::size_t i = 1; i < fields.size(); ++i) {
     const auto eq = fields[i].find('=');
@@ -218,7 +212,7 @@ std::vector<std::string> ChooseGrids(const std::vector<std::string>& names, cons
   for (const std::string& g : spec.grids) {
     if (std::find(names.begin(), names.end(), g) == names.end()) {
       throw InputError("--grid '" + g + "': " + source + " has no float grid '" + g +
-                       "' (float grids: " + Join(names) + ")");
+                       "' (float grids: " + Join(names, ", ") + ")");
     }
     if (std::find(chosen.begin(), chosen.end(), g) == chosen.end()) chosen.push_back(g);
   }
@@ -257,8 +251,8 @@ void LoadFile(Scene::Impl& s, const std::string& path, const SceneSpec& spec) {
                      "; raycell renders float fog volumes and level sets");
   }
   if (s.fogs.empty() && s.surfaces.empty()) {
-    throw InputError(path + ": no non-empty float grid: " + Join(chosen) +
-                     " has no active voxels (float grids: " + Join(s.float_grids) +
+    throw InputError(path + ": no non-empty float grid: " + Join(chosen, ", ") +
+                     " has no active voxels (float grids: " + Join(s.float_grids, ", ") +
                      "; choose with --grid NAME or --all-grids)");
   }
 }
