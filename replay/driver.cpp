@@ -154,13 +154,14 @@ void FinishTotal(std::uint32_t processors, ReplayResult* t) {
 
 FrameWalker::FrameWalker(const TraceReader& reader, std::vector<std::size_t> frame_indices,
                          bool need_segments, bool need_nodes, std::uint32_t sample_every,
-                         std::uint32_t history)
+                         std::uint32_t history, std::uint64_t compact_above_visits)
     : reader_(reader),
       indices_(std::move(frame_indices)),
       need_segments_(need_segments),
       need_nodes_(need_nodes),
       k_(sample_every),
-      history_(history) {
+      history_(history),
+      compact_above_(compact_above_visits) {
   if (k_ < 1) throw InputError("sampling: 1 in k ray trees needs k >= 1");
   for (std::size_t p = 1; p < indices_.size(); ++p) RAYCELL_CHECK_LT(indices_[p - 1], indices_[p]);
 }
@@ -190,6 +191,17 @@ const LoadedFrame* FrameWalker::Next() {
   f.nodes.reset();
   if (!need_segments_ && k_ == 1) {  // per node the tree is all the replay needs: stream it
     f.tree = LoadTree(reader_, i, 1);
+  } else if (k_ == 1 && reader_.frames()[i].visits > compact_above_) {
+    // A large frame: the tree and the compact per-segment work from one stream of batches.
+    CellTreeBuilder trees;
+    RaySegmentWorkBuilder work(cells);
+    work.Reserve(reader_.frames()[i]);
+    reader_.ForEachBatch(i, [&](const RayBatch& b) {
+      trees.AddBatch(b);
+      work.AddBatch(b);
+    });
+    f.tree = std::make_unique<CellTree>(trees.Finish());
+    f.segments = std::make_unique<WorkGraph>(work.Finish());
   } else {
     RayBatch rays = reader_.LoadFrame(i);
     if (k_ > 1) rays = SampleRayTrees(rays, k_);
@@ -265,7 +277,7 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
   });
   const TraceHeader& header = reader.header();
   FrameWalker walker(reader, frame_indices, need_segments, need_nodes, options.sample_every,
-                     history);
+                     history, options.compact_above_visits);
   WorkerPool pool(unsigned(
       std::clamp<std::size_t>(options.jobs, 1, std::max<std::size_t>(distinct.size(), 1))));
   std::vector<ReplayResult> distinct_results(distinct.size()), results(configs.size());

@@ -55,8 +55,11 @@ struct LoadedFrame {
 class FrameWalker {
  public:
   // history: earlier frames' trees to keep (1: the previous; 2: also the one before it).
+  // The per-segment work of a frame of more than `compact_above_visits` visits (not sampled)
+  // is built in the Compact form (work.h) from the frame's batches, without holding its rays.
   FrameWalker(const TraceReader& reader, std::vector<std::size_t> frame_indices, bool need_segments,
-              bool need_nodes, std::uint32_t sample_every = 1, std::uint32_t history = 1);
+              bool need_nodes, std::uint32_t sample_every = 1, std::uint32_t history = 1,
+              std::uint64_t compact_above_visits = kCompactAboveVisits);
   // The next frame, or nullptr after the last. Valid until the next call.
   const LoadedFrame* Next();
   std::size_t size() const { return indices_.size(); }
@@ -66,6 +69,7 @@ class FrameWalker {
   std::vector<std::size_t> indices_;
   bool need_segments_, need_nodes_;
   std::uint32_t k_, history_;
+  std::uint64_t compact_above_;
   std::size_t position_ = 0;
   LoadedFrame frame_;
 };
@@ -92,6 +96,8 @@ struct ReplayFramesOptions {
   std::function<void(double)> progress;
   // Watches the replays (replay/observer.h); only with one configuration, not sampled.
   ReplayObserver* observer = nullptr;
+  // Frames of more visits replay per segment from the Compact form (see FrameWalker).
+  std::uint64_t compact_above_visits = kCompactAboveVisits;
 };
 
 struct ReplayFramesStats {

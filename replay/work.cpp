@@ -2,8 +2,10 @@
 
 #include <sys/mman.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <numeric>
+#include <string>
 
 #include "base/check.h"
 #include "base/checked.h"
@@ -123,6 +125,100 @@ WorkGraph RaySegmentWork(const RayBatch& frame, CellId cells) {
   BuildSuccessors(w, edges);
   Finish(w);
   return w;
+}
+
+namespace {
+
+void AppendVarint(std::vector<std::uint8_t>& out, std::uint32_t x) {
+  while (x >= 0x80) {
+    out.push_back(std::uint8_t(x | 0x80));
+    x >>= 7;
+  }
+  out.push_back(std::uint8_t(x));
+}
+
+}  // namespace
+
+void RaySegmentWorkBuilder::Reserve(const FrameSummary& summary) {
+  // A summary is checked against its frame only once the frame is read: cap what it asks.
+  const std::uint64_t rays = std::min<std::uint64_t>(summary.rays, UINT32_MAX);
+  const std::uint64_t primary =
+      std::min<std::uint64_t>(summary.rays_by_kind[std::size_t(RayKind::kPrimary)], rays);
+  visit_begin_.reserve(rays);
+  w_.compact.roots.reserve(primary);
+  w_.compact.spawned.reserve(rays - primary);
+  // Two varints of 1-2 bytes a visit, usually.
+  w_.compact.stream.reserve(std::min<std::uint64_t>(summary.visits, UINT32_MAX / 4) * 4);
+}
+
+void RaySegmentWorkBuilder::AddBatch(const RayBatch& batch) {
+  WorkGraph::Compact& c = w_.compact;
+  if (batch.first_id() != rays_) {
+    throw InputError("per-segment work: batch starts at ray " + std::to_string(batch.first_id()) +
+                     ", expected " + std::to_string(rays_));
+  }
+  for (std::size_t r = 0; r < batch.size(); ++r) {
+    const RayView ray = batch.ray(r);
+    const std::size_t n = ray.visit_count;
+    visit_begin_.push_back(std::uint32_t(visits_));  // the parent's visits: up to the next ray's
+    ++rays_;
+    if (n == 0) continue;  // no work, no spawned rays (as in RaySegmentWork)
+    if (visits_ + n >= UINT32_MAX || c.stream.size() >= UINT32_MAX - 20 * n) {
+      throw InputError("per-segment work: frame of more than 2^32 visits or stream bytes");
+    }
+    const WorkGraph::CompactUnit first{std::uint32_t(c.stream.size()), std::uint32_t(visits_), 0};
+    if (ray.is_primary()) {
+      c.roots.push_back(first);
+    } else {
+      const RayId parent = ray.parent;
+      if (parent >= ray.id || ray.spawn >= visit_begin_[parent + 1] - visit_begin_[parent]) {
+        throw InputError("per-segment work: ray " + std::to_string(ray.id) +
+                         " has an unknown parent or spawn visit");
+      }
+      c.spawned.push_back({visit_begin_[parent] + ray.spawn, first});
+    }
+    for (std::size_t v = 0; v < n; ++v) {
+      AppendVarint(c.stream, ray.cells[v] * 2 + (v + 1 == n ? 1 : 0));
+      AppendVarint(c.stream, ray.samples[v]);
+      CheckedIncrement(w_.totals.samples, std::uint64_t{ray.samples[v]});
+    }
+    visits_ += n;
+    ++w_.totals.rays;
+    w_.totals.segments += n;
+  }
+}
+
+WorkGraph RaySegmentWorkBuilder::Finish() {
+  std::vector<std::uint32_t>().swap(visit_begin_);
+  WorkGraph::Compact& c = w_.compact;
+  c.units = visits_;
+  // The rays spawned at one visit together, in ray order (their first visits' numbers
+  // increase with the ray id).
+  std::sort(c.spawned.begin(), c.spawned.end(),
+            [](const WorkGraph::Spawned& a, const WorkGraph::Spawned& b) {
+              return a.at != b.at ? a.at < b.at : a.unit.visit < b.unit.visit;
+            });
+  const auto first_spawned = [&c](std::uint32_t visit) {
+    return std::uint32_t(
+        std::lower_bound(c.spawned.begin(), c.spawned.end(), visit,
+                         [](const WorkGraph::Spawned& s, std::uint32_t v) { return s.at < v; }) -
+        c.spawned.begin());
+  };
+  for (WorkGraph::CompactUnit& u : c.roots) u.spawned = first_spawned(u.visit);
+  for (WorkGraph::Spawned& s : c.spawned) s.unit.spawned = first_spawned(s.unit.visit);
+  WorkGraph out = std::move(w_);
+  w_ = WorkGraph{};
+  w_.cells = out.cells;
+  visits_ = 0;
+  rays_ = 0;
+  return out;
+}
+
+std::size_t WorkGraph::MemoryBytes() const {
+  const auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
+  return bytes(cell) + bytes(samples) + bytes(queued_rays) + bytes(segments) + bytes(rays_started) +
+         bytes(succ_begin) + bytes(succ) + bytes(roots) + bytes(packed) + bytes(compact.stream) +
+         bytes(compact.roots) + bytes(compact.spawned);
 }
 
 WorkGraph NodeWork(const CellTree& tree, CellId cells) {

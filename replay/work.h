@@ -14,6 +14,7 @@
 
 #include "graph/cell_tree.h"
 #include "traces/ray_batch.h"
+#include "traces/trace_header.h"
 
 namespace raycell {
 
@@ -75,16 +76,69 @@ struct WorkGraph {
   };
   std::vector<Packed, HugePageAllocator<Packed>> packed;
 
+  // Per ray segment for large frames (RaySegmentWorkBuilder): the visits as a byte stream
+  // instead of columns, about 3 bytes a visit and 12-16 bytes a ray, so that a frame of tens
+  // of millions of visits fits (BENCHMARKS.md "Capture at scale"). When `compact.units` is
+  // not zero it is the only form: the columns and `packed` are empty.
+  //  - stream: each visit of each ray with visits, in ray order, as a record of two LEB128
+  //    varints: cell * 2 + (1 on the ray's last visit), then samples. Visits are numbered
+  //    0, 1, ... in that order, so a ray's visits have consecutive numbers.
+  //  - A unit is named by a CompactUnit: its record's offset, its visit's number, and where
+  //    the rays spawned at it (or at the ray's later visits) begin in `spawned`.
+  //  - roots: the primary rays' first units, in ray order. spawned: the other rays' first
+  //    units, ordered by (`at`, the parent's visit they are spawned at; ray order), so that
+  //    the rays spawned at one visit are one run, in ray order, as in RaySegmentWork.
+  struct CompactUnit {
+    std::uint32_t offset, visit, spawned;
+  };
+  struct Spawned {
+    std::uint32_t at;
+    CompactUnit unit;
+  };
+  struct Compact {
+    std::vector<std::uint8_t> stream;
+    std::vector<CompactUnit> roots;
+    std::vector<Spawned> spawned;
+    std::size_t units = 0;  // visits
+  } compact;
+
   // Sums over the units.
   struct Totals {
     std::uint64_t samples = 0, segments = 0, rays = 0;
   } totals;
 
-  std::size_t size() const { return cell.size(); }
+  std::size_t size() const { return compact.units != 0 ? compact.units : cell.size(); }
   std::uint64_t total_samples() const { return totals.samples; }
   std::uint64_t total_segments() const { return totals.segments; }
   std::uint64_t total_rays() const { return totals.rays; }
+  // Bytes held by the work graph's vectors (their capacity), for reports and tests.
+  std::size_t MemoryBytes() const;
 };
+
+// Per ray segment, built from a frame's batches as TraceReader::ForEachBatch delivers them
+// (frame-local ray ids, in order, parents in earlier batches or the same), without holding
+// the frame: the Compact form above. The same units, successors in the same order and the
+// same totals as RaySegmentWork on the whole frame, so a replay gives the same results.
+class RaySegmentWorkBuilder {
+ public:
+  explicit RaySegmentWorkBuilder(CellId cells) { w_.cells = cells; }
+  // Room for the frame `summary` describes, so that the arrays are not copied as they grow
+  // (pages reserved but never written are not resident).
+  void Reserve(const FrameSummary& summary);
+  // InputError on a parent or spawn outside the rays and visits seen so far.
+  void AddBatch(const RayBatch& batch);
+  WorkGraph Finish();
+
+ private:
+  WorkGraph w_;
+  std::vector<std::uint32_t> visit_begin_;  // per ray so far: its first visit's number
+  std::uint64_t visits_ = 0;
+  std::size_t rays_ = 0;
+};
+
+// Frames of more visits than this are replayed per ray segment in the Compact form when they
+// are read for that alone (FrameWalker): about 3 bytes a visit instead of ~100.
+inline constexpr std::uint64_t kCompactAboveVisits = std::uint64_t{1} << 22;
 
 // Per ray segment: `frame` holds a whole frame (first_id 0), as TraceReader::LoadFrame
 // returns it. Rays without visits do no work and are not counted.

@@ -4,6 +4,7 @@
 // every scheduler, granularity and a wide range of configurations, ties in time included.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <sstream>
 
@@ -167,6 +168,105 @@ TEST(ReplayCore, EqualsTheReferenceOnTheColumns) {
               Describe(ReferenceReplayFrame(w, footprints, config, *b, info, Bound(tree))))
         << "trial " << trial;
   }
+}
+
+// `rays` with every cell id times `cell_scale` (up to 2^17 cells: varints of 3 bytes),
+// every sample count times `sample_scale`, and rays without visits added: primary ones, and
+// spawned ones at random visits of earlier rays (they do no work, RaySegmentWork skips them).
+RayBatch Widened(std::mt19937& rng, const RayBatch& rays, CellId cell_scale,
+                 std::uint32_t sample_scale) {
+  RayBatch out(false);
+  std::vector<RayId> id(rays.size());
+  std::size_t tree = 0;  // the current ray tree's primary ray (rays come one tree at a time)
+  for (std::size_t r = 0; r < rays.size(); ++r) {
+    const RayView ray = rays.ray(r);
+    if (ray.is_primary()) {
+      if (rng() % 4 == 0) out.BeginRay(RayKind::kPrimary, kNoParent, 0, 0, 0);
+      tree = r;
+    } else if (rng() % 4 == 0) {
+      const RayId p = id[tree + rng() % (r - tree)];
+      const auto spawn = std::uint32_t(rng() % (out.visit_end(p) - out.visit_begin(p)));
+      out.BeginRay(RayKind::kShadow, p, spawn, 0, 0);
+    }
+    id[r] = RayId(out.size());
+    out.BeginRay(ray.kind, ray.is_primary() ? kNoParent : id[ray.parent], ray.spawn, 0, 0);
+    for (std::size_t v = 0; v < ray.visit_count; ++v) {
+      out.AddVisit(ray.cells[v] * cell_scale, ray.samples[v] * sample_scale, 0, 0);
+    }
+  }
+  return out;
+}
+
+// `rays` cut into batches of 1 to `max` rays with frame-local ids, as TraceReader delivers
+// them, fed to a RaySegmentWorkBuilder.
+WorkGraph CompactWork(std::mt19937& rng, const RayBatch& rays, CellId cells, std::size_t max) {
+  RaySegmentWorkBuilder builder(cells);
+  if (rng() % 2 == 0) {
+    FrameSummary summary;
+    summary.rays = rays.size();
+    summary.visits = rays.visit_count();
+    summary.rays_by_kind[0] = rays.size() / 2;  // a wrong hint must not matter
+    builder.Reserve(summary);
+  }
+  for (std::size_t r = 0; r < rays.size();) {
+    const std::size_t n = std::min(rays.size() - r, 1 + rng() % max);
+    RayBatch batch(false);
+    batch.set_first_id(RayId(r));
+    for (std::size_t i = r; i < r + n; ++i) {
+      const RayView ray = rays.ray(i);
+      batch.BeginRay(ray.kind, ray.parent, ray.spawn, 0, 0);
+      for (std::size_t v = 0; v < ray.visit_count; ++v) {
+        batch.AddVisit(ray.cells[v], ray.samples[v], 0, 0);
+      }
+    }
+    builder.AddBatch(batch);
+    r += n;
+  }
+  return builder.Finish();
+}
+
+// The Compact form (large frames, built batch by batch without the frame) gives the
+// reference's results on the columns of RaySegmentWork, field by field: cells and samples
+// of several varint bytes, rays without visits, parents in earlier batches.
+TEST(ReplayCore, EqualsTheReferenceOnTheCompactForm) {
+  std::mt19937 rng(31);
+  for (int trial = 0; trial < 300; ++trial) {
+    const CellId base_cells = 2 + rng() % 6;
+    const CellId scale = trial % 10 == 0 ? (CellId{1} << 14) : trial % 2 == 0 ? 70 : 1;
+    const std::uint32_t sample_scale = trial % 4 == 0 ? 1 : trial % 4 == 1 ? 300 : 200'000'000;
+    const RayBatch rays =
+        Widened(rng, testing::RandomReplayFrame(rng, base_cells, 60), scale, sample_scale);
+    const CellId cells = (base_cells - 1) * scale + 1;
+    const CellTree tree = testing::TreeOf(rays);
+    std::vector<std::uint64_t> footprints(cells, 4096);
+    for (CellId c = 0; c < cells; c += scale) footprints[c] = 1 + rng() % 200'000;
+    ReplayConfig config = cells > 10'000 ? DefaultConfig() : RandomConfig(rng, footprints);
+    config.granularity = ReplayConfig::Granularity::kRay;
+    config.scheduler = kSchedulers[trial % 5];
+    if (cells > 10'000) config.processors.count = 1 + rng() % 3;
+    const WorkGraph columns = RaySegmentWork(rays, cells);
+    const WorkGraph compact = CompactWork(rng, rays, cells, 1 + rng() % 20);
+    ASSERT_TRUE(compact.packed.empty() && compact.cell.empty());
+    ASSERT_EQ(compact.size(), columns.size());
+    const FrameInfo info{0, &tree, nullptr, cells};
+    auto a = MakeScheduler(config.scheduler, config.seed);
+    auto b = MakeScheduler(config.scheduler, config.seed);
+    ASSERT_EQ(Describe(ReplayFrame(compact, footprints, config, *a, info, Bound(tree))),
+              Describe(ReferenceReplayFrame(columns, footprints, config, *b, info, Bound(tree))))
+        << "trial " << trial << "\n"
+        << ToToml(config);
+  }
+}
+
+// A parent outside the rays seen so far is bad input, named.
+TEST(ReplayCore, CompactBuilderRejectsAnUnknownParent) {
+  RayBatch batch(false);
+  batch.BeginRay(RayKind::kPrimary, kNoParent, 0, 0, 0);
+  batch.AddVisit(0, 1, 0, 0);
+  batch.BeginRay(RayKind::kShadow, 0, 3, 0, 0);  // spawn 3 of a one-visit parent
+  batch.AddVisit(0, 1, 0, 0);
+  RaySegmentWorkBuilder builder(1);
+  EXPECT_THROW(builder.AddBatch(batch), InputError);
 }
 
 // Samples beyond 32 bits cannot be packed; the replay still counts them exactly.

@@ -156,6 +156,35 @@ TEST_F(DriverTest, ManyConfigurationsAtOnceEqualEachAlone) {
   EXPECT_NE(got.back(), got[4]);  // peak bytes: 7 per ray, not 32
 }
 
+// Frames above ReplayFramesOptions::compact_above_visits replay per segment from the Compact
+// form, built from the frame's batches: every result equals the usual replay's.
+TEST_F(DriverTest, TheCompactFormGivesTheSameResults) {
+  std::vector<ReplayConfig> configs;
+  for (const std::string& s : SchedulerNames()) {
+    for (std::uint32_t p : {2u, 3u}) configs.push_back(Config(s.c_str(), p));
+  }
+  const std::vector<std::size_t> frames = {0, 1, 3, 4};
+  std::vector<std::vector<std::string>> usual(configs.size()), compact(configs.size());
+  for (const bool small : {false, true}) {
+    ReplayFramesOptions options;
+    options.jobs = 2;
+    if (small) options.compact_above_visits = 0;
+    ReplayFrames(*reader_, frames, configs, options,
+                 [&](const LoadedFrame& f, const std::vector<ReplayResult>& results) {
+                   EXPECT_EQ(f.segments->compact.units != 0, small);
+                   EXPECT_EQ(f.segments->packed.empty(), small);
+                   for (std::size_t c = 0; c < results.size(); ++c) {
+                     (small ? compact : usual)[c].push_back(Describe(results[c]));
+                   }
+                   return true;
+                 });
+  }
+  for (std::size_t c = 0; c < configs.size(); ++c) {
+    ASSERT_EQ(compact[c].size(), frames.size());
+    EXPECT_EQ(compact[c], usual[c]) << ToToml(configs[c]);
+  }
+}
+
 // The seed reaches every scheduler whose choices depend on it (random, and the planners'
 // seeded schedule searches): configurations that differ only in it are replayed apart, and
 // the canonical form keeps it; for the others it is dropped, so they are replayed once.
