@@ -267,6 +267,9 @@ class Board {
   static constexpr std::uint64_t kWatchdogEvents = 10'000'000;
   // How far ahead in a worklist the units' successors are prefetched.
   static constexpr std::size_t kPrefetch = 16;
+  // Worked units at the front of a worklist before they may be dropped; longer empty
+  // queues are freed.
+  static constexpr std::size_t kDropWorked = std::size_t{1} << 16;
 
   // Schedules processor p's next event. p has none pending: it is the processor being
   // handled (its slot is brought up to date after the handler), or one that was waiting.
@@ -324,6 +327,9 @@ class Board {
       ps.worklist.clear();
       ps.head = 0;
       ps.worklist.swap(q);
+      // The cell's queue now has the old worklist's room; a long one is freed, else the
+      // rooms of long worklists would pile up in the queues of every cell.
+      if (q.capacity() > kDropWorked) std::vector<Entry>().swap(q);
     } else {
       ps.worklist.insert(ps.worklist.end(), q.begin(), q.end());
       q.clear();
@@ -347,6 +353,13 @@ class Board {
       locked_[*ps.cell] = false;
       Schedule(p, now_, Kind::kIdle);
       return;
+    }
+    // Units worked are dropped from the front once they are half of a long worklist, so
+    // that a batch that keeps spawning units in its cell (millions in a large frame) holds
+    // those still to work, not every unit of the batch; the order is unchanged.
+    if (ps.head >= kDropWorked && 2 * ps.head >= ps.worklist.size()) {
+      ps.worklist.erase(ps.worklist.begin(), ps.worklist.begin() + std::ptrdiff_t(ps.head));
+      ps.head = 0;
     }
     // The units a few places ahead are known: load their successors while this one is
     // worked (the records are scattered over the frame, so each would be a cache miss).
