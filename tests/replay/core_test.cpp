@@ -258,6 +258,32 @@ TEST(ReplayCore, EqualsTheReferenceOnTheCompactForm) {
   }
 }
 
+// Batches of hundreds of thousands of units (a worklist whose worked front is dropped, queues
+// given a long worklist's room freed): the reference's results, in both forms.
+TEST(ReplayCore, EqualsTheReferenceOnLongWorklists) {
+  std::mt19937 rng(2);
+  const CellId cells = 3;
+  const RayBatch rays = testing::RandomReplayFrame(rng, cells, 300'000, 2);
+  ASSERT_GT(rays.size(), 250'000u);  // 283,850 rays: batches of more than 2^16 units
+  const CellTree tree = testing::TreeOf(rays);
+  const std::vector<std::uint64_t> footprints(cells, 4096);
+  const FrameInfo info{0, &tree, nullptr, cells};
+  const WorkGraph packed = RaySegmentWork(rays, cells);
+  const WorkGraph compact = CompactWork(rng, rays, cells, 70'000);
+  for (std::uint32_t processors : {1u, 3u}) {
+    ReplayConfig config = DefaultConfig();
+    config.granularity = ReplayConfig::Granularity::kRay;
+    config.processors.count = processors;
+    config.scheduler = "maxwork";
+    auto a = MakeScheduler("maxwork", 1), b = MakeScheduler("maxwork", 1);
+    auto c = MakeScheduler("maxwork", 1);
+    const std::string reference =
+        Describe(ReferenceReplayFrame(packed, footprints, config, *b, info, Bound(tree)));
+    EXPECT_EQ(Describe(ReplayFrame(packed, footprints, config, *a, info, Bound(tree))), reference);
+    EXPECT_EQ(Describe(ReplayFrame(compact, footprints, config, *c, info, Bound(tree))), reference);
+  }
+}
+
 // A parent outside the rays seen so far is bad input, named.
 TEST(ReplayCore, CompactBuilderRejectsAnUnknownParent) {
   RayBatch batch(false);
