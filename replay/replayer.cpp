@@ -337,6 +337,9 @@ class Board {
       ps.worklist.clear();
       ps.head = 0;
       ps.worklist.swap(q);
+      // WorkNext prefetches kPrefetch units ahead: start the first ones here.
+      const std::size_t n = std::min(kPrefetch, ps.worklist.size());
+      for (std::size_t i = 0; i < n; ++i) u_.Prefetch(ps.worklist[i]);
     } else {
       ps.worklist.insert(ps.worklist.end(), q.begin(), q.end());
       q.clear();
