@@ -129,51 +129,61 @@ struct Slot {
 };
 
 // A winner tree over the slots: the earliest slot in O(1), a slot changed in O(log P). Each
-// node holds a copy of its winner's (time, seq) next to the winner's index, so that an
-// update walks from the leaf to the root comparing the changed slot's key with one sibling
-// node per level (one load, no indirection through the slots).
+// node holds its winner's key next to nothing else: (time, seq << shift | index), 16 bytes,
+// so that an update walks from the leaf to the root comparing the changed slot's key with one
+// sibling node per level (one load, no indirection through the slots) and picks the earlier
+// without a branch (with several processors the winner is unpredictable). seq is unique per
+// pending event, so the index below it changes no order; it only names the winner, and among
+// empty slots (seq UINT64_MAX) makes the left one win, as in the order of the slots.
 class SlotTree {
  public:
   explicit SlotTree(std::uint32_t n) : slots_(n) {
-    while (leaves_ < n) leaves_ *= 2;
+    while (leaves_ < n) leaves_ *= 2, ++shift_;
+    max_seq_ = (UINT64_MAX >> shift_) - 1;
     slots_.resize(leaves_);  // padding slots stay empty forever
     for (auto& s : slots_) s.time = SimTime::Max();
     nodes_.assign(2 * leaves_, Node{});
     for (std::uint32_t i = 0; i < leaves_; ++i) nodes_[leaves_ + i] = NodeOf(i);
     for (std::uint32_t k = leaves_ - 1; k >= 1; --k) {
-      const Node& a = nodes_[2 * k];
-      const Node& b = nodes_[2 * k + 1];
-      nodes_[k] = Before(b, a) ? b : a;  // the left one on ties
+      nodes_[k] = Earlier(nodes_[2 * k], nodes_[2 * k + 1]);
     }
   }
   // Slot i to be written in place, field by field (copying a whole slot just written would
   // stall on store forwarding); Update(i) afterwards.
   Slot& at(std::uint32_t i) { return slots_[i]; }
+  // The largest seq a slot may hold (the rest of the key's bits name the slot).
+  std::uint64_t max_seq() const { return max_seq_; }
   // The earliest slot's index; its kind is kNone when nothing is pending.
-  std::uint32_t top() const { return nodes_[1].index; }
-  void Update(std::uint32_t i) {
+  std::uint32_t top() const { return std::uint32_t(nodes_[1].seq_index & (leaves_ - 1)); }
+  // Returns top() afterwards.
+  std::uint32_t Update(std::uint32_t i) {
     Node cur = NodeOf(i);
     std::uint32_t k = leaves_ + i;
     nodes_[k] = cur;
     for (; k > 1; k /= 2) {
-      const Node& sibling = nodes_[k ^ 1];
-      // The left one wins ties, as in the order of the slots: k odd means cur is the right.
-      if ((k & 1) != 0 ? !Before(cur, sibling) : Before(sibling, cur)) cur = sibling;
+      cur = Earlier(cur, nodes_[k ^ 1]);
       nodes_[k / 2] = cur;
     }
+    return std::uint32_t(cur.seq_index & (leaves_ - 1));
   }
 
  private:
   struct Node {
-    std::uint64_t time = UINT64_MAX, seq = UINT64_MAX;
-    std::uint32_t index = 0;
+    std::uint64_t time = UINT64_MAX, seq_index = UINT64_MAX;
   };
-  static bool Before(const Node& a, const Node& b) {
-    return a.time != b.time ? a.time < b.time : a.seq < b.seq;
+  // The earlier of two nodes (keys are distinct), selected without a branch.
+  static Node Earlier(const Node& a, const Node& b) {
+    using Key = unsigned __int128;
+    const Key ka = Key{a.time} << 64 | a.seq_index, kb = Key{b.time} << 64 | b.seq_index;
+    const std::uint64_t m = 0 - std::uint64_t{kb < ka};  // all ones: b
+    return {a.time ^ ((a.time ^ b.time) & m), a.seq_index ^ ((a.seq_index ^ b.seq_index) & m)};
   }
-  Node NodeOf(std::uint32_t i) const { return {slots_[i].time.picoseconds(), slots_[i].seq, i}; }
+  Node NodeOf(std::uint32_t i) const {
+    return {slots_[i].time.picoseconds(), slots_[i].seq << shift_ | i};
+  }
 
-  std::uint32_t leaves_ = 1;
+  std::uint32_t leaves_ = 1, shift_ = 0;
+  std::uint64_t max_seq_ = 0;
   std::vector<Slot> slots_;
   std::vector<Node> nodes_;  // nodes_[1] the root; slot i's leaf at leaves_ + i
 };
@@ -212,7 +222,7 @@ class Board {
         queues_(w.cells),
         queued_rays_(w.cells, 0),
         view_(w.cells, 0),
-        locked_(w.cells, false),
+        open_(w.cells, kOpen),
         processors_(config.processors.count),
         slots_(config.processors.count),
         obs_(observer) {
@@ -226,8 +236,7 @@ class Board {
       Schedule(p, SimTime::Zero(), Kind::kIdle);
       slots_.Update(p);
     }
-    for (;;) {
-      const std::uint32_t p = slots_.top();
+    for (std::uint32_t p = slots_.top();;) {
       Slot& slot = slots_.at(p);
       const Kind kind = slot.kind;
       if (kind == Kind::kNone) break;
@@ -251,7 +260,8 @@ class Board {
         case Kind::kNone:
           break;
       }
-      slots_.Update(p);
+      p = updated_ ? top_ : slots_.Update(p);
+      updated_ = false;
       if (events_since_progress_ >= kWatchdogEvents) Stall("events without progress");
     }
     if (done_ != w_.size()) Stall("no event pending while units remain");
@@ -276,6 +286,7 @@ class Board {
   void Schedule(std::uint32_t p, SimTime when, Kind kind) {
     Slot& s = slots_.at(p);
     RAYCELL_CHECK(s.kind == Kind::kNone);
+    RAYCELL_CHECK_LE(next_seq_, slots_.max_seq());
     s.time = when;
     s.seq = next_seq_++;
     s.kind = kind;
@@ -290,7 +301,9 @@ class Board {
 
   // The queues a scheduler may choose from: cells being worked are not available.
   QueueView View(std::uint32_t p) {
-    for (CellId c = 0; c < w_.cells; ++c) view_[c] = locked_[c] ? 0 : queued_rays_[c];
+    // A mask, not a branch per cell: the loop vectorises (a processor asks on every idle event,
+    // and with several processors most of them find every queued cell being worked).
+    for (CellId c = 0; c < w_.cells; ++c) view_[c] = queued_rays_[c] & open_[c];
     return QueueView::Of(view_, processors_[p].cell);
   }
 
@@ -301,8 +314,8 @@ class Board {
       ++waiting_;
       return;
     }
-    RAYCELL_CHECK(!queues_[*c].empty() && !locked_[*c]);
-    locked_[*c] = true;
+    RAYCELL_CHECK(!queues_[*c].empty() && open_[*c] == kOpen);
+    open_[*c] = 0;
     processors_[p].cell = *c;
     const std::uint64_t fetches = obs_ ? memory_.stats()[0].fetches : 0;  // observed only
     const SimTime ready = memory_.Fetch(p, *c, now_);
@@ -330,6 +343,9 @@ class Board {
       // The cell's queue now has the old worklist's room; a long one is freed, else the
       // rooms of long worklists would pile up in the queues of every cell.
       if (q.capacity() > kDropWorked) std::vector<Entry>().swap(q);
+      // WorkNext prefetches kPrefetch units ahead: start the first ones here.
+      const std::size_t n = std::min(kPrefetch, ps.worklist.size());
+      for (std::size_t i = 0; i < n; ++i) u_.Prefetch(ps.worklist[i]);
     } else {
       ps.worklist.insert(ps.worklist.end(), q.begin(), q.end());
       q.clear();
@@ -350,10 +366,16 @@ class Board {
     if (ps.head == ps.worklist.size()) TakeQueue(p);  // units that arrived meanwhile
     if (ps.head == ps.worklist.size()) {
       if (obs_) obs_->BatchEnd(p, *ps.cell, now_);
-      locked_[*ps.cell] = false;
+      open_[*ps.cell] = kOpen;
       Schedule(p, now_, Kind::kIdle);
       return;
     }
+    WorkNext(p);
+  }
+
+  // Starts working the unit at the head of p's worklist.
+  void WorkNext(std::uint32_t p) {
+    Processor<Entry>& ps = processors_[p];
     // Units worked are dropped from the front once they are half of a long worklist, so
     // that a batch that keeps spawning units in its cell (millions in a large frame) holds
     // those still to work, not every unit of the batch; the order is unchanged.
@@ -375,8 +397,20 @@ class Board {
     ++done_;
     Processor<Entry>& ps = processors_[p];
     const CellId cell = *ps.cell;  // the unit's, as every unit of the worklist
+    const Entry unit = ps.unit;
+    // When the next unit is already in the worklist and no processor waits (so releasing
+    // successors schedules no event and takes no seq), p's next event is the same whether it
+    // is scheduled before or after the successors are released. Scheduling it first lets the
+    // choice of the next event (slots_, an unpredictable branch with several processors)
+    // resolve without waiting for the successors' records, which are often cache misses.
+    const bool early = waiting_ == 0 && ps.head < ps.worklist.size();
+    if (early) {
+      WorkNext(p);
+      top_ = slots_.Update(p);
+      updated_ = true;
+    }
     bool released = false;
-    u_.ForEachChild(ps.unit, [&](const Entry& e, CellId c, std::uint64_t q) {
+    u_.ForEachChild(unit, [&](const Entry& e, CellId c, std::uint64_t q) {
       if (c == cell) {
         ps.worklist.push_back(e);  // spawned in the loaded cell: worked now
       } else {
@@ -384,6 +418,7 @@ class Board {
         released = true;
       }
     });
+    if (early) return;
     if (released && waiting_ > 0) WakeWaiting();
     StartNext(p);
   }
@@ -414,10 +449,15 @@ class Board {
   MemoryHierarchy memory_;
   std::vector<std::vector<Entry>> queues_;
   std::vector<std::uint64_t> queued_rays_, view_;
-  std::vector<bool> locked_;
+  // Per cell: all ones, or 0 while a processor works it (locked: not in the view).
+  static constexpr std::uint64_t kOpen = ~std::uint64_t{0};
+  std::vector<std::uint64_t> open_;
   std::vector<Processor<Entry>> processors_;
   SlotTree slots_;
   std::uint32_t waiting_ = 0;
+  // OnUnitDone brought its processor's slot up to date itself; top_ is then the next.
+  bool updated_ = false;
+  std::uint32_t top_ = 0;
   SimTime now_;
   std::uint64_t next_seq_ = 0, events_ = 0, events_since_progress_ = 0;
   std::uint64_t done_ = 0, queued_total_ = 0, peak_queued_ = 0;
