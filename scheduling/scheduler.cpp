@@ -56,6 +56,13 @@ std::optional<CellId> ScheduleFollower::Peek(const QueueView& queues) const {
 
 std::optional<CellId> ScheduleFollower::Next(const QueueView& queues) {
   last_skipped_ = 0;
+  // No work anywhere in view (with several processors: the cells with work are all being
+  // worked): nothing to choose, and the schedule keeps its place. Walking on would skip
+  // every entry left and hand the rest of the frame to Max Work.
+  if (cursor_ < schedule_.size() && !queues.has_work(schedule_[cursor_]) && queues.empty()) {
+    last_how_ = 0;
+    return std::nullopt;
+  }
   while (cursor_ < schedule_.size()) {
     const CellId c = schedule_[cursor_++];
     if (queues.has_work(c)) {

@@ -73,8 +73,10 @@ class Scheduler {
 std::optional<CellId> MostQueuedCell(const QueueView& queues);
 
 // Walks a fixed schedule with a cursor, skipping entries whose cell has no queued work (no
-// fetch); once the schedule is used up, Max Work. Shared by the Peel oracle and Cell Tree
-// scheduling.
+// fetch); once the schedule is used up, Max Work. When no cell has work in view (with several
+// processors, a processor woken while the others work every cell that has some), Next
+// returns nullopt without skipping anything. Shared by the Peel oracle, Cell Tree scheduling
+// and the planners.
 class ScheduleFollower {
  public:
   struct Stats {

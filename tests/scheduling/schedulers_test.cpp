@@ -185,6 +185,20 @@ TEST_F(FollowTest, PeelOracleSkipsEntriesWithoutWork) {
   EXPECT_EQ(m.Reason(), "");  // the default: nothing beyond the name
 }
 
+// With several processors a processor may ask while every cell with work is being worked
+// (its view is empty): it gets nothing, and the schedule keeps its place.
+TEST_F(FollowTest, AnEmptyViewSkipsNothing) {
+  PeelOracleScheduler s;
+  s.BeginFrame(Frame(0, 3, &tree_));
+  EXPECT_EQ(Ask(s, {0, 0, 0}), std::nullopt);
+  EXPECT_EQ(s.follower().cursor(), 0u);
+  EXPECT_EQ(Ask(s, {2, 0, 1}), C);  // still the schedule's first entry, not Max Work's A
+  EXPECT_EQ(s.Reason(), "followed");
+  EXPECT_EQ(Ask(s, {0, 0, 0}), std::nullopt);
+  EXPECT_EQ(Ask(s, {3, 0, 0}), A);
+  EXPECT_EQ(s.follower().stats().ToString(), "followed 2, skipped 0, max work 0");
+}
+
 TEST_F(FollowTest, CellTreeFrameZeroIsMaxWork) {
   CellTreeScheduler s;
   EXPECT_EQ(s.Name(), "celltree");
