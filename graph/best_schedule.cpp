@@ -33,8 +33,12 @@ std::uint64_t ChainSeed(std::uint64_t seed, std::size_t i) {
 
 // Chain i's options: o.local with its own seed and, when o.vary_windows, its window lengths
 // shifted by -4, -2, 0, +2 entries (chains 0, 1, 2, 3, then again), the longest solved
-// exactly: the chains then fall into different local optima, and the best of them is
-// taken.
+// exactly, and large windows (LocalSearchOptions::large_every) in the odd chains only: the
+// chains then fall into different local optima, and the best of them is taken. On the
+// 27-cell study capture (24 frames) four chains without large windows gave 87.08 on average,
+// four with them 86.67 (11 frames shorter, 2 longer), this portfolio 86.67 (10 shorter, none
+// longer) for less work: the even chains end at their window limit, the odd ones at their
+// work limit.
 LocalSearchOptions ChainOptions(const BestScheduleOptions& o, std::size_t i) {
   LocalSearchOptions lo = o.local;
   lo.seed = ChainSeed(o.seed, i);
@@ -43,6 +47,7 @@ LocalSearchOptions ChainOptions(const BestScheduleOptions& o, std::size_t i) {
     lo.min_window = std::size_t(std::max<long>(1, long(lo.min_window) + shift));
     lo.max_window = std::size_t(std::max<long>(long(lo.min_window), long(lo.max_window) + shift));
     if (o.local.exact_window >= o.local.max_window) lo.exact_window = lo.max_window;
+    if (i % 2 == 0) lo.large_every = 0;  // the odd chains keep o.local's
   }
   return lo;
 }
@@ -133,6 +138,7 @@ class Best {
     const LocalSearchResult* best = &chains[0];
     for (const LocalSearchResult& c : chains) {
       out_.windows += c.windows;
+      out_.large_windows += c.large_windows;
       out_.work += c.work;
       if (c.schedule.size() < best->schedule.size()) best = &c;
     }

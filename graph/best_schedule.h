@@ -30,8 +30,9 @@ struct BestScheduleOptions {
   // derived from `seed` and the chain number).
   std::size_t chains = 4;
   LocalSearchOptions local;
-  // Chain i's windows are shifted by -4, -2, 0, +2 entries (i % 4; at least 1 entry): a
-  // portfolio of neighbourhood sizes.
+  // Chain i's windows are shifted by -4, -2, 0, +2 entries (i % 4; at least 1 entry), and
+  // only the odd chains have large windows (LocalSearchOptions::large_every): a portfolio of
+  // neighbourhoods.
   bool vary_windows = true;
   std::size_t threads = 0;  // chains run at once; 0: the hardware's threads
   // Exact search with the best schedule as incumbent, on trees of at most exact_max_nodes
@@ -60,6 +61,7 @@ struct BestScheduleResult {
   // "unknown in [71, 83] (50000 states): ...".
   std::string exact_status = "not run";
   std::uint64_t beam_states = 0, windows = 0, work = 0, exact_states = 0;
+  std::uint64_t large_windows = 0;  // of the windows, large ones (LocalSearchOptions)
   // "84 (beam(256)+lns(4x20000); Peel 114, beam 99, local search 84, bound 63, lower 63)".
   std::string ToString() const;
 };

@@ -12,9 +12,9 @@ namespace raycell {
 
 std::string LocalSearchResult::ToString() const {
   std::ostringstream s;
-  s << schedule.size() << " entries after " << windows << " windows (" << improvements
-    << " shorter, " << plateau_moves << " plateau moves, " << deletions << " deletions, " << kicks
-    << " kicks)";
+  s << schedule.size() << " entries after " << windows << " windows (" << large_windows
+    << " large; " << improvements << " shorter, " << plateau_moves << " plateau moves, "
+    << deletions << " deletions, " << kicks << " kicks)";
   return s.str();
 }
 
@@ -30,6 +30,11 @@ class LocalSearch {
       throw InputError("local search: min_window (" + std::to_string(o.min_window) +
                        ") must be at least 1 and at most max_window (" +
                        std::to_string(o.max_window) + ")");
+    }
+    if (o.large_every != 0 && (o.large_min < 1 || o.large_min > o.large_max)) {
+      throw InputError("local search: large_min (" + std::to_string(o.large_min) +
+                       ") must be at least 1 and at most large_max (" +
+                       std::to_string(o.large_max) + ")");
     }
   }
 
@@ -99,11 +104,15 @@ class LocalSearch {
 
   void TryWindow() {
     const std::size_t len = schedule_.size();
-    const std::size_t k = std::min<std::size_t>(len, rng_.Between(o_.min_window, o_.max_window));
+    const bool large = o_.large_every != 0 && rng_.Below(o_.large_every) == 0;
+    out_.large_windows += large;
+    const std::size_t k =
+        std::min<std::size_t>(len, large ? rng_.Between(o_.large_min, o_.large_max)
+                                         : rng_.Between(o_.min_window, o_.max_window));
     const std::size_t i = rng_.Below(len - k + 1), j = i + k;
     const CellForest sub = CellForest::Sub(f_, WindowNodes(i, j));
     out_.work += sub.size();
-    if (k <= o_.exact_window) {
+    if (!large && k <= o_.exact_window) {
       ShorterOptions so;
       so.upper = k + 1;
       so.seed = rng_.Next() | 1;

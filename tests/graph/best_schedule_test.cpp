@@ -120,6 +120,8 @@ TEST(BestSchedulePropertyTest, SameResultForAnyThreadCount) {
     o.local.max_windows = 60;
     o.local.min_window = 4;
     o.local.max_window = o.local.exact_window = 8;
+    o.local.large_min = 9;  // large windows (odd chains) shorter than the default, for speed
+    o.local.large_max = 12;
     o.exact_states = 0;
     o.seed = 1 + i;
     o.threads = 1;
@@ -133,6 +135,33 @@ TEST(BestSchedulePropertyTest, SameResultForAnyThreadCount) {
     }
     EXPECT_TRUE(IsFeasible(t, one.schedule));
   }
+}
+
+// The chains' portfolio: large windows in the odd chains only (chain 0 has none, chain 1
+// some); without vary_windows every chain has o.local's.
+TEST(BestScheduleTest, OnlyOddChainsHaveLargeWindows) {
+  std::mt19937 rng(31);
+  const CellTree t = RandomTree(rng, 8, 80);
+  BestScheduleOptions o;
+  o.local.max_windows = 100;
+  o.local.large_min = 6;
+  o.local.large_max = 10;
+  o.exact_states = 0;
+  o.threads = 1;
+  o.chains = 1;
+  const BestScheduleResult even = BestSchedule(t, o);
+  ASSERT_EQ(even.windows, 100u);  // the search did not stop at the bound
+  EXPECT_EQ(even.large_windows, 0u);
+  o.chains = 2;
+  const BestScheduleResult both = BestSchedule(t, o);
+  ASSERT_EQ(both.windows, 200u);
+  EXPECT_GT(both.large_windows, 20u);
+  EXPECT_LT(both.large_windows, 80u);
+  o.chains = 1;
+  o.vary_windows = false;
+  EXPECT_GT(BestSchedule(t, o).large_windows, 20u);
+  o.local.large_every = 0;
+  EXPECT_EQ(BestSchedule(t, o).large_windows, 0u);
 }
 
 // Large trees and many cells: everything stays within its limits and the result is

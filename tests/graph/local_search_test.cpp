@@ -45,6 +45,7 @@ TEST(LocalSearchTest, WindowFindsWhatDeletionCannot) {
   ASSERT_TRUE(IsFeasible(t, {C, B, A, B}));
   LocalSearchOptions o;
   o.min_window = o.max_window = o.exact_window = 5;
+  o.large_every = 0;
   o.max_windows = 1;
   const LocalSearchResult r = Improve(t, start, o);
   EXPECT_EQ(r.schedule.size(), 4u);
@@ -69,13 +70,63 @@ TEST(LocalSearchTest, InconsistentWindowsAreAnInputError) {
   EXPECT_THROW(Improve(FromPaths({{A, B}}), {A, B}, o), InputError);
   o.min_window = 0;
   EXPECT_THROW(Improve(FromPaths({{A, B}}), {A, B}, o), InputError);
+  o = LocalSearchOptions();
+  o.large_min = 31;
+  o.large_max = 30;
+  EXPECT_THROW(Improve(FromPaths({{A, B}}), {A, B}, o), InputError);
+  o.large_min = 0;
+  EXPECT_THROW(Improve(FromPaths({{A, B}}), {A, B}, o), InputError);
+  o.large_every = 0;  // no large windows: their lengths are not used
+  EXPECT_NO_THROW(Improve(FromPaths({{A, B}}), {A, B}, o));
+}
+
+// The instance of WindowFindsWhatDeletionCannot, with windows of one entry (which cannot
+// shorten B C A B A: no entry can be deleted): a large window over the whole schedule, given
+// to the beam search, finds C B A B.
+TEST(LocalSearchTest, LargeWindowsReachFurther) {
+  const CellTree t = FromPaths({{C, B, A}, {B, A, B}});
+  const Schedule start{B, C, A, B, A};
+  LocalSearchOptions o;
+  o.min_window = o.max_window = o.exact_window = 1;
+  o.kick_after = 0;
+  o.max_windows = 50;
+  o.large_every = 0;
+  const LocalSearchResult short_only = Improve(t, start, o);
+  ASSERT_EQ(short_only.schedule.size(), 5u);
+  EXPECT_EQ(short_only.large_windows, 0u);
+  o.large_every = 1;
+  o.large_min = o.large_max = 5;
+  o.max_windows = 1;
+  const LocalSearchResult r = Improve(t, start, o);
+  EXPECT_EQ(r.schedule.size(), 4u);
+  EXPECT_TRUE(IsFeasible(t, r.schedule));
+  EXPECT_EQ(r.windows, 1u);
+  EXPECT_EQ(r.large_windows, 1u);
+}
+
+// One window in large_every is large, drawn at random: about half of them for 2.
+TEST(LocalSearchPropertyTest, LargeWindowShare) {
+  std::mt19937 rng(5);
+  const CellTree t = RandomTree(rng, 6, 40);
+  LocalSearchOptions o;
+  o.max_windows = 400;
+  o.kick_after = 10;
+  o.large_every = 2;
+  o.large_min = 6;
+  o.large_max = 9;
+  const LocalSearchResult r = Improve(t, Peel(t).schedule, o);
+  ASSERT_EQ(r.windows, 400u);
+  EXPECT_GT(r.large_windows, 160u);
+  EXPECT_LT(r.large_windows, 240u);
+  EXPECT_TRUE(IsFeasible(t, r.schedule));
 }
 
 TEST(LocalSearchTest, ToString) {
   LocalSearchOptions o;
   o.max_windows = 0;
   EXPECT_EQ(Improve(FromPaths({{A, B}}), {A, A, B, B}, o).ToString(),
-            "2 entries after 0 windows (0 shorter, 0 plateau moves, 2 deletions, 0 kicks)");
+            "2 entries after 0 windows (0 large; 0 shorter, 0 plateau moves, 2 deletions, 0 "
+            "kicks)");
 }
 
 // Windows as long as the schedule, solved exactly: the local search is then an exact search
@@ -87,6 +138,7 @@ TEST(LocalSearchPropertyTest, WholeWindowIsExact) {
     const Schedule peel = Peel(t).schedule;
     LocalSearchOptions o;
     o.min_window = o.max_window = o.exact_window = 64;
+    o.large_every = 0;  // large windows go to the beam search, which is not exact
     o.exact_states = 1'000'000;
     o.max_windows = 1;
     const LocalSearchResult r = Improve(t, peel, o);

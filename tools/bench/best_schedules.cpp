@@ -9,7 +9,8 @@
 //   --frames A-B,C      frame indices to run (into the capture's frames; default all)
 //   --width N           beam width          --chains N     local-search chains
 //   --windows N         windows per chain   --threads N    chains at once
-//   --min-window N, --max-window N, --exact-window N, --kick-after N, --kick-size N
+//   --min-window N, --max-window N, --exact-window N, --kick-after N, --kick-size N,
+//   --large-every N (0: no large windows, as before), --large-min N, --large-max N
 //                       local search (LocalSearchOptions)
 //   --exact-states N    exact search states --seed N
 //   --cells N           cells of the synthetic trees (27)
@@ -106,6 +107,12 @@ Args Parse(int argc, char** argv) {
       a.options.local.kick_after = number();
     } else if (arg == "--kick-size") {
       a.options.local.kick_size = number();
+    } else if (arg == "--large-every") {
+      a.options.local.large_every = number();
+    } else if (arg == "--large-min") {
+      a.options.local.large_min = number();
+    } else if (arg == "--large-max") {
+      a.options.local.large_max = number();
     } else if (arg == "--threads") {
       a.options.threads = number();
     } else if (arg == "--exact-states") {
