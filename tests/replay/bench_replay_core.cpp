@@ -14,12 +14,12 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
-#include <ctime>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "base/check.h"
+#include "base/cpu_time.h"
 #include "graph/analysis.h"
 #include "replay/config.h"
 #include "replay/replayer.h"
@@ -30,12 +30,6 @@
 
 namespace raycell {
 namespace {
-
-double CpuSeconds() {
-  timespec t;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
 
 struct Frame {
   std::size_t index;
@@ -115,13 +109,13 @@ int main(int argc, char** argv) {
           const FrameInfo info{f.index, f.tree.get(), f.previous.get(), h.cell_count()};
           auto a = MakeScheduler(c.config.scheduler, c.config.seed);
           auto b = MakeScheduler(c.config.scheduler, c.config.seed);
-          double t0 = CpuSeconds();
+          double t0 = ThreadCpuSeconds();
           const ReplayResult x =
               ReferenceReplayFrame(f.work, h.footprints, c.config, *a, info, Bound(*f.tree));
-          double t1 = CpuSeconds();
+          double t1 = ThreadCpuSeconds();
           const ReplayResult y =
               ReplayFrame(f.work, h.footprints, c.config, *b, info, Bound(*f.tree));
-          double t2 = CpuSeconds();
+          double t2 = ThreadCpuSeconds();
           RAYCELL_CHECK_EQ(x.time, y.time);
           RAYCELL_CHECK_EQ(x.fetches, y.fetches);
           RAYCELL_CHECK_EQ(x.events, y.events);

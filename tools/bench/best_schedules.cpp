@@ -32,12 +32,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <ctime>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "base/check.h"
+#include "base/cpu_time.h"
 #include "base/parse.h"
 #include "graph/analysis.h"
 #include "graph/best_schedule.h"
@@ -134,20 +134,13 @@ Args Parse(int argc, char** argv) {
   return a;
 }
 
-// CPU time of the whole process (every thread), in seconds.
-double CpuSeconds() {
-  timespec t{};
-  RAYCELL_CHECK(clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t) == 0);
-  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
-
 Row Measure(const CellTree& tree, const Args& a) {
   Row r{};
   const auto t0 = std::chrono::steady_clock::now();
-  const double cpu0 = CpuSeconds();
+  const double cpu0 = ProcessCpuSeconds();
   const BestScheduleResult b = BestSchedule(tree, a.options);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  r.cpu_seconds = CpuSeconds() - cpu0;
+  r.cpu_seconds = ProcessCpuSeconds() - cpu0;
   r.nodes = tree.node_count(), r.bound = b.bound, r.peel = b.peel_length;
   r.beam = b.beam_length, r.local = b.local_length, r.best = b.length, r.lower = b.lower;
   r.optimal = b.optimal;

@@ -15,11 +15,11 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <ctime>
 #include <string>
 #include <vector>
 
 #include "base/check.h"
+#include "base/cpu_time.h"
 #include "engine/calendar_queue.h"
 #include "engine/event_queue.h"
 #include "engine/simulator.h"
@@ -38,14 +38,6 @@ struct SplitMix64 {
   SimTime Delay() { return SimTime::Picoseconds((*this)() % 2001); }
 };
 
-// CPU time of this thread: on a shared, loaded machine it counts only the time this thread
-// ran, where wall time would count the other processes' turns too.
-double CpuSeconds() {
-  timespec t;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
-
 // Bare queue: N events, `warmup` untimed holds, then `ops` timed holds. Returns events/s.
 template <typename Queue>
 double QueueHold(std::size_t n, std::uint64_t warmup, std::uint64_t ops, std::uint64_t seed,
@@ -61,9 +53,9 @@ double QueueHold(std::size_t n, std::uint64_t warmup, std::uint64_t ops, std::ui
     q.Push(Event{e.time + rng.Delay(), 0, seq++, 0, 0, 0});
   };
   for (std::uint64_t i = 0; i < warmup; ++i) hold();
-  const double start = CpuSeconds();
+  const double start = ThreadCpuSeconds();
   for (std::uint64_t i = 0; i < ops; ++i) hold();
-  const double s = CpuSeconds() - start;
+  const double s = ThreadCpuSeconds() - start;
   *checksum = last.picoseconds();
   return double(ops) / s;
 }
@@ -98,9 +90,9 @@ double SimulatorHold(std::size_t n, std::uint64_t warmup, std::uint64_t ops, std
   };
   run_events(warmup);
   const std::uint64_t before = sim.events_handled();
-  const double start = CpuSeconds();
+  const double start = ThreadCpuSeconds();
   run_events(ops);
-  const double s = CpuSeconds() - start;
+  const double s = ThreadCpuSeconds() - start;
   *checksum = sim.now().picoseconds();
   return double(sim.events_handled() - before) / s;
 }
