@@ -71,17 +71,7 @@ struct CompactUnits {
   const std::uint8_t* stream;
   const WorkGraph::Compact* c;
 
-  // Reads the LEB128 varint at stream[*at], moving *at past it.
-  std::uint32_t Read(std::uint32_t* at) const {
-    std::uint32_t x = stream[(*at)++];
-    if (x < 0x80) return x;
-    x &= 0x7f;
-    for (int shift = 7;; shift += 7) {
-      const std::uint32_t b = stream[(*at)++];
-      x |= (b & 0x7f) << shift;
-      if (b < 0x80) return x;
-    }
-  }
+  std::uint32_t Read(std::uint32_t* at) const { return ReadVarint(stream, at); }
   CellId CellAt(std::uint32_t offset) const { return Read(&offset) >> 1; }
 
   template <typename F>

@@ -40,9 +40,8 @@ void Resize(WorkGraph& w, std::size_t n) {
 }  // namespace
 
 void* AllocateHugePages(std::size_t bytes) {
-  constexpr std::size_t kHuge = std::size_t{2} << 20;
-  const std::size_t rounded = (bytes + kHuge - 1) / kHuge * kHuge;
-  void* p = std::aligned_alloc(kHuge, rounded);
+  const std::size_t rounded = (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
+  void* p = std::aligned_alloc(kHugePageBytes, rounded);
   if (p == nullptr) throw std::bad_alloc();
   madvise(p, rounded, MADV_HUGEPAGE);  // a hint: without huge pages, 4 KiB pages as before
   return p;
@@ -127,18 +126,6 @@ WorkGraph RaySegmentWork(const RayBatch& frame, CellId cells) {
   return w;
 }
 
-namespace {
-
-void AppendVarint(std::vector<std::uint8_t>& out, std::uint32_t x) {
-  while (x >= 0x80) {
-    out.push_back(std::uint8_t(x | 0x80));
-    x >>= 7;
-  }
-  out.push_back(std::uint8_t(x));
-}
-
-}  // namespace
-
 void RaySegmentWorkBuilder::Reserve(const FrameSummary& summary) {
   // A summary is checked against its frame only once the frame is read: cap what it asks.
   const std::uint64_t rays = std::min<std::uint64_t>(summary.rays, UINT32_MAX);
@@ -212,13 +199,6 @@ WorkGraph RaySegmentWorkBuilder::Finish() {
   visits_ = 0;
   rays_ = 0;
   return out;
-}
-
-std::size_t WorkGraph::MemoryBytes() const {
-  const auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
-  return bytes(cell) + bytes(samples) + bytes(queued_rays) + bytes(segments) + bytes(rays_started) +
-         bytes(succ_begin) + bytes(succ) + bytes(roots) + bytes(packed) + bytes(compact.stream) +
-         bytes(compact.roots) + bytes(compact.spawned);
 }
 
 WorkGraph NodeWork(const CellTree& tree, CellId cells) {

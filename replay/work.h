@@ -24,23 +24,23 @@ using UnitId = std::uint32_t;
 // marked for transparent huge pages with madvise, which this kernel setting needs), smaller
 // ones from operator new. For the packed unit records, read at random by the replay: on
 // 4 KiB pages nearly every such read also misses the TLB.
+inline constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
 void* AllocateHugePages(std::size_t bytes);
 void FreeHugePages(void* p, std::size_t bytes);
 template <typename T>
 struct HugePageAllocator {
   using value_type = T;
-  static constexpr std::size_t kHuge = std::size_t{2} << 20;
   HugePageAllocator() = default;
   template <typename U>
   HugePageAllocator(const HugePageAllocator<U>&) {}
   T* allocate(std::size_t n) {
     const std::size_t bytes = n * sizeof(T);
-    if (bytes < kHuge) return static_cast<T*>(::operator new(bytes));
+    if (bytes < kHugePageBytes) return static_cast<T*>(::operator new(bytes));
     return static_cast<T*>(AllocateHugePages(bytes));
   }
   void deallocate(T* p, std::size_t n) {
     const std::size_t bytes = n * sizeof(T);
-    if (bytes < kHuge) {
+    if (bytes < kHugePageBytes) {
       ::operator delete(p);
     } else {
       FreeHugePages(p, bytes);
@@ -111,9 +111,27 @@ struct WorkGraph {
   std::uint64_t total_samples() const { return totals.samples; }
   std::uint64_t total_segments() const { return totals.segments; }
   std::uint64_t total_rays() const { return totals.rays; }
-  // Bytes held by the work graph's vectors (their capacity), for reports and tests.
-  std::size_t MemoryBytes() const;
 };
+
+// The Compact stream's LEB128 varints: AppendVarint writes x; ReadVarint reads the one at
+// stream[*at] and moves *at past it.
+inline void AppendVarint(std::vector<std::uint8_t>& out, std::uint32_t x) {
+  while (x >= 0x80) {
+    out.push_back(std::uint8_t(x | 0x80));
+    x >>= 7;
+  }
+  out.push_back(std::uint8_t(x));
+}
+inline std::uint32_t ReadVarint(const std::uint8_t* stream, std::uint32_t* at) {
+  std::uint32_t x = stream[(*at)++];
+  if (x < 0x80) return x;
+  x &= 0x7f;
+  for (int shift = 7;; shift += 7) {
+    const std::uint32_t b = stream[(*at)++];
+    x |= (b & 0x7f) << shift;
+    if (b < 0x80) return x;
+  }
+}
 
 // Per ray segment, built from a frame's batches as TraceReader::ForEachBatch delivers them
 // (frame-local ray ids, in order, parents in earlier batches or the same), without holding
