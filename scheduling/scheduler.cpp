@@ -144,24 +144,30 @@ std::string SchedulerNameList(const char* separator) {
   return out;
 }
 
-std::uint32_t SchedulerHistory(const std::string& name) {
+namespace {
+
+// The registry's entry named `name`, or null.
+const SchedulerEntry* FindScheduler(const std::string& name) {
   for (const SchedulerEntry& e : SchedulerRegistry()) {
-    if (name == e.name) return e.history;
+    if (name == e.name) return &e;
   }
-  return 1;
+  return nullptr;
+}
+
+}  // namespace
+
+std::uint32_t SchedulerHistory(const std::string& name) {
+  const SchedulerEntry* e = FindScheduler(name);
+  return e ? e->history : 1;
 }
 
 bool SchedulerUsesSeed(const std::string& name) {
-  for (const SchedulerEntry& e : SchedulerRegistry()) {
-    if (name == e.name) return e.seeded;
-  }
-  return false;
+  const SchedulerEntry* e = FindScheduler(name);
+  return e && e->seeded;
 }
 
 std::unique_ptr<Scheduler> MakeScheduler(const std::string& name, std::uint64_t seed) {
-  for (const SchedulerEntry& e : SchedulerRegistry()) {
-    if (name == e.name) return e.make(seed);
-  }
+  if (const SchedulerEntry* e = FindScheduler(name)) return e->make(seed);
   throw InputError("unknown scheduler '" + name + "' (expected one of: " + SchedulerNameList(", ") +
                    ")");
 }
