@@ -2,8 +2,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <exception>
+#include <thread>
+#include <utility>
 
 #include "base/check.h"
+#include "graph/late_bound.h"
 #include "graph/optimum.h"
 #include "graph/peel.h"
 #include "graph/schedule.h"
@@ -56,15 +60,46 @@ std::optional<double> FrameAnalysis::gap() const {
 
 namespace {
 
-// Brackets the optimum of `tree`: the lower bound first, then the schedule search told of it
-// (it stops when a schedule meets it). A proved optimum (a.optimum, from --exact) tightens
-// both sides.
+// The lower bound and the schedule search told of it (it stops when a schedule meets it):
+// with options.overlap the bound on a thread of its own while the search runs, which gives
+// the same results (graph/late_bound.h) in about the longer of the two times.
+std::pair<LowerBoundResult, BestScheduleResult> BoundAndSearch(const CellTree& tree,
+                                                               const BracketOptions& options) {
+  BestScheduleOptions best = options.best;
+  if (!options.overlap) {
+    LowerBoundResult lb = LowerBound(tree, options.lower);
+    best.lower_bound = std::max(best.lower_bound, lb.value);
+    return {std::move(lb), BestSchedule(tree, best)};
+  }
+  LateBound late;
+  LowerBoundResult lb;
+  std::exception_ptr error;
+  std::thread bound([&] {
+    try {
+      lb = LowerBound(tree, options.lower);
+    } catch (...) {
+      error = std::current_exception();
+    }
+    late.Publish(error ? 0 : lb.value);
+  });
+  best.late_lower_bound = &late;
+  BestScheduleResult b;
+  try {
+    b = BestSchedule(tree, best);
+  } catch (...) {
+    bound.join();
+    throw;
+  }
+  bound.join();
+  if (error) std::rethrow_exception(error);
+  return {std::move(lb), std::move(b)};
+}
+
+// Brackets the optimum of `tree`: the lower bound and the schedule search. A proved optimum
+// (a.optimum, from --exact) tightens both sides.
 void Bracket(const CellTree& tree, const BracketOptions& options,
              const std::vector<CellId>& optimal_schedule, FrameAnalysis& a) {
-  const LowerBoundResult lb = LowerBound(tree, options.lower);
-  BestScheduleOptions best = options.best;
-  best.lower_bound = std::max(best.lower_bound, lb.value);
-  BestScheduleResult b = BestSchedule(tree, best);
+  auto [lb, b] = BoundAndSearch(tree, options);
   RAYCELL_CHECK(IsFeasible(tree, b.schedule));
   std::uint64_t lower = std::max<std::uint64_t>(lb.value, b.lower);
   a.lower_bound_method = lb.value >= b.lower ? lb.method : "exact search";

@@ -61,6 +61,7 @@ std::vector<LocalSearchResult> RunChains(const CellForest& forest, const std::ve
     for (std::size_t i; (i = next++) < o.chains;) {
       LocalSearchOptions lo = ChainOptions(o, i);
       lo.lower_bound = std::max(lo.lower_bound, o.lower_bound);
+      lo.late_lower_bound = o.late_lower_bound;
       results[i] = ImproveSchedule(forest, start, lo);
     }
   };
@@ -98,10 +99,12 @@ class Best {
     // Small trees: the exact search first, which often proves the beam's schedule optimal;
     // if it does not, once more after the local search, with its (maybe shorter) schedule.
     const bool exact = o_.exact_states > 0 && tree_.node_count() <= o_.exact_max_nodes;
+    if (exact) WaitForLateBound();  // the exact search prunes with it
     if (!Done() && exact) RunExact();
     const std::size_t before = out_.schedule.size();
     if (!Done() && o_.chains > 0) RunLocal(forest);
     if (!Done() && exact && out_.schedule.size() < before) RunExact();
+    WaitForLateBound();
     out_.length = out_.schedule.size();
     out_.optimal = out_.lower >= out_.length;
     RAYCELL_CHECK(IsFeasible(tree_, out_.schedule));
@@ -110,7 +113,16 @@ class Best {
   }
 
  private:
-  bool Done() const { return out_.schedule.size() <= out_.lower; }
+  // Whether the best schedule meets a lower bound. With a late bound this depends on when it
+  // arrives; so it may only decide whether to go on looking, never what is kept.
+  bool Done() const {
+    const std::uint64_t late = o_.late_lower_bound ? o_.late_lower_bound->Now() : 0;
+    return out_.schedule.size() <= std::max(out_.lower, late);
+  }
+
+  void WaitForLateBound() {
+    if (o_.late_lower_bound) out_.lower = std::max(out_.lower, o_.late_lower_bound->Wait());
+  }
 
   // Keeps `schedule` if it is shorter than the best so far (the first one always).
   void Offer(const std::vector<CellId>& schedule, const std::string& method) {

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "graph/cell_tree.h"
+#include "graph/late_bound.h"
 #include "graph/local_search.h"
 
 namespace raycell {
@@ -44,6 +45,11 @@ struct BestScheduleOptions {
   // A known lower bound on the optimum (0: none): the search stops as soon as a schedule
   // meets it (that schedule is then optimal).
   std::uint64_t lower_bound = 0;
+  // Or one published by another thread while the search runs (null: none): the search stops
+  // once a schedule meets the value known at the time, waits for it before the exact search
+  // and at the end (it is then part of `lower`), and returns what it would have returned with
+  // the value given as lower_bound (graph/late_bound.h says why).
+  const LateBound* late_lower_bound = nullptr;
 };
 
 struct BestScheduleResult {

@@ -41,6 +41,7 @@
 
 #include "graph/cell_tree.h"
 #include "graph/forest.h"
+#include "graph/late_bound.h"
 
 namespace raycell {
 
@@ -67,6 +68,8 @@ struct LocalSearchOptions {
   std::uint64_t kick_slack = 1;
   // Stop as soon as the schedule is this short (a known lower bound: then it is optimal).
   std::uint64_t lower_bound = 0;
+  // Or as short as a bound published while the search runs (graph/late_bound.h); null: none.
+  const LateBound* late_lower_bound = nullptr;
 };
 
 struct LocalSearchResult {

@@ -210,6 +210,7 @@ GridStudy StudyTrace(const TraceReader& reader, GridStudy g, const StudyArgs& a)
   options.bracket_options = BracketEffort(a.effort);
   options.bracket_options.lower.grid = reader.header().cells;
   options.bracket_options.best.threads = 1;  // the frames run in parallel instead
+  options.bracket_options.overlap = false;
   g.trees = AnalyzeTrees(trees, options, g.cells, a.quiet);
   for (std::size_t i = 0; i < n; ++i) g.trees[i].frame = numbers[i];
   return g;

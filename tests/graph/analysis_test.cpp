@@ -57,6 +57,29 @@ TEST(AnalysisBracketTest, RandomTreesAreBracketedAroundTheOptimum) {
   EXPECT_GT(met, 250);  // small trees: the two sides meet on nearly all
 }
 
+// The lower bound on a thread of its own beside the search (BracketOptions::overlap) reports
+// what the two in turn report, field by field, with and without the exact search.
+TEST(AnalysisBracketTest, OverlappedBoundAndSearchReportTheSame) {
+  std::mt19937 rng(23);
+  for (int i = 0; i < 60; ++i) {
+    const CellTree t =
+        i % 4 == 0 ? RandomTree(rng, 6, 16) : RandomTree(rng, 2 + rng() % 4, 1 + rng() % 10, 5);
+    SCOPED_TRACE("tree " + std::to_string(i) + ": " + t.ToString());
+    AnalyzeOptions o = Bracketed("quick", i % 3 == 0);
+    o.bracket_options.overlap = false;
+    const FrameAnalysis in_turn = AnalyzeTree(t, o);
+    o.bracket_options.overlap = true;
+    const FrameAnalysis overlapped = AnalyzeTree(t, o);
+    EXPECT_EQ(overlapped.lower_bound, in_turn.lower_bound);
+    EXPECT_EQ(overlapped.lower_bound_method, in_turn.lower_bound_method);
+    EXPECT_EQ(overlapped.best_schedule, in_turn.best_schedule);
+    EXPECT_EQ(overlapped.best_method, in_turn.best_method);
+    EXPECT_EQ(overlapped.optimum, in_turn.optimum);
+    EXPECT_EQ(overlapped.optimum_status, in_turn.optimum_status);
+    if (HasFailure()) return;
+  }
+}
+
 TEST(AnalysisBracketTest, WithoutBracketNothingIsReported) {
   const FrameAnalysis a = AnalyzeTree(FromPaths({{0, 1}, {1, 0}}), AnalyzeOptions{});
   EXPECT_FALSE(a.lower_bound || a.best_length || a.gap());

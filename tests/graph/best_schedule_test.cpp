@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <random>
+#include <thread>
 
+#include "graph/late_bound.h"
 #include "graph/peel.h"
 #include "graph/schedule.h"
 #include "tests/graph/test_trees.h"
@@ -135,6 +138,49 @@ TEST(BestSchedulePropertyTest, SameResultForAnyThreadCount) {
     }
     EXPECT_TRUE(IsFeasible(t, one.schedule));
   }
+}
+
+// A lower bound published by another thread while the search runs (graph/late_bound.h) gives
+// what the same bound given up front gives: the schedule, its method, the lower end and the
+// exact search's answer, whenever it arrives (before the search, a few microseconds or
+// milliseconds into it). The bound is the brute-force optimum, so that the searches meet it
+// and would stop: most of the trees are small enough for the exact search, which waits for it.
+TEST(BestSchedulePropertyTest, ALateLowerBoundGivesTheSameResult) {
+  std::mt19937 rng(17);
+  int stopped = 0;
+  for (int i = 0; i < 120; ++i) {
+    const CellTree t = RandomTree(rng, 2 + rng() % 4, 1 + rng() % 8, 5);
+    BestScheduleOptions o = Small();
+    o.seed = 1 + i;
+    o.exact_max_nodes = i % 3 == 0 ? 0 : 1000;  // a third without the exact search
+    o.lower_bound = BruteForceOptimum(t);
+    const BestScheduleResult given = BestSchedule(t, o);
+    stopped += given.windows == 0;
+    for (int delay_us : {-1, 0, 50, 2000}) {
+      SCOPED_TRACE("tree " + std::to_string(i) + ", published after " + std::to_string(delay_us) +
+                   " us: " + t.ToString());
+      BestScheduleOptions late_o = o;
+      const std::uint64_t value = o.lower_bound;
+      late_o.lower_bound = 0;
+      LateBound late;
+      late_o.late_lower_bound = &late;
+      if (delay_us < 0) late.Publish(value);  // known from the start
+      std::thread publisher([&] {
+        if (delay_us < 0) return;
+        std::this_thread::sleep_for(std::chrono::microseconds(delay_us));
+        late.Publish(value);
+      });
+      const BestScheduleResult r = BestSchedule(t, late_o);
+      publisher.join();
+      EXPECT_EQ(r.schedule, given.schedule);
+      EXPECT_EQ(r.method, given.method);
+      EXPECT_EQ(r.lower, given.lower);
+      EXPECT_EQ(r.optimal, given.optimal);
+      EXPECT_EQ(r.exact_status, given.exact_status);
+    }
+    if (HasFailure()) return;
+  }
+  EXPECT_GT(stopped, 20);  // the given bound stopped the search before its local search
 }
 
 // The chains' portfolio: large windows in the odd chains only (chain 0 has none, chain 1
