@@ -10,7 +10,7 @@
 //    Max Work, frame 1 follows frame 0's tree alone).
 // Entries with no queued work are skipped; when the plan is used up, Max Work.
 //
-// The plans use kPlanEffort, a small budget (a plan must be ready while the frame before it
+// The plans use PlanEffort, a small budget (a plan must be ready while the frame before it
 // is replayed: BENCHMARKS.md states the time per frame). BestSchedule is deterministic, so
 // plans are memoised by the tree's contents (PlanFor): sweeps whose configurations share a
 // scheduler compute each frame's plan once, with the same result.
