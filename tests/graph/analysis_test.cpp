@@ -80,6 +80,18 @@ TEST(AnalysisBracketTest, OverlappedBoundAndSearchReportTheSame) {
   }
 }
 
+// An error in the lower bound on its own thread reaches the caller as the same InputError
+// (not std::terminate), after the search has finished with it.
+TEST(AnalysisBracketTest, AnErrorOfTheOverlappedBoundReachesTheCaller) {
+  const CellTree t = FromPaths({{0, 1, 2}, {2, 1, 0}});
+  for (bool overlap : {false, true}) {
+    AnalyzeOptions o = Bracketed("quick");
+    o.bracket_options.overlap = overlap;
+    o.bracket_options.lower.grid = {1, 1, 1};  // fewer cells than the tree's 3
+    EXPECT_THROW(AnalyzeTree(t, o), InputError) << "overlap " << overlap;
+  }
+}
+
 TEST(AnalysisBracketTest, WithoutBracketNothingIsReported) {
   const FrameAnalysis a = AnalyzeTree(FromPaths({{0, 1}, {1, 0}}), AnalyzeOptions{});
   EXPECT_FALSE(a.lower_bound || a.best_length || a.gap());
