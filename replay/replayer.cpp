@@ -284,6 +284,7 @@ class Board {
 
   void Enqueue(const Entry& e, CellId c, std::uint64_t q) {
     queues_[c].push_back(e);
+    available_ += (queued_rays_[c] == 0) & (q != 0) & (open_[c] != 0);
     queued_rays_[c] += q;
     queued_total_ += q;
     peak_queued_ = std::max(peak_queued_, queued_total_);
@@ -298,14 +299,19 @@ class Board {
   }
 
   void OnIdle(std::uint32_t p) {
-    const std::optional<CellId> c = scheduler_.Next(View(p));
+    // With no cell in view having work, every scheduler answers nothing and changes nothing
+    // (Scheduler::Next), so it is not asked: with several processors most idle events are
+    // of processors woken by work released into a cell that another one is working.
+    const std::optional<CellId> c = available_ == 0 ? std::nullopt : scheduler_.Next(View(p));
     if (!c) {
-      processors_[p].waiting = true;  // woken when work is released
+      RAYCELL_CHECK_EQ(available_, 0u);  // Next answers nothing only when nothing is in view
+      processors_[p].waiting = true;     // woken when work is released
       ++waiting_;
       return;
     }
-    RAYCELL_CHECK(!queues_[*c].empty() && open_[*c] == kOpen);
+    RAYCELL_CHECK(!queues_[*c].empty() && open_[*c] == kOpen && queued_rays_[*c] != 0);
     open_[*c] = 0;
+    --available_;
     processors_[p].cell = *c;
     const std::uint64_t fetches = obs_ ? memory_.stats()[0].fetches : 0;  // observed only
     const SimTime ready = memory_.Fetch(p, *c, now_);
@@ -356,6 +362,7 @@ class Board {
     if (ps.head == ps.worklist.size()) TakeQueue(p);  // units that arrived meanwhile
     if (ps.head == ps.worklist.size()) {
       if (obs_) obs_->BatchEnd(p, *ps.cell, now_);
+      RAYCELL_CHECK_EQ(queued_rays_[*ps.cell], 0u);  // so unlocking leaves available_ as it is
       open_[*ps.cell] = kOpen;
       Schedule(p, now_, Kind::kIdle);
       return;
@@ -442,6 +449,10 @@ class Board {
   // Per cell: all ones, or 0 while a processor works it (locked: not in the view).
   static constexpr std::uint64_t kOpen = ~std::uint64_t{0};
   std::vector<std::uint64_t> open_;
+  // Cells in view: with queued rays and open. A queue is taken only by the processor that
+  // locked its cell, and a cell is unlocked only with an empty queue, so only Enqueue and
+  // the lock in OnIdle change it.
+  CellId available_ = 0;
   std::vector<Processor<Entry>> processors_;
   SlotTree slots_;
   std::uint32_t waiting_ = 0;

@@ -49,7 +49,10 @@ struct FrameInfo {
 //
 // Next returns a cell with queued work, or nullopt iff no cell has any. A scheduler may keep
 // state between calls (a cursor into a schedule), so the caller must call Next again only
-// after it has processed the returned cell's queue (fetched it and worked its rays).
+// after it has processed the returned cell's queue (fetched it and worked its rays). When no
+// cell has work, Next changes nothing that a later Next, Peek or Reason could show (no
+// random draw, no cursor moved), so that a caller may skip asking then: the replay does, for
+// the idle processors woken by work released into cells that others are working.
 class Scheduler {
  public:
   virtual ~Scheduler() = default;
