@@ -116,8 +116,7 @@ class Best {
   // Whether the best schedule meets a lower bound. With a late bound this depends on when it
   // arrives; so it may only decide whether to go on looking, never what is kept.
   bool Done() const {
-    const std::uint64_t late = o_.late_lower_bound ? o_.late_lower_bound->Now() : 0;
-    return out_.schedule.size() <= std::max(out_.lower, late);
+    return out_.schedule.size() <= std::max(out_.lower, KnownNow(o_.late_lower_bound));
   }
 
   void WaitForLateBound() {

@@ -44,4 +44,7 @@ class LateBound {
   bool published_ = false;
 };
 
+// The value `bound` (null: none) makes known now, else 0: what a search may stop on.
+inline std::uint64_t KnownNow(const LateBound* bound) { return bound ? bound->Now() : 0; }
+
 }  // namespace raycell

@@ -59,8 +59,8 @@ class LocalSearch {
 
  private:
   bool Done() const {
-    const std::uint64_t late = o_.late_lower_bound ? o_.late_lower_bound->Now() : 0;
-    return out_.schedule.size() <= std::max<std::uint64_t>({o_.lower_bound, late, 1});
+    return out_.schedule.size() <=
+           std::max<std::uint64_t>({o_.lower_bound, KnownNow(o_.late_lower_bound), 1});
   }
 
   // Times of the current schedule, and its nodes bucketed by earliest entry.
