@@ -10,7 +10,12 @@
 // It lives with the reference it measures against (test-only code), and is built with the
 // tests but not run by them.
 //
-// Usage: build/tests/replay/bench_replay_core TRACE [FRAMES=all] [REPS=3] [CASE=all]
+// With --core-only the reference is not run, and each frame is replayed REPS times in a row,
+// as a sweep replays its configurations on a frame it decoded once: between the replays the
+// frame's records stay warm in the caches, where alternating with the reference evicts them.
+//
+// Usage: build/tests/replay/bench_replay_core TRACE [FRAMES=all] [REPS=3] [CASE=all|-1]
+//            [--core-only]
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -72,7 +77,9 @@ double Median(std::vector<double> v) {
 int main(int argc, char** argv) {
   using namespace raycell;
   if (argc < 2) {
-    std::fprintf(stderr, "usage: bench_replay_core TRACE [FRAMES=all] [REPS=3]\n");
+    std::fprintf(stderr,
+                 "usage: bench_replay_core TRACE [FRAMES=all] [REPS=3] [CASE=all|-1] "
+                 "[--core-only]\n");
     return 2;
   }
   try {
@@ -81,6 +88,7 @@ int main(int argc, char** argv) {
     if (argc > 2) frames = std::min<std::size_t>(frames, std::strtoull(argv[2], nullptr, 10));
     const int reps = argc > 3 ? std::max(1, std::atoi(argv[3])) : 3;
     const int only = argc > 4 ? std::atoi(argv[4]) : -1;  // one configuration, by number
+    const bool core_only = argc > 5 && std::string(argv[5]) == "--core-only";
     const TraceHeader& h = reader.header();
     std::vector<Frame> loaded;
     std::uint64_t segments = 0;
@@ -103,6 +111,24 @@ int main(int argc, char** argv) {
       if (only >= 0 && std::size_t(only) != k) continue;
       const Case& c = cases[k];
       std::vector<double> ref_s, core_s;
+      if (core_only) {
+        // As a sweep replays its configurations: each frame, decoded once, replayed REPS
+        // times in a row (its records stay warm in the caches between the replays).
+        std::vector<double> warm_s(reps, 0.0);
+        for (const Frame& f : loaded) {
+          const FrameInfo info{f.index, f.tree.get(), f.previous.get(), h.cell_count()};
+          for (int r = 0; r < reps; ++r) {
+            auto b = MakeScheduler(c.config.scheduler, c.config.seed);
+            const double t0 = ThreadCpuSeconds();
+            ReplayFrame(f.work, h.footprints, c.config, *b, info, Bound(*f.tree));
+            warm_s[r] += ThreadCpuSeconds() - t0;
+          }
+        }
+        const double core = Median(warm_s);
+        std::printf("%-44s %10s %10.3f %12s %12.1f %8s\n", c.label.c_str(), "-", core, "-",
+                    double(segments) / core / 1e6, "-");
+        continue;
+      }
       for (int r = 0; r < reps; ++r) {
         double ref = 0, core = 0;
         for (const Frame& f : loaded) {
