@@ -10,8 +10,8 @@
 // It lives with the reference it measures against (test-only code), and is built with the
 // tests but not run by them.
 //
-// With --core-only the reference is not run, and each frame is replayed REPS times in a row,
-// as a sweep replays its configurations on a frame it decoded once: between the replays the
+// With --core-only the reference is not run: each frame is replayed REPS times in a row, as a
+// sweep replays its configurations on a frame it decoded once, and between the replays the
 // frame's records stay warm in the caches, where alternating with the reference evicts them.
 //
 // Usage: build/tests/replay/bench_replay_core TRACE [FRAMES=all] [REPS=3] [CASE=all|-1]
@@ -20,6 +20,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -89,6 +91,10 @@ int main(int argc, char** argv) {
     const int reps = argc > 3 ? std::max(1, std::atoi(argv[3])) : 3;
     const int only = argc > 4 ? std::atoi(argv[4]) : -1;  // one configuration, by number
     const bool core_only = argc > 5 && std::string(argv[5]) == "--core-only";
+    if (argc > 5 && !core_only) {
+      throw std::invalid_argument(std::string("unknown argument '") + argv[5] +
+                                  "' (expected --core-only)");
+    }
     const TraceHeader& h = reader.header();
     std::vector<Frame> loaded;
     std::uint64_t segments = 0;
@@ -110,46 +116,36 @@ int main(int argc, char** argv) {
     for (std::size_t k = 0; k < cases.size(); ++k) {
       if (only >= 0 && std::size_t(only) != k) continue;
       const Case& c = cases[k];
-      std::vector<double> ref_s, core_s;
-      if (core_only) {
-        // As a sweep replays its configurations: each frame, decoded once, replayed REPS
-        // times in a row (its records stay warm in the caches between the replays).
-        std::vector<double> warm_s(reps, 0.0);
-        for (const Frame& f : loaded) {
-          const FrameInfo info{f.index, f.tree.get(), f.previous.get(), h.cell_count()};
-          for (int r = 0; r < reps; ++r) {
-            auto b = MakeScheduler(c.config.scheduler, c.config.seed);
-            const double t0 = ThreadCpuSeconds();
-            ReplayFrame(f.work, h.footprints, c.config, *b, info, Bound(*f.tree));
-            warm_s[r] += ThreadCpuSeconds() - t0;
+      // Per repetition, summed over the frames. Each frame is replayed REPS times in a row:
+      // with --core-only as a sweep replays its configurations on a frame it decoded once
+      // (the frame's records stay warm in the caches), else the reference before each core.
+      std::vector<double> ref_s(reps, 0.0), core_s(reps, 0.0);
+      for (const Frame& f : loaded) {
+        const FrameInfo info{f.index, f.tree.get(), f.previous.get(), h.cell_count()};
+        for (int r = 0; r < reps; ++r) {
+          auto a = core_only ? nullptr : MakeScheduler(c.config.scheduler, c.config.seed);
+          auto b = MakeScheduler(c.config.scheduler, c.config.seed);
+          std::optional<ReplayResult> x;
+          const double t0 = ThreadCpuSeconds();
+          if (a) x = ReferenceReplayFrame(f.work, h.footprints, c.config, *a, info, Bound(*f.tree));
+          const double t1 = ThreadCpuSeconds();
+          const ReplayResult y =
+              ReplayFrame(f.work, h.footprints, c.config, *b, info, Bound(*f.tree));
+          const double t2 = ThreadCpuSeconds();
+          if (x) {
+            RAYCELL_CHECK_EQ(x->time, y.time);
+            RAYCELL_CHECK_EQ(x->fetches, y.fetches);
+            RAYCELL_CHECK_EQ(x->events, y.events);
           }
+          ref_s[r] += t1 - t0;
+          core_s[r] += t2 - t1;
         }
-        const double core = Median(warm_s);
+      }
+      if (core_only) {
+        const double core = Median(core_s);
         std::printf("%-44s %10s %10.3f %12s %12.1f %8s\n", c.label.c_str(), "-", core, "-",
                     double(segments) / core / 1e6, "-");
         continue;
-      }
-      for (int r = 0; r < reps; ++r) {
-        double ref = 0, core = 0;
-        for (const Frame& f : loaded) {
-          const FrameInfo info{f.index, f.tree.get(), f.previous.get(), h.cell_count()};
-          auto a = MakeScheduler(c.config.scheduler, c.config.seed);
-          auto b = MakeScheduler(c.config.scheduler, c.config.seed);
-          double t0 = ThreadCpuSeconds();
-          const ReplayResult x =
-              ReferenceReplayFrame(f.work, h.footprints, c.config, *a, info, Bound(*f.tree));
-          double t1 = ThreadCpuSeconds();
-          const ReplayResult y =
-              ReplayFrame(f.work, h.footprints, c.config, *b, info, Bound(*f.tree));
-          double t2 = ThreadCpuSeconds();
-          RAYCELL_CHECK_EQ(x.time, y.time);
-          RAYCELL_CHECK_EQ(x.fetches, y.fetches);
-          RAYCELL_CHECK_EQ(x.events, y.events);
-          ref += t1 - t0;
-          core += t2 - t1;
-        }
-        ref_s.push_back(ref);
-        core_s.push_back(core);
       }
       const double ref = Median(ref_s), core = Median(core_s);
       std::printf("%-44s %10.3f %10.3f %12.1f %12.1f %7.1fx\n", c.label.c_str(), ref, core,
