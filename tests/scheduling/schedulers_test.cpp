@@ -315,20 +315,15 @@ TEST(SchedulerContract, AnEmptyViewChangesNothing) {
   const CellTree t0 = FromPaths({{A, B, C}, {C, A}, {B, C, A}});
   const CellTree t1 = FromPaths({{B, A, C}, {A, C}, {C, B}});
   const CellTree t2 = FromPaths({{C, B, A}, {A, B}});
+  const CellTree* trees[] = {&t0, &t1, &t2};
   const Queues none{0, 0, 0};
   for (const std::string& name : SchedulerNames()) {
     SCOPED_TRACE(name);
     auto plain = MakeScheduler(name, 7), asked = MakeScheduler(name, 7);
     std::mt19937 rng(11);
     for (std::size_t frame = 0; frame < 3; ++frame) {
-      FrameInfo f = Frame(frame, 3,
-                          frame == 2   ? &t2
-                          : frame == 1 ? &t1
-                                       : &t0,
-                          frame == 2   ? &t1
-                          : frame == 1 ? &t0
-                                       : nullptr);
-      f.before_previous = frame == 2 ? &t0 : nullptr;
+      FrameInfo f = Frame(frame, 3, trees[frame], frame >= 1 ? trees[frame - 1] : nullptr);
+      f.before_previous = frame >= 2 ? trees[frame - 2] : nullptr;
       plain->BeginFrame(f);
       asked->BeginFrame(f);
       for (int step = 0; step < 12; ++step) {
