@@ -9,6 +9,7 @@
 //   --frames A-B,C      frame indices to run (into the capture's frames; default all)
 //   --width N           beam width          --chains N     local-search chains
 //   --windows N         windows per chain   --threads N    chains at once
+//   --max-work N        node visits per chain (LocalSearchOptions::max_work)
 //   --min-window N, --max-window N, --exact-window N, --kick-after N, --kick-size N,
 //   --large-every N (0: no large windows, as before), --large-min N, --large-max N
 //                       local search (LocalSearchOptions)
@@ -95,6 +96,8 @@ Args Parse(int argc, char** argv) {
       a.options.beam_width = number();
     } else if (arg == "--chains") {
       a.options.chains = number();
+    } else if (arg == "--max-work") {
+      a.options.local.max_work = number();
     } else if (arg == "--windows") {
       a.options.local.max_windows = number();
     } else if (arg == "--min-window") {
