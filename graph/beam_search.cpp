@@ -39,17 +39,34 @@ struct Child {
   }
 };
 
+// One pass over a cell's nodes in a state: how many are ready, and the cell's maxGen term
+// before and after processing them (Beam::ScoreMove).
+struct MoveScore {
+  std::uint32_t ready, old_term, new_term;
+};
+
 struct Layer {
   std::vector<Word> bits;  // size() * words
   std::vector<std::uint32_t> h, left;
+  // size() * the forest's cells with nodes: each state's MoveScore per cell, in the order of
+  // CellForest::cells().
+  std::vector<MoveScore> scores;
   std::size_t size() const { return h.size(); }
-  void Clear() { bits.clear(), h.clear(), left.clear(); }
+  void Clear() { bits.clear(), h.clear(), left.clear(), scores.clear(); }
 };
 
 class Beam {
  public:
   Beam(const CellForest& f, const BeamOptions& o)
-      : f_(f), o_(o), words_(WordsFor(f.size())), rg_old_(f.size()), rg_new_(f.size()) {}
+      : f_(f),
+        o_(o),
+        words_(WordsFor(f.size())),
+        slot_(f.cell_count(), 0),
+        stamp_(f.cells().size(), 0),
+        rg_old_(f.size()),
+        rg_new_(f.size()) {
+    for (std::size_t k = 0; k < f.cells().size(); ++k) slot_[f.cells()[k]] = std::uint32_t(k);
+  }
 
   BeamResult Run() {
     BeamResult out;
@@ -60,6 +77,7 @@ class Beam {
     cur_.bits.assign(words_, 0);
     cur_.h.push_back(std::uint32_t(f_.bound()));
     cur_.left.push_back(std::uint32_t(f_.size()));
+    for (CellId c : f_.cells()) cur_.scores.push_back(ScoreMove(cur_.bits.data(), c));
     out.states = 1;
     for (std::uint32_t g = 0;; ++g) {
       const std::size_t width = Width(out, cur_.h[0]);
@@ -95,13 +113,18 @@ class Beam {
     return std::size_t(std::max<std::uint64_t>(1, std::min<std::uint64_t>(o_.width, fit)));
   }
 
-  // Every child of every state of the current layer, with its score.
+  // Every child of every state of the current layer, with its score. The states' MoveScores
+  // were computed when they were kept (Select); node_visits still counts a pass over every
+  // node per state, the cost of scoring them all afresh, so that the work limit gives the
+  // same widths, and so the same schedules, as when they were.
   void ScoreChildren(std::uint32_t g, BeamResult& out) {
     children_.clear();
+    const std::size_t cells = f_.cells().size();
     for (std::uint32_t s = 0; s < cur_.size(); ++s) {
-      const Word* bits = &cur_.bits[std::size_t(s) * words_];
-      for (CellId c : f_.cells()) {
-        const auto [ready, old_term, new_term] = ScoreMove(bits, c);
+      const MoveScore* scores = &cur_.scores[s * cells];
+      for (std::size_t k = 0; k < cells; ++k) {
+        const CellId c = f_.cells()[k];
+        const auto [ready, old_term, new_term] = scores[k];
         if (ready == 0) continue;
         ++out.children;
         const std::uint32_t h = cur_.h[s] - old_term + new_term;
@@ -115,9 +138,6 @@ class Beam {
     }
   }
 
-  struct MoveScore {
-    std::uint32_t ready, old_term, new_term;
-  };
   // One pass over the nodes of c (ancestors first): how many are ready, and c's maxGen term
   // before and after processing them. rg: remaining generation, 0 for processed nodes.
   MoveScore ScoreMove(const Word* bits, CellId c) {
@@ -164,16 +184,20 @@ class Beam {
     std::vector<Word> bits(words_);
     std::size_t sorted = std::min(children_.size(), 2 * width);
     for (std::size_t k = 0; k < children_.size() && next_.size() < width; ++k) {
-      if (k == sorted) {  // duplicates used up the sorted part: sort the rest
-        SortPrefix(k, children_.size() - k);
-        sorted = children_.size();
+      if (k == sorted) {  // duplicates used up the sorted part: sort the next 2 * width
+        SortPrefix(k, 2 * width);
+        sorted = std::min(children_.size(), k + 2 * width);
       }
       const Child& ch = children_[k];
       const Word* from = &cur_.bits[std::size_t(ch.state) * words_];
       std::copy(from, from + words_, bits.begin());
+      processed_.clear();
       for (Index n : f_.nodes_of(ch.cell)) {
         const Index p = f_.parent(n);
-        if (!TestBit(from, n) && (p == CellForest::kNone || TestBit(from, p))) SetBit(bits, n);
+        if (!TestBit(from, n) && (p == CellForest::kNone || TestBit(from, p))) {
+          SetBit(bits, n);
+          processed_.push_back(n);
+        }
       }
       out.node_visits += words_ + f_.nodes_of(ch.cell).size();
       const std::uint64_t hash = HashBits(bits.data(), words_);
@@ -181,8 +205,31 @@ class Beam {
       next_.bits.insert(next_.bits.end(), bits.begin(), bits.end());
       next_.h.push_back(ch.h);
       next_.left.push_back(ch.left);
+      AddScores(ch, bits.data());
       moves_.back().push_back({ch.state, ch.cell});
       ++out.states;
+    }
+  }
+
+  // The MoveScores of the state just kept in next_ (bits, reached by `ch`, which processed
+  // processed_): its parent's, but for the cells a move there changes: ch.cell (its nodes
+  // were processed) and the cells of their children (now ready). A move on any other cell
+  // reads the same bits of its nodes and their parents as in the parent state.
+  void AddScores(const Child& ch, const Word* bits) {
+    const std::size_t cells = f_.cells().size();
+    const MoveScore* parent = &cur_.scores[ch.state * cells];
+    next_.scores.insert(next_.scores.end(), parent, parent + cells);
+    MoveScore* scores = &next_.scores[next_.scores.size() - cells];
+    ++epoch_;
+    const auto rescore = [&](CellId c) {
+      const std::uint32_t k = slot_[c];
+      if (stamp_[k] == epoch_) return;
+      stamp_[k] = epoch_;
+      scores[k] = ScoreMove(bits, c);
+    };
+    rescore(ch.cell);
+    for (Index n : processed_) {
+      for (const Index* m = f_.child_begin(n); m != f_.child_end(n); ++m) rescore(f_.cell(*m));
     }
   }
 
@@ -225,6 +272,11 @@ class Beam {
   std::vector<std::vector<Move>> moves_;  // per layer, per state kept: how it was reached
   std::vector<std::uint32_t> table_;      // open addressing over next_'s states
   std::vector<std::uint64_t> hashes_;
+  std::vector<std::uint32_t> slot_;  // per cell id: its index in f_.cells()
+  // AddScores' cells already scored for the current state (stamp_[k] == epoch_).
+  std::vector<std::uint64_t> stamp_;
+  std::uint64_t epoch_ = 0;
+  std::vector<Index> processed_;                // nodes the kept move processed
   std::vector<std::uint32_t> rg_old_, rg_new_;  // scratch, per node
 };
 
