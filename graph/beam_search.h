@@ -19,12 +19,16 @@
 // layer holding the complete set, so it always returns a feasible schedule unless an
 // `upper` limit pruned every state.
 //
-// Cost. Scoring the children of one state is one pass over the forest's nodes (each cell's
-// nodes once: its ready nodes and the change of its maxGen term); a layer costs
-// O(width * nodes) plus picking its best 2 * width children (nth_element, then a sort). The width
-// shrinks (never below 1) when width * nodes * (moves still expected) would pass max_node_visits,
-// so huge forests degrade to a greedy search instead of blowing up; every limit counts work, not
-// time.
+// Cost. A move on cell c is scored by one pass over c's nodes (its ready nodes and the change
+// of its maxGen term). A state's scores are computed when it is kept, from its parent's: only
+// the cells its move changes are scored again (the moved cell, and the cells of its processed
+// nodes' children, now ready); the others read the same bits as in the parent. A layer then
+// costs the scoring of its kept states plus picking its best 2 * width children (nth_element,
+// then a sort). The work limit counts, per state, a pass over all the forest's nodes (scoring
+// every cell afresh, as the search once did), so that it gives the same widths and schedules:
+// the width shrinks (never below 1) when width * nodes * (moves still expected) would pass
+// max_node_visits, so huge forests degrade to a greedy search instead of blowing up; every
+// limit counts work, not time.
 #pragma once
 
 #include <cstddef>
