@@ -401,20 +401,19 @@ class Moves {
   void EvaluateInto(const Frontier& f, Eval& e);  // the same, reusing e's memory
   const std::vector<PartTable>* parts() const { return parts_; }
 
-  // The symbols of the frontier's nodes, increasing.
-  std::vector<Symbol> Symbols(const Frontier& f) {
+  // The symbols of the frontier's nodes, increasing, into `out`.
+  void SymbolsInto(const Frontier& f, std::vector<Symbol>& out) {
     std::fill(present_.begin(), present_.end(), 0);
     for (Node v : f) present_[dag_.symbol(v)] = 1;
-    std::vector<Symbol> out;
+    out.clear();
     for (Symbol a = 0; a < dag_.symbols(); ++a) {
       if (present_[a]) out.push_back(a);
     }
-    return out;
   }
 
-  // The frontier after a move on a: nodes of a replaced by their children, sorted, without
-  // duplicates and dominated nodes.
-  Frontier Move(const Frontier& f, Symbol a) const {
+  // The frontier after a move on a, into `out` (not f), reusing its memory: nodes of a
+  // replaced by their children, sorted, without duplicates and dominated nodes.
+  void MoveInto(const Frontier& f, Symbol a, Frontier& out) const {
     // f has no dominated node; only pairs with a new node (a child) need a test.
     olds_.clear();
     news_.clear();
@@ -431,13 +430,15 @@ class Moves {
     fresh_.clear();
     std::set_difference(news_.begin(), news_.end(), olds_.begin(), olds_.end(),
                         std::back_inserter(fresh_));
-    return Reduce(olds_, fresh_);
+    Reduce(olds_, fresh_, out);
   }
 
   Frontier WithoutDominated(Frontier f) const {
     std::sort(f.begin(), f.end());
     f.erase(std::unique(f.begin(), f.end()), f.end());
-    return Reduce({}, f);
+    Frontier out;
+    Reduce({}, f, out);
+    return out;
   }
 
  private:
@@ -445,7 +446,7 @@ class Moves {
   // nodes are known not to dominate each other. Dominance is a strict partial order (see
   // above), so a node dominated by a dropped node is dominated by a kept one too, and each
   // test can look at the whole set.
-  Frontier Reduce(const std::vector<Node>& olds, const std::vector<Node>& news) const {
+  void Reduce(const std::vector<Node>& olds, const std::vector<Node>& news, Frontier& out) const {
     kept_old_.clear();
     kept_new_.clear();
     for (Node o : olds) {
@@ -471,11 +472,8 @@ class Moves {
       }
       if (!dominated) kept_new_.push_back(n);
     }
-    Frontier out;
-    out.reserve(kept_old_.size() + kept_new_.size());
-    std::merge(kept_old_.begin(), kept_old_.end(), kept_new_.begin(), kept_new_.end(),
-               std::back_inserter(out));
-    return out;
+    out.resize(kept_old_.size() + kept_new_.size());
+    std::merge(kept_old_.begin(), kept_old_.end(), kept_new_.begin(), kept_new_.end(), out.begin());
   }
 
   const Dag& dag_;
@@ -493,6 +491,9 @@ class StateStore {
   }
   std::vector<std::uint32_t> Get(StateId s) const {
     return {values_.begin() + begin_[s], values_.begin() + End(s)};
+  }
+  void GetInto(StateId s, std::vector<std::uint32_t>& out) const {
+    out.assign(values_.begin() + begin_[s], values_.begin() + End(s));
   }
   StateId Find(const std::vector<std::uint32_t>& key, std::uint64_t hash) const {
     if (table_.empty()) return kNoState;
@@ -541,16 +542,21 @@ std::uint64_t HashOf(const std::vector<std::uint32_t>& v) { return HashValues(v.
 // One step of lookahead: the forced symbol if any, else the move whose result has the smallest
 // h, then the one that removes the most path length, then the smallest symbol.
 CellString Greedy(const Dag& dag, Moves& moves) {
-  Frontier f = moves.WithoutDominated(dag.start());
+  Frontier f = moves.WithoutDominated(dag.start()), next;
   CellString out;
+  Eval e;
+  std::vector<Symbol> symbols;
   while (!f.empty()) {
-    const Eval e = moves.Evaluate(f);
+    moves.EvaluateInto(f, e);
     Symbol best = e.forced;
     if (best == kNoSymbol) {
       std::uint32_t best_h = std::numeric_limits<std::uint32_t>::max();
       std::uint64_t best_gain = 0;
-      for (Symbol a : moves.Symbols(f)) {
-        const std::uint32_t h = moves.Evaluate(moves.Move(f, a)).h;
+      moves.SymbolsInto(f, symbols);
+      for (Symbol a : symbols) {
+        moves.MoveInto(f, a, next);
+        moves.EvaluateInto(next, e);
+        const std::uint32_t h = e.h;
         std::uint64_t gain = 0;
         for (Node v : f) {
           if (dag.symbol(v) == a) gain += dag.height(v);
@@ -561,7 +567,8 @@ CellString Greedy(const Dag& dag, Moves& moves) {
       }
     }
     out.push_back(dag.cell(best));
-    f = moves.Move(f, best);
+    moves.MoveInto(f, best, next);
+    f.swap(next);
   }
   return out;
 }
@@ -596,7 +603,8 @@ class AStar {
       const OpenEntry top = open_.top();
       open_.pop();
       if (top.g > g_[top.state]) continue;  // stale: the state was reached cheaper since
-      const Frontier f = store_.Get(top.state);
+      store_.GetInto(top.state, f_);
+      const Frontier& f = f_;
       if (f.empty()) {
         r.supersequence = Path(top.state);
         return Exact(r, top.g);
@@ -606,16 +614,26 @@ class AStar {
         return r;
       }
       ++r.states;
-      const Eval e = moves_.Evaluate(f);
-      const std::vector<Symbol> symbols =
-          e.forced != kNoSymbol ? std::vector<Symbol>{e.forced} : moves_.Symbols(f);
+      moves_.EvaluateInto(f, e_);
+      if (e_.forced != kNoSymbol) {
+        symbols_.assign(1, e_.forced);
+      } else {
+        moves_.SymbolsInto(f, symbols_);
+      }
       const std::uint32_t g = top.g + 1;
-      for (Symbol a : symbols) {
-        const Frontier next = moves_.Move(f, a);
+      for (Symbol a : symbols_) {
+        moves_.MoveInto(f, a, next_);
+        const Frontier& next = next_;
         const std::uint64_t hash = HashOf(next);
         StateId s = store_.Find(next, hash);
         if (s != kNoState && g_[s] <= g) continue;
-        const std::uint32_t h = s != kNoState ? h_[s] : moves_.Evaluate(next).h;
+        std::uint32_t h;
+        if (s != kNoState) {
+          h = h_[s];
+        } else {
+          moves_.EvaluateInto(next, e_);
+          h = e_.h;
+        }
         if (g + h >= r.upper_bound) continue;
         if (s == kNoState) {
           s = Add(next, g, h, top.state, a);
@@ -650,6 +668,10 @@ class AStar {
   Moves moves_;
   ScsLimits limits_;
   StateStore store_;
+  // Scratch of Run's loop, reused: the state expanded, a child, an evaluation, the moves.
+  Frontier f_, next_;
+  Eval e_;
+  std::vector<Symbol> symbols_;
   std::priority_queue<OpenEntry> open_;
   std::vector<std::uint32_t> g_, h_;
   std::vector<StateId> parent_;
@@ -673,6 +695,8 @@ class BudgetSearch {
     for (Symbol a = 0; a < dag_.symbols(); ++a) deepest += dag_.total(a);
     evals_.resize(std::min(left, deepest) + 2);
     keys_.resize(evals_.size());
+    frontiers_.resize(evals_.size());
+    symbols_.resize(evals_.size());
     const Outcome o = Search(moves_.WithoutDominated(dag_.start()), used, left);
     r.states = states_;
     if (o == kFound) {
@@ -709,22 +733,25 @@ class BudgetSearch {
     const std::uint64_t hash = HashOf(key);
     if (failed_.Find(key, hash) != kNoState) return kFail;
     if (++states_ > limits_.max_states) return kStopped;
-    std::vector<Symbol> symbols;
+    std::vector<Symbol>& symbols = symbols_[depth];
     if (e.forced != kNoSymbol) {
-      symbols.push_back(e.forced);
+      symbols.assign(1, e.forced);
     } else {
-      symbols = moves_.Symbols(f);
+      moves_.SymbolsInto(f, symbols);
       // The nodes advanced with the most path length first; then the smaller symbol.
-      std::vector<std::uint64_t> gain(dag_.symbols(), 0);
-      for (Node v : f) gain[dag_.symbol(v)] += dag_.height(v);
+      gain_.assign(dag_.symbols(), 0);
+      for (Node v : f) gain_[dag_.symbol(v)] += dag_.height(v);
       std::stable_sort(symbols.begin(), symbols.end(),
-                       [&](Symbol a, Symbol b) { return gain[a] > gain[b]; });
+                       [&](Symbol a, Symbol b) { return gain_[a] > gain_[b]; });
     }
     for (Symbol a : symbols) {
       if (used[a] >= budget_[a]) continue;
       ++used[a];
       path_.push_back(a);
-      const Outcome o = Search(moves_.Move(f, a), used, left - 1);
+      RAYCELL_CHECK_LT(depth + 1, frontiers_.size());
+      Frontier& next = frontiers_[depth + 1];  // the next level's (f is this one's or the start)
+      moves_.MoveInto(f, a, next);
+      const Outcome o = Search(next, used, left - 1);
       if (o != kFail) return o;
       path_.pop_back();
       --used[a];
@@ -742,6 +769,9 @@ class BudgetSearch {
   std::vector<Symbol> path_;
   std::vector<Eval> evals_;                       // per depth
   std::vector<std::vector<std::uint32_t>> keys_;  // per depth
+  std::vector<Frontier> frontiers_;               // per depth: the frontier searched there
+  std::vector<std::vector<Symbol>> symbols_;      // per depth: its moves, in order
+  std::vector<std::uint64_t> gain_;               // scratch of one depth's ordering
 };
 
 std::uint32_t PartTable::Remaining(const Frontier& f) {
