@@ -489,9 +489,6 @@ class StateStore {
   std::size_t bytes() const {
     return values_.size() * 4 + begin_.size() * 16 + table_.size() * sizeof(StateId);
   }
-  std::vector<std::uint32_t> Get(StateId s) const {
-    return {values_.begin() + begin_[s], values_.begin() + End(s)};
-  }
   void GetInto(StateId s, std::vector<std::uint32_t>& out) const {
     out.assign(values_.begin() + begin_[s], values_.begin() + End(s));
   }
