@@ -10,7 +10,7 @@
 
 #include "base/check.h"
 #include "base/checked.h"
-#include "graph/analysis.h"
+#include "graph/frame_tree.h"
 #include "scheduling/scheduler.h"
 
 namespace raycell {

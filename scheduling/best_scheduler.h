@@ -1,4 +1,4 @@
-// Schedulers that follow the best schedule found for a Cell Tree (graph/best_schedule.h)
+// Schedulers that follow the best schedule found for a Cell Tree (search/best_schedule.h)
 // instead of Peel's (DESIGN.md §1 "Cell Tree scheduling"):
 //  - `best`: each frame follows its own tree's best schedule, an offline oracle (as `peel`
 //    is for Peel);
@@ -19,8 +19,8 @@
 #include <optional>
 #include <vector>
 
-#include "graph/best_schedule.h"
 #include "scheduling/scheduler.h"
+#include "search/best_schedule.h"
 
 namespace raycell {
 

@@ -9,11 +9,12 @@
 #include <sstream>
 #include <utility>
 
+#include "analysis/analysis.h"
 #include "base/check.h"
 #include "base/file.h"
 #include "base/format.h"
 #include "base/progress.h"
-#include "graph/analysis.h"
+#include "graph/frame_tree.h"
 #include "graph/links.h"
 #include "tools/commands.h"
 #include "traces/jsonl.h"

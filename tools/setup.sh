@@ -10,7 +10,7 @@ packages=(
   capnproto libcapnp-dev libzstd-dev zstd                            # the trace file
   libcli11-dev libpng-dev libboost-graph-dev libtomlplusplus-dev     # CLI, images, graphs, configs
   libgtest-dev libgmock-dev                                          # tests
-  libglpk-dev                    # the lower bound's integer program (graph/lower_bound.cpp)
+  libglpk-dev                    # the lower bound's integer program (bounds/lower_bound.cpp)
   python3 python3-matplotlib bc graphviz                             # plots, DOT, benchmarks
   clang libclang-rt-14-dev  # .ci/run: the ASan/UBSan build and libFuzzer targets (RAYCELL_FUZZ)
 )

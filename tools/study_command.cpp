@@ -17,12 +17,12 @@
 #include <sstream>
 #include <thread>
 
+#include "analysis/analysis.h"
 #include "base/check.h"
 #include "base/file.h"
 #include "base/format.h"
 #include "base/parse.h"
 #include "base/progress.h"
-#include "graph/analysis.h"
 #include "replay/config.h"
 #include "replay/driver.h"
 #include "tools/commands.h"

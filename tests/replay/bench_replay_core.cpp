@@ -27,7 +27,7 @@
 
 #include "base/check.h"
 #include "base/cpu_time.h"
-#include "graph/analysis.h"
+#include "graph/frame_tree.h"
 #include "replay/config.h"
 #include "replay/replayer.h"
 #include "replay/work.h"

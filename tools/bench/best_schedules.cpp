@@ -1,4 +1,4 @@
-// Schedules better than Peel (graph/best_schedule.h), frame by frame: the maxGen bound,
+// Schedules better than Peel (search/best_schedule.h), frame by frame: the maxGen bound,
 // Peel, the beam search, beam + local search, the exact search's status, time, work and
 // peak memory. Each frame runs in a child process, so its peak resident memory is its own.
 //
@@ -37,14 +37,15 @@
 #include <string>
 #include <vector>
 
+#include "analysis/analysis.h"
 #include "base/check.h"
 #include "base/cpu_time.h"
 #include "base/parse.h"
-#include "graph/analysis.h"
-#include "graph/best_schedule.h"
-#include "graph/optimum.h"
+#include "graph/frame_tree.h"
 #include "graph/peel.h"
 #include "scheduling/best_scheduler.h"
+#include "search/best_schedule.h"
+#include "search/optimum.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {

@@ -1,4 +1,4 @@
-// Lower bounds frame by frame (graph/lower_bound.h): maxGen, then the bound after each stage
+// Lower bounds frame by frame (bounds/lower_bound.h): maxGen, then the bound after each stage
 // of LowerBound (pairs matching, the program with pairs and triples, + blocks, + cuts), the
 // Peel length (an upper bound), search states, cuts, CPU and wall time and peak memory. Each
 // frame runs in a child process, so its time and peak resident memory are its own. The cell
@@ -27,10 +27,11 @@
 #include <string>
 #include <vector>
 
+#include "analysis/analysis.h"
 #include "base/check.h"
 #include "base/parse.h"
-#include "graph/analysis.h"
-#include "graph/lower_bound.h"
+#include "bounds/lower_bound.h"
+#include "graph/frame_tree.h"
 #include "graph/peel.h"
 #include "traces/trace_reader.h"
 
