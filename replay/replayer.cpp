@@ -6,6 +6,7 @@
 #include "base/check.h"
 #include "base/checked.h"
 #include "engine/simulator.h"  // SimulationStalled
+#include "engine/slot_queue.h"
 
 namespace raycell {
 namespace {
@@ -105,78 +106,12 @@ struct CompactUnits {
 
 // ---- Pending events -------------------------------------------------------------------
 // Each processor has at most one pending event: the end of its fetch, of its unit, or its
-// call for a cell (and none while it waits for work). So the pending set is one slot per
-// processor, and the next event is the slot with the least (time, seq): the engine's order
-// (Event: time, priority, seq; every replay event has priority 0). seq counts every event
-// scheduled, as the engine's does, so ties fall exactly as on the engine.
+// call for a cell (and none while it waits for work). So the pending set is the engine's
+// SlotQueue (engine/slot_queue.h), one slot per processor, which hands them out in the
+// engine's order (time, then insertion order; every replay event has priority 0): ties fall
+// exactly as on the Simulator.
 
 enum class Kind : std::uint8_t { kNone, kIdle, kFetched, kUnitDone };
-
-struct Slot {
-  SimTime time;
-  std::uint64_t seq = UINT64_MAX;  // UINT64_MAX with time Max: nothing pending
-  Kind kind = Kind::kNone;
-};
-
-// A winner tree over the slots: the earliest slot in O(1), a slot changed in O(log P). Each
-// node holds its winner's key next to nothing else: (time, seq << shift | index), 16 bytes,
-// so that an update walks from the leaf to the root comparing the changed slot's key with one
-// sibling node per level (one load, no indirection through the slots) and picks the earlier
-// without a branch (with several processors the winner is unpredictable). seq is unique per
-// pending event, so the index below it changes no order; it only names the winner, and among
-// empty slots (seq UINT64_MAX) makes the left one win, as in the order of the slots.
-class SlotTree {
- public:
-  explicit SlotTree(std::uint32_t n) : slots_(n) {
-    while (leaves_ < n) leaves_ *= 2, ++shift_;
-    max_seq_ = (UINT64_MAX >> shift_) - 1;
-    slots_.resize(leaves_);  // padding slots stay empty forever
-    for (auto& s : slots_) s.time = SimTime::Max();
-    nodes_.assign(2 * leaves_, Node{});
-    for (std::uint32_t i = 0; i < leaves_; ++i) nodes_[leaves_ + i] = NodeOf(i);
-    for (std::uint32_t k = leaves_ - 1; k >= 1; --k) {
-      nodes_[k] = Earlier(nodes_[2 * k], nodes_[2 * k + 1]);
-    }
-  }
-  // Slot i to be written in place, field by field (copying a whole slot just written would
-  // stall on store forwarding); Update(i) afterwards.
-  Slot& at(std::uint32_t i) { return slots_[i]; }
-  // The largest seq a slot may hold (the rest of the key's bits name the slot).
-  std::uint64_t max_seq() const { return max_seq_; }
-  // The earliest slot's index; its kind is kNone when nothing is pending.
-  std::uint32_t top() const { return std::uint32_t(nodes_[1].seq_index & (leaves_ - 1)); }
-  // Returns top() afterwards.
-  std::uint32_t Update(std::uint32_t i) {
-    Node cur = NodeOf(i);
-    std::uint32_t k = leaves_ + i;
-    nodes_[k] = cur;
-    for (; k > 1; k /= 2) {
-      cur = Earlier(cur, nodes_[k ^ 1]);
-      nodes_[k / 2] = cur;
-    }
-    return std::uint32_t(cur.seq_index & (leaves_ - 1));
-  }
-
- private:
-  struct Node {
-    std::uint64_t time = UINT64_MAX, seq_index = UINT64_MAX;
-  };
-  // The earlier of two nodes (keys are distinct), selected without a branch.
-  static Node Earlier(const Node& a, const Node& b) {
-    using Key = unsigned __int128;
-    const Key ka = Key{a.time} << 64 | a.seq_index, kb = Key{b.time} << 64 | b.seq_index;
-    const std::uint64_t m = 0 - std::uint64_t{kb < ka};  // all ones: b
-    return {a.time ^ ((a.time ^ b.time) & m), a.seq_index ^ ((a.seq_index ^ b.seq_index) & m)};
-  }
-  Node NodeOf(std::uint32_t i) const {
-    return {slots_[i].time.picoseconds(), slots_[i].seq << shift_ | i};
-  }
-
-  std::uint32_t leaves_ = 1, shift_ = 0;
-  std::uint64_t max_seq_ = 0;
-  std::vector<Slot> slots_;
-  std::vector<Node> nodes_;  // nodes_[1] the root; slot i's leaf at leaves_ + i
-};
 
 // ---- The board ------------------------------------------------------------------------
 
@@ -191,7 +126,7 @@ struct Processor {
 };
 
 // The board of DESIGN.md §2: per-cell ray queues (flat arrays of unit ids), processors and
-// memory, run as the engine would run the same events (see SlotTree). A processor's unit is
+// memory, run as the engine would run the same events (see SlotQueue). A processor's unit is
 // worked by its own loop iteration, without a queue push and pop: while a processor works
 // the queued units of a cell, its next unit's end is compared with the other processors'
 // pending events only.
@@ -227,14 +162,12 @@ class Board {
       slots_.Update(p);
     }
     for (std::uint32_t p = slots_.top();;) {
-      Slot& slot = slots_.at(p);
+      const auto& slot = slots_.at(p);
       const Kind kind = slot.kind;
       if (kind == Kind::kNone) break;
       RAYCELL_CHECK_LE(now_, slot.time);  // time never goes backwards
       now_ = slot.time;
-      slot.time = SimTime::Max();  // handled; the handlers may schedule p's next event
-      slot.seq = UINT64_MAX;
-      slot.kind = Kind::kNone;
+      slots_.Clear(p);  // handled; the handlers may schedule p's next event
       CheckedIncrement(events_);
       ++events_since_progress_;
       switch (kind) {
@@ -273,14 +206,7 @@ class Board {
 
   // Schedules processor p's next event. p has none pending: it is the processor being
   // handled (its slot is brought up to date after the handler), or one that was waiting.
-  void Schedule(std::uint32_t p, SimTime when, Kind kind) {
-    Slot& s = slots_.at(p);
-    RAYCELL_CHECK(s.kind == Kind::kNone);
-    RAYCELL_CHECK_LE(next_seq_, slots_.max_seq());
-    s.time = when;
-    s.seq = next_seq_++;
-    s.kind = kind;
-  }
+  void Schedule(std::uint32_t p, SimTime when, Kind kind) { slots_.Schedule(p, when, kind); }
 
   void Enqueue(const Entry& e, CellId c, std::uint64_t q) {
     queues_[c].push_back(e);
@@ -454,13 +380,13 @@ class Board {
   // the lock in OnIdle change it.
   CellId available_ = 0;
   std::vector<Processor<Entry>> processors_;
-  SlotTree slots_;
+  SlotQueue<Kind> slots_;
   std::uint32_t waiting_ = 0;
   // OnUnitDone brought its processor's slot up to date itself; top_ is then the next.
   bool updated_ = false;
   std::uint32_t top_ = 0;
   SimTime now_;
-  std::uint64_t next_seq_ = 0, events_ = 0, events_since_progress_ = 0;
+  std::uint64_t events_ = 0, events_since_progress_ = 0;
   std::uint64_t done_ = 0, queued_total_ = 0, peak_queued_ = 0;
   ReplayObserver* obs_;  // null: nothing observes (replay/observer.h)
 };

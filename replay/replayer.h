@@ -1,16 +1,15 @@
-// The GI-Cube replay of one frame (DESIGN.md §2), a discrete-event model: block processors
-// ask the scheduler for a cell, fetch it through the memory levels, and work every unit
-// queued there (ray segments or Cell Tree nodes, see work.h); finished units release their
-// successors into the per-cell queues.
+// The GI-Cube replay of one frame (docs/design.md §2), a discrete-event model: block
+// processors ask the scheduler for a cell, fetch it through the memory levels, and work every
+// unit queued there (ray segments or Cell Tree nodes, see work.h); finished units release
+// their successors into the per-cell queues.
 //
-// The events are the engine's (engine/event.h: a processor's call for a cell, the end of its
-// fetch, the end of each unit), handled in the engine's order (time, priority, insertion
-// order), so the results are those of running them on engine/simulator.h, as the replay
-// did before (tests/replay/reference_replayer.cpp, checked equal field by field, `events`
-// included). But since a processor has at most one pending event, the pending set is one slot
-// per processor, not a general event queue, and a cell's queue (a flat array of units, each
-// carrying its samples and where its successors are) is handed to the processor whole, to
-// be worked through in its own loop: a batch per fetch.
+// The events (a processor's call for a cell, the end of its fetch, the end of each unit) run
+// on the engine's SlotQueue (engine/slot_queue.h), one slot per processor since a processor
+// has at most one pending event, in the engine's order: the results are those of the same
+// events on engine/simulator.h (tests/replay/reference_replayer.cpp, checked equal field by
+// field, `events` included). A cell's queue (a flat array of units, each carrying its samples
+// and where its successors are) is handed to the processor whole, to be worked through in its
+// own loop: a batch per fetch.
 #pragma once
 
 #include <cstdint>

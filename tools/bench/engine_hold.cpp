@@ -4,13 +4,18 @@
 // component that reschedules itself through Simulator::Schedule), and the queue's share of
 // the loop's time (loop rate / bare-queue rate). Deterministic: splitmix64 from SEED.
 //
+// The slot queue (engine/slot_queue.h, what the replay runs on) holds the same model as N
+// components with one pending event each, the handled one rescheduling itself: the same
+// events in the same order (checked: the same last time as the heaps'). It has no Simulator
+// loop; its row gives the bare queue only.
+//
 // Rates are events per second of this thread's CPU time (not wall time), which the other
 // processes of a shared machine disturb much less. Each queue is measured REPS times, the three
 // queues in turn (so that the load of a shared machine touches them alike), and the medians are
 // printed.
 //
 // Usage: bench_engine_hold [MAX_N=1000000] [SEED=1] [REPS=5] [MIN_N=100] [QUEUES=all]
-//   QUEUES: "all", or one of binary-heap, 4-ary-heap, calendar (for profiling one queue).
+//   QUEUES: "all", or one of binary-heap, 4-ary-heap, calendar, slot (for profiling one queue).
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
@@ -23,6 +28,7 @@
 #include "engine/calendar_queue.h"
 #include "engine/event_queue.h"
 #include "engine/simulator.h"
+#include "engine/slot_queue.h"
 
 namespace raycell {
 namespace {
@@ -51,6 +57,33 @@ double QueueHold(std::size_t n, std::uint64_t warmup, std::uint64_t ops, std::ui
     const Event e = q.Pop();
     last = e.time;
     q.Push(Event{e.time + rng.Delay(), 0, seq++, 0, 0, 0});
+  };
+  for (std::uint64_t i = 0; i < warmup; ++i) hold();
+  const double start = ThreadCpuSeconds();
+  for (std::uint64_t i = 0; i < ops; ++i) hold();
+  const double s = ThreadCpuSeconds() - start;
+  *checksum = last.picoseconds();
+  return double(ops) / s;
+}
+
+// The same hold on the slot queue: slot i holds the i-th event; the handled slot reschedules
+// itself. Returns events/s.
+double SlotHold(std::size_t n, std::uint64_t warmup, std::uint64_t ops, std::uint64_t seed,
+                std::uint64_t* checksum) {
+  enum class Kind : std::uint8_t { kNone, kHold };
+  SplitMix64 rng{seed};
+  SlotQueue<Kind> q{static_cast<std::uint32_t>(n)};
+  for (std::uint32_t i = 0; i < n; ++i) {
+    q.Schedule(i, rng.Delay(), Kind::kHold);
+    q.Update(i);
+  }
+  SimTime last;
+  std::uint32_t p = q.top();
+  auto hold = [&] {
+    last = q.at(p).time;
+    q.Clear(p);
+    q.Schedule(p, last + rng.Delay(), Kind::kHold);
+    p = q.Update(p);
   };
   for (std::uint64_t i = 0; i < warmup; ++i) hold();
   const double start = ThreadCpuSeconds();
@@ -118,25 +151,43 @@ void Measure(std::size_t n, std::uint64_t seed, Rates* rates) {
 }
 
 void Print(const std::string& name, std::size_t n, const Rates& r) {
+  if (r.engine.empty()) {  // the slot queue: no Simulator loop
+    std::printf("%-11s %10zu %5zu %14.2f %14s %10.1f %13s\n", name.c_str(), n, r.queue.size(),
+                Median(r.queue) / 1e6, "-", 1e9 / Median(r.queue), "-");
+    return;
+  }
   const double queue = Median(r.queue), loop = Median(r.engine);
   std::printf("%-11s %10zu %5zu %14.2f %14.2f %10.1f %12.1f%%\n", name.c_str(), n, r.queue.size(),
               queue / 1e6, loop / 1e6, 1e9 / loop, 100.0 * loop / queue);
 }
 
-// The three queues measured in turn, `reps` times, so that a change in the machine's load
+// The slot queue's hold, checked to end at the binary heap's last time.
+void MeasureSlots(std::size_t n, std::uint64_t seed, Rates* rates) {
+  const std::uint64_t ops = std::max<std::uint64_t>(2'000'000, 4 * n);
+  const std::uint64_t warmup = std::max<std::uint64_t>(100'000, n);
+  std::uint64_t c1 = 0, c2 = 0;
+  rates->queue.push_back(SlotHold(n, warmup, ops, seed, &c1));
+  QueueHold<BinaryHeapQueue>(n, warmup, ops, seed, &c2);
+  RAYCELL_CHECK_EQ(c1, c2);  // the same events in the same order: the same last time
+}
+
+// The four queues measured in turn, `reps` times, so that a change in the machine's load
 // touches all of them alike; medians printed.
 void Rows(std::size_t n, std::uint64_t seed, int reps, const std::string& queues) {
-  const auto on = [&](const EventQueue& q) { return queues == "all" || queues == q.Name(); };
-  const bool b = on(BinaryHeapQueue()), f = on(QuaternaryHeapQueue()), c = on(CalendarQueue());
-  Rates binary, quaternary, calendar;
+  const auto on = [&](const std::string& name) { return queues == "all" || queues == name; };
+  const bool b = on(BinaryHeapQueue().Name()), f = on(QuaternaryHeapQueue().Name()),
+             c = on(CalendarQueue().Name()), s = on("slot");
+  Rates binary, quaternary, calendar, slot;
   for (int i = 0; i < reps; ++i) {
     if (b) Measure<BinaryHeapQueue>(n, seed, &binary);
     if (f) Measure<QuaternaryHeapQueue>(n, seed, &quaternary);
     if (c) Measure<CalendarQueue>(n, seed, &calendar);
+    if (s) MeasureSlots(n, seed, &slot);
   }
   if (b) Print(BinaryHeapQueue().Name(), n, binary);
   if (f) Print(QuaternaryHeapQueue().Name(), n, quaternary);
   if (c) Print(CalendarQueue().Name(), n, calendar);
+  if (s) Print("slot", n, slot);
 }
 
 }  // namespace
