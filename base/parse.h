@@ -17,6 +17,8 @@ std::string_view Trim(std::string_view s);
 std::vector<std::string> Split(std::string_view s, char sep);
 // The parts with `sep` between each two: {"a", "b"} and ", " -> "a, b"; {} -> "".
 std::string Join(const std::vector<std::string>& parts, std::string_view sep);
+// The names as a list for messages: {"a", "b", "c"} -> "a, b or c"; {"a"} -> "a".
+std::string JoinOr(const std::vector<std::string>& names);
 
 // A whole decimal integer: digits with an optional leading '-', nothing else (no white
 // space, no '+', no trailing text), within [lo, hi]. InputError "WHAT: 'TEXT' is not an

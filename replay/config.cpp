@@ -14,6 +14,7 @@
 
 #include "base/check.h"
 #include "base/parse.h"
+#include "replay/replacement.h"
 #include "scheduling/scheduler.h"
 
 namespace raycell {
@@ -46,23 +47,6 @@ bool ParseBool(std::string_view text, const std::string& what) {
   Fail(what, "expected true or false, got '" + std::string(text) + "'");
 }
 
-// "a, b or c".
-std::string JoinOr(const std::vector<std::string>& names) {
-  std::string out;
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    out += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
-  }
-  return out;
-}
-
-std::string ParseScheduler(std::string_view text, const std::string& what) {
-  for (const std::string& s : SchedulerNames()) {
-    if (text == s) return s;
-  }
-  Fail(what,
-       "unknown scheduler '" + std::string(text) + "' (expected " + JoinOr(SchedulerNames()) + ")");
-}
-
 ReplayConfig::Granularity ParseGranularity(std::string_view text, const std::string& what) {
   if (text == "ray") return ReplayConfig::Granularity::kRay;
   if (text == "node") return ReplayConfig::Granularity::kNode;
@@ -71,10 +55,23 @@ ReplayConfig::Granularity ParseGranularity(std::string_view text, const std::str
 }
 
 LevelConfig::Replacement ParseReplacement(std::string_view text, const std::string& what) {
-  if (text == "lru") return LevelConfig::Replacement::kLru;
-  if (text == "fifo") return LevelConfig::Replacement::kFifo;
-  if (text == "min") return LevelConfig::Replacement::kMin;
-  Fail(what, "unknown replacement '" + std::string(text) + "' (expected lru, fifo or min)");
+  std::vector<std::string> names;
+  for (const ReplacementEntry& e : ReplacementRegistry()) {
+    if (text == e.name) return e.kind;
+    names.push_back(e.name);
+  }
+  Fail(what, "unknown replacement '" + std::string(text) + "' (expected " + JoinOr(names) + ")");
+}
+
+// "lru | fifo | min (Belady's MIN, a bound)": the registry's names and notes.
+std::string ReplacementMeaning() {
+  std::vector<std::string> names;
+  std::string notes;
+  for (const ReplacementEntry& e : ReplacementRegistry()) {
+    names.push_back(e.name);
+    if (e.note != nullptr) notes += std::string(" (") + e.note + ")";
+  }
+  return Join(names, " | ") + notes;
 }
 
 // "1 cell", "4 cells" or a size ("256MiB"); > 0.
@@ -140,7 +137,10 @@ struct Key {
   std::uint64_t lo, hi;  // integers: the valid range
   void (*parse)(std::string_view text, const std::string& what, T& target);
   std::string (*text)(const T& target);  // as overrides take it and --help prints it
-  const char* source;  // where the default comes from ("" for level keys: per level below)
+  // The default, as text for `parse`, and where it comes from; "" for level keys, whose
+  // defaults are per level (kDefaultLevels).
+  const char* default_value;
+  const char* source;
 };
 
 constexpr std::uint64_t kMax64 = std::numeric_limits<std::uint64_t>::max();
@@ -151,9 +151,10 @@ const std::vector<Key<ReplayConfig>>& ConfigKeys() {
       {"scheduler", "cell scheduler: " + SchedulerNameList(" | "), TomlKind::kString, "a string", 0,
        0,
        [](std::string_view t, const std::string& what, ReplayConfig& c) {
-         c.scheduler = ParseScheduler(Trim(t), what);
+         c.scheduler = &SchedulerByName(Trim(t), what);
        },
-       [](const ReplayConfig& c) { return c.scheduler; }, "the paper's Cell Tree scheduler"},
+       [](const ReplayConfig& c) { return std::string(c.scheduler_name()); }, "celltree",
+       "the paper's Cell Tree scheduler"},
       {"seed",
        "seed of the random scheduler and of the planners' searches (best, celltree-best, "
        "celltree-union)",
@@ -161,7 +162,7 @@ const std::vector<Key<ReplayConfig>>& ConfigKeys() {
        [](std::string_view t, const std::string& what, ReplayConfig& c) {
          c.seed = ParseCount(t, what, 0, kMax64);
        },
-       [](const ReplayConfig& c) { return std::to_string(c.seed); },
+       [](const ReplayConfig& c) { return std::to_string(c.seed); }, "1",
        "any fixed value keeps a replay deterministic"},
       {"granularity",
        "ray: per ray segment (exact) | node: per Cell Tree node (aggregated, fast) | auto: node "
@@ -170,21 +171,21 @@ const std::vector<Key<ReplayConfig>>& ConfigKeys() {
        [](std::string_view t, const std::string& what, ReplayConfig& c) {
          c.granularity = ParseGranularity(Trim(t), what);
        },
-       [](const ReplayConfig& c) { return std::string(ToString(c.granularity)); },
+       [](const ReplayConfig& c) { return std::string(ToString(c.granularity)); }, "auto",
        "exact and as fast as possible"},
       {"processors.count", "number of block processors, 1..1024", TomlKind::kInteger, "an integer",
        1, 1024,
        [](std::string_view t, const std::string& what, ReplayConfig& c) {
          c.processors.count = std::uint32_t(ParseCount(t, what, 1, 1024));
        },
-       [](const ReplayConfig& c) { return std::to_string(c.processors.count); },
+       [](const ReplayConfig& c) { return std::to_string(c.processors.count); }, "1",
        "one block processor, the paper's case"},
       {"processors.time_per_sample", "time a block processor takes per sample", TomlKind::kString,
        "a duration string such as \"10ns\"", 0, 0,
        [](std::string_view t, const std::string& what, ReplayConfig& c) {
          c.processors.time_per_sample = ParsePositiveDuration(t, what);
        },
-       [](const ReplayConfig& c) { return FormatDuration(c.processors.time_per_sample); },
+       [](const ReplayConfig& c) { return FormatDuration(c.processors.time_per_sample); }, "10ns",
        "one sample per cycle of a 100 MHz pipeline, the Cube-5/GI-Cube design point"},
       {"processors.queue_record_bytes", "bytes per queued ray (an integer or a size, \"32B\")",
        TomlKind::kIntegerOrString, "an integer", 0, kMax64,
@@ -196,7 +197,7 @@ const std::vector<Key<ReplayConfig>>& ConfigKeys() {
          c.processors.queue_record_bytes =
              digits ? ParseCount(v, what, 0, kMax64) : ParseBytes(t, what).count();
        },
-       [](const ReplayConfig& c) { return std::to_string(c.processors.queue_record_bytes); },
+       [](const ReplayConfig& c) { return std::to_string(c.processors.queue_record_bytes); }, "32",
        "position, direction, colour/opacity, cell-tree node"},
       {"processors.prefetch",
        "fetch the next scheduled cell while the current one is worked (double buffering)",
@@ -205,7 +206,7 @@ const std::vector<Key<ReplayConfig>>& ConfigKeys() {
          c.processors.prefetch = ParseBool(t, what);
        },
        [](const ReplayConfig& c) { return std::string(c.processors.prefetch ? "true" : "false"); },
-       "no double buffering, the paper's model"},
+       "false", "no double buffering, the paper's model"},
   };
   return keys;
 }
@@ -218,50 +219,65 @@ const std::vector<Key<LevelConfig>>& LevelKeys() {
        [](std::string_view t, const std::string& what, LevelConfig& l) {
          ParseCapacity(t, what, &l);
        },
-       [](const LevelConfig& l) { return FormatCapacity(l); }, ""},
+       [](const LevelConfig& l) { return FormatCapacity(l); }, "", ""},
       {"bandwidth", "to the level below (below the last: host memory); \"unlimited\" ok",
        TomlKind::kString, "a bandwidth string such as \"1.6GB/s\"", 0, 0,
        [](std::string_view t, const std::string& what, LevelConfig& l) {
          l.bandwidth_below = ParseBandwidth(t, what);
        },
-       [](const LevelConfig& l) { return l.bandwidth_below.ToString(); }, ""},
+       [](const LevelConfig& l) { return l.bandwidth_below.ToString(); }, "", ""},
       {"latency", "to the level below", TomlKind::kString, "a duration string such as \"40ns\"", 0,
        0,
        [](std::string_view t, const std::string& what, LevelConfig& l) {
          l.latency_below = ParseDuration(t, what);
        },
-       [](const LevelConfig& l) { return FormatDuration(l.latency_below); }, ""},
-      {"replacement", "lru | fifo | min (Belady's MIN, a bound)", TomlKind::kString, "a string", 0,
-       0,
+       [](const LevelConfig& l) { return FormatDuration(l.latency_below); }, "", ""},
+      {"replacement", ReplacementMeaning(), TomlKind::kString, "a string", 0, 0,
        [](std::string_view t, const std::string& what, LevelConfig& l) {
          l.replacement = ParseReplacement(Trim(t), what);
        },
-       [](const LevelConfig& l) { return std::string(ToString(l.replacement)); }, ""},
+       [](const LevelConfig& l) { return std::string(ToString(l.replacement)); }, "", ""},
   };
   return keys;
 }
 
-// The default levels (DefaultConfig) and where each of their values comes from, in
-// LevelKeys() order.
-struct DefaultLevelDoc {
+// The default levels: each value, as text for its key's parser, and where it comes from.
+struct DefaultLevel {
+  struct Value {
+    const char* key;  // a LevelKeys() name
+    const char* value;
+    const char* source;
+  };
   const char* name;
   const char* about;
-  const char* sources[4];
+  Value values[4];  // one per LevelKeys() entry, in any order
+
+  // The value of `key`; every key has one (a CHECK).
+  const Value& Of(const std::string& key) const {
+    for (const Value& v : values) {
+      if (key == v.key) return v;
+    }
+    RAYCELL_CHECK(false);  // every default level gives a value of every key
+    return values[0];
+  }
 };
-constexpr DefaultLevelDoc kDefaultLevelDocs[] = {
+constexpr DefaultLevel kDefaultLevels[] = {
     {"cache",
      "the block processor's on-chip cell cache",
-     {"\"cell size set to memory size\", the paper's case",
-      "one Direct RDRAM PC800 channel, 2 bytes x 800 MT/s", "RDRAM row access",
-      "with one cell every policy behaves alike"}},
+     {{"capacity", "1 cell", "\"cell size set to memory size\", the paper's case"},
+      {"bandwidth", "1.6GB/s", "one Direct RDRAM PC800 channel, 2 bytes x 800 MT/s"},
+      {"latency", "40ns", "RDRAM row access"},
+      {"replacement", "lru", "with one cell every policy behaves alike"}}},
     {"board",
      "board memory (RDRAM) of the PCI board",
-     {"RDRAM board memory of a PCI board of the period", "32-bit 33 MHz PCI to host memory",
-      "a PCI transaction", "LRU, the usual hardware policy"}},
+     {{"capacity", "256MiB", "RDRAM board memory of a PCI board of the period"},
+      {"bandwidth", "133MB/s", "32-bit 33 MHz PCI to host memory"},
+      {"latency", "1us", "a PCI transaction"},
+      {"replacement", "lru", "LRU, the usual hardware policy"}}},
 };
 
-const DefaultLevelDoc* DefaultLevelDocOf(const std::string& name) {
-  for (const DefaultLevelDoc& d : kDefaultLevelDocs) {
+const DefaultLevel* DefaultLevelOf(const std::string& name) {
+  for (const DefaultLevel& d : kDefaultLevels) {
     if (name == d.name) return &d;
   }
   return nullptr;
@@ -483,7 +499,7 @@ void WriteKey(std::ostringstream& out, std::string meaning, const std::string& s
   out << toml_key << " = " << value << "\n";
 }
 
-const LevelConfig* DefaultLevel(const std::string& name) {
+const LevelConfig* DefaultLevelConfig(const std::string& name) {
   static const ReplayConfig defaults = DefaultConfig();
   for (const LevelConfig& l : defaults.levels) {
     if (l.name == name) return &l;
@@ -526,18 +542,7 @@ bool operator==(const ReplayConfig& a, const ReplayConfig& b) {
 }
 bool operator!=(const ReplayConfig& a, const ReplayConfig& b) { return !(a == b); }
 
-std::string_view ToString(LevelConfig::Replacement r) {
-  switch (r) {
-    case LevelConfig::Replacement::kLru:
-      return "lru";
-    case LevelConfig::Replacement::kFifo:
-      return "fifo";
-    case LevelConfig::Replacement::kMin:
-      return "min";
-  }
-  return "?";
-}
-
+std::string_view ToString(LevelConfig::Replacement r) { return ReplacementOf(r).name; }
 std::string_view ToString(ReplayConfig::Granularity g) {
   return g == ReplayConfig::Granularity::kRay    ? "ray"
          : g == ReplayConfig::Granularity::kNode ? "node"
@@ -556,25 +561,23 @@ std::string FormatCapacity(const LevelConfig& level) {
 }
 
 ReplayConfig DefaultConfig() {
-  ReplayConfig c;
-  LevelConfig cache;
-  cache.name = "cache";                                             // on-chip cell cache
-  cache.capacity_unit = LevelConfig::CapacityUnit::kCells;          // "cell size set to
-  cache.capacity = 1;                                               //  memory size"
-  cache.bandwidth_below = Bandwidth::BytesPerSecond(1600'000'000);  // Direct RDRAM PC800
-  cache.latency_below = SimTime::Nanoseconds(40);                   // RDRAM row access
-  cache.replacement = LevelConfig::Replacement::kLru;               // one cell: any policy
-  LevelConfig board;
-  board.name = "board";  // board RDRAM
-  board.capacity_unit = LevelConfig::CapacityUnit::kBytes;
-  board.capacity = std::uint64_t(256) << 20;                       // 256MiB
-  board.bandwidth_below = Bandwidth::BytesPerSecond(133'000'000);  // 32-bit 33 MHz PCI
-  board.latency_below = SimTime::Microseconds(1);                  // a PCI transaction
-  board.replacement = LevelConfig::Replacement::kLru;
-  c.levels = {cache, board};
-  return c;  // processors, scheduler, seed, granularity: the member defaults in config.h
+  static const ReplayConfig defaults = [] {
+    ReplayConfig c;
+    for (const Key<ReplayConfig>& k : ConfigKeys()) {
+      k.parse(k.default_value, "default " + k.name, c);
+    }
+    for (const DefaultLevel& d : kDefaultLevels) {
+      LevelConfig level;
+      level.name = d.name;
+      for (const Key<LevelConfig>& k : LevelKeys()) {
+        k.parse(d.Of(k.name).value, "default level." + level.name + "." + k.name, level);
+      }
+      c.levels.push_back(level);
+    }
+    return c;
+  }();
+  return defaults;
 }
-
 void ValidateConfig(const ReplayConfig& config, const std::string& where) {
   if (config.levels.empty()) Fail(where, "at least one level is required");
   std::set<std::string> names;
@@ -590,7 +593,7 @@ void ValidateConfig(const ReplayConfig& config, const std::string& where) {
   if (config.processors.time_per_sample == SimTime::Zero()) {
     Fail(where, "processors.time_per_sample must be greater than zero");
   }
-  ParseScheduler(config.scheduler, where + ": scheduler");
+  if (config.scheduler == nullptr) Fail(where, "no scheduler");
 }
 
 ReplayConfig LoadConfigFromString(std::string_view text, const std::string& source) {
@@ -621,8 +624,9 @@ std::vector<std::string> OverrideKeys(const ReplayConfig& config) {
   return keys;
 }
 
-void ApplyOverride(ReplayConfig& config, const std::string& key, const std::string& value) {
-  const std::string what = "override '" + key + "'";
+void ApplyOverride(ReplayConfig& config, const std::string& key, const std::string& value,
+                   const std::string& what_given) {
+  const std::string what = what_given.empty() ? "override '" + key + "'" : what_given;
   ReplayConfig c = config;
   const auto top = std::find_if(ConfigKeys().begin(), ConfigKeys().end(),
                                 [&](const Key<ReplayConfig>& k) { return k.name == key; });
@@ -664,15 +668,14 @@ std::string ToToml(const ReplayConfig& config) {
   out << "\n# Memory levels, nearest (on-chip cache) first; the level below the last is host\n"
          "# memory, unlimited. [[level]] tables in a file replace the default levels entirely.\n";
   for (const LevelConfig& l : config.levels) {
-    const LevelConfig* dl = DefaultLevel(l.name);
-    const DefaultLevelDoc* doc = DefaultLevelDocOf(l.name);
+    const LevelConfig* dl = DefaultLevelConfig(l.name);
+    const DefaultLevel* doc = DefaultLevelOf(l.name);
     out << "\n[[level]]\n";
     if (doc != nullptr) out << "# Default level: " << doc->about << ".\n";
     out << "name = " << Quote(l.name) << "\n";
     const LevelConfig& ref = dl != nullptr ? *dl : l;
-    for (std::size_t i = 0; i < LevelKeys().size(); ++i) {
-      const Key<LevelConfig>& k = LevelKeys()[i];
-      WriteKey(out, k.meaning, doc != nullptr ? doc->sources[i] : "",
+    for (const Key<LevelConfig>& k : LevelKeys()) {
+      WriteKey(out, k.meaning, doc != nullptr ? doc->Of(k.name).source : "",
                TomlLiteral(k.kind, k.text(ref)), k.name, TomlLiteral(k.kind, k.text(l)));
     }
   }
@@ -684,11 +687,10 @@ std::string DefaultsHelp() {
   std::vector<std::array<std::string, 3>> rows;  // key, value, source
   for (const Key<ReplayConfig>& k : ConfigKeys()) rows.push_back({k.name, k.text(d), k.source});
   for (const LevelConfig& l : d.levels) {
-    const DefaultLevelDoc* doc = DefaultLevelDocOf(l.name);
+    const DefaultLevel* doc = DefaultLevelOf(l.name);
     RAYCELL_CHECK(doc != nullptr);
-    for (std::size_t i = 0; i < LevelKeys().size(); ++i) {
-      const Key<LevelConfig>& k = LevelKeys()[i];
-      rows.push_back({"level." + l.name + "." + k.name, k.text(l), doc->sources[i]});
+    for (const Key<LevelConfig>& k : LevelKeys()) {
+      rows.push_back({"level." + l.name + "." + k.name, k.text(l), doc->Of(k.name).source});
     }
   }
   std::size_t width = 0;
@@ -705,6 +707,8 @@ std::string DefaultsHelp() {
 }  // namespace raycell
 
 namespace raycell {
+
+const char* ReplayConfig::scheduler_name() const { return scheduler ? scheduler->name : "none"; }
 
 ReplayConfig::Granularity EffectiveGranularity(const ReplayConfig& config) {
   if (config.granularity != ReplayConfig::Granularity::kAuto) return config.granularity;

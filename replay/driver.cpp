@@ -236,9 +236,8 @@ ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& head
 ReplayConfig CanonicalConfig(const ReplayConfig& config) {
   ReplayConfig c = config;
   c.granularity = EffectiveGranularity(config);
-  const bool random = c.scheduler == "random";
-  if (!SchedulerUsesSeed(c.scheduler)) c.seed = 0;
-  if (random) c.processors.prefetch = false;
+  if (!c.scheduler->seeded) c.seed = 0;
+  if (!c.scheduler->predicts) c.processors.prefetch = false;
   c.processors.queue_record_bytes = 1;
   return c;
 }
@@ -268,8 +267,8 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
   for (std::size_t d = 0; d < distinct.size(); ++d) {
     const bool per_ray = distinct[d].granularity == ReplayConfig::Granularity::kRay;
     (per_ray ? need_segments : need_nodes) = true;
-    schedulers.push_back(MakeScheduler(distinct[d].scheduler, distinct[d].seed));
-    history = std::max(history, SchedulerHistory(distinct[d].scheduler));
+    schedulers.push_back(MakeScheduler(*distinct[d].scheduler, distinct[d].seed));
+    history = std::max(history, distinct[d].scheduler->history);
     order.push_back(d);
   }
   std::stable_partition(order.begin(), order.end(), [&](std::size_t d) {

@@ -82,11 +82,12 @@ ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& head
                                std::uint32_t sample_every = 1, ReplayObserver* observer = nullptr);
 
 // What a frame's result cannot depend on, removed: granularity resolved (EffectiveGranularity),
-// the seed unless the scheduler uses it (SchedulerUsesSeed: random and the planners), prefetch
-// for the random scheduler (it predicts nothing, Scheduler::Peek, so prefetch never
-// happens), and the queue record size, which only scales peak_queued_bytes (ReplayFrames
-// rescales it). Configurations with equal canonical forms have equal frame results up to
-// that rescaling, so ReplayFrames replays each canonical form once.
+// the seed unless the scheduler uses it (SchedulerEntry::seeded: random and the planners),
+// prefetch for a scheduler that predicts nothing (SchedulerEntry::predicts: random, whose
+// Scheduler::Peek answers nothing, so prefetch never happens), and the queue record size, which
+// only scales peak_queued_bytes (ReplayFrames rescales it). Configurations with equal canonical
+// forms have equal frame results up to that rescaling, so ReplayFrames replays each canonical form
+// once.
 ReplayConfig CanonicalConfig(const ReplayConfig& config);
 
 struct ReplayFramesOptions {

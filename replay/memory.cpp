@@ -53,7 +53,8 @@ MemoryHierarchy::MemoryHierarchy(const ReplayConfig& config,
     : levels_(config.levels), footprints_(footprints) {
   RAYCELL_CHECK(!levels_.empty());
   for (std::size_t i = 0; i < levels_.size(); ++i) {
-    const bool min = levels_[i].replacement == LevelConfig::Replacement::kMin;
+    // A policy that needs the future runs as LRU until a run has made the requests.
+    const bool min = ReplacementOf(levels_[i].replacement).needs_future;
     LevelConfig level = levels_[i];
     if (min && futures.empty()) level.replacement = LevelConfig::Replacement::kLru;
     const std::uint32_t copies = i == 0 ? config.processors.count : 1;

@@ -2,23 +2,41 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <utility>
 
 #include "base/check.h"
 
 namespace raycell {
 
+const std::vector<ReplacementEntry>& ReplacementRegistry() {
+  static const std::vector<ReplacementEntry> registry = {
+      {LevelConfig::Replacement::kLru, "lru", nullptr, false,
+       [](CellId cells, std::vector<CellId>) -> std::unique_ptr<ReplacementPolicy> {
+         return std::make_unique<RecencyReplacement>(cells, true);
+       }},
+      {LevelConfig::Replacement::kFifo, "fifo", nullptr, false,
+       [](CellId cells, std::vector<CellId>) -> std::unique_ptr<ReplacementPolicy> {
+         return std::make_unique<RecencyReplacement>(cells, false);
+       }},
+      {LevelConfig::Replacement::kMin, "min", "Belady's MIN, a bound", true,
+       [](CellId cells, std::vector<CellId> future) -> std::unique_ptr<ReplacementPolicy> {
+         return std::make_unique<MinReplacement>(cells, std::move(future));
+       }},
+  };
+  return registry;
+}
+
+const ReplacementEntry& ReplacementOf(LevelConfig::Replacement kind) {
+  for (const ReplacementEntry& e : ReplacementRegistry()) {
+    if (e.kind == kind) return e;
+  }
+  RAYCELL_CHECK(false);  // every kind has an entry
+  return ReplacementRegistry().front();
+}
+
 std::unique_ptr<ReplacementPolicy> MakeReplacement(LevelConfig::Replacement kind, CellId cells,
                                                    std::vector<CellId> future) {
-  switch (kind) {
-    case LevelConfig::Replacement::kLru:
-      return std::make_unique<RecencyReplacement>(cells, true);
-    case LevelConfig::Replacement::kFifo:
-      return std::make_unique<RecencyReplacement>(cells, false);
-    case LevelConfig::Replacement::kMin:
-      return std::make_unique<MinReplacement>(cells, std::move(future));
-  }
-  RAYCELL_CHECK(false);
-  return nullptr;
+  return ReplacementOf(kind).make(cells, std::move(future));
 }
 
 // ---- LRU and FIFO ------------------------------------------------------------------------

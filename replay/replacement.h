@@ -31,9 +31,27 @@ class ReplacementPolicy {
   virtual bool diverged() const { return false; }
 };
 
-// The policy `kind` for a store of `cells` cells. `future` (MIN only): the requests a
-// previous run of the same frame made at this store; MIN with no future is a CHECK failure
-// (MemoryHierarchy runs LRU first to learn it).
+// Every replacement policy: the one list that configurations (parsing, printing, the key's
+// meaning), the factory and the replay's reruns for MIN derive from. A new policy is one
+// entry here and one value of LevelConfig::Replacement.
+struct ReplacementEntry {
+  LevelConfig::Replacement kind;
+  const char* name;  // as in configs: "lru"
+  const char* note;  // for the key's meaning, or null: "Belady's MIN, a bound"
+  // Whether it needs the level's future requests (Belady's MIN): a replay first runs the
+  // frame with LRU at that level to learn them (MemoryHierarchy), then again with the policy
+  // (ReplayFrame).
+  bool needs_future;
+  // The policy for a store of `cells` cells; `future`: the requests a previous run of the
+  // same frame made at this store (needs_future only).
+  std::unique_ptr<ReplacementPolicy> (*make)(CellId cells, std::vector<CellId> future);
+};
+const std::vector<ReplacementEntry>& ReplacementRegistry();
+// The entry of `kind`.
+const ReplacementEntry& ReplacementOf(LevelConfig::Replacement kind);
+
+// The policy `kind` for a store of `cells` cells (ReplacementOf(kind).make). A policy that
+// needs a future given none is a CHECK failure.
 std::unique_ptr<ReplacementPolicy> MakeReplacement(LevelConfig::Replacement kind, CellId cells,
                                                    std::vector<CellId> future = {});
 

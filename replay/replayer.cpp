@@ -414,9 +414,10 @@ ReplayResult Board<Units>::Result() const {
   return r;
 }
 
-bool UsesMin(const ReplayConfig& config) {
+// Whether some level's policy needs its future requests (Belady's MIN).
+bool NeedsFuture(const ReplayConfig& config) {
   for (const LevelConfig& l : config.levels) {
-    if (l.replacement == LevelConfig::Replacement::kMin) return true;
+    if (ReplacementOf(l.replacement).needs_future) return true;
   }
   return false;
 }
@@ -426,7 +427,7 @@ ReplayResult Replay(const WorkGraph& work, Units units,
                     const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
                     Scheduler& scheduler, const FrameInfo& frame, std::uint64_t bound,
                     ReplayObserver* observer) {
-  const bool min = UsesMin(config);
+  const bool min = NeedsFuture(config);
   const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
   MemoryHierarchy::Requests futures;
   for (std::uint32_t pass = 1;; ++pass) {

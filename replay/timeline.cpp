@@ -226,7 +226,8 @@ void TimelineWriter::Finish() {
     levels += (levels.empty() ? "" : ",") + JsonQuote(l.name);
   const std::string tail =
       "\n],\n\"otherData\":{\"schema\":" + JsonQuote(kTimelineSchema) +
-      ",\"trace\":" + JsonQuote(options_.trace) + ",\"scheduler\":" + JsonQuote(config_.scheduler) +
+      ",\"trace\":" + JsonQuote(options_.trace) +
+      ",\"scheduler\":" + JsonQuote(config_.scheduler_name()) +
       ",\"granularity\":" + JsonQuote(std::string(ToString(EffectiveGranularity(config_)))) +
       ",\"processors\":" + std::to_string(config_.processors.count) + ",\"levels\":[" + levels +
       "],\"frames\":" + std::to_string(frames_done_) + ",\"time_ps\":" + std::to_string(offset_) +

@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "base/check.h"
+#include "base/parse.h"
 #include "scheduling/best_scheduler.h"
 #include "scheduling/cell_tree_scheduler.h"
 #include "scheduling/max_work.h"
@@ -88,39 +89,47 @@ std::string ScheduleFollower::Reason() const {
 
 const std::vector<SchedulerEntry>& SchedulerRegistry() {
   static const std::vector<SchedulerEntry> registry = {
-      {"maxwork", "Max Work: the cell with the most queued rays",
+      {"maxwork", "Max Work: the cell with the most queued rays", "Max Work",
        [](std::uint64_t) -> std::unique_ptr<Scheduler> {
          return std::make_unique<MaxWorkScheduler>();
        }},
       {"roundrobin", "Round Robin: the next cell with work after the last one (a baseline)",
+       "Round Robin",
        [](std::uint64_t) -> std::unique_ptr<Scheduler> {
          return std::make_unique<RoundRobinScheduler>();
-       }},
-      {"random", "a seeded random cell with work (a baseline)",
+       },
+       1, false, true, false, false},
+      {"random", "a seeded random cell with work (a baseline)", "Random",
        [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
          return std::make_unique<RandomScheduler>(seed);
        },
-       1, true},
+       1, true, false, false, false},
       {"peel", "the Peel oracle: each frame follows its own tree's Peel schedule",
+       "Peel oracle (the frame's own Peel schedule)",
        [](std::uint64_t) -> std::unique_ptr<Scheduler> {
          return std::make_unique<PeelOracleScheduler>();
-       }},
+       },
+       1, false, true, true},
       {"celltree", "the paper's Cell Tree scheduling: frame i+1 follows frame i's Peel schedule",
+       "Cell Tree scheduling (Peel of frame i's tree)",
        [](std::uint64_t) -> std::unique_ptr<Scheduler> {
          return std::make_unique<CellTreeScheduler>();
        }},
       {"best", "the best-schedule oracle: each frame follows the best schedule found for its tree",
+       "best-schedule oracle (the frame's own best schedule)",
        [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
          return std::make_unique<BestOracleScheduler>(seed);
        },
-       1, true},
+       1, true, true, true},
       {"celltree-best", "frame i+1 follows the best schedule found for frame i's tree",
+       "Cell Tree, best schedule of frame i's tree",
        [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
          return std::make_unique<CellTreeBestScheduler>(seed, false);
        },
        1, true},
       {"celltree-union",
        "frame i+1 follows the best schedule found for the union of frames i and i-1's trees",
+       "Cell Tree, best schedule of frames i-1 and i together",
        [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
          return std::make_unique<CellTreeBestScheduler>(seed, true);
        },
@@ -144,32 +153,20 @@ std::string SchedulerNameList(const char* separator) {
   return out;
 }
 
-namespace {
-
-// The registry's entry named `name`, or null.
-const SchedulerEntry* FindScheduler(const std::string& name) {
+const SchedulerEntry& SchedulerByName(std::string_view name, const std::string& what) {
   for (const SchedulerEntry& e : SchedulerRegistry()) {
-    if (name == e.name) return &e;
+    if (name == e.name) return e;
   }
-  return nullptr;
+  throw InputError(what + ": unknown scheduler '" + std::string(name) + "' (expected " +
+                   JoinOr(SchedulerNames()) + ")");
 }
 
-}  // namespace
-
-std::uint32_t SchedulerHistory(const std::string& name) {
-  const SchedulerEntry* e = FindScheduler(name);
-  return e ? e->history : 1;
+std::unique_ptr<Scheduler> MakeScheduler(const SchedulerEntry& entry, std::uint64_t seed) {
+  return entry.make(seed);
 }
 
-bool SchedulerUsesSeed(const std::string& name) {
-  const SchedulerEntry* e = FindScheduler(name);
-  return e && e->seeded;
-}
-
-std::unique_ptr<Scheduler> MakeScheduler(const std::string& name, std::uint64_t seed) {
-  if (const SchedulerEntry* e = FindScheduler(name)) return e->make(seed);
-  throw InputError("unknown scheduler '" + name + "' (expected one of: " + SchedulerNameList(", ") +
-                   ")");
+std::unique_ptr<Scheduler> MakeScheduler(std::string_view name, std::uint64_t seed) {
+  return MakeScheduler(SchedulerByName(name, "scheduler"), seed);
 }
 
 }  // namespace raycell

@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "graph/cell_tree.h"
@@ -113,26 +114,37 @@ class ScheduleFollower {
 };
 
 // Every scheduler by name: the one list that MakeScheduler, the configuration's validation
-// and messages, and --help are derived from. A new scheduler is one entry here.
+// and messages, --help and raycell study's tables are derived from. A new scheduler is one
+// entry here. A name is looked up once (SchedulerByName, where a configuration is read);
+// configurations then hold the entry.
 struct SchedulerEntry {
   const char* name;     // as in configs and --scheduler: "maxwork"
   const char* meaning;  // one line for --help and the configuration's comments
+  const char* label;    // as raycell study's tables name it: "Max Work"
   std::unique_ptr<Scheduler> (*make)(std::uint64_t seed);  // seed: random and planners
   // Earlier frames' trees it reads: 1 (FrameInfo::previous) or 2 (also before_previous).
   std::uint32_t history = 1;
   // Whether its choices depend on the seed (random, and the planners' seeded searches).
   bool seeded = false;
+  // Whether Peek predicts its next choice (what prefetch fetches); without a prediction,
+  // prefetch changes nothing.
+  bool predicts = true;
+  // An oracle knows the frame being replayed (its own tree); the others only earlier frames.
+  bool oracle = false;
+  // Whether raycell study replays it: all but the naive baselines (Round Robin, Random).
+  bool studied = true;
 };
 const std::vector<SchedulerEntry>& SchedulerRegistry();
 // The registry's names, in its order; and joined by `separator` ("maxwork | roundrobin ...").
 const std::vector<std::string>& SchedulerNames();
 std::string SchedulerNameList(const char* separator);
-// The history of the scheduler `name` (SchedulerEntry::history); 1 for an unknown name.
-std::uint32_t SchedulerHistory(const std::string& name);
-// Whether the scheduler `name` uses its seed (SchedulerEntry::seeded); false for an unknown name.
-bool SchedulerUsesSeed(const std::string& name);
-// A new scheduler by name. An unknown name is an InputError listing the valid names.
-std::unique_ptr<Scheduler> MakeScheduler(const std::string& name, std::uint64_t seed);
+// The entry named `name`: the one lookup by name. InputError "WHAT: unknown scheduler 'x'
+// (expected maxwork, roundrobin, ... or celltree-union)" for any other name.
+const SchedulerEntry& SchedulerByName(std::string_view name, const std::string& what);
+// A new scheduler of the entry's kind.
+std::unique_ptr<Scheduler> MakeScheduler(const SchedulerEntry& entry, std::uint64_t seed);
+// The same by name (SchedulerByName with what "scheduler"), for tests and tools that name one.
+std::unique_ptr<Scheduler> MakeScheduler(std::string_view name, std::uint64_t seed);
 
 // A scheduler that follows a schedule chosen in BeginFrame (ScheduleFollower: entries with no
 // work skipped, then Max Work). The Peel oracle and Cell Tree scheduling differ only in which

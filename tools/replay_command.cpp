@@ -96,8 +96,8 @@ void PrintTable(const TraceReplay& t, std::ostream& out) {
 
 ReplayConfig MakeConfig(const ReplayArgs& a) {
   ReplayConfig c = a.config.empty() ? DefaultConfig() : LoadConfig(a.config);
-  if (!a.scheduler.empty()) ApplyOverride(c, "scheduler", a.scheduler);
-  if (!a.granularity.empty()) ApplyOverride(c, "granularity", a.granularity);
+  if (!a.scheduler.empty()) ApplyOverride(c, "scheduler", a.scheduler, "--scheduler");
+  if (!a.granularity.empty()) ApplyOverride(c, "granularity", a.granularity, "--granularity");
   for (const std::string& s : a.sets) {
     const auto eq = s.find('=');
     if (eq == std::string::npos) throw InputError("--set '" + s + "': expected KEY=VALUE");

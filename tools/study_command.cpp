@@ -25,6 +25,7 @@
 #include "base/progress.h"
 #include "replay/config.h"
 #include "replay/driver.h"
+#include "scheduling/scheduler.h"
 #include "tools/commands.h"
 #include "traces/record/cell_grid.h"
 #include "traces/record/recorder.h"
@@ -79,21 +80,18 @@ std::vector<int> StudyFrames(const StudyArgs& a) {
   return frames;
 }
 
-// The schedulers the study replays, in the report's order. Online ones plan frame i+1 from
-// what frame i showed (as hardware could); oracles know the frame itself.
-struct StudyScheduler {
-  const char* name;  // as MakeScheduler knows it, and the column in fetches_CELLS.csv
-  const char* label;
-  bool online;
-};
-constexpr StudyScheduler kStudySchedulers[] = {
-    {"maxwork", "Max Work", true},
-    {"celltree", "Cell Tree scheduling (Peel of frame i's tree)", true},
-    {"celltree-best", "Cell Tree, best schedule of frame i's tree", true},
-    {"celltree-union", "Cell Tree, best schedule of frames i-1 and i together", true},
-    {"peel", "Peel oracle (the frame's own Peel schedule)", false},
-    {"best", "best-schedule oracle (the frame's own best schedule)", false},
-};
+// The schedulers the study replays, in the report's order: the registry's studied ones,
+// online first (they plan frame i+1 from what frame i showed, as hardware could), then the
+// oracles (they know the frame itself).
+std::vector<const SchedulerEntry*> StudySchedulers() {
+  std::vector<const SchedulerEntry*> out;
+  for (const bool oracle : {false, true}) {
+    for (const SchedulerEntry& e : SchedulerRegistry()) {
+      if (e.studied && e.oracle == oracle) out.push_back(&e);
+    }
+  }
+  return out;
+}
 
 // The results for one cell grid (recorded) or one given trace.
 struct GridStudy {
@@ -175,9 +173,9 @@ GridStudy StudyTrace(const TraceReader& reader, GridStudy g, const StudyArgs& a)
   const std::size_t n = reader.frames().size();
   for (std::size_t i = 0; i < n; ++i) all.push_back(i);
   std::vector<ReplayConfig> configs;
-  for (const StudyScheduler& s : kStudySchedulers) {
+  for (const SchedulerEntry* s : StudySchedulers()) {
     ReplayConfig config = DefaultConfig();
-    config.scheduler = s.name;
+    config.scheduler = s;
     config.granularity = ReplayConfig::Granularity::kNode;  // exact with a one-cell cache
     configs.push_back(config);
   }
@@ -202,7 +200,7 @@ GridStudy StudyTrace(const TraceReader& reader, GridStudy g, const StudyArgs& a)
                  });
     for (std::size_t k = 0; k < configs.size(); ++k) {
       FinishTotal(configs[k].processors.count, &replays[k].total);
-      g.replays[configs[k].scheduler] = std::move(replays[k]);
+      g.replays[configs[k].scheduler_name()] = std::move(replays[k]);
     }
   }
   AnalyzeOptions options;
@@ -279,11 +277,12 @@ std::string TreesCsv(const GridStudy& g) {
 std::string FetchesCsv(const GridStudy& g) {
   std::ostringstream s;
   s << "frame";
-  for (const StudyScheduler& k : kStudySchedulers) s << ',' << k.name;
+  for (const SchedulerEntry* k : StudySchedulers()) s << ',' << k->name;
   s << ",bound,lower_bound,best_length\n";
   for (std::size_t i = 0; i < g.trees.size(); ++i) {
     s << g.trees[i].frame;
-    for (const StudyScheduler& k : kStudySchedulers) s << ',' << g.replay(k.name).frames[i].fetches;
+    for (const SchedulerEntry* k : StudySchedulers())
+      s << ',' << g.replay(k->name).frames[i].fetches;
     s << ',' << g.trees[i].bound << ',' << *g.trees[i].lower_bound << ',' << *g.trees[i].best_length
       << '\n';
   }
@@ -319,15 +318,15 @@ std::string GridReport(const GridStudy& g) {
     << FormatFixed(Mean(tr, [](const FrameAnalysis& x) { return double(x.nodes); }), 1) << " |\n"
     << "| rays per node (mean; the paper: about 100) | "
     << FormatFixed(Mean(tr, [](const FrameAnalysis& x) { return x.rays_per_node(); }), 1) << " |\n";
-  for (const StudyScheduler& k : kStudySchedulers) {
-    s << "| fetches, " << k.label << " | " << g.replay(k.name).total.fetches << " |\n";
+  for (const SchedulerEntry* k : StudySchedulers()) {
+    s << "| fetches, " << k->label << " | " << g.replay(k->name).total.fetches << " |\n";
   }
   s << "| maxGen bound (summed) | " << bound << " |\n";
-  for (const StudyScheduler& k : kStudySchedulers) {
-    if (!k.online || std::string(k.name) == "maxwork") continue;
-    const double f = double(g.replay(k.name).total.fetches);
-    s << "| " << k.label << " against Max Work"
-      << (std::string(k.name) == "celltree" ? " (the paper: 30% fewer)" : "") << " | "
+  for (const SchedulerEntry* k : StudySchedulers()) {
+    if (k->oracle || std::string(k->name) == "maxwork") continue;
+    const double f = double(g.replay(k->name).total.fetches);
+    s << "| " << k->label << " against Max Work"
+      << (std::string(k->name) == "celltree" ? " (the paper: 30% fewer)" : "") << " | "
       << Percent(f - double(mw), double(mw)) << " |\n";
   }
   s << "\nThe optimum of each frame's Cell Tree (fewest fetches with a one-cell cache) lies "

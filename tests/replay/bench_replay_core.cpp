@@ -123,8 +123,8 @@ int main(int argc, char** argv) {
       for (const Frame& f : loaded) {
         const FrameInfo info{f.index, f.tree.get(), f.previous.get(), h.cell_count()};
         for (int r = 0; r < reps; ++r) {
-          auto a = core_only ? nullptr : MakeScheduler(c.config.scheduler, c.config.seed);
-          auto b = MakeScheduler(c.config.scheduler, c.config.seed);
+          auto a = core_only ? nullptr : MakeScheduler(*c.config.scheduler, c.config.seed);
+          auto b = MakeScheduler(*c.config.scheduler, c.config.seed);
           std::optional<ReplayResult> x;
           const double t0 = ThreadCpuSeconds();
           if (a) x = ReferenceReplayFrame(f.work, h.footprints, c.config, *a, info, Bound(*f.tree));

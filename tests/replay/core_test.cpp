@@ -98,7 +98,7 @@ TEST(ReplayCore, EqualsTheReferenceOnRandomFramesAndConfigs) {
     const FrameInfo info{std::size_t(trial % 3), &tree, trial % 2 ? &previous : nullptr, cells};
     for (const char* name : kSchedulers) {
       ReplayConfig config = base;
-      config.scheduler = name;
+      config.scheduler = &SchedulerByName(name, "test");
       const WorkGraph w = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay
                               ? RaySegmentWork(rays, cells)
                               : NodeWork(tree, cells);
@@ -134,7 +134,7 @@ TEST(ReplayCore, EqualsTheReferenceWhenEventsTie) {
     }
     const FrameInfo info{0, &tree, nullptr, cells};
     for (const char* name : kSchedulers) {
-      config.scheduler = name;
+      config.scheduler = &SchedulerByName(name, "test");
       const WorkGraph w = RaySegmentWork(rays, cells);
       auto a = MakeScheduler(name, 1), b = MakeScheduler(name, 1);
       ASSERT_EQ(Describe(ReplayFrame(w, footprints, config, *a, info, Bound(tree))),
@@ -155,15 +155,15 @@ TEST(ReplayCore, EqualsTheReferenceOnTheColumns) {
     std::vector<std::uint64_t> footprints(cells);
     for (auto& f : footprints) f = 1 + rng() % 200'000;
     ReplayConfig config = RandomConfig(rng, footprints);
-    config.scheduler = kSchedulers[trial % 5];
+    config.scheduler = &SchedulerByName(kSchedulers[trial % 5], "test");
     WorkGraph w = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay
                       ? RaySegmentWork(rays, cells)
                       : NodeWork(tree, cells);
     ASSERT_FALSE(w.packed.empty());
     w.packed.clear();
     const FrameInfo info{0, &tree, nullptr, cells};
-    auto a = MakeScheduler(config.scheduler, config.seed);
-    auto b = MakeScheduler(config.scheduler, config.seed);
+    auto a = MakeScheduler(*config.scheduler, config.seed);
+    auto b = MakeScheduler(*config.scheduler, config.seed);
     ASSERT_EQ(Describe(ReplayFrame(w, footprints, config, *a, info, Bound(tree))),
               Describe(ReferenceReplayFrame(w, footprints, config, *b, info, Bound(tree))))
         << "trial " << trial;
@@ -242,15 +242,15 @@ TEST(ReplayCore, EqualsTheReferenceOnTheCompactForm) {
     for (CellId c = 0; c < cells; c += scale) footprints[c] = 1 + rng() % 200'000;
     ReplayConfig config = cells > 10'000 ? DefaultConfig() : RandomConfig(rng, footprints);
     config.granularity = ReplayConfig::Granularity::kRay;
-    config.scheduler = kSchedulers[trial % 5];
+    config.scheduler = &SchedulerByName(kSchedulers[trial % 5], "test");
     if (cells > 10'000) config.processors.count = 1 + rng() % 3;
     const WorkGraph columns = RaySegmentWork(rays, cells);
     const WorkGraph compact = CompactWork(rng, rays, cells, 1 + rng() % 20);
     ASSERT_TRUE(compact.packed.empty() && compact.cell.empty());
     ASSERT_EQ(compact.size(), columns.size());
     const FrameInfo info{0, &tree, nullptr, cells};
-    auto a = MakeScheduler(config.scheduler, config.seed);
-    auto b = MakeScheduler(config.scheduler, config.seed);
+    auto a = MakeScheduler(*config.scheduler, config.seed);
+    auto b = MakeScheduler(*config.scheduler, config.seed);
     ASSERT_EQ(Describe(ReplayFrame(compact, footprints, config, *a, info, Bound(tree))),
               Describe(ReferenceReplayFrame(columns, footprints, config, *b, info, Bound(tree))))
         << "trial " << trial << "\n"
@@ -274,7 +274,7 @@ TEST(ReplayCore, EqualsTheReferenceOnLongWorklists) {
     ReplayConfig config = DefaultConfig();
     config.granularity = ReplayConfig::Granularity::kRay;
     config.processors.count = processors;
-    config.scheduler = "maxwork";
+    config.scheduler = &SchedulerByName("maxwork", "test");
     auto a = MakeScheduler("maxwork", 1), b = MakeScheduler("maxwork", 1);
     auto c = MakeScheduler("maxwork", 1);
     const std::string reference =

@@ -69,8 +69,8 @@ class DriverTest : public ::testing::Test {
     const WorkGraph w = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay
                             ? RaySegmentWork(rays, h.cell_count())
                             : NodeWork(tree, h.cell_count());
-    auto s = MakeScheduler(config.scheduler, config.seed);
-    const bool two = SchedulerHistory(config.scheduler) == 2 && i > 1;
+    auto s = MakeScheduler(*config.scheduler, config.seed);
+    const bool two = config.scheduler->history == 2 && i > 1;
     const FrameInfo info{i, &tree, i > 0 ? &previous : nullptr, h.cell_count(),
                          two ? &before : nullptr};
     ReplayResult r = ReplayFrame(w, h.footprints, config, *s, info, Bound(tree));
@@ -85,7 +85,7 @@ class DriverTest : public ::testing::Test {
 
   static ReplayConfig Config(const char* scheduler, std::uint32_t processors) {
     ReplayConfig c = DefaultConfig();
-    c.scheduler = scheduler;
+    c.scheduler = &SchedulerByName(scheduler, "test");
     c.processors.count = processors;
     c.levels[0].capacity = processors > 1 ? 2 : 1;
     return c;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "replay/config.h"
 #include "replay/memory.h"
 
 namespace raycell {
@@ -98,6 +99,37 @@ TEST(Replacement, BytesCapacityEvictsUntilTheCellFits) {
   EXPECT_FALSE(s.Contains(1));
   EXPECT_TRUE(s.Contains(2));
   EXPECT_EQ(s.used(), 70u);
+}
+
+// The registry is the one list of policies: each kind has one entry and a distinct name that
+// configurations parse and print back; only MIN needs its future requests.
+TEST(ReplacementRegistry, EachPolicyOnceByNameThroughTheConfiguration) {
+  const std::vector<std::pair<LevelConfig::Replacement, std::string>> expected = {
+      {LevelConfig::Replacement::kLru, "lru"},
+      {LevelConfig::Replacement::kFifo, "fifo"},
+      {LevelConfig::Replacement::kMin, "min"}};
+  ASSERT_EQ(ReplacementRegistry().size(), expected.size());
+  for (const auto& [kind, name] : expected) {
+    const ReplacementEntry& e = ReplacementOf(kind);
+    EXPECT_EQ(e.kind, kind);
+    EXPECT_EQ(e.name, name);
+    EXPECT_EQ(e.needs_future, kind == LevelConfig::Replacement::kMin) << name;
+    EXPECT_EQ(ToString(kind), name);
+    ReplayConfig c = DefaultConfig();
+    ApplyOverride(c, "level.board.replacement", name);
+    EXPECT_EQ(c.levels[1].replacement, kind) << name;
+    EXPECT_NE(MakeReplacement(kind, 4, {0, 1}), nullptr);
+  }
+  ReplayConfig c = DefaultConfig();
+  try {
+    ApplyOverride(c, "level.board.replacement", "random");
+    FAIL() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(),
+                 "override 'level.board.replacement': unknown replacement 'random' "
+                 "(expected lru, fifo or min)");
+  }
+  EXPECT_NE(ToToml(c).find("# Lru | fifo | min (Belady's MIN, a bound)."), std::string::npos);
 }
 
 }  // namespace

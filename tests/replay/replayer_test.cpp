@@ -33,7 +33,7 @@ struct Outcome {
 
 Outcome Replay(const RayBatch& rays, const std::string& scheduler, ReplayConfig config,
                const CellTree* previous = nullptr, CellId cells = 3) {
-  config.scheduler = scheduler;
+  config.scheduler = &SchedulerByName(scheduler, "test");
   const CellTree tree = TreeOf(rays);
   auto s = MakeScheduler(scheduler, config.seed);
   const FrameInfo info{previous ? 1u : 0u, &tree, previous, cells};

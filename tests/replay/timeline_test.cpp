@@ -78,8 +78,8 @@ Replayed Replay(const Frames& f, const ReplayConfig& config) {
   Replayed out;
   std::ostringstream json;
   TimelineWriter writer(json, config, f.footprints, {"t.rct", FrameNumbers(f.rays.size())});
-  auto watched = MakeScheduler(config.scheduler, config.seed);
-  auto plain = MakeScheduler(config.scheduler, config.seed);
+  auto watched = MakeScheduler(*config.scheduler, config.seed);
+  auto plain = MakeScheduler(*config.scheduler, config.seed);
   for (std::size_t i = 0; i < f.rays.size(); ++i) {
     const FrameInfo info{i, &f.trees[i], i > 0 ? &f.trees[i - 1] : nullptr, f.cells};
     const WorkGraph w = WorkOf(f, i, config);
@@ -271,7 +271,7 @@ ReplayConfig Config(std::uint32_t processors, ReplayConfig::Granularity g, bool 
   c.granularity = g;
   c.processors.prefetch = prefetch;
   c.levels[0].capacity = cache_cells;
-  c.scheduler = scheduler;
+  c.scheduler = &SchedulerByName(scheduler, "test");
   return c;
 }
 
@@ -359,7 +359,7 @@ TEST(Timeline, RefusesToGrowPastItsLimit) {
     const std::string error = testing::ErrorOf([&] {
       TimelineWriter writer(out, c, f.footprints,
                             {"t.rct", FrameNumbers(f.rays.size()), limit, "--timeline x.json"});
-      auto s = MakeScheduler(c.scheduler, c.seed);
+      auto s = MakeScheduler(*c.scheduler, c.seed);
       for (std::size_t i = 0; i < f.rays.size(); ++i) {
         const FrameInfo info{i, &f.trees[i], i > 0 ? &f.trees[i - 1] : nullptr, f.cells};
         ReplayFrame(WorkOf(f, i, c), f.footprints, c, *s, info, 0, &writer);
@@ -376,7 +376,7 @@ TEST(Timeline, RefusesToGrowPastItsLimit) {
   std::ostringstream out;  // exactly the size it needs: written
   TimelineWriter writer(out, c, f.footprints,
                         {"t.rct", FrameNumbers(f.rays.size()), whole.size(), "--timeline"});
-  auto s = MakeScheduler(c.scheduler, c.seed);
+  auto s = MakeScheduler(*c.scheduler, c.seed);
   for (std::size_t i = 0; i < f.rays.size(); ++i) {
     const FrameInfo info{i, &f.trees[i], i > 0 ? &f.trees[i - 1] : nullptr, f.cells};
     ReplayFrame(WorkOf(f, i, c), f.footprints, c, *s, info, Bound(f.trees[i]), &writer);

@@ -278,8 +278,8 @@ TEST(BestSchedulersTest, CellTreeUnionPlansTheLastTwoFramesTogether) {
   EXPECT_TRUE(IsFeasible(t0, plan));
   EXPECT_TRUE(IsFeasible(t1, plan));
   EXPECT_FALSE(IsFeasible(t1, PlanFor(t0, 3)));  // t0's plan alone would not serve t1
-  EXPECT_EQ(SchedulerHistory("celltree-union"), 2u);
-  EXPECT_EQ(SchedulerHistory("celltree-best"), 1u);
+  EXPECT_EQ(SchedulerByName("celltree-union", "test").history, 2u);
+  EXPECT_EQ(SchedulerByName("celltree-best", "test").history, 1u);
 }
 
 // ------------------------------------------------------------------ factory
@@ -301,8 +301,8 @@ TEST(MakeSchedulerTest, UnknownNameListsTheValidOnes) {
     FAIL() << "no InputError";
   } catch (const InputError& e) {
     EXPECT_STREQ(e.what(),
-                 "unknown scheduler 'MaxWork' (expected one of: maxwork, roundrobin, random, "
-                 "peel, celltree, best, celltree-best, celltree-union)");
+                 "scheduler: unknown scheduler 'MaxWork' (expected maxwork, roundrobin, random, "
+                 "peel, celltree, best, celltree-best or celltree-union)");
   }
   EXPECT_THROW(MakeScheduler("", 0), InputError);
 }
