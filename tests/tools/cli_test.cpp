@@ -365,7 +365,10 @@ TEST(Cli, BadInputGetsAClearMessageAndExitCode2) {
   EXPECT_FALSE(std::filesystem::exists(d / "x.rct"));
   EXPECT_EQ(Raycell("record --help").code, 0);
   // A bad value of a command's own flag names the flag, not the configuration key it sets.
-  ASSERT_EQ(Raycell("record --res 8x8 --quiet --out " + (d / "small.rct").string()).code, 0);
+  ASSERT_EQ(Raycell("record --res 8x8 --quiet --images " + (d / "img").string() + " --out " +
+                    (d / "small.rct").string())
+                .code,
+            0);
   for (const std::string flag : {"--scheduler", "--granularity"}) {
     r = Raycell("replay " + (d / "small.rct").string() + " " + flag + " foo");
     EXPECT_EQ(r.code, 2);
