@@ -46,7 +46,7 @@ struct FrameAnalysis {
   std::uint64_t splits = 0;                     // split peels
   std::optional<std::uint64_t> optimum;         // set only when proved optimal
   std::string optimum_status = "not computed";  // or "optimal", "unknown: ...", ...
-  // With --bracket (DESIGN.md §1 "Lower bounds beyond maxGen"): the optimum lies in
+  // With --bracket (docs/design.md §1 "Lower bounds beyond maxGen"): the optimum lies in
   // [lower_bound, best_length]; optimum is set when they meet or a search proves it.
   std::optional<std::uint64_t> lower_bound;  // the best proven lower bound, >= bound
   std::string lower_bound_method;            // e.g. "ip(pairs,triples,blocks)+cuts"

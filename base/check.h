@@ -1,4 +1,4 @@
-// Two error channels (CONVENTIONS.md "Errors"):
+// Two error channels (CONTRIBUTING.md "Errors"):
 //  - InputError: bad input (files, options, configs). The message names the file, record or
 //    option and what was expected; tools print it and exit non-zero.
 //  - RAYCELL_CHECK: a broken invariant, a bug. Prints the condition and values and aborts.

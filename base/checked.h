@@ -1,4 +1,4 @@
-// Checked 64-bit arithmetic for counters and simulated time (CONVENTIONS.md "Typed time"):
+// Checked 64-bit arithmetic for counters and simulated time (CONTRIBUTING.md "Typed time"):
 // an overflow is a broken invariant, so it is a CHECK failure that prints both operands.
 #pragma once
 

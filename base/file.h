@@ -1,4 +1,4 @@
-// Output files are written to a temporary name and renamed when complete (CONVENTIONS.md
+// Output files are written to a temporary name and renamed when complete (CONTRIBUTING.md
 // "Errors"): a reader never sees a half-written file under the final name, and a failed
 // write leaves whatever was there before.
 #pragma once

@@ -22,7 +22,7 @@
 // Why every number this file reports is at most the optimum.
 //
 // Let T be an optimal (shortest feasible) schedule and x_c the number of entries of T that
-// are cell c. T is a common supersequence of all root-to-leaf paths (DESIGN.md §1), so:
+// are cell c. T is a common supersequence of all root-to-leaf paths (docs/design.md §1), so:
 //  (1) x_c >= maxGen(c): a node of generation g has g nodes of cell c on its path, each needing
 //      its own entry of c (maxGen).
 //  (2) for any set S of cells, T restricted to S (the entries of cells of S, in order) is a

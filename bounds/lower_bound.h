@@ -1,5 +1,5 @@
 // Lower bounds on the fewest fetches of any feasible schedule of a Cell Tree (one-cell cache),
-// stronger than maxGen (DESIGN.md §1 "Lower bounds beyond maxGen").
+// stronger than maxGen (docs/design.md §1 "Lower bounds beyond maxGen").
 //
 // For groups S of cells, the SCS of the tree's paths projected onto S (bounds/projection.h,
 // bounds/scs.h) bounds the fetches of cells of S. The groups (pairs and triples of cells that

@@ -1,4 +1,4 @@
-// Projections of a Cell Tree onto a set of cells (DESIGN.md §1 "Lower bounds beyond maxGen").
+// Projections of a Cell Tree onto a set of cells (docs/design.md §1 "Lower bounds beyond maxGen").
 //
 // For a set S of cells, every root-to-leaf cell path is projected onto S: its cells that are in
 // S are kept, in order, repeats kept. A feasible schedule restricted to S is a common

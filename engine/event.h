@@ -1,4 +1,4 @@
-// An event of the discrete-event core (DESIGN.md §2): a small plain struct, no callable per
+// An event of the discrete-event core (docs/design.md §2): a small plain struct, no callable per
 // event, so millions of pending events cost 40 bytes each. The engine knows nothing of what
 // `kind` and `payload` mean; the target component does.
 #pragma once

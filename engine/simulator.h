@@ -1,4 +1,4 @@
-// The simulation loop (DESIGN.md §2): pops events in (time, priority, insertion order),
+// The simulation loop (docs/design.md §2): pops events in (time, priority, insertion order),
 // CHECKs that time never goes backwards, counts events, and runs a watchdog (ChampSim) that
 // stops with a dump of every component's state when nothing progresses.
 #pragma once

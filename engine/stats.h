@@ -1,4 +1,4 @@
-// The printer side of statistics (CONVENTIONS.md, ChampSim): components own plain stats
+// The printer side of statistics (CONTRIBUTING.md, ChampSim): components own plain stats
 // structs; a caller turns them into a StatsTable (an ordered list of named values) and
 // prints it as text, JSON or CSV. Formatting is deterministic: integers in decimal, reals
 // in the shortest form that reads back to the same double, or with fixed decimals where the

@@ -1,4 +1,4 @@
-// Simulated time (DESIGN.md §2): an integer count of picoseconds in 64 bits, so 10^12
+// Simulated time (docs/design.md §2): an integer count of picoseconds in 64 bits, so 10^12
 // samples at 1 ps each (10^12 ps = 1 s) are exact and the range is about 213 days.
 // Typed and explicit: no implicit conversion from or to integers; arithmetic is checked.
 #pragma once

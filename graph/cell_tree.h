@@ -1,4 +1,4 @@
-// The Cell Tree of one frame (DESIGN.md §1 "Cell Tree", "Generation and bound").
+// The Cell Tree of one frame (docs/design.md §1 "Cell Tree", "Generation and bound").
 //
 // Nodes live in flat arrays indexed by NodeId. Node 0 (kRootNode) is the virtual root: it
 // has no cell, no parent and is never counted as work. Every other node is (parent, cell),

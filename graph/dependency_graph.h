@@ -1,4 +1,4 @@
-// The dependency graph of a Cell Tree in Boost.Graph (DESIGN.md §1 "Cache-saving links and
+// The dependency graph of a Cell Tree in Boost.Graph (docs/design.md §1 "Cache-saving links and
 // conflicts"): one vertex per tree node except the virtual root, one edge parent -> child
 // per tree edge (edges from the root are dropped: the root is always done). A node's work
 // can be done only after its parent's, so any order of work is a topological order.

@@ -7,7 +7,7 @@
 // a child never has its parent's cell (rays never repeat a cell consecutively); a forest
 // built by FromArrays, e.g. a projection onto a few cells, may.
 //
-// Running a schedule on a forest is DESIGN.md §1's run: at each entry c, every unprocessed
+// Running a schedule on a forest is docs/design.md §1's run: at each entry c, every unprocessed
 // node of cell c whose parent was processed before the entry (a root: always) is processed;
 // a child of c made ready by the entry waits for the next fetch of c.
 #pragma once
@@ -56,7 +56,7 @@ class CellForest {
   // Longest path (in nodes) from n down to a leaf, n included.
   std::uint32_t height(Index n) const { return height_[n]; }
 
-  // maxGen per cell (size cell_count()) and their sum: DESIGN.md's bound for this forest.
+  // maxGen per cell (size cell_count()) and their sum: docs/design.md's bound for this forest.
   const std::vector<std::uint32_t>& max_generations() const { return max_gen_; }
   std::uint64_t bound() const { return bound_; }
 

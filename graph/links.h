@@ -1,4 +1,4 @@
-// Cache-saving links and conflicts (DESIGN.md §1 "Cache-saving links and conflicts").
+// Cache-saving links and conflicts (docs/design.md §1 "Cache-saving links and conflicts").
 //
 // A schedule groups the tree's nodes into fetches; two nodes of one cell processed by the
 // same fetch share that fetch and are joined by a cache-saving link. A group of k nodes is
@@ -22,7 +22,7 @@
 //       link a - b gives f(a) = f(b), so f is constant on classes and strictly increases
 //       along every edge of the contracted graph; a cycle K -> ... -> K would give
 //       f(K) < f(K).
-// Under DESIGN.md's greedy run (RunSchedule: an entry processes *every* ready node of its
+// Under docs/design.md's greedy run (RunSchedule: an entry processes *every* ready node of its
 // cell) (=>) still holds, so the links of any schedule (LinksOf) are feasible, but (<=) does
 // not: greedy processing can be forced to separate linked nodes. Paths A B and C A B D B:
 // nodes A1 B2 / C3 A4 B5 D6 B7, links {A1, A4} and {B2, B7}. The contraction is acyclic (C3,

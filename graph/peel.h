@@ -1,4 +1,4 @@
-// Peel (DESIGN.md §1 "Peel"): builds a feasible schedule for a Cell Tree backwards, by
+// Peel (docs/design.md §1 "Peel"): builds a feasible schedule for a Cell Tree backwards, by
 // peeling the leaves of one cell at a time.
 #pragma once
 
@@ -25,7 +25,7 @@ struct PeelResult {
   std::string ToString() const;
 };
 
-// Runs Peel exactly as DESIGN.md specifies, tie-breaks included: the lowest-numbered ready
+// Runs Peel exactly as docs/design.md specifies, tie-breaks included: the lowest-numbered ready
 // cell, else the cell with the most leaves (lowest number on ties); each step removes the
 // leaves of that cell present at the start of the step. O(nodes log cells) time, O(nodes)
 // memory.

@@ -1,4 +1,4 @@
-// Schedules and feasibility (DESIGN.md §1 "Schedule and feasibility"). Independent of
+// Schedules and feasibility (docs/design.md §1 "Schedule and feasibility"). Independent of
 // Peel: this is the checker Peel's output is tested against.
 #pragma once
 

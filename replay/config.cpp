@@ -655,7 +655,7 @@ void ApplyOverride(ReplayConfig& config, const std::string& key, const std::stri
 std::string ToToml(const ReplayConfig& config) {
   const ReplayConfig d = DefaultConfig();
   std::ostringstream out;
-  out << "# raycell replay configuration (DESIGN.md §2).\n"
+  out << "# raycell replay configuration (docs/design.md §2).\n"
          "# Defaults model the GI-Cube board on the slides: a PCI board whose block processors\n"
          "# are backed by Direct RDRAM, with host memory reached over PCI.\n\n";
   bool in_processors = false;

@@ -1,4 +1,4 @@
-// The memory levels between the block processors and host memory (DESIGN.md §2): level 0 is
+// The memory levels between the block processors and host memory (docs/design.md §2): level 0 is
 // each processor's own cell cache, the others are shared (board memory), and host memory
 // below the last level holds every cell. Moving a cell across the link below a level takes
 // that link's latency plus footprint / bandwidth; a link carries one transfer at a time.

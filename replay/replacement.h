@@ -1,4 +1,4 @@
-// Replacement policies of a memory level (DESIGN.md §2; CONVENTIONS.md: policies plug in
+// Replacement policies of a memory level (docs/design.md §2; CONTRIBUTING.md: policies plug in
 // through small interfaces, after ChampSim's replacement modules). A CellStore keeps which
 // cells it holds and their bytes; its policy is told every request, hit, insertion and
 // eviction, and picks the victim when room is needed.

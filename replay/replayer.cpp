@@ -125,7 +125,7 @@ struct Processor {
   SimTime work, stall;
 };
 
-// The board of DESIGN.md §2: per-cell ray queues (flat arrays of unit ids), processors and
+// The board of docs/design.md §2: per-cell ray queues (flat arrays of unit ids), processors and
 // memory, run as the engine would run the same events (see SlotQueue). A processor's unit is
 // worked by its own loop iteration, without a queue push and pop: while a processor works
 // the queued units of a cell, its next unit's end is compared with the other processors'

@@ -1,4 +1,4 @@
-// Units for the replay configuration (CONVENTIONS.md "Units parsed once at load"): durations,
+// Units for the replay configuration (CONTRIBUTING.md "Units parsed once at load"): durations,
 // sizes and bandwidths are parsed from text such as "10ns", "256MiB" or "1.6GB/s" into typed,
 // exact values, and formatted back so that format → parse round-trips exactly.
 //

@@ -1,10 +1,10 @@
-// A frame's work as the replay schedules it (DESIGN.md §2 "granularity"): units, each done in
+// A frame's work as the replay schedules it (docs/design.md §2 "granularity"): units, each done in
 // one cell, that become ready when their predecessor is done.
 //  - Per ray segment (exact): one unit per visit of every ray. A visit's successors are the
 //    ray's next visit and the first visits of the rays spawned at it.
 //  - Per Cell Tree node (aggregated): one unit per node, its successors its children.
 // A successor in the same cell as its unit (a spawned ray's first visit) is worked in the
-// same fetch, never queued (DESIGN.md §1 "Max Work").
+// same fetch, never queued (docs/design.md §1 "Max Work").
 #pragma once
 
 #include <cstddef>

@@ -1,5 +1,5 @@
 // Schedulers that follow the best schedule found for a Cell Tree (search/best_schedule.h)
-// instead of Peel's (DESIGN.md §1 "Cell Tree scheduling"):
+// instead of Peel's (docs/design.md §1 "Cell Tree scheduling"):
 //  - `best`: each frame follows its own tree's best schedule, an offline oracle (as `peel`
 //    is for Peel);
 //  - `celltree-best`: frame i+1 follows the best schedule of frame i's tree, the paper's

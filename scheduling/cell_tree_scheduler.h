@@ -1,4 +1,4 @@
-// Cell Tree scheduling, the paper's scheme (DESIGN.md §1 "Cell Tree scheduling"): frame 0
+// Cell Tree scheduling, the paper's scheme (docs/design.md §1 "Cell Tree scheduling"): frame 0
 // runs Max Work; frame i+1 follows the Peel schedule of frame i's Cell Tree, skipping
 // entries whose cell has no queued work (no fetch), then Max Work once the schedule is used
 // up. Peel runs once per frame, in BeginFrame.

@@ -1,4 +1,4 @@
-// Max Work (DESIGN.md §1 "Max Work"): the cell with the most queued rays, lowest number on
+// Max Work (docs/design.md §1 "Max Work"): the cell with the most queued rays, lowest number on
 // ties. Stateless.
 #pragma once
 

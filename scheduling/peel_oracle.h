@@ -1,4 +1,4 @@
-// The Peel oracle: follows the Peel schedule of the frame's own Cell Tree (DESIGN.md §1
+// The Peel oracle: follows the Peel schedule of the frame's own Cell Tree (docs/design.md §1
 // "Peel"), which a real machine cannot know before the frame is traced: an offline
 // reference for how well Cell Tree scheduling could do. Entries whose cell has no queued
 // work are skipped; when the schedule is used up, Max Work. With a one-cell cache the

@@ -1,4 +1,4 @@
-// Random (a baseline, DESIGN.md §2): a cell drawn uniformly among the cells with queued
+// Random (a baseline, docs/design.md §2): a cell drawn uniformly among the cells with queued
 // work. The generator is implemented here (xoshiro256**, seeded through splitmix64, and
 // rejection sampling for bounded draws) so that a seed gives the same choices with every
 // compiler and standard library. Each frame re-seeds from (seed, frame_index): frames are

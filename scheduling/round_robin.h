@@ -1,4 +1,4 @@
-// Round Robin (a baseline, DESIGN.md §2): the next cell with queued work after the last one
+// Round Robin (a baseline, docs/design.md §2): the next cell with queued work after the last one
 // chosen, cyclically; each frame starts the search at cell 0.
 #pragma once
 

@@ -1,7 +1,7 @@
-// Ray schedulers (DESIGN.md §1 "Max Work", "Cell Tree scheduling"; §2 "scheduler"): the
+// Ray schedulers (docs/design.md §1 "Max Work", "Cell Tree scheduling"; §2 "scheduler"): the
 // policy that picks which cell a processor fetches next. The replay model keeps per-cell ray
 // queues and asks its Scheduler whenever a processor needs a cell; policies plug in through
-// this small interface (CONVENTIONS.md, after ChampSim's replacement modules).
+// this small interface (CONTRIBUTING.md, after ChampSim's replacement modules).
 #pragma once
 
 #include <cstddef>

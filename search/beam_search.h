@@ -1,4 +1,4 @@
-// Beam search for short schedules (DESIGN.md §1 "Schedule and feasibility"): a breadth-first
+// Beam search for short schedules (docs/design.md §1 "Schedule and feasibility"): a breadth-first
 // search over sets of processed nodes that keeps only the `width` most promising states of
 // each depth.
 //

@@ -1,4 +1,4 @@
-// The shortest schedule we can find for a Cell Tree (DESIGN.md §1 "Schedule and
+// The shortest schedule we can find for a Cell Tree (docs/design.md §1 "Schedule and
 // feasibility"), far shorter than Peel's on real frames: Peel, a beam search
 // (search/beam_search.h), for small trees the exact search (search/optimum.h) with the best
 // schedule so far as its incumbent (it proves it optimal or brackets the optimum), then

@@ -15,7 +15,7 @@
 //
 // States and moves. A state is the set of processed nodes; it is downward closed (a node is
 // processed only after its parent). A move on cell c processes every node of c whose parent
-// is processed. That is exactly how DESIGN.md runs a schedule, so the paths from the start
+// is processed. That is exactly how docs/design.md runs a schedule, so the paths from the start
 // state are the schedules, entry for entry, once entries that process nothing are dropped
 // (dropping them keeps a schedule feasible and makes it shorter). Taking all available nodes
 // of c is also never worse than taking some: running any schedule from a superset state S'

@@ -1,4 +1,4 @@
-// The exact optimum (DESIGN.md §1 "Schedule and feasibility"): the shortest feasible
+// The exact optimum (docs/design.md §1 "Schedule and feasibility"): the shortest feasible
 // schedule of a Cell Tree with a one-cell cache, found by A* over sets of processed nodes.
 // The problem is NP-hard (shortest common supersequence), so the search has limits and,
 // past one, answers a bracket [lower, upper] instead of a guess. Meant for small trees, and

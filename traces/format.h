@@ -1,4 +1,4 @@
-// The trace format's constants, shared by the writer and the reader (DESIGN.md §3; the format
+// The trace format's constants, shared by the writer and the reader (docs/design.md §3; the format
 // itself is documented field by field in traces/trace.capnp): the format version, magic
 // numbers, the layout of a ray's head byte, and every limit of the format. A limit here is
 // what the reader accepts; the writer refuses, up front and with a message naming the limit,

@@ -1,5 +1,5 @@
 // Rays and visits of one frame, as the renderer produces them and the trace stores them
-// (DESIGN.md §1 "Rays and visits"). A RayBatch is a run of consecutive rays of one frame
+// (docs/design.md §1 "Rays and visits"). A RayBatch is a run of consecutive rays of one frame
 // held as a struct of arrays, so a batch of a million shadow rays costs a handful of
 // allocations, not a million.
 #pragma once

@@ -1,4 +1,4 @@
-# raycell trace file schema, format version 2 (DESIGN.md §3 "The trace"). The format's
+# raycell trace file schema, format version 2 (docs/design.md §3 "The trace"). The format's
 # constants and limits are in traces/format.h.
 #
 # A trace file (".rct") is a sequence of zstd frames:

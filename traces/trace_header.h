@@ -1,4 +1,4 @@
-// What a trace file says about the capture as a whole (DESIGN.md §3): the scene, its cell
+// What a trace file says about the capture as a whole (docs/design.md §3): the scene, its cell
 // grid and footprints, the camera of every frame and the renderer's settings. Plain values;
 // traces/trace.capnp stores them field by field.
 #pragma once

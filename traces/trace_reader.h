@@ -1,4 +1,4 @@
-// Reader of trace files (DESIGN.md §3; the format is documented in traces/trace.capnp).
+// Reader of trace files (docs/design.md §3; the format is documented in traces/trace.capnp).
 //
 // Open() decodes the header and the index at the end of the file; a frame is then read by
 // seeking to its offset, without decoding the others. When the index is missing (a .tmp

@@ -1,4 +1,4 @@
-// Streaming writer of trace files (DESIGN.md §3; the format is documented in
+// Streaming writer of trace files (docs/design.md §3; the format is documented in
 // traces/trace.capnp). Memory is bounded by one batch of rays plus zstd's window, never by
 // the capture. The file is written to `path + ".tmp"` and renamed to `path` by Finish();
 // each frame is flushed to the .tmp as a complete zstd frame at EndFrame(), so an

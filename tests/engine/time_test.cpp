@@ -54,7 +54,7 @@ TEST(SimTime, TryFromSecondsRejectsUnrepresentable) {
   EXPECT_TRUE(SimTime::TryFromSeconds(1.8e7).has_value());   // 1.8e19 ps < 2^64 - 1
 }
 
-// DESIGN.md: simulated time for 10^12 samples at 1 ps each is exact.
+// docs/design.md: simulated time for 10^12 samples at 1 ps each is exact.
 TEST(SimTime, TrillionOnePicosecondSamplesAreExact) {
   const SimTime sample = SimTime::Picoseconds(1);
   EXPECT_EQ((sample * kTrillion).picoseconds(), kTrillion);

@@ -13,7 +13,7 @@
 namespace raycell {
 namespace {
 
-// Typed ids (CONVENTIONS.md): a node and a cell, both 32-bit numbers, never convert into each
+// Typed ids (CONTRIBUTING.md): a node and a cell, both 32-bit numbers, never convert into each
 // other, in either direction, by construction or assignment; a number becomes a node only
 // explicitly, NodeId(i). Checked at compile time: this file does not build if they do.
 static_assert(!std::is_convertible_v<NodeId, CellId> && !std::is_convertible_v<CellId, NodeId>);

@@ -217,7 +217,7 @@ TEST(LinksTest, EmptyTree) {
 
 // ------------------------------------------------------------------------- chains
 
-// The chain (DESIGN.md §1, the paper's slides). Paths A B, B C, C A give
+// The chain (docs/design.md §1, the paper's slides). Paths A B, B C, C A give
 //   A1 -> B2,  B3 -> C4,  C5 -> A6
 // and the links a = {A1, A6}, b = {B2, B3}, c = {C4, C5}. Any two are feasible: with a and b
 // the contraction is C5 -> {A1 A6} -> {B2 B3} -> C4, acyclic (schedule C A B C), and the

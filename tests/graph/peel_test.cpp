@@ -38,7 +38,7 @@ NaiveRun RunNaive(const CellTree& t, const Schedule& schedule) {
   return {std::all_of(done.begin(), done.end(), [](bool d) { return d; }), useful};
 }
 
-// Peel straight from DESIGN.md's pseudo-code, recomputing everything at every step
+// Peel straight from docs/design.md's pseudo-code, recomputing everything at every step
 // (O(nodes^2)): the reference the bucketed Peel must match entry for entry.
 PeelResult NaivePeel(const CellTree& t) {
   std::vector<bool> gone(t.size(), false);

@@ -271,7 +271,7 @@ void ExpectSamePictureAndWork(const Rendered& r, const Rendered& one) {
 }
 
 // Every visit is to a non-empty cell, consecutive visits differ, and spawned rays start in
-// their parent's cell (DESIGN.md §1).
+// their parent's cell (docs/design.md §1).
 void ExpectWellFormedRecord(const Rendered& r) {
   const RayBatch& rays = r.rays;
   ASSERT_EQ(rays.size(), r.stats.rays);

@@ -1,5 +1,5 @@
 // Schedulers driven by a small, independent functional replay with a one-cell cache
-// (DESIGN.md §1 "Max Work", "Cell Tree scheduling"), checked against the Cell Tree of the
+// (docs/design.md §1 "Max Work", "Cell Tree scheduling"), checked against the Cell Tree of the
 // same rays: its bound, Peel and the schedule feasibility checker.
 #include <gtest/gtest.h>
 

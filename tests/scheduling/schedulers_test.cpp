@@ -141,7 +141,7 @@ TEST(RandomTest, ChoicesArePinned) {
 
 // ------------------------------------------------------------------ Peel oracle, Cell Tree
 
-// Paths A B, A B, C A: Peel gives C A B (DESIGN.md §1: B is ready and peeled first, then both
+// Paths A B, A B, C A: Peel gives C A B (docs/design.md §1: B is ready and peeled first, then both
 // A nodes, then C).
 class FollowTest : public ::testing::Test {
  protected:

@@ -1,4 +1,4 @@
-// Size and speed of a realistic trace (DESIGN.md §3: bytes per visit at zstd level 3): a
+// Size and speed of a realistic trace (docs/design.md §3: bytes per visit at zstd level 3): a
 // synthetic capture shaped like vdb_render's, written and read back (the round trip is
 // checked), then the same rays with incompressible samples for comparison.
 //

@@ -1,4 +1,4 @@
-// The scene's cell grid and the traversal of a ray through it (DESIGN.md §1 "Scene and
+// The scene's cell grid and the traversal of a ray through it (docs/design.md §1 "Scene and
 // cells", "Rays and visits").
 //
 // CellGrid: a world-space box [lo, hi] split uniformly into nx*ny*nz cells,
