@@ -82,12 +82,12 @@ class CountProgram {
     ++live_programs;
     glp_ = glp_create_prob();
     glp_set_obj_dir(glp_, GLP_MIN);
-    for (CellId c = 0; c < max_gen.size(); ++c) {
-      if (max_gen[c] == 0) continue;
+    for (CellId c : CellRange(max_gen.size())) {
+      if (max_gen[c.value()] == 0) continue;
       const int j = glp_add_cols(glp_, 1);
-      column_[c] = j;
+      column_[c.value()] = j;
       glp_set_col_kind(glp_, j, GLP_IV);
-      glp_set_col_bnds(glp_, j, GLP_LO, max_gen[c], 0);
+      glp_set_col_bnds(glp_, j, GLP_LO, max_gen[c.value()], 0);
       glp_set_obj_coef(glp_, j, 1);
     }
   }
@@ -101,7 +101,7 @@ class CountProgram {
   void AddAtLeast(const std::vector<CellId>& cells, std::uint32_t rhs) {
     std::vector<int> ind{0};
     std::vector<double> val{0};
-    for (CellId c : cells) ind.push_back(column_[c]), val.push_back(1);
+    for (CellId c : cells) ind.push_back(column_[c.value()]), val.push_back(1);
     AddRow(ind, val, rhs);
   }
 
@@ -139,8 +139,9 @@ class CountProgram {
     const bool has_x = status == GLP_OPT || status == GLP_FEAS;
     if (has_x) {
       s.x.assign(max_gen_.size(), 0);
-      for (CellId c = 0; c < max_gen_.size(); ++c) {
-        if (column_[c] != 0) s.x[c] = Round(glp_mip_col_val(glp_, column_[c]));
+      for (CellId c : CellRange(max_gen_.size())) {
+        if (column_[c.value()] != 0)
+          s.x[c.value()] = Round(glp_mip_col_val(glp_, column_[c.value()]));
       }
     }
     if (rc == 0 && status == GLP_OPT) {
@@ -182,20 +183,20 @@ class CountProgram {
   }
 
   int Indicator(CellId c, std::uint32_t v) {
-    RAYCELL_CHECK(column_[c] != 0);
-    RAYCELL_CHECK_LT(max_gen_[c], v);
-    const std::uint64_t key = (std::uint64_t{c} << 32) | v;
+    RAYCELL_CHECK(column_[c.value()] != 0);
+    RAYCELL_CHECK_LT(max_gen_[c.value()], v);
+    const std::uint64_t key = (std::uint64_t{c.value()} << 32) | v;
     auto it = indicator_.find(key);
     if (it != indicator_.end()) return it->second;
     const int z = glp_add_cols(glp_, 1);
     glp_set_col_kind(glp_, z, GLP_BV);
     glp_set_obj_coef(glp_, z, 0);
     // x_c - (v - maxGen) z >= maxGen.
-    const int ind[] = {0, column_[c], z};
-    const double val[] = {0, 1, -double(v - max_gen_[c])};
+    const int ind[] = {0, column_[c.value()], z};
+    const double val[] = {0, 1, -double(v - max_gen_[c.value()])};
     const int i = glp_add_rows(glp_, 1);
     glp_set_mat_row(glp_, i, 2, ind, val);
-    glp_set_row_bnds(glp_, i, GLP_LO, max_gen_[c], 0);
+    glp_set_row_bnds(glp_, i, GLP_LO, max_gen_[c.value()], 0);
     indicator_.emplace(key, z);
     return z;
   }
@@ -285,7 +286,7 @@ class Bounder {
       CellString cells_of = paths_[i];
       std::sort(cells_of.begin(), cells_of.end());
       cells_of.erase(std::unique(cells_of.begin(), cells_of.end()), cells_of.end());
-      for (CellId c : cells_of) paths_with_[c].push_back(i);
+      for (CellId c : cells_of) paths_with_[c.value()].push_back(i);
     }
   }
 
@@ -365,7 +366,8 @@ class Bounder {
   // The paths' projection onto `cells` (increasing), from the paths through them only.
   std::vector<CellString> Project(const std::vector<CellId>& cells) const {
     std::vector<std::size_t> ids;
-    for (CellId c : cells) ids.insert(ids.end(), paths_with_[c].begin(), paths_with_[c].end());
+    for (CellId c : cells)
+      ids.insert(ids.end(), paths_with_[c.value()].begin(), paths_with_[c.value()].end());
     std::sort(ids.begin(), ids.end());
     ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
     std::vector<CellString> strings;
@@ -381,7 +383,7 @@ class Bounder {
     if (!seen_.insert(cells).second) return -1;
     Group g;
     g.bound.cells = cells;
-    for (CellId c : cells) g.bound.max_gen_sum += max_gen_[c];
+    for (CellId c : cells) g.bound.max_gen_sum += max_gen_[c.value()];
     g.solver = std::make_unique<ScsSolver>(Project(cells), options_.merged_parts);
     g.bound.strings = static_cast<std::uint32_t>(g.solver->strings());
     ScsLimits limits = Limits();
@@ -440,14 +442,14 @@ class Bounder {
   void AddTriples(CountProgram& program) {
     std::vector<std::vector<CellId>> partners(tree_.cell_count());
     for (const auto& e : together_) {
-      partners[e.first.first].push_back(e.first.second);
+      partners[e.first.first.value()].push_back(e.first.second);
     }
     std::vector<std::pair<std::uint32_t, std::array<CellId, 3>>> candidates;
-    for (CellId a = 0; a < tree_.cell_count(); ++a) {
-      for (std::size_t i = 0; i < partners[a].size(); ++i) {
-        const CellId b = partners[a][i];
-        for (std::size_t j = i + 1; j < partners[a].size(); ++j) {
-          const CellId c = partners[a][j];
+    for (CellId a : CellRange(tree_.cell_count())) {
+      for (std::size_t i = 0; i < partners[a.value()].size(); ++i) {
+        const CellId b = partners[a.value()][i];
+        for (std::size_t j = i + 1; j < partners[a.value()].size(); ++j) {
+          const CellId c = partners[a.value()][j];
           if (!together_.count({b, c})) continue;
           const std::uint32_t score = PairGain(a, b) + PairGain(a, c) + PairGain(b, c);
           if (score > 0) candidates.push_back({score, {a, b, c}});
@@ -468,8 +470,8 @@ class Bounder {
     if (blocks.size() > options_.max_blocks) blocks.resize(options_.max_blocks);
     // With few cells, all of them together (the tree's own SCS) comes last.
     std::vector<CellId> all;
-    for (CellId c = 0; c < max_gen_.size(); ++c) {
-      if (max_gen_[c] > 0) all.push_back(c);
+    for (CellId c : CellRange(max_gen_.size())) {
+      if (max_gen_[c.value()] > 0) all.push_back(c);
     }
     if (!all.empty() && all.size() <= options_.max_block_cells) blocks.push_back(all);
     for (const auto& b : blocks) AddIfGain(program, Compute(b));
@@ -501,8 +503,8 @@ class Bounder {
             for (std::uint32_t k = z; k < z + s[2]; ++k) {
               for (std::uint32_t j = y; j < y + s[1]; ++j) {
                 for (std::uint32_t i = x; i < x + s[0]; ++i) {
-                  const CellId c = i + n[0] * (j + n[1] * k);
-                  if (c < max_gen_.size() && max_gen_[c] > 0) b.push_back(c);
+                  const CellId c(i + n[0] * (j + n[1] * k));
+                  if (c.value() < max_gen_.size() && max_gen_[c.value()] > 0) b.push_back(c);
                 }
               }
             }
@@ -520,15 +522,15 @@ class Bounder {
     std::vector<std::vector<CellId>> out;
     std::vector<std::map<CellId, std::uint32_t>> near(tree_.cell_count());
     for (const auto& [pair, count] : together_) {
-      near[pair.first][pair.second] = count;
-      near[pair.second][pair.first] = count;
+      near[pair.first.value()][pair.second] = count;
+      near[pair.second.value()][pair.first] = count;
     }
-    for (CellId seed = 0; seed < tree_.cell_count(); ++seed) {
-      if (max_gen_[seed] == 0) continue;
+    for (CellId seed : CellRange(tree_.cell_count())) {
+      if (max_gen_[seed.value()] == 0) continue;
       std::vector<CellId> set{seed};
       std::map<CellId, std::uint64_t> score;
       for (;;) {
-        for (const auto& [c, n] : near[set.back()]) score[c] += n;
+        for (const auto& [c, n] : near[set.back().value()]) score[c] += n;
         for (CellId c : set) score.erase(c);
         if (score.empty()) break;
         auto best = score.begin();
@@ -572,7 +574,7 @@ class Bounder {
         }
         if (g.bound.cells.size() > options_.max_cut_group_cells) continue;
         std::vector<std::uint32_t> u;
-        for (CellId c : g.bound.cells) u.push_back(s.x[c]);
+        for (CellId c : g.bound.cells) u.push_back(s.x[c.value()]);
         if (Fits(g, u) != Realisability::kNotRealisable) continue;
         program.AddCut(Lift(g, u));
         ++r_.cuts;
@@ -594,7 +596,7 @@ class Bounder {
     for (std::size_t gi = 0; gi < groups_.size(); ++gi) {
       const GroupBound& b = groups_[gi].bound;
       std::uint64_t sum = 0;
-      for (CellId c : b.cells) sum += x[c];
+      for (CellId c : b.cells) sum += x[c.value()];
       if (b.scs_lower > b.max_gen_sum && sum == b.scs_lower) tight.push_back(gi);
     }
     std::size_t added = 0, tried = 0;
@@ -611,13 +613,13 @@ class Bounder {
         ++tried;
         Group g;
         g.bound.cells = either;
-        for (CellId c : either) g.bound.max_gen_sum += max_gen_[c];
+        for (CellId c : either) g.bound.max_gen_sum += max_gen_[c.value()];
         g.bound.scs_lower = g.bound.max_gen_sum;  // (1); no SCS search for these
         g.solver = std::make_unique<ScsSolver>(Project(either), options_.merged_parts);
         g.bound.strings = static_cast<std::uint32_t>(g.solver->strings());
         g.union_of_tight = true;
         std::vector<std::uint32_t> u;
-        for (CellId c : either) u.push_back(x[c]);
+        for (CellId c : either) u.push_back(x[c.value()]);
         const bool cut = Fits(g, u) == Realisability::kNotRealisable;
         if (cut) {
           program.AddCut(Lift(g, u));
@@ -649,7 +651,7 @@ class Bounder {
       if (AllLessEqual(u, n)) return Realisability::kNotRealisable;
     }
     std::vector<std::uint32_t> budget(tree_.cell_count(), 0);
-    for (std::size_t i = 0; i < u.size(); ++i) budget[g.bound.cells[i]] = u[i];
+    for (std::size_t i = 0; i < u.size(); ++i) budget[g.bound.cells[i].value()] = u[i];
     ScsLimits limits = Limits();
     limits.max_states = std::min(limits.max_states, options_.max_cut_states);
     if (limits.max_states == 0) return Realisability::kUnknown;

@@ -19,7 +19,7 @@ namespace {
 
 std::uint64_t SymbolMask(const CellString& s) {
   std::uint64_t m = 0;
-  for (CellId c : s) m |= std::uint64_t{1} << (c % 64);
+  for (CellId c : s) m |= std::uint64_t{1} << (c.value() % 64);
   return m;
 }
 
@@ -29,7 +29,7 @@ class ProjectionTrie {
   ProjectionTrie() : parent_{0}, symbol_{kNoCell}, has_child_{false} {}
 
   std::uint32_t Child(std::uint32_t node, CellId cell) {
-    const std::uint64_t key = (std::uint64_t{node} << 32) | cell;
+    const std::uint64_t key = (std::uint64_t{node} << 32) | cell.value();
     const auto [it, inserted] = children_.emplace(key, static_cast<std::uint32_t>(size()));
     if (inserted) {
       parent_.push_back(node);
@@ -91,14 +91,14 @@ std::vector<CellString> RemoveDominated(std::vector<CellString> strings) {
 std::vector<CellString> ProjectPaths(const CellTree& tree, const std::vector<CellId>& cells) {
   std::vector<bool> in(tree.cell_count(), false);
   for (CellId c : cells) {
-    if (c < tree.cell_count()) in[c] = true;
+    if (c.value() < tree.cell_count()) in[c.value()] = true;
   }
   // Parents come before children (parent(n) < n), so one pass maps every node.
   ProjectionTrie trie;
   std::vector<std::uint32_t> trie_node(tree.size(), 0);
   for (NodeId n : tree.nodes()) {
     const std::uint32_t up = trie_node[tree.parent(n).index()];
-    trie_node[n.index()] = in[tree.cell(n)] ? trie.Child(up, tree.cell(n)) : up;
+    trie_node[n.index()] = in[tree.cell(n).value()] ? trie.Child(up, tree.cell(n)) : up;
   }
   // Every trie node was made for some tree node, under which some leaf's projection extends
   // it; so a trie node with a child is a proper prefix (a subsequence) of a projection, and

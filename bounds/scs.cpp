@@ -84,8 +84,8 @@ BudgetResult ScsSolver::FitsBudget(const std::vector<std::uint32_t>& budget,
   const Dag& dag = in_->dag;
   std::vector<std::uint32_t> dense(dag.symbols());
   for (Symbol a = 0; a < dag.symbols(); ++a) {
-    RAYCELL_CHECK_LT(std::size_t{dag.cell(a)}, budget.size());
-    dense[a] = budget[dag.cell(a)];
+    RAYCELL_CHECK_LT(std::size_t{dag.cell(a).value()}, budget.size());
+    dense[a] = budget[dag.cell(a).value()];
   }
   return BudgetSearch(dag, std::move(dense), limits, &in_->parts).Run();
 }

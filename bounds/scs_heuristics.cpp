@@ -34,8 +34,8 @@ PartTable::PartTable(const Dag& dag, std::vector<Symbol> part, std::uint64_t sub
 std::uint32_t PartTable::Intern(std::vector<CellString> set) {
   std::vector<std::uint32_t> flat;
   for (const CellString& s : set) {
-    flat.insert(flat.end(), s.begin(), s.end());
-    flat.push_back(kNoCell);
+    for (CellId c : s) flat.push_back(c.value());
+    flat.push_back(kNoCell.value());
   }
   auto [it, inserted] = ids_.emplace(flat, static_cast<std::uint32_t>(sets_.size()));
   if (inserted) sets_.push_back(std::move(set));

@@ -53,7 +53,7 @@ NodeId CellTree::AddNode(NodeId parent, CellId cell) {
     next_sibling_[last_child_[parent.index()].index()] = id;
   }
   last_child_[parent.index()] = id;
-  cell_count_ = std::max(cell_count_, cell + 1);
+  cell_count_ = std::max(cell_count_, cell.value() + 1);
   return id;
 }
 
@@ -90,10 +90,10 @@ void CellTree::ComputeGenerations() {
     const auto [n, leaving] = stack.back();
     stack.pop_back();
     if (leaving) {
-      --on_path[cell_[n.index()]];
+      --on_path[cell_[n.index()].value()];
       continue;
     }
-    generation_[n.index()] = ++on_path[cell_[n.index()]];
+    generation_[n.index()] = ++on_path[cell_[n.index()].value()];
     stack.push_back({n, true});
     for (NodeId c = first_child_[n.index()]; c != kNoNode; c = next_sibling_[c.index()])
       stack.push_back({c, false});
@@ -121,7 +121,7 @@ std::string CellTree::ToString() const {
 std::vector<std::uint32_t> MaxGenerations(const CellTree& tree) {
   std::vector<std::uint32_t> max_gen(tree.cell_count(), 0);
   for (NodeId n : tree.nodes()) {
-    max_gen[tree.cell(n)] = std::max(max_gen[tree.cell(n)], tree.generation(n));
+    max_gen[tree.cell(n).value()] = std::max(max_gen[tree.cell(n).value()], tree.generation(n));
   }
   return max_gen;
 }
@@ -151,7 +151,7 @@ void CellTreeBuilder::AddBatch(const RayBatch& batch) {
 // Children are found by walking the sibling list while a node has few of them (the common
 // case: a handful of cells follow any cell), and through a hash index once it has many.
 NodeId CellTreeBuilder::Child(NodeId parent, CellId cell) {
-  const std::uint64_t key = (std::uint64_t{parent.index()} << 32) | cell;
+  const std::uint64_t key = (std::uint64_t{parent.index()} << 32) | cell.value();
   if (child_counts_[parent.index()] <= kScanChildren) {
     const NodeId found = tree_.FindChild(parent, cell);
     if (found != kNoNode) return found;
@@ -163,7 +163,7 @@ NodeId CellTreeBuilder::Child(NodeId parent, CellId cell) {
   child_counts_.push_back(0);
   if (++child_counts_[parent.index()] == kScanChildren + 1) {
     for (NodeId c = tree_.first_child(parent); c != kNoNode; c = tree_.next_sibling(c)) {
-      child_index_.emplace((std::uint64_t{parent.index()} << 32) | tree_.cell(c), c);
+      child_index_.emplace((std::uint64_t{parent.index()} << 32) | tree_.cell(c).value(), c);
     }
   } else if (child_counts_[parent.index()] > kScanChildren) {
     child_index_.emplace(key, n);
@@ -202,8 +202,8 @@ NodeId CellTreeBuilder::StartNode(const RayView& ray) {
   }
   const NodeId n = ParentVisitNode(ray);
   if (tree_.cell(n) != ray.cells[0]) {
-    RayError(ray.id, "first cell " + std::to_string(ray.cells[0]) + " is not the cell " +
-                         std::to_string(tree_.cell(n)) + " of parent " +
+    RayError(ray.id, "first cell " + std::to_string(ray.cells[0].value()) + " is not the cell " +
+                         std::to_string(tree_.cell(n).value()) + " of parent " +
                          std::to_string(ray.parent) + "'s spawn visit " +
                          std::to_string(ray.spawn));
   }
@@ -213,9 +213,10 @@ NodeId CellTreeBuilder::StartNode(const RayView& ray) {
 void CellTreeBuilder::AddRay(const RayView& ray) {
   for (std::size_t v = 0; v < ray.visit_count; ++v) {
     // The tree keeps arrays indexed by cell: cells are bounded as in a trace.
-    if (ray.cells[v] >= kTraceMaxCells) {
-      RayError(ray.id, "cell " + std::to_string(ray.cells[v]) + " is beyond the largest cell " +
-                           "grid (" + std::to_string(kTraceMaxCells) + " cells, kTraceMaxCells)");
+    if (ray.cells[v].value() >= kTraceMaxCells) {
+      RayError(ray.id, "cell " + std::to_string(ray.cells[v].value()) +
+                           " is beyond the largest cell " + "grid (" +
+                           std::to_string(kTraceMaxCells) + " cells, kTraceMaxCells)");
     }
   }
   if (any_ray_ && ray.id <= last_id_) {
@@ -237,7 +238,7 @@ void CellTreeBuilder::AddRay(const RayView& ray) {
   for (std::size_t v = 0; v < ray.visit_count; ++v) {
     if (v > 0) {
       if (ray.cells[v] == ray.cells[v - 1]) {
-        RayError(ray.id, "cell " + std::to_string(ray.cells[v]) + " repeated at visit " +
+        RayError(ray.id, "cell " + std::to_string(ray.cells[v].value()) + " repeated at visit " +
                              std::to_string(v));
       }
       n = Child(n, ray.cells[v]);

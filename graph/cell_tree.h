@@ -47,7 +47,6 @@ static_assert(sizeof(NodeId) == sizeof(std::uint32_t) && std::is_trivially_copya
 
 inline constexpr NodeId kRootNode{0};
 inline constexpr NodeId kNoNode{std::numeric_limits<std::uint32_t>::max()};
-inline constexpr CellId kNoCell = std::numeric_limits<CellId>::max();
 
 class CellTree {
  public:
@@ -60,7 +59,7 @@ class CellTree {
   // Nodes without the root.
   std::size_t node_count() const { return cell_.size() - 1; }
   // One more than the largest cell of any node (0 for an empty tree).
-  CellId cell_count() const { return cell_count_; }
+  std::uint32_t cell_count() const { return cell_count_; }
   // Rays the tree was built from (rays with no visit included).
   std::uint64_t rays() const { return rays_; }
 
@@ -98,7 +97,7 @@ class CellTree {
   std::vector<std::uint32_t> generation_;
   std::vector<NodeId> first_child_, next_sibling_;
   std::vector<NodeId> last_child_;  // for appending in creation order; cleared by Finish
-  CellId cell_count_ = 0;
+  std::uint32_t cell_count_ = 0;
   std::uint64_t rays_ = 0;
 };
 

@@ -87,19 +87,19 @@ CellForest CellForest::FromArrays(const std::vector<Index>& parent,
 }
 
 const std::vector<CellForest::Index>& CellForest::nodes_of(CellId c) const {
-  return c < nodes_of_.size() ? nodes_of_[c] : kNoNodes;
+  return c.value() < nodes_of_.size() ? nodes_of_[c.value()] : kNoNodes;
 }
 
 void CellForest::Finish() {
   const std::size_t n = cell_.size();
   cell_count_ = 0;
-  for (CellId c : cell_) cell_count_ = std::max<CellId>(cell_count_, c + 1);
+  for (CellId c : cell_) cell_count_ = std::max(cell_count_, c.value() + 1);
   nodes_of_.assign(cell_count_, {});
   same_cell_above_.assign(n, kNone);
   generation_.assign(n, 1);
   child_start_.assign(n + 2, 0);
   for (Index i = 0; i < n; ++i) {
-    nodes_of_[cell_[i]].push_back(i);
+    nodes_of_[cell_[i].value()].push_back(i);
     if (parent_[i] == kNone) continue;
     ++child_start_[parent_[i] + 2];
     Index a = parent_[i];
@@ -120,10 +120,11 @@ void CellForest::Finish() {
   cells_.clear();
   max_gen_.assign(cell_count_, 0);
   bound_ = 0;
-  for (CellId c = 0; c < cell_count_; ++c) {
-    for (Index i : nodes_of_[c]) max_gen_[c] = std::max(max_gen_[c], generation_[i]);
-    if (!nodes_of_[c].empty()) cells_.push_back(c);
-    bound_ += max_gen_[c];
+  for (CellId c : CellRange(cell_count_)) {
+    for (Index i : nodes_of_[c.value()])
+      max_gen_[c.value()] = std::max(max_gen_[c.value()], generation_[i]);
+    if (!nodes_of_[c.value()].empty()) cells_.push_back(c);
+    bound_ += max_gen_[c.value()];
   }
 }
 
@@ -140,19 +141,19 @@ bool ScheduleTimer::ComputeEarliest(const std::vector<CellId>& schedule) {
   times_.earliest.assign(f_.size(), -1);
   for (auto& p : pending_) p.clear();
   for (CellForest::Index n = 0; n < f_.size(); ++n) {
-    if (f_.parent(n) == CellForest::kNone) pending_[f_.cell(n)].push_back(n);
+    if (f_.parent(n) == CellForest::kNone) pending_[f_.cell(n).value()].push_back(n);
   }
   std::size_t processed = 0;
   for (std::size_t i = 0; i < schedule.size(); ++i) {
     const CellId c = schedule[i];
-    if (c >= pending_.size() || pending_[c].empty()) continue;
+    if (c.value() >= pending_.size() || pending_[c.value()].empty()) continue;
     batch_.clear();
-    std::swap(batch_, pending_[c]);
+    std::swap(batch_, pending_[c.value()]);
     processed += batch_.size();
     for (CellForest::Index n : batch_) {
       times_.earliest[n] = std::int32_t(i);
       for (auto* k = f_.child_begin(n); k != f_.child_end(n); ++k) {
-        pending_[f_.cell(*k)].push_back(*k);
+        pending_[f_.cell(*k).value()].push_back(*k);
       }
     }
   }
@@ -165,17 +166,18 @@ void ScheduleTimer::ComputeLatest(const std::vector<CellId>& schedule) {
   for (auto& p : pending_) p.clear();
   for (CellForest::Index n = 0; n < f_.size(); ++n) {
     children_left_[n] = std::uint32_t(f_.child_count(n));
-    if (children_left_[n] == 0) pending_[f_.cell(n)].push_back(n);
+    if (children_left_[n] == 0) pending_[f_.cell(n).value()].push_back(n);
   }
   for (std::size_t i = schedule.size(); i-- > 0;) {
     const CellId c = schedule[i];
-    if (c >= pending_.size() || pending_[c].empty()) continue;
+    if (c.value() >= pending_.size() || pending_[c.value()].empty()) continue;
     batch_.clear();
-    std::swap(batch_, pending_[c]);
+    std::swap(batch_, pending_[c.value()]);
     for (CellForest::Index n : batch_) {
       times_.latest[n] = std::int32_t(i);
       const CellForest::Index p = f_.parent(n);
-      if (p != CellForest::kNone && --children_left_[p] == 0) pending_[f_.cell(p)].push_back(p);
+      if (p != CellForest::kNone && --children_left_[p] == 0)
+        pending_[f_.cell(p).value()].push_back(p);
     }
   }
 }

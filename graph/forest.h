@@ -37,7 +37,7 @@ class CellForest {
 
   std::size_t size() const { return cell_.size(); }
   // One more than the largest cell id of any node (0 when empty).
-  CellId cell_count() const { return cell_count_; }
+  std::uint32_t cell_count() const { return cell_count_; }
   // Cells with at least one node, increasing.
   const std::vector<CellId>& cells() const { return cells_; }
 
@@ -75,7 +75,7 @@ class CellForest {
   std::vector<CellId> cells_;
   std::vector<std::uint32_t> max_gen_;
   std::uint64_t bound_ = 0;
-  CellId cell_count_ = 0;
+  std::uint32_t cell_count_ = 0;
 };
 
 // When each node is processed by a schedule, and how late it could be.

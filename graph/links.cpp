@@ -20,7 +20,7 @@ std::vector<std::int64_t> ScheduleGroups(const CellTree& tree,
   std::vector<std::vector<NodeId>> ready(tree.cell_count());
   const auto make_ready = [&](NodeId p) {
     for (NodeId c = tree.first_child(p); c != kNoNode; c = tree.next_sibling(c)) {
-      ready[tree.cell(c)].push_back(c);
+      ready[tree.cell(c).value()].push_back(c);
     }
   };
   std::vector<std::int64_t> fetch(tree.size(), -1);
@@ -28,9 +28,9 @@ std::vector<std::int64_t> ScheduleGroups(const CellTree& tree,
   std::vector<NodeId> batch;
   for (std::size_t i = 0; i < schedule.size(); ++i) {
     const CellId c = schedule[i];
-    if (c >= tree.cell_count()) continue;
+    if (c.value() >= tree.cell_count()) continue;
     batch.clear();
-    std::swap(batch, ready[c]);  // processing c's nodes makes no node of c ready
+    std::swap(batch, ready[c.value()]);  // processing c's nodes makes no node of c ready
     for (NodeId n : batch) fetch[n.index()] = static_cast<std::int64_t>(i), make_ready(n);
   }
   return fetch;
@@ -212,7 +212,7 @@ struct VertexWriter {
   void operator()(std::ostream& out, DependencyVertex v) const {
     const NodeId n = NodeOf(v);
     out << "[label=\"cell" << tree->cell(n) << " g" << tree->generation(n) << " e" << tree->enter(n)
-        << "\", fillcolor=\"" << kPalette[tree->cell(n) % kPalette.size()] << "\"]";
+        << "\", fillcolor=\"" << kPalette[tree->cell(n).value() % kPalette.size()] << "\"]";
   }
 };
 

@@ -39,7 +39,7 @@ class Peeler {
     for (NodeId n : t_.nodes()) {
       if (t_.is_leaf(n)) AddLeaf(n);
     }
-    for (CellId c = 0; c < cells_; ++c) UpdateReady(c);
+    for (CellId c : CellRange(cells_)) UpdateReady(c);
   }
 
   PeelResult Run() {
@@ -61,14 +61,15 @@ class Peeler {
  private:
   // (-leaf count, cell) ordering: most leaves first, lowest cell on ties.
   using LeafKey = std::pair<std::size_t, CellId>;
-  LeafKey Key(CellId c) const { return {~leaves_[c].size(), c}; }
-  std::size_t Slot(NodeId n) const { return base_[t_.cell(n)] + t_.generation(n) - 1; }
+  LeafKey Key(CellId c) const { return {~leaves_[c.value()].size(), c}; }
+  std::size_t Slot(NodeId n) const { return base_[t_.cell(n).value()] + t_.generation(n) - 1; }
 
   void InitCounts() {
     top_ = MaxGenerations(t_);
     base_.assign(cells_, 0);
     std::size_t total = 0;
-    for (CellId c = 0; c < cells_; ++c) base_[c] = std::exchange(total, total + top_[c]);
+    for (CellId c : CellRange(cells_))
+      base_[c.value()] = std::exchange(total, total + top_[c.value()]);
     count_.assign(total, 0);
     leaf_count_.assign(total, 0);
     children_.assign(t_.size(), 0);
@@ -77,22 +78,23 @@ class Peeler {
       if (t_.parent(n) != kRootNode) ++children_[t_.parent(n).index()];
     }
     non_leaf_top_.assign(cells_, 0);
-    for (CellId c = 0; c < cells_; ++c)
-      non_leaf_top_[c] = top_[c] ? count_[base_[c] + top_[c] - 1] : 0;
+    for (CellId c : CellRange(cells_))
+      non_leaf_top_[c.value()] =
+          top_[c.value()] ? count_[base_[c.value()] + top_[c.value()] - 1] : 0;
     leaves_.resize(cells_);
   }
 
   void AddLeaf(NodeId n) {
     const CellId c = t_.cell(n);
-    if (!leaves_[c].empty()) by_leaves_.erase(Key(c));
-    leaves_[c].push_back(n);
+    if (!leaves_[c.value()].empty()) by_leaves_.erase(Key(c));
+    leaves_[c.value()].push_back(n);
     by_leaves_.insert(Key(c));
     ++leaf_count_[Slot(n)];
-    if (t_.generation(n) == top_[c]) --non_leaf_top_[c];
+    if (t_.generation(n) == top_[c.value()]) --non_leaf_top_[c.value()];
   }
 
   void UpdateReady(CellId c) {
-    if (top_[c] > 0 && non_leaf_top_[c] == 0) {
+    if (top_[c.value()] > 0 && non_leaf_top_[c.value()] == 0) {
       ready_.insert(c);
     } else {
       ready_.erase(c);
@@ -103,11 +105,11 @@ class Peeler {
   // has its parent's cell), so no leaf of c appears while they are removed.
   void RemoveLeavesOf(CellId c) {
     by_leaves_.erase(Key(c));
-    std::vector<NodeId> leaves = std::move(leaves_[c]);
-    leaves_[c].clear();
+    std::vector<NodeId> leaves = std::move(leaves_[c.value()]);
+    leaves_[c.value()].clear();
     RAYCELL_CHECK(!leaves.empty());  // progress: every step removes a node
     for (NodeId n : leaves) RemoveLeaf(n);
-    RAYCELL_CHECK(leaves_[c].empty());
+    RAYCELL_CHECK(leaves_[c.value()].empty());
     LowerTop(c);
     UpdateReady(c);
   }
@@ -123,15 +125,16 @@ class Peeler {
 
   // Moves top_[c] down past emptied generations and recounts its non-leaves there.
   void LowerTop(CellId c) {
-    const std::uint32_t old_top = top_[c];
-    while (top_[c] > 0 && count_[base_[c] + top_[c] - 1] == 0) --top_[c];
-    if (top_[c] == old_top || top_[c] == 0) return;
-    const std::size_t slot = base_[c] + top_[c] - 1;
-    non_leaf_top_[c] = count_[slot] - leaf_count_[slot];
+    const std::uint32_t old_top = top_[c.value()];
+    while (top_[c.value()] > 0 && count_[base_[c.value()] + top_[c.value()] - 1] == 0)
+      --top_[c.value()];
+    if (top_[c.value()] == old_top || top_[c.value()] == 0) return;
+    const std::size_t slot = base_[c.value()] + top_[c.value()] - 1;
+    non_leaf_top_[c.value()] = count_[slot] - leaf_count_[slot];
   }
 
   const CellTree& t_;
-  const CellId cells_;
+  const std::uint32_t cells_;
   std::vector<std::uint32_t> top_;           // per cell: maxGen over the remaining nodes
   std::vector<std::size_t> base_;            // per cell: first slot of its generations
   std::vector<std::size_t> count_;           // per (cell, gen): remaining nodes

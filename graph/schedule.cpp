@@ -17,7 +17,7 @@ namespace {
 // ready[c]: unprocessed nodes of cell c whose parent is processed.
 void MakeReady(const CellTree& tree, NodeId parent, std::vector<std::vector<NodeId>>& ready) {
   for (NodeId c = tree.first_child(parent); c != kNoNode; c = tree.next_sibling(c)) {
-    ready[tree.cell(c)].push_back(c);
+    ready[tree.cell(c).value()].push_back(c);
   }
 }
 
@@ -33,13 +33,13 @@ ScheduleRun RunSchedule(const CellTree& tree, const std::vector<CellId>& schedul
   ScheduleRun run;
   std::vector<NodeId> batch;
   for (CellId c : schedule) {
-    if (c >= tree.cell_count() || ready[c].empty()) continue;
+    if (c.value() >= tree.cell_count() || ready[c.value()].empty()) continue;
     batch.clear();
-    std::swap(batch, ready[c]);
+    std::swap(batch, ready[c.value()]);
     ++run.useful_fetches;
     run.processed_nodes += batch.size();
     for (NodeId n : batch) MakeReady(tree, n, ready);
-    RAYCELL_CHECK(ready[c].empty());
+    RAYCELL_CHECK(ready[c.value()].empty());
   }
   run.feasible = run.processed_nodes == tree.node_count();
   return run;

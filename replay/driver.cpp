@@ -169,7 +169,7 @@ FrameWalker::FrameWalker(const TraceReader& reader, std::vector<std::size_t> fra
 const LoadedFrame* FrameWalker::Next() {
   if (position_ == indices_.size()) return nullptr;
   const std::size_t i = indices_[position_];
-  const CellId cells = reader_.header().cell_count();
+  const std::uint32_t cells = reader_.header().cell_count();
   LoadedFrame& f = frame_;
   const bool follows = position_ > 0 && indices_[position_ - 1] == i - 1;
   // Frame i - 2's tree, for schedulers that plan from the last two frames.

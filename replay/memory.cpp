@@ -11,37 +11,39 @@ CellStore::CellStore(const LevelConfig& level, const std::vector<std::uint64_t>*
                      std::vector<CellId> future)
     : level_(level),
       footprints_(footprints),
-      policy_(MakeReplacement(level.replacement, CellId(footprints->size()), std::move(future))),
+      policy_(
+          MakeReplacement(level.replacement, std::uint32_t(footprints->size()), std::move(future))),
       held_(footprints->size(), false) {}
 
 std::uint64_t CellStore::Size(CellId cell) const {
-  return level_.capacity_unit == LevelConfig::CapacityUnit::kCells ? 1 : (*footprints_)[cell];
+  return level_.capacity_unit == LevelConfig::CapacityUnit::kCells ? 1
+                                                                   : (*footprints_)[cell.value()];
 }
 
 bool CellStore::Lookup(CellId cell) {
   requests_.push_back(cell);
   policy_->Requested(cell);
-  if (!held_[cell]) return false;
+  if (!held_[cell.value()]) return false;
   policy_->Hit(cell);
   return true;
 }
 
 bool CellStore::Fits(CellId cell, std::optional<CellId> pinned) const {
-  const std::uint64_t keep = pinned && held_[*pinned] ? Size(*pinned) : 0;
-  return held_[cell] || keep + Size(cell) <= level_.capacity;
+  const std::uint64_t keep = pinned && held_[pinned->value()] ? Size(*pinned) : 0;
+  return held_[cell.value()] || keep + Size(cell) <= level_.capacity;
 }
 
 bool CellStore::Insert(CellId cell, std::optional<CellId> pinned) {
-  if (held_[cell]) return true;
+  if (held_[cell.value()]) return true;
   if (!Fits(cell, pinned)) return false;
   while (used_ + Size(cell) > level_.capacity) {
     const std::optional<CellId> victim = policy_->Victim(pinned);
     RAYCELL_CHECK(victim.has_value());
-    held_[*victim] = false;
+    held_[victim->value()] = false;
     used_ -= Size(*victim);
     policy_->Evicted(*victim);
   }
-  held_[cell] = true;
+  held_[cell.value()] = true;
   used_ += Size(cell);
   policy_->Inserted(cell);
   return true;
@@ -101,15 +103,15 @@ SimTime MemoryHierarchy::Transfer(std::uint32_t processor, CellId cell, std::siz
     SimTime& free = LinkFree(i, processor);
     const SimTime start = std::max(t, free);
     t = start + levels_[i].latency_below +
-        levels_[i].bandwidth_below.TransferTime(footprints_[cell]);
+        levels_[i].bandwidth_below.TransferTime(footprints_[cell.value()]);
     free = t;
     if (observer_) {  // a prefetch keeps the cell being worked: only it passes `pinned`
-      observer_->Transfer(i, i == 0 ? processor : 0, cell, footprints_[cell], start, t, processor,
-                          pinned.has_value());
+      observer_->Transfer(i, i == 0 ? processor : 0, cell, footprints_[cell.value()], start, t,
+                          processor, pinned.has_value());
     }
     Store(i, processor).Insert(cell, i == 0 ? pinned : std::nullopt);
     CheckedIncrement(stats_[i].fetches);
-    CheckedIncrement(stats_[i].bytes, footprints_[cell]);
+    CheckedIncrement(stats_[i].bytes, footprints_[cell.value()]);
   }
   return t;
 }
@@ -118,11 +120,11 @@ SimTime MemoryHierarchy::Fetch(std::uint32_t processor, CellId cell, SimTime now
   std::size_t from = 0;  // the nearest level holding the cell; levels_.size() = host
   while (from < levels_.size() && !Store(from, processor).Lookup(cell)) ++from;
   if (from == 0) {
-    if (prefetched_[processor][cell]) CheckedIncrement(prefetch_hits_);
-    prefetched_[processor][cell] = false;
-    return std::max(now, arrival_[processor][cell]);
+    if (prefetched_[processor][cell.value()]) CheckedIncrement(prefetch_hits_);
+    prefetched_[processor][cell.value()] = false;
+    return std::max(now, arrival_[processor][cell.value()]);
   }
-  prefetched_[processor][cell] = false;
+  prefetched_[processor][cell.value()] = false;
   return Transfer(processor, cell, from, now, std::nullopt);
 }
 
@@ -131,8 +133,8 @@ bool MemoryHierarchy::Prefetch(std::uint32_t processor, CellId cell, SimTime now
   if (cache.Contains(cell) || !cache.Fits(cell, working)) return false;
   std::size_t from = 1;
   while (from < levels_.size() && !Store(from, processor).Lookup(cell)) ++from;
-  arrival_[processor][cell] = Transfer(processor, cell, from, now, working);
-  prefetched_[processor][cell] = true;
+  arrival_[processor][cell.value()] = Transfer(processor, cell, from, now, working);
+  prefetched_[processor][cell.value()] = true;
   CheckedIncrement(prefetches_);
   return true;
 }

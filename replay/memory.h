@@ -36,7 +36,7 @@ class CellStore {
   bool Insert(CellId cell, std::optional<CellId> pinned = std::nullopt);
   // Whether Insert(cell, pinned) would keep the cell.
   bool Fits(CellId cell, std::optional<CellId> pinned) const;
-  bool Contains(CellId cell) const { return held_[cell]; }
+  bool Contains(CellId cell) const { return held_[cell.value()]; }
   std::uint64_t used() const { return used_; }
   const std::vector<CellId>& requests() const { return requests_; }
   bool diverged() const { return policy_->diverged(); }

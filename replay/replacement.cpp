@@ -11,15 +11,15 @@ namespace raycell {
 const std::vector<ReplacementEntry>& ReplacementRegistry() {
   static const std::vector<ReplacementEntry> registry = {
       {LevelConfig::Replacement::kLru, "lru", nullptr, false,
-       [](CellId cells, std::vector<CellId>) -> std::unique_ptr<ReplacementPolicy> {
+       [](std::uint32_t cells, std::vector<CellId>) -> std::unique_ptr<ReplacementPolicy> {
          return std::make_unique<RecencyReplacement>(cells, true);
        }},
       {LevelConfig::Replacement::kFifo, "fifo", nullptr, false,
-       [](CellId cells, std::vector<CellId>) -> std::unique_ptr<ReplacementPolicy> {
+       [](std::uint32_t cells, std::vector<CellId>) -> std::unique_ptr<ReplacementPolicy> {
          return std::make_unique<RecencyReplacement>(cells, false);
        }},
       {LevelConfig::Replacement::kMin, "min", "Belady's MIN, a bound", true,
-       [](CellId cells, std::vector<CellId> future) -> std::unique_ptr<ReplacementPolicy> {
+       [](std::uint32_t cells, std::vector<CellId> future) -> std::unique_ptr<ReplacementPolicy> {
          return std::make_unique<MinReplacement>(cells, std::move(future));
        }},
   };
@@ -34,23 +34,26 @@ const ReplacementEntry& ReplacementOf(LevelConfig::Replacement kind) {
   return ReplacementRegistry().front();
 }
 
-std::unique_ptr<ReplacementPolicy> MakeReplacement(LevelConfig::Replacement kind, CellId cells,
+std::unique_ptr<ReplacementPolicy> MakeReplacement(LevelConfig::Replacement kind,
+                                                   std::uint32_t cells,
                                                    std::vector<CellId> future) {
   return ReplacementOf(kind).make(cells, std::move(future));
 }
 
 // ---- LRU and FIFO ------------------------------------------------------------------------
 
-RecencyReplacement::RecencyReplacement(CellId cells, bool move_on_hit)
+RecencyReplacement::RecencyReplacement(std::uint32_t cells, bool move_on_hit)
     : move_on_hit_(move_on_hit), pos_(cells) {}
 
 void RecencyReplacement::Hit(CellId cell) {
-  if (move_on_hit_) order_.splice(order_.end(), order_, pos_[cell]);
+  if (move_on_hit_) order_.splice(order_.end(), order_, pos_[cell.value()]);
 }
 
-void RecencyReplacement::Inserted(CellId cell) { pos_[cell] = order_.insert(order_.end(), cell); }
+void RecencyReplacement::Inserted(CellId cell) {
+  pos_[cell.value()] = order_.insert(order_.end(), cell);
+}
 
-void RecencyReplacement::Evicted(CellId cell) { order_.erase(pos_[cell]); }
+void RecencyReplacement::Evicted(CellId cell) { order_.erase(pos_[cell.value()]); }
 
 std::optional<CellId> RecencyReplacement::Victim(std::optional<CellId> pinned) const {
   for (const CellId c : order_) {
@@ -61,13 +64,13 @@ std::optional<CellId> RecencyReplacement::Victim(std::optional<CellId> pinned) c
 
 // ---- MIN ---------------------------------------------------------------------------------
 
-MinReplacement::MinReplacement(CellId cells, std::vector<CellId> future)
+MinReplacement::MinReplacement(std::uint32_t cells, std::vector<CellId> future)
     : future_(std::move(future)), uses_(cells), held_(cells, false) {
-  for (std::size_t i = 0; i < future_.size(); ++i) uses_[future_[i]].push_back(i);
+  for (std::size_t i = 0; i < future_.size(); ++i) uses_[future_[i].value()].push_back(i);
 }
 
 std::size_t MinReplacement::NextUse(CellId cell) const {
-  const auto& u = uses_[cell];
+  const auto& u = uses_[cell.value()];
   const auto it = std::lower_bound(u.begin(), u.end(), pos_);
   return it == u.end() ? SIZE_MAX : *it;
 }
@@ -85,8 +88,8 @@ void MinReplacement::Requested(CellId cell) {
 std::optional<CellId> MinReplacement::Victim(std::optional<CellId> pinned) const {
   std::optional<CellId> victim;
   std::size_t farthest = 0;
-  for (CellId c = 0; c < held_.size(); ++c) {
-    if (!held_[c] || c == pinned) continue;
+  for (CellId c : CellRange(held_.size())) {
+    if (!held_[c.value()] || c == pinned) continue;
     const std::size_t next = NextUse(c);
     if (!victim || next > farthest) victim = c, farthest = next;
   }

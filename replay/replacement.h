@@ -44,7 +44,7 @@ struct ReplacementEntry {
   bool needs_future;
   // The policy for a store of `cells` cells; `future`: the requests a previous run of the
   // same frame made at this store (needs_future only).
-  std::unique_ptr<ReplacementPolicy> (*make)(CellId cells, std::vector<CellId> future);
+  std::unique_ptr<ReplacementPolicy> (*make)(std::uint32_t cells, std::vector<CellId> future);
 };
 const std::vector<ReplacementEntry>& ReplacementRegistry();
 // The entry of `kind`.
@@ -52,14 +52,15 @@ const ReplacementEntry& ReplacementOf(LevelConfig::Replacement kind);
 
 // The policy `kind` for a store of `cells` cells (ReplacementOf(kind).make). A policy that
 // needs a future given none is a CHECK failure.
-std::unique_ptr<ReplacementPolicy> MakeReplacement(LevelConfig::Replacement kind, CellId cells,
+std::unique_ptr<ReplacementPolicy> MakeReplacement(LevelConfig::Replacement kind,
+                                                   std::uint32_t cells,
                                                    std::vector<CellId> future = {});
 
 // Least recently used (move_on_hit) or first in, first out: held cells in a list, oldest use
 // or arrival first; the victim is the first that is not pinned.
 class RecencyReplacement : public ReplacementPolicy {
  public:
-  RecencyReplacement(CellId cells, bool move_on_hit);
+  RecencyReplacement(std::uint32_t cells, bool move_on_hit);
   void Hit(CellId cell) override;
   void Inserted(CellId cell) override;
   void Evicted(CellId cell) override;
@@ -75,11 +76,11 @@ class RecencyReplacement : public ReplacementPolicy {
 // requested again first; lowest cell number on ties).
 class MinReplacement : public ReplacementPolicy {
  public:
-  MinReplacement(CellId cells, std::vector<CellId> future);
+  MinReplacement(std::uint32_t cells, std::vector<CellId> future);
   void Requested(CellId cell) override;
   void Hit(CellId) override {}
-  void Inserted(CellId cell) override { held_[cell] = true; }
-  void Evicted(CellId cell) override { held_[cell] = false; }
+  void Inserted(CellId cell) override { held_[cell.value()] = true; }
+  void Evicted(CellId cell) override { held_[cell.value()] = false; }
   std::optional<CellId> Victim(std::optional<CellId> pinned) const override;
   bool diverged() const override { return diverged_; }
 

@@ -73,7 +73,7 @@ struct CompactUnits {
   const WorkGraph::Compact* c;
 
   std::uint32_t Read(std::uint32_t* at) const { return ReadVarint(stream, at); }
-  CellId CellAt(std::uint32_t offset) const { return Read(&offset) >> 1; }
+  CellId CellAt(std::uint32_t offset) const { return CellId(Read(&offset) >> 1); }
 
   template <typename F>
   void ForEachRoot(F f) const {
@@ -209,9 +209,9 @@ class Board {
   void Schedule(std::uint32_t p, SimTime when, Kind kind) { slots_.Schedule(p, when, kind); }
 
   void Enqueue(const Entry& e, CellId c, std::uint64_t q) {
-    queues_[c].push_back(e);
-    available_ += (queued_rays_[c] == 0) & (q != 0) & (open_[c] != 0);
-    queued_rays_[c] += q;
+    queues_[c.value()].push_back(e);
+    available_ += (queued_rays_[c.value()] == 0) & (q != 0) & (open_[c.value()] != 0);
+    queued_rays_[c.value()] += q;
     queued_total_ += q;
     peak_queued_ = std::max(peak_queued_, queued_total_);
   }
@@ -220,7 +220,7 @@ class Board {
   QueueView View(std::uint32_t p) {
     // A mask, not a branch per cell: the loop vectorises (a processor asks on every idle event,
     // and with several processors most of them find every queued cell being worked).
-    for (CellId c = 0; c < w_.cells; ++c) view_[c] = queued_rays_[c] & open_[c];
+    for (std::uint32_t c = 0; c < w_.cells; ++c) view_[c] = queued_rays_[c] & open_[c];
     return QueueView::Of(view_, processors_[p].cell);
   }
 
@@ -235,8 +235,9 @@ class Board {
       ++waiting_;
       return;
     }
-    RAYCELL_CHECK(!queues_[*c].empty() && open_[*c] == kOpen && queued_rays_[*c] != 0);
-    open_[*c] = 0;
+    RAYCELL_CHECK(!queues_[c->value()].empty() && open_[c->value()] == kOpen &&
+                  queued_rays_[c->value()] != 0);
+    open_[c->value()] = 0;
     --available_;
     processors_[p].cell = *c;
     const std::uint64_t fetches = obs_ ? memory_.stats()[0].fetches : 0;  // observed only
@@ -253,11 +254,11 @@ class Board {
   void TakeQueue(std::uint32_t p) {
     Processor<Entry>& ps = processors_[p];
     const CellId c = *ps.cell;
-    std::vector<Entry>& q = queues_[c];
+    std::vector<Entry>& q = queues_[c.value()];
     if (q.empty()) return;
-    if (obs_) obs_->QueueTaken(p, c, queued_rays_[c], now_);
-    queued_total_ -= queued_rays_[c];
-    queued_rays_[c] = 0;
+    if (obs_) obs_->QueueTaken(p, c, queued_rays_[c.value()], now_);
+    queued_total_ -= queued_rays_[c.value()];
+    queued_rays_[c.value()] = 0;
     if (ps.head == ps.worklist.size()) {
       ps.worklist.clear();
       ps.head = 0;
@@ -288,8 +289,9 @@ class Board {
     if (ps.head == ps.worklist.size()) TakeQueue(p);  // units that arrived meanwhile
     if (ps.head == ps.worklist.size()) {
       if (obs_) obs_->BatchEnd(p, *ps.cell, now_);
-      RAYCELL_CHECK_EQ(queued_rays_[*ps.cell], 0u);  // so unlocking leaves available_ as it is
-      open_[*ps.cell] = kOpen;
+      RAYCELL_CHECK_EQ(queued_rays_[ps.cell->value()],
+                       0u);  // so unlocking leaves available_ as it is
+      open_[ps.cell->value()] = kOpen;
       Schedule(p, now_, Kind::kIdle);
       return;
     }
@@ -378,7 +380,7 @@ class Board {
   // Cells in view: with queued rays and open. A queue is taken only by the processor that
   // locked its cell, and a cell is unlocked only with an empty queue, so only Enqueue and
   // the lock in OnIdle change it.
-  CellId available_ = 0;
+  std::uint32_t available_ = 0;
   std::vector<Processor<Entry>> processors_;
   SlotQueue<Kind> slots_;
   std::uint32_t waiting_ = 0;

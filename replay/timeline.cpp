@@ -23,7 +23,7 @@ std::string Micros(std::uint64_t ns) {
 
 std::uint64_t Nanos(std::uint64_t ps) { return ps / 1000 + (ps % 1000 >= 500 ? 1 : 0); }
 
-std::string CellName(CellId c) { return "cell " + std::to_string(c); }
+std::string CellName(CellId c) { return "cell " + std::to_string(c.value()); }
 
 std::string Meta(const char* name, std::uint32_t tid, const std::string& args) {
   return "{\"ph\":\"M\",\"pid\":" + std::to_string(kPid) + ",\"tid\":" + std::to_string(tid) +
@@ -153,11 +153,11 @@ void TimelineWriter::Counters(std::uint64_t now) {
            ",\"name\":" + JsonQuote(name) + ",\"args\":{\"rays\":" + std::to_string(rays) + "}}");
   };
   std::uint64_t total = 0;
-  for (CellId c = 0; c < shown_.size(); ++c) {
-    const std::uint64_t q = (*queued_)[c];
+  for (CellId c : CellRange(shown_.size())) {
+    const std::uint64_t q = (*queued_)[c.value()];
     total += q;
-    if (q == shown_[c]) continue;
-    shown_[c] = q;
+    if (q == shown_[c.value()]) continue;
+    shown_[c.value()] = q;
     counter("queue: " + CellName(c), q);
   }
   if (total != shown_total_) counter("queue: all cells", total);
@@ -171,8 +171,8 @@ void TimelineWriter::Fetch(std::uint32_t p, CellId cell, SimTime request, SimTim
   ProcessorState& ps = processors_[p];
   if (miss || ready > request) {
     Slice(1 + p, "fetch", "fetch " + CellName(cell), request.picoseconds(), ready.picoseconds(),
-          "\"cell\":" + std::to_string(cell) + ",\"bytes\":" + std::to_string(footprints_[cell]) +
-              ",\"miss\":" + (miss ? "true" : "false"));
+          "\"cell\":" + std::to_string(cell.value()) + ",\"bytes\":" +
+              std::to_string(footprints_[cell.value()]) + ",\"miss\":" + (miss ? "true" : "false"));
   }
   ps.last_end = ready.picoseconds();
   ps.batch_start = ready.picoseconds();
@@ -191,10 +191,10 @@ void TimelineWriter::BatchEnd(std::uint32_t p, CellId cell, SimTime now) {
                       tps = config_.processors.time_per_sample.picoseconds();
   // The batch is worked without a break: its length is its samples' work.
   RAYCELL_CHECK_EQ((end - ps.batch_start) % tps, 0u);
-  std::string args = "\"cell\":" + std::to_string(cell) +
+  std::string args = "\"cell\":" + std::to_string(cell.value()) +
                      ",\"rays\":" + std::to_string(ps.batch_rays) +
                      ",\"samples\":" + std::to_string((end - ps.batch_start) / tps) +
-                     ",\"bytes\":" + std::to_string(footprints_[cell]);
+                     ",\"bytes\":" + std::to_string(footprints_[cell.value()]);
   if (!ps.reason.empty()) args += ",\"reason\":" + JsonQuote(ps.reason);
   Slice(1 + p, "work", CellName(cell), ps.batch_start, end, args);
   ps.last_end = end;
@@ -205,7 +205,7 @@ void TimelineWriter::Transfer(std::size_t level, std::uint32_t copy, CellId cell
                               std::uint64_t bytes, SimTime start, SimTime end,
                               std::uint32_t processor, bool prefetch) {
   Slice(LevelTid(level, copy), "transfer", CellName(cell), start.picoseconds(), end.picoseconds(),
-        "\"cell\":" + std::to_string(cell) + ",\"bytes\":" + std::to_string(bytes) +
+        "\"cell\":" + std::to_string(cell.value()) + ",\"bytes\":" + std::to_string(bytes) +
             ",\"processor\":" + std::to_string(processor) +
             ",\"prefetch\":" + (prefetch ? "true" : "false"));
 }

@@ -95,7 +95,7 @@ void Finish(WorkGraph& w) {
   w.packed.back() = {kNoCell, 0, 0, std::uint32_t(w.size())};
 }
 
-WorkGraph RaySegmentWork(const RayBatch& frame, CellId cells) {
+WorkGraph RaySegmentWork(const RayBatch& frame, std::uint32_t cells) {
   RAYCELL_CHECK_EQ(frame.first_id(), RayId{0});
   RAYCELL_CHECK_LT(frame.visit_count(), std::size_t{UINT32_MAX});
   WorkGraph w;
@@ -165,7 +165,7 @@ void RaySegmentWorkBuilder::AddBatch(const RayBatch& batch) {
       c.spawned.push_back({visit_begin_[parent] + ray.spawn, first});
     }
     for (std::size_t v = 0; v < n; ++v) {
-      AppendVarint(c.stream, ray.cells[v] * 2 + (v + 1 == n ? 1 : 0));
+      AppendVarint(c.stream, ray.cells[v].value() * 2 + (v + 1 == n ? 1 : 0));
       AppendVarint(c.stream, ray.samples[v]);
       CheckedIncrement(w_.totals.samples, std::uint64_t{ray.samples[v]});
     }
@@ -201,7 +201,7 @@ WorkGraph RaySegmentWorkBuilder::Finish() {
   return out;
 }
 
-WorkGraph NodeWork(const CellTree& tree, CellId cells) {
+WorkGraph NodeWork(const CellTree& tree, std::uint32_t cells) {
   WorkGraph w;
   w.cells = cells;
   Resize(w, tree.node_count());

@@ -51,7 +51,7 @@ struct HugePageAllocator {
 };
 
 struct WorkGraph {
-  CellId cells = 0;                         // of the grid
+  std::uint32_t cells = 0;                  // of the grid
   std::vector<CellId> cell;                 // per unit
   std::vector<std::uint64_t> samples;       // volume samples worked in the unit
   std::vector<std::uint64_t> queued_rays;   // rays it stands for in a queue (0: in place)
@@ -139,7 +139,7 @@ inline std::uint32_t ReadVarint(const std::uint8_t* stream, std::uint32_t* at) {
 // same totals as RaySegmentWork on the whole frame, so a replay gives the same results.
 class RaySegmentWorkBuilder {
  public:
-  explicit RaySegmentWorkBuilder(CellId cells) { w_.cells = cells; }
+  explicit RaySegmentWorkBuilder(std::uint32_t cells) { w_.cells = cells; }
   // Room for the frame `summary` describes, so that the arrays are not copied as they grow
   // (pages reserved but never written are not resident).
   void Reserve(const FrameSummary& summary);
@@ -160,9 +160,9 @@ inline constexpr std::uint64_t kCompactAboveVisits = std::uint64_t{1} << 22;
 
 // Per ray segment: `frame` holds a whole frame (first_id 0), as TraceReader::LoadFrame
 // returns it. Rays without visits do no work and are not counted.
-WorkGraph RaySegmentWork(const RayBatch& frame, CellId cells);
+WorkGraph RaySegmentWork(const RayBatch& frame, std::uint32_t cells);
 // Per Cell Tree node.
-WorkGraph NodeWork(const CellTree& tree, CellId cells);
+WorkGraph NodeWork(const CellTree& tree, std::uint32_t cells);
 
 // Sampling: the ray trees (a primary ray and its descendants) whose order in the frame is a
 // multiple of k, renumbered from 0. k = 1 returns the frame as it is.

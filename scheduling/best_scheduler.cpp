@@ -39,7 +39,8 @@ std::uint64_t PlanKey(const CellTree& tree, std::uint64_t seed) {
   Hash64 h;
   h.Add(seed);
   h.Add(tree.size());
-  for (NodeId n : tree.nodes()) h.Add(std::uint64_t{tree.cell(n)} << 32 | tree.parent(n).index());
+  for (NodeId n : tree.nodes())
+    h.Add(std::uint64_t{tree.cell(n).value()} << 32 | tree.parent(n).index());
   return h.Finish();
 }
 

@@ -51,10 +51,10 @@ void RandomScheduler::BeginFrame(const FrameInfo& frame) {
 
 std::optional<CellId> RandomScheduler::Next(const QueueView& queues) {
   std::uint64_t with_work = 0;
-  for (CellId c = 0; c < queues.cells; ++c) with_work += queues.has_work(c) ? 1 : 0;
+  for (CellId c : CellRange(queues.cells)) with_work += queues.has_work(c) ? 1 : 0;
   if (with_work == 0) return std::nullopt;
   std::uint64_t k = rng_.Below(with_work);
-  for (CellId c = 0;; ++c) {
+  for (CellId c{0};; ++c) {
     if (queues.has_work(c) && k-- == 0) return c;
   }
 }

@@ -3,8 +3,8 @@
 namespace raycell {
 
 std::optional<CellId> RoundRobinScheduler::Peek(const QueueView& queues) const {
-  for (CellId i = 0; i < queues.cells; ++i) {
-    const CellId c = static_cast<CellId>((std::uint64_t{start_} + i) % queues.cells);
+  for (std::uint32_t i = 0; i < queues.cells; ++i) {
+    const CellId c(static_cast<std::uint32_t>((std::uint64_t{start_} + i) % queues.cells));
     if (queues.has_work(c)) return c;
   }
   return std::nullopt;
@@ -12,7 +12,7 @@ std::optional<CellId> RoundRobinScheduler::Peek(const QueueView& queues) const {
 
 std::optional<CellId> RoundRobinScheduler::Next(const QueueView& queues) {
   const std::optional<CellId> c = Peek(queues);
-  if (c) start_ = static_cast<CellId>((std::uint64_t{*c} + 1) % queues.cells);
+  if (c) start_ = static_cast<std::uint32_t>((std::uint64_t{c->value()} + 1) % queues.cells);
   return c;
 }
 

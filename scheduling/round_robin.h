@@ -14,7 +14,7 @@ class RoundRobinScheduler : public Scheduler {
   std::optional<CellId> Peek(const QueueView& queues) const override;
 
  private:
-  CellId start_ = 0;  // where the next search begins: one past the last choice
+  std::uint32_t start_ = 0;  // the cell where the next search begins: one past the last choice
 };
 
 }  // namespace raycell

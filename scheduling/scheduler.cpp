@@ -17,13 +17,13 @@ namespace raycell {
 bool QueueView::empty() const { return !MostQueuedCell(*this).has_value(); }
 
 QueueView QueueView::Of(const std::vector<std::uint64_t>& queued, std::optional<CellId> loaded) {
-  RAYCELL_CHECK_LE(queued.size(), std::size_t{kNoCell});
-  return {queued.data(), static_cast<CellId>(queued.size()), loaded};
+  RAYCELL_CHECK_LE(queued.size(), std::size_t{kNoCell.value()});
+  return {queued.data(), static_cast<std::uint32_t>(queued.size()), loaded};
 }
 
 std::optional<CellId> MostQueuedCell(const QueueView& queues) {
   std::optional<CellId> best;
-  for (CellId c = 0; c < queues.cells; ++c) {
+  for (CellId c : CellRange(queues.cells)) {
     if (queues.queued(c) > (best ? queues.queued(*best) : 0)) best = c;
   }
   return best;
@@ -35,8 +35,8 @@ std::string ScheduleFollower::Stats::ToString() const {
   return s.str();
 }
 
-void ScheduleFollower::Reset(std::vector<CellId> schedule, CellId cells) {
-  for (CellId c : schedule) RAYCELL_CHECK_LT(c, cells);
+void ScheduleFollower::Reset(std::vector<CellId> schedule, std::uint32_t cells) {
+  for (CellId c : schedule) RAYCELL_CHECK_LT(c.value(), cells);
   schedule_ = std::move(schedule);
   cursor_ = 0;
   stats_ = {};

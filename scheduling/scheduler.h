@@ -20,11 +20,11 @@ namespace raycell {
 // (0 = no work) and the cell in the cache, if any. Does not own the counts.
 struct QueueView {
   const std::uint64_t* queued_rays = nullptr;  // queued_rays[c] for c < cells
-  CellId cells = 0;
+  std::uint32_t cells = 0;
   std::optional<CellId> loaded;
 
-  std::uint64_t queued(CellId c) const { return queued_rays[c]; }
-  bool has_work(CellId c) const { return c < cells && queued_rays[c] > 0; }
+  std::uint64_t queued(CellId c) const { return queued_rays[c.value()]; }
+  bool has_work(CellId c) const { return c.value() < cells && queued_rays[c.value()] > 0; }
   // True when no cell has queued work.
   bool empty() const;
   // A view of `queued` (which must outlive the view); cells = queued.size().
@@ -37,7 +37,7 @@ struct FrameInfo {
   std::size_t frame_index = 0;
   const CellTree* current = nullptr;   // this frame's tree (the Peel oracle needs it)
   const CellTree* previous = nullptr;  // the previous frame's tree; null for frame 0
-  CellId cells = 0;                    // cells of the grid; every tree's cell_count() <= cells
+  std::uint32_t cells = 0;             // cells of the grid; every tree's cell_count() <= cells
   // Frame i-2's tree, for schedulers whose registry entry has history 2; else null.
   const CellTree* before_previous = nullptr;
 };
@@ -92,7 +92,7 @@ class ScheduleFollower {
   };
 
   // Starts over on `schedule`; every entry must be < cells.
-  void Reset(std::vector<CellId> schedule, CellId cells);
+  void Reset(std::vector<CellId> schedule, std::uint32_t cells);
   std::optional<CellId> Next(const QueueView& queues);
   // Next's choice without moving the cursor or counting.
   std::optional<CellId> Peek(const QueueView& queues) const;

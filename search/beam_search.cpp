@@ -65,7 +65,8 @@ class Beam {
         stamp_(f.cells().size(), 0),
         rg_old_(f.size()),
         rg_new_(f.size()) {
-    for (std::size_t k = 0; k < f.cells().size(); ++k) slot_[f.cells()[k]] = std::uint32_t(k);
+    for (std::size_t k = 0; k < f.cells().size(); ++k)
+      slot_[f.cells()[k].value()] = std::uint32_t(k);
   }
 
   BeamResult Run() {
@@ -130,8 +131,9 @@ class Beam {
         const std::uint32_t h = cur_.h[s] - old_term + new_term;
         if (o_.upper != 0 && g + 1 + h >= o_.upper) continue;
         const std::uint64_t tie =
-            o_.seed == 0 ? std::uint64_t(s) * f_.cell_count() + c
-                         : MixBits(o_.seed ^ MixBits(std::uint64_t(s) * f_.cell_count() + c));
+            o_.seed == 0
+                ? std::uint64_t(s) * f_.cell_count() + c.value()
+                : MixBits(o_.seed ^ MixBits(std::uint64_t(s) * f_.cell_count() + c.value()));
         children_.push_back({g + 1 + h, cur_.left[s] - ready, tie, s, c, h});
       }
       out.node_visits += f_.size();
@@ -222,7 +224,7 @@ class Beam {
     MoveScore* scores = &next_.scores[next_.scores.size() - cells];
     ++epoch_;
     const auto rescore = [&](CellId c) {
-      const std::uint32_t k = slot_[c];
+      const std::uint32_t k = slot_[c.value()];
       if (stamp_[k] == epoch_) return;
       stamp_[k] = epoch_;
       scores[k] = ScoreMove(bits, c);

@@ -185,7 +185,7 @@ class PairProjection {
 // h = sum over groups; see "Heuristic".
 class Heuristic {
  public:
-  static constexpr CellId kMaxPairCells = 64;
+  static constexpr std::size_t kMaxPairCells = 64;
 
   Heuristic(const CellForest& f, bool pairs) : f_(f), group_of_(f.cell_count(), kSingle) {
     remgen_.resize(f.size());
@@ -195,7 +195,7 @@ class Heuristic {
   std::uint32_t Start(const Word* bits) {
     std::uint32_t h = 0;
     for (CellId c : f_.cells()) {
-      if (group_of_[c] == kSingle) h += MaxRemgen(f_, bits, c, remgen_);
+      if (group_of_[c.value()] == kSingle) h += MaxRemgen(f_, bits, c, remgen_);
     }
     for (PairProjection& p : pairs_) h += p.Value(bits, exact_);
     return h;
@@ -203,10 +203,10 @@ class Heuristic {
 
   // h of `after`, a move on c from `before` whose h is h.
   std::uint32_t Child(std::uint32_t h, const Word* before, const Word* after, CellId c) {
-    if (group_of_[c] == kSingle) {
+    if (group_of_[c.value()] == kSingle) {
       return h - MaxRemgen(f_, before, c, remgen_) + MaxRemgen(f_, after, c, remgen_);
     }
-    PairProjection& p = pairs_[group_of_[c]];
+    PairProjection& p = pairs_[group_of_[c.value()]];
     return h - p.Value(before, exact_) + p.Value(after, exact_);
   }
 
@@ -234,16 +234,16 @@ class Heuristic {
       for (std::size_t j = i + 1; j < cells.size(); ++j) {
         PairProjection p(f_, cells[i], cells[j]);
         bool exact = true;
-        const std::int64_t gain =
-            std::int64_t(p.Value(none.data(), exact)) - max_gen[cells[i]] - max_gen[cells[j]];
+        const std::int64_t gain = std::int64_t(p.Value(none.data(), exact)) -
+                                  max_gen[cells[i].value()] - max_gen[cells[j].value()];
         if (exact && gain > 0) candidates.push_back({gain, cells[i], cells[j]});
       }
     }
     std::stable_sort(candidates.begin(), candidates.end(),
                      [](const Candidate& x, const Candidate& y) { return x.gain > y.gain; });
     for (const Candidate& c : candidates) {
-      if (group_of_[c.a] != kSingle || group_of_[c.b] != kSingle) continue;
-      group_of_[c.a] = group_of_[c.b] = std::uint32_t(pairs_.size());
+      if (group_of_[c.a.value()] != kSingle || group_of_[c.b.value()] != kSingle) continue;
+      group_of_[c.a.value()] = group_of_[c.b.value()] = std::uint32_t(pairs_.size());
       pairs_.emplace_back(f_, c.a, c.b);
     }
   }

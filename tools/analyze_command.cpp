@@ -32,7 +32,7 @@ struct AnalyzeArgs {
 
 std::string Schedule(const std::vector<CellId>& s, const char* sep) {
   std::string out;
-  for (std::size_t i = 0; i < s.size(); ++i) out += (i ? sep : "") + std::to_string(s[i]);
+  for (std::size_t i = 0; i < s.size(); ++i) out += (i ? sep : "") + std::to_string(s[i].value());
   return out;
 }
 

@@ -24,7 +24,7 @@ void FrameAccumulator::AddRay(const RayView& r) {
   hash_.Add(r.pixel_y);
   hash_.Add(r.visit_count);
   for (std::size_t i = 0; i < r.visit_count; ++i) {
-    hash_.Add(r.cells[i]);
+    hash_.Add(r.cells[i].value());
     hash_.Add(r.samples[i]);
     if (store_t_) hash_.Add(FloatBits(r.t_enter[i]) << 32 | FloatBits(r.t_exit[i]));
     summary_.samples += r.samples[i];

@@ -73,6 +73,15 @@ JsonlWriter& JsonlWriter::List(const std::uint32_t* v, std::size_t n) {
   return Put(']');
 }
 
+JsonlWriter& JsonlWriter::List(const CellId* v, std::size_t n) {
+  Put('[');
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i) Put(',');
+    Int(v[i].value());
+  }
+  return Put(']');
+}
+
 namespace {
 
 void WriteFrame(const TraceReader& reader, std::size_t index, bool with_frame, JsonlWriter& out) {
@@ -454,9 +463,9 @@ class FrameOrderer {
       }
       const CellId spawn_cell = f_.cells[f_.begin[p] + f_.spawn[i]];
       if (f_.visits(i) > 0 && f_.cells[f_.begin[i]] != spawn_cell) {
-        Fail(i, "first cell " + std::to_string(f_.cells[f_.begin[i]]) + " is not the cell " +
-                    std::to_string(spawn_cell) + " of " + of_parent + "'s spawn visit " +
-                    std::to_string(f_.spawn[i]));
+        Fail(i, "first cell " + std::to_string(f_.cells[f_.begin[i]].value()) +
+                    " is not the cell " + std::to_string(spawn_cell.value()) + " of " + of_parent +
+                    "'s spawn visit " + std::to_string(f_.spawn[i]));
       }
     }
   }

@@ -48,6 +48,7 @@ class JsonlWriter {
   template <typename T>
   JsonlWriter& Int(T v);
   JsonlWriter& List(const std::uint32_t* v, std::size_t n);
+  JsonlWriter& List(const CellId* v, std::size_t n);
 
   std::ostream& out_;
   std::string buf_;

@@ -12,9 +12,10 @@
 #include <string_view>
 #include <vector>
 
+#include "traces/cell_id.h"
+
 namespace raycell {
 
-using CellId = std::uint32_t;
 using RayId = std::uint64_t;
 
 inline constexpr RayId kNoParent = std::numeric_limits<RayId>::max();
@@ -30,7 +31,7 @@ std::optional<RayKind> ParseRayKind(std::string_view name);
 // the ray parameter where it enters and leaves the cell (world units along the ray's
 // unit direction).
 struct Visit {
-  CellId cell = 0;
+  CellId cell{0};
   std::uint32_t samples = 0;
   float t_enter = 0.f;
   float t_exit = 0.f;

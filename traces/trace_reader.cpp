@@ -571,7 +571,7 @@ class FrameDecoder {
     std::uint32_t cell = 0;
     for (std::uint64_t v = 0; v < count; ++v) {
       if (!new_path) {
-        cell = out.cells()[ref_begin + v];
+        cell = out.cells()[ref_begin + v].value();
       } else if (v == 0) {
         const std::uint64_t first = paths.Next();
         if (first >= header_.cell_count()) throw BadData("ray " + Str(id) + ": bad cell");
@@ -589,7 +589,7 @@ class FrameDecoder {
       }
       const std::size_t k = out.visit_count();
       if (t && k >= c.t_enter.size()) throw BadData("t columns have bad length");
-      out.AddVisit(cell, static_cast<std::uint32_t>(n), t ? c.t_enter[k] : 0.f,
+      out.AddVisit(CellId(cell), static_cast<std::uint32_t>(n), t ? c.t_enter[k] : 0.f,
                    t ? c.t_exit[k] : 0.f);
     }
   }

@@ -266,7 +266,8 @@ struct BatchColumns {
   static void AddPath(const RayView& r, ColumnBuilder& paths) {
     paths.Add(r.visit_count);
     for (std::size_t v = 0; v < r.visit_count; ++v) {
-      paths.Add(v == 0 ? r.cells[0] : ZigZag(Delta(r.cells[v], r.cells[v - 1])));
+      paths.Add(v == 0 ? r.cells[0].value()
+                       : ZigZag(Delta(r.cells[v].value(), r.cells[v - 1].value())));
     }
   }
 
@@ -518,7 +519,7 @@ struct TraceWriter::Impl {
     RAYCELL_CHECK_LE(r.visit_count, kTraceMaxRayVisits);
     if (header.settings.store_t) RAYCELL_CHECK(r.t_enter != nullptr);
     for (std::size_t v = 0; v < r.visit_count; ++v) {
-      RAYCELL_CHECK_LT(r.cells[v], header.cell_count());
+      RAYCELL_CHECK_LT(r.cells[v].value(), header.cell_count());
     }
   }
 

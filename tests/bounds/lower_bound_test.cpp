@@ -16,7 +16,7 @@ using testing::FromPaths;
 using testing::RandomTree;
 using testing::Rotations;
 
-constexpr CellId A = 0, B = 1, C = 2, D = 3;
+constexpr CellId A{0}, B{1}, C{2}, D{3};
 
 void ExpectValid(const CellTree& t, const LowerBoundResult& r) {
   EXPECT_EQ(r.max_gen, Bound(t));
@@ -31,7 +31,7 @@ void ExpectValid(const CellTree& t, const LowerBoundResult& r) {
 }
 
 TEST(LowerBoundTest, RotationsReachTheOptimum) {
-  for (CellId n = 2; n <= 6; ++n) {
+  for (std::uint32_t n = 2; n <= 6; ++n) {
     const CellTree t = Rotations(n);
     const LowerBoundResult r = LowerBound(t);
     ExpectValid(t, r);
@@ -71,7 +71,7 @@ TEST(LowerBoundTest, RandomTreesStayBetweenMaxGenAndTheOptimum) {
   int above = 0, equal = 0;
   const int trials = 1500;
   for (int trial = 0; trial < trials; ++trial) {
-    const CellId cells = 2 + rng() % 5;
+    const std::uint32_t cells = 2 + rng() % 5;
     const CellTree t = RandomTree(rng, cells, 1 + rng() % 8, 1 + rng() % 6);
     if (t.node_count() > 22) continue;  // keep the brute force fast
     LowerBoundOptions options;
@@ -98,7 +98,7 @@ TEST(LowerBoundTest, CutsRaiseTheBoundAndStayValid) {
   std::mt19937 rng(5);
   int cut = 0;
   for (int trial = 0; trial < 700; ++trial) {
-    const CellId cells = 4 + rng() % 3;
+    const std::uint32_t cells = 4 + rng() % 3;
     const CellTree t = RandomTree(rng, cells, 4 + rng() % 10, 2 + rng() % 6);
     if (t.node_count() > 26) continue;
     LowerBoundOptions options;
@@ -122,7 +122,7 @@ TEST(LowerBoundTest, EmptyAndTinyTrees) {
 
 TEST(LowerBoundTest, ManyCellsFewNodes) {
   std::mt19937 rng(22);
-  for (CellId cells : {512u, 4096u}) {
+  for (std::uint32_t cells : {512u, 4096u}) {
     const CellTree t = RandomTree(rng, cells, 60, 8);
     LowerBoundOptions options;
     if (cells == 512) options.grid = {8, 8, 8};
@@ -132,7 +132,7 @@ TEST(LowerBoundTest, ManyCellsFewNodes) {
 }
 
 TEST(LowerBoundTest, GridMustCoverTheCells) {
-  const CellTree t = FromPaths({{A, B, 9}});
+  const CellTree t = FromPaths({{A, B, CellId(9)}});
   LowerBoundOptions options;
   options.grid = {2, 2, 2};
   const std::string error = testing::ErrorOf([&] { LowerBound(t, options); });

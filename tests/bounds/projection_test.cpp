@@ -15,7 +15,7 @@ using testing::FromPaths;
 using testing::RandomTree;
 using Strings = std::vector<CellString>;
 
-constexpr CellId A = 0, B = 1, C = 2, D = 3;
+constexpr CellId A{0}, B{1}, C{2}, D{3};
 
 // Subsequence by recursion over both strings (independent of the greedy scan under test).
 bool SubsequenceReference(const CellString& a, std::size_t i, const CellString& b, std::size_t j) {
@@ -68,7 +68,7 @@ TEST(ProjectionTest, HandMadeTree) {
   // Onto {B, D}: B C -> B, B D A -> B D; B is dropped.
   EXPECT_EQ(ProjectPaths(t, {B, D}), (Strings{{B, D}}));
   // Cells that match nothing, and none at all.
-  EXPECT_TRUE(ProjectPaths(t, {7}).empty());
+  EXPECT_TRUE(ProjectPaths(t, {CellId(7)}).empty());
   EXPECT_TRUE(ProjectPaths(t, {}).empty());
   // Longest first, then lexicographic.
   EXPECT_EQ(ProjectPaths(t, {A, C}), (Strings{{A, A}, {A, C}, {C, A}}));
@@ -83,10 +83,10 @@ TEST(ProjectionTest, RemoveDominatedKeepsOnlyMaximalStrings) {
 TEST(ProjectionTest, RandomTreesMatchTheReference) {
   std::mt19937 rng(7);
   for (int trial = 0; trial < 400; ++trial) {
-    const CellId cells = 2 + rng() % 6;
+    const std::uint32_t cells = 2 + rng() % 6;
     const CellTree t = RandomTree(rng, cells, 1 + rng() % 12, 1 + rng() % 7);
     std::set<CellId> subset;
-    for (CellId c = 0; c < cells; ++c) {
+    for (CellId c : CellRange(cells)) {
       if (rng() % 2) subset.insert(c);
     }
     const std::vector<CellId> list(subset.begin(), subset.end());

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "graph/cell_tree.h"
+#include "tests/cell_list.h"
 #include "tests/graph/test_trees.h"
 
 namespace raycell {
@@ -16,7 +17,7 @@ namespace {
 
 using Strings = std::vector<CellString>;
 
-constexpr CellId A = 0, B = 1, C = 2;
+constexpr CellId A{0}, B{1}, C{2};
 
 bool Covers(const CellString& super, const CellString& s) {
   std::size_t i = 0;
@@ -67,12 +68,12 @@ std::size_t BruteForceScs(const Strings& strings) {
 bool BruteForceFits(const Strings& strings, const std::vector<std::uint32_t>& budget) {
   const std::vector<CellId> alphabet = Alphabet(strings);
   std::size_t most = 0;
-  for (CellId c : alphabet) most += budget[c];
+  for (CellId c : alphabet) most += budget[c.value()];
   for (std::size_t length = 0; length <= most; ++length) {
     CellString s;
     const bool found = AnyString(alphabet, length, s, [&](const CellString& t) {
       for (CellId c : alphabet) {
-        if (std::count(t.begin(), t.end(), c) > budget[c]) return false;
+        if (std::count(t.begin(), t.end(), c) > budget[c.value()]) return false;
       }
       return CoversAll(t, strings);
     });
@@ -100,7 +101,7 @@ std::size_t BfsScs(const Strings& strings, const std::vector<std::uint32_t>* bud
       if (done) return depth;
       for (std::size_t a = 0; a < alphabet.size(); ++a) {
         State t = s;
-        if (budget != nullptr && ++t.second[a] > (*budget)[alphabet[a]]) continue;
+        if (budget != nullptr && ++t.second[a] > (*budget)[alphabet[a].value()]) continue;
         if (budget == nullptr) t.second.clear();
         for (std::size_t i = 0; i < strings.size(); ++i) {
           if (t.first[i] < strings[i].size() && strings[i][t.first[i]] == alphabet[a]) ++t.first[i];
@@ -113,12 +114,12 @@ std::size_t BfsScs(const Strings& strings, const std::vector<std::uint32_t>* bud
   return SIZE_MAX;
 }
 
-Strings RandomStrings(std::mt19937& rng, CellId symbols, int count, int max_length) {
+Strings RandomStrings(std::mt19937& rng, std::uint32_t symbols, int count, int max_length) {
   Strings out;
   for (int i = 0; i < count; ++i) {
     CellString s;
     const int length = rng() % (max_length + 1);
-    for (int j = 0; j < length; ++j) s.push_back(rng() % symbols);
+    for (int j = 0; j < length; ++j) s.push_back(CellId(rng() % symbols));
     out.push_back(s);
   }
   return out;
@@ -141,7 +142,7 @@ TEST(ScsTest, SmallCases) {
 TEST(ScsTest, ExactAgainstBruteForceOnRandomSets) {
   std::mt19937 rng(11);
   for (int trial = 0; trial < 600; ++trial) {
-    const CellId symbols = 1 + rng() % 3;
+    const std::uint32_t symbols = 1 + rng() % 3;
     const Strings strings = RandomStrings(rng, symbols, 1 + rng() % 5, 5);
     const ScsResult r = ShortestCommonSupersequence(strings);
     ASSERT_TRUE(r.exact) << r.ToString();
@@ -157,7 +158,7 @@ TEST(ScsTest, ExactAgainstBruteForceOnRandomSets) {
 TEST(ScsTest, ExactWithThePairHeuristicAgainstBreadthFirstSearch) {
   std::mt19937 rng(16);
   for (int trial = 0; trial < 100; ++trial) {
-    const CellId symbols = 4 + rng() % 2;
+    const std::uint32_t symbols = 4 + rng() % 2;
     const Strings strings = RandomStrings(rng, symbols, 2 + rng() % 4, 6);
     const ScsSolver solver(strings);
     const ScsResult r = solver.Shortest();
@@ -180,11 +181,11 @@ TEST(ScsTest, MergedPartsStayAdmissible) {
   std::mt19937 rng(17);
   for (int trial = 0; trial < 60; ++trial) {
     // Orders of the same symbols that disagree: pairs, and groups of pairs, gain.
-    const CellId symbols = 8 + rng() % 2;
+    const std::uint32_t symbols = 8 + rng() % 2;
     Strings strings;
     for (int i = 3 + rng() % 2; i > 0; --i) {
       CellString s;
-      for (CellId c = 0; c < symbols; ++c) s.push_back(c);
+      for (CellId c : CellRange(symbols)) s.push_back(c);
       std::shuffle(s.begin(), s.end(), rng);
       s.resize(5 + rng() % 3);
       strings.push_back(s);
@@ -242,12 +243,12 @@ TEST(ScsTest, ProjectionsWithAndWithoutDominanceHaveTheSameScs) {
   std::mt19937 rng(14);
   for (int trial = 0; trial < 200; ++trial) {
     const CellTree t = testing::RandomTree(rng, 3, 1 + rng() % 6, 5);
-    const std::vector<CellId> cells = {0, 2};
+    const testing::CellList cells = {0, 2};
     Strings raw;  // every leaf's projection, nothing removed
     for (const CellString& p : TreePaths(t)) {
       CellString s;
       for (CellId c : p) {
-        if (c == 0 || c == 2) s.push_back(c);
+        if (c == CellId(0) || c == CellId(2)) s.push_back(c);
       }
       raw.push_back(s);
     }
@@ -270,8 +271,8 @@ TEST(ScsTest, BudgetAgainstBruteForce) {
     if (expected) {
       ++yes;
       ASSERT_TRUE(CoversAll(r.witness, strings));
-      for (CellId c = 0; c < 3; ++c) {
-        ASSERT_LE(std::count(r.witness.begin(), r.witness.end(), c), budget[c]);
+      for (CellId c : CellRange(3)) {
+        ASSERT_LE(std::count(r.witness.begin(), r.witness.end(), c), budget[c.value()]);
       }
     } else {
       ++no;
@@ -298,13 +299,13 @@ TEST(ScsTest, BudgetsOfTheCrossedPair) {
 TEST(ScsTest, ManySymbolsAndLongStrings) {
   // 300 distinct symbols, one string each way: the reverse needs 2n - 1.
   CellString up, down;
-  for (CellId c = 0; c < 300; ++c) up.push_back(c), down.insert(down.begin(), c);
+  for (CellId c : CellRange(300)) up.push_back(c), down.insert(down.begin(), c);
   const ScsResult r = ShortestCommonSupersequence({up, down});
   EXPECT_GE(r.lower_bound, 300u);
   EXPECT_LE(r.lower_bound, 599u);
   // A string longer than 255.
   CellString alternating;
-  for (int i = 0; i < 600; ++i) alternating.push_back(i % 2);
+  for (int i = 0; i < 600; ++i) alternating.push_back(CellId(i % 2));
   const ScsResult l = ShortestCommonSupersequence({alternating, {C}});
   EXPECT_TRUE(l.exact);
   EXPECT_EQ(l.lower_bound, 601u);

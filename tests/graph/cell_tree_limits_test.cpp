@@ -21,11 +21,11 @@ RayBatch OneRay(CellId a, CellId b) {
 
 TEST(CellTreeLimitsTest, CellsBeyondTheLargestGridAreRefused) {
   CellTreeBuilder builder;
-  EXPECT_EQ(testing::ErrorOf([&] { builder.AddBatch(OneRay(1, 4000000000u)); }),
+  EXPECT_EQ(testing::ErrorOf([&] { builder.AddBatch(OneRay(CellId(1), CellId(4000000000u))); }),
             "ray 0: cell 4000000000 is beyond the largest cell grid (16777216 cells, "
             "kTraceMaxCells)");
   CellTreeBuilder at_limit;
-  at_limit.AddBatch(OneRay(0, static_cast<CellId>(kTraceMaxCells - 1)));
+  at_limit.AddBatch(OneRay(CellId(0), static_cast<CellId>(kTraceMaxCells - 1)));
   EXPECT_EQ(at_limit.Finish().cell_count(), kTraceMaxCells);
 }
 

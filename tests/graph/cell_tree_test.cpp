@@ -13,18 +13,26 @@
 namespace raycell {
 namespace {
 
-// Typed ids (CONTRIBUTING.md): a node and a cell, both 32-bit numbers, never convert into each
-// other, in either direction, by construction or assignment; a number becomes a node only
-// explicitly, NodeId(i). Checked at compile time: this file does not build if they do.
+// Typed ids (CONTRIBUTING.md, docs/design.md §1 "Cell and node ids"): a node and a cell, both
+// 32-bit numbers, never convert into each other, in either direction, by construction or
+// assignment, nor into or from numbers; a number becomes a node or a cell only explicitly,
+// NodeId(i), CellId(i). Checked at compile time: this file does not build if they do.
 static_assert(!std::is_convertible_v<NodeId, CellId> && !std::is_convertible_v<CellId, NodeId>);
 static_assert(!std::is_assignable_v<CellId&, NodeId> && !std::is_assignable_v<NodeId&, CellId>);
 static_assert(!std::is_convertible_v<std::uint32_t, NodeId> &&
               !std::is_convertible_v<std::size_t, NodeId>);
 static_assert(std::is_constructible_v<NodeId, std::uint32_t> && NodeId(7).index() == 7);
+static_assert(!std::is_convertible_v<std::uint32_t, CellId> &&
+              !std::is_convertible_v<std::size_t, CellId> && !std::is_convertible_v<int, CellId>);
+static_assert(!std::is_convertible_v<CellId, std::uint32_t> &&
+              !std::is_convertible_v<CellId, std::size_t> && !std::is_convertible_v<CellId, bool>);
+static_assert(!std::is_assignable_v<CellId&, std::uint32_t> && !std::is_assignable_v<CellId&, int>);
+static_assert(std::is_constructible_v<CellId, std::uint32_t> && CellId(7).value() == 7);
 // And no cost: four bytes, copied as the number they hold.
 static_assert(sizeof(NodeId) == sizeof(std::uint32_t) && std::is_trivially_copyable_v<NodeId>);
+static_assert(sizeof(CellId) == sizeof(std::uint32_t) && std::is_trivially_copyable_v<CellId>);
 
-constexpr CellId A = 0, B = 1, C = 2;
+constexpr CellId A{0}, B{1}, C{2};
 
 struct TestRay {
   RayId parent;
@@ -94,7 +102,7 @@ TEST(CellTreeTest, ChainRevisitingACell) {
 // Star: one primary ray per cell 0..9; ten children of the root, bound 10.
 TEST(CellTreeTest, Star) {
   std::vector<TestRay> rays;
-  for (CellId c = 0; c < 10; ++c) rays.push_back({kNoParent, 0, {c}, {}});
+  for (CellId c : CellRange(10)) rays.push_back({kNoParent, 0, {c}, {}});
   const CellTree t = Build(rays);
   EXPECT_EQ(t.node_count(), 10u);
   EXPECT_EQ(t.children(kRootNode).size(), 10u);
@@ -192,7 +200,7 @@ TEST(CellTreeTest, ToStringListsNodesDepthFirst) {
 
 // Random ray trees (primary rays and rays spawned at a visit of an earlier ray of the same
 // tree), as testing::TestRay with parents indexing this list.
-std::vector<testing::TestRay> RandomRays(std::mt19937& rng, CellId cells, int rays) {
+std::vector<testing::TestRay> RandomRays(std::mt19937& rng, std::uint32_t cells, int rays) {
   std::vector<testing::TestRay> out;
   std::size_t tree_start = 0;
   for (int i = 0; i < rays; ++i) {
@@ -239,7 +247,7 @@ void ExpectSameTree(const CellTree& a, const CellTree& b) {
 TEST(UnionTreeTest, EqualsTheTreeOfAllRaysAndItsSchedulesServeEach) {
   std::mt19937 rng(11);
   for (int round = 0; round < 200; ++round) {
-    const CellId cells = 2 + rng() % 6;
+    const std::uint32_t cells = 2 + rng() % 6;
     const auto a = RandomRays(rng, cells, 1 + int(rng() % 12));
     const auto b = RandomRays(rng, cells, 1 + int(rng() % 12));
     auto both = a;

@@ -6,6 +6,7 @@
 
 #include "graph/peel.h"
 #include "graph/schedule.h"
+#include "tests/cell_list.h"
 #include "tests/graph/test_trees.h"
 
 namespace raycell {
@@ -14,8 +15,8 @@ namespace {
 using testing::FromPaths;
 using testing::RandomTree;
 using Index = CellForest::Index;
-using Schedule = std::vector<CellId>;
-constexpr CellId A = 0, B = 1, C = 2;
+using Schedule = testing::CellList;
+constexpr CellId A{0}, B{1}, C{2};
 
 TEST(CellForestTest, FromTreeKeepsCellsParentsAndGenerations) {
   // A B A and A C: tree nodes 1 A, 2 B, 3 A, 4 C; forest nodes 0..3.
@@ -33,7 +34,7 @@ TEST(CellForestTest, FromTreeKeepsCellsParentsAndGenerations) {
   EXPECT_EQ(f.child_count(0), 2u);
   EXPECT_EQ(f.nodes_of(A), (std::vector<Index>{0, 2}));
   EXPECT_EQ(f.bound(), Bound(t));
-  EXPECT_EQ(f.cells(), (std::vector<CellId>{A, B, C}));
+  EXPECT_EQ(f.cells(), (testing::CellList{A, B, C}));
   EXPECT_EQ(f.ToString(), "forest of 4 nodes, 3 cells, bound 4");
 }
 
@@ -68,7 +69,7 @@ Schedule Padded(const CellTree& t, std::mt19937& rng, int extra) {
   Schedule s = Peel(t).schedule;
   for (int k = 0; k < extra; ++k) {
     s.insert(s.begin() + rng() % (s.size() + 1),
-             CellId(rng() % std::max<CellId>(1, t.cell_count())));
+             CellId(rng() % std::max<std::uint32_t>(1, t.cell_count())));
   }
   return s;
 }

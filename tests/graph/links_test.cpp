@@ -13,6 +13,7 @@
 #include "graph/dependency_graph.h"
 #include "graph/peel.h"
 #include "graph/schedule.h"
+#include "tests/cell_list.h"
 #include "tests/graph/test_trees.h"
 
 namespace raycell {
@@ -21,8 +22,8 @@ namespace {
 using testing::FromPaths;
 using testing::RandomTree;
 
-constexpr CellId A = 0, B = 1, C = 2, D = 3, E = 4, F = 5;
-using Schedule = std::vector<CellId>;
+constexpr CellId A{0}, B{1}, C{2}, D{3}, E{4}, F{5};
+using Schedule = testing::CellList;
 using Links = std::vector<Link>;
 
 // The node reached from the root along `path`.
@@ -55,7 +56,7 @@ bool Realisable(const CellTree& t, const Links& links, bool greedy) {
   for (std::size_t q = 0; q < queue.size(); ++q) {
     const std::uint32_t done = queue[q];
     if (done == all) return true;
-    for (CellId c = 0; c < t.cell_count(); ++c) {
+    for (CellId c : CellRange(t.cell_count())) {
       std::uint32_t ready = 0;
       for (NodeId n : t.nodes()) {
         const NodeId p = t.parent(n);
@@ -82,7 +83,7 @@ template <typename Fn>
 void ForRandomTrees(int count, std::size_t max_nodes, Fn fn) {
   std::mt19937 rng(20020902);
   for (int i = 0; i < count;) {
-    const CellId cells = 2 + rng() % 3;
+    const std::uint32_t cells = 2 + rng() % 3;
     const int rays = 1 + static_cast<int>(rng() % (max_nodes <= 12 ? 5 : 14));
     const CellTree t = RandomTree(rng, cells, rays, max_nodes <= 12 ? 4 : 6);
     if (t.node_count() > max_nodes) continue;
@@ -127,11 +128,11 @@ std::size_t LargestFeasibleSubset(const CellTree& t, const Links& links) {
 
 // Is some schedule of `length` entries over the tree's cells feasible? (exhaustive)
 bool SomeScheduleOfLength(const CellTree& t, std::size_t length) {
-  Schedule s(length, 0);
+  Schedule s(std::vector<CellId>(length, CellId(0)));
   for (;;) {
     if (IsFeasible(t, s)) return true;
     std::size_t i = 0;
-    while (i < length && ++s[i] == t.cell_count()) s[i++] = 0;
+    while (i < length && (++s[i]).value() == t.cell_count()) s[i++] = CellId(0);
     if (i == length) return false;
   }
 }
@@ -144,7 +145,7 @@ TEST(LinksTest, GroupsAndLinksOfASchedule) {
   const CellTree t = FromPaths({{A, B}, {B, A}});
   ASSERT_EQ(t.node_count(), 4u);
   EXPECT_EQ(ScheduleGroups(t, {A, B, A}), (std::vector<std::int64_t>{-1, 0, 1, 1, 2}));
-  EXPECT_EQ(ScheduleGroups(t, {9, B, A}), (std::vector<std::int64_t>{-1, 2, -1, 1, 2}));
+  EXPECT_EQ(ScheduleGroups(t, {CellId(9), B, A}), (std::vector<std::int64_t>{-1, 2, -1, 1, 2}));
   EXPECT_EQ(LinksOf(t, {A, B, A}), (Links{N(2, 3)}));
   EXPECT_EQ(LinksOf(t, {B, A, B}), (Links{N(1, 4)}));
   EXPECT_EQ(RunSchedule(t, {A, B, A}).useful_fetches, t.node_count() - 1);
@@ -165,12 +166,12 @@ TEST(LinksTest, GroupsAndLinksOfASchedule) {
 // all processed by the one fetch of cell 0 after cells 1..5: links 6-7, 7-8, 8-9, 9-10.
 TEST(LinksTest, GroupOfKNodesGivesKMinusOneLinks) {
   std::vector<Schedule> paths;
-  for (CellId c = 1; c <= 5; ++c) paths.push_back({c, 0});
+  for (std::uint32_t c = 1; c <= 5; ++c) paths.push_back({c, 0});
   const CellTree t = FromPaths(paths);
   const Schedule s{1, 2, 3, 4, 5, 0};
   const Links links = LinksOf(t, s);
   EXPECT_EQ(links.size(), 4u);
-  for (const Link& l : links) EXPECT_EQ(t.cell(l.a), 0u) << l;
+  for (const Link& l : links) EXPECT_EQ(t.cell(l.a), CellId(0)) << l;
   EXPECT_EQ(RunSchedule(t, s).useful_fetches, t.node_count() - links.size());
   EXPECT_TRUE(LinksFeasible(t, links));
 }
@@ -184,7 +185,7 @@ TEST(LinksTest, AncestorLinkIsInfeasibleAndNoCandidate) {
   const Contraction k = ContractLinks(t, {N(1, 3)});
   EXPECT_EQ(k.classes(), 2u);
   EXPECT_EQ(k.class_of, (std::vector<std::uint32_t>{Contraction::kNoClass, 0, 1, 0}));
-  EXPECT_EQ(k.class_cell, (std::vector<CellId>{A, B}));
+  EXPECT_EQ(k.class_cell, (testing::CellList{A, B}));
   EXPECT_EQ(boost::num_edges(k.graph), 2u);
 }
 
@@ -270,7 +271,7 @@ TEST(LinksChainTest, SeveralChains) {
   const CellTree two = FromPaths({{A, B}, {B, C}, {C, A}, {D, E}, {E, F}, {F, D}});
   Links disjoint;
   for (CellId x : {A, D}) {
-    const CellId y = x + 1, z = x + 2;
+    const CellId y(x.value() + 1), z(x.value() + 2);
     disjoint.push_back(L(At(two, {x}), At(two, {z, x})));
     disjoint.push_back(L(At(two, {x, y}), At(two, {y})));
     disjoint.push_back(L(At(two, {y, z}), At(two, {z})));
@@ -386,7 +387,7 @@ TEST(LinksDotTest, OneNodeLinePerNodeOneDashedEdgePerLink) {
   EXPECT_EQ(CountLines(dot, "->"), tree_edges + links.size());
   EXPECT_EQ(CountLines(dot, "style=solid"), tree_edges);
   for (NodeId n : t.nodes()) {
-    if (t.cell(n) == 12) {
+    if (t.cell(n) == CellId(12)) {
       EXPECT_NE(dot.find(std::to_string(n.index()) + "[label=\"cell12 g"), std::string::npos);
       EXPECT_NE(dot.find("fillcolor=\"#8dd3c7\"]",
                          dot.find(std::to_string(n.index()) + "[label=\"cell12")),
@@ -426,8 +427,8 @@ TEST(LinksPropertyTest, PeelLinksAreFeasibleAndCountFetches) {
 // cell; when it is feasible, fetches = nodes - links.
 TEST(LinksPropertyTest, LinksOfRandomSchedulesAreFeasible) {
   ForRandomTrees(3000, 64, [](const CellTree& t, std::mt19937& rng) {
-    Schedule s(rng() % (2 * t.node_count() + 1));
-    for (CellId& c : s) c = rng() % (t.cell_count() + 1);
+    Schedule s(std::vector<CellId>(rng() % (2 * t.node_count() + 1)));
+    for (CellId& c : s) c = CellId(rng() % (t.cell_count() + 1));
     const Links links = LinksOf(t, s);
     const ScheduleRun run = RunSchedule(t, s);
     EXPECT_TRUE(LinksFeasible(t, links));

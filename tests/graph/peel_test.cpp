@@ -6,6 +6,7 @@
 #include <random>
 
 #include "graph/schedule.h"
+#include "tests/cell_list.h"
 #include "tests/graph/test_trees.h"
 
 namespace raycell {
@@ -14,8 +15,8 @@ namespace {
 using testing::FromPaths;
 using testing::RandomTree;
 
-constexpr CellId A = 0, B = 1, C = 2;
-using Schedule = std::vector<CellId>;
+constexpr CellId A{0}, B{1}, C{2};
+using Schedule = testing::CellList;
 constexpr PeelKind kC = PeelKind::kCompletion, kS = PeelKind::kSplit;
 
 // An independent, naive run of a schedule: at each entry, scan every node.
@@ -53,14 +54,14 @@ PeelResult NaivePeel(const CellTree& t) {
     std::vector<std::size_t> leaves(t.cell_count(), 0);
     for (NodeId n : t.nodes()) {
       if (gone[n.index()]) continue;
-      top[t.cell(n)] = std::max(top[t.cell(n)], t.generation(n));
-      leaves[t.cell(n)] += leaf[n.index()] ? 1 : 0;
+      top[t.cell(n).value()] = std::max(top[t.cell(n).value()], t.generation(n));
+      leaves[t.cell(n).value()] += leaf[n.index()] ? 1 : 0;
     }
     std::vector<bool> ready(t.cell_count());
-    for (CellId c = 0; c < t.cell_count(); ++c) ready[c] = top[c] > 0;
+    for (CellId c : CellRange(t.cell_count())) ready[c.value()] = top[c.value()] > 0;
     for (NodeId n : t.nodes()) {
-      if (!gone[n.index()] && !leaf[n.index()] && t.generation(n) == top[t.cell(n)])
-        ready[t.cell(n)] = false;
+      if (!gone[n.index()] && !leaf[n.index()] && t.generation(n) == top[t.cell(n).value()])
+        ready[t.cell(n).value()] = false;
     }
     const auto r = std::find(ready.begin(), ready.end(), true);
     const bool completion = r != ready.end();
@@ -115,7 +116,7 @@ TEST(PeelTest, ChainRevisitingACell) {
 // 0 1 ... 9 and the schedule is 9 8 ... 0, length = bound = 10.
 TEST(PeelTest, StarPeelsLowestReadyCellFirst) {
   std::vector<Schedule> paths;
-  for (CellId c = 0; c < 10; ++c) paths.push_back({c});
+  for (CellId c : CellRange(10)) paths.push_back({c});
   const CellTree t = FromPaths(paths);
   const PeelResult p = Peel(t);
   EXPECT_EQ(p.schedule, (Schedule{9, 8, 7, 6, 5, 4, 3, 2, 1, 0}));
@@ -174,7 +175,7 @@ TEST(PeelTest, EmptyTree) {
 
 TEST(ScheduleTest, UnknownCellsProcessNothing) {
   const CellTree t = FromPaths({{A, B}});
-  const ScheduleRun run = RunSchedule(t, {7, A, A, B});
+  const ScheduleRun run = RunSchedule(t, {CellId(7), A, A, B});
   EXPECT_TRUE(run.feasible);
   EXPECT_EQ(run.useful_fetches, 2u);
   EXPECT_EQ(run.ToString(), "feasible, 2 nodes processed, 2 useful fetches");
@@ -186,7 +187,7 @@ template <typename Fn>
 void ForRandomTrees(int count, Fn fn) {
   std::mt19937 rng(20020901);
   for (int i = 0; i < count; ++i) {
-    const CellId cells = 2 + rng() % 5;
+    const std::uint32_t cells = 2 + rng() % 5;
     const int rays = 1 + static_cast<int>(rng() % 12);
     const CellTree t = RandomTree(rng, cells, rays);
     SCOPED_TRACE(t.ToString());
@@ -210,7 +211,7 @@ TEST(PeelPropertyTest, ScheduleIsFeasibleAndWithinBoundPlusSplits) {
     EXPECT_LE(Bound(t), p.schedule.size());
     EXPECT_LE(p.schedule.size(), Bound(t) + p.split_peels);
     const auto max_gen = MaxGenerations(t);
-    for (CellId c = 0; c < t.cell_count(); ++c) EXPECT_GE(Count(p.schedule, c), max_gen[c]);
+    for (CellId c : CellRange(t.cell_count())) EXPECT_GE(Count(p.schedule, c), max_gen[c.value()]);
   });
 }
 
@@ -236,7 +237,7 @@ TEST(PeelPropertyTest, RemovingAnEntry) {
       const NaiveRun naive = RunNaive(t, shorter);
       EXPECT_EQ(run.feasible, naive.feasible) << "without entry " << i;
       EXPECT_EQ(run.useful_fetches, naive.useful);
-      if (Count(s, s[i]) == max_gen[s[i]]) {
+      if (Count(s, s[i]) == max_gen[s[i].value()]) {
         EXPECT_FALSE(run.feasible) << "without entry " << i;
       }
     }

@@ -9,21 +9,22 @@
 #include <vector>
 
 #include "graph/cell_tree.h"
+#include "tests/cell_list.h"
 
 namespace raycell::testing {
 
 // The vocabulary of hand-made trees: cells A..F and a schedule (or path) of cells.
 namespace cells {
-inline constexpr CellId A = 0, B = 1, C = 2, D = 3, E = 4, F = 5;
+inline constexpr CellId A{0}, B{1}, C{2}, D{3}, E{4}, F{5};
 }  // namespace cells
-using Schedule = std::vector<CellId>;
+using Schedule = CellList;
 
 // One ray of a hand-made frame: its parent (kNoParent for a primary ray), the parent's visit
 // it was spawned at, and its cells. Rays come one ray tree at a time.
 struct TestRay {
   RayId parent = kNoParent;
   std::uint32_t spawn = 0;
-  std::vector<CellId> cells;
+  CellList cells;
 };
 
 // The rays as a frame, `samples` samples per visit.
@@ -44,7 +45,7 @@ inline CellTree TreeOf(const RayBatch& rays) {
 }
 
 // Primary rays with the given paths, one sample per visit.
-inline CellTree FromPaths(const std::vector<std::vector<CellId>>& paths) {
+inline CellTree FromPaths(const std::vector<CellList>& paths) {
   std::vector<TestRay> rays;
   for (const auto& p : paths) rays.push_back({kNoParent, 0, p});
   return TreeOf(RaysOf(rays));
@@ -53,9 +54,10 @@ inline CellTree FromPaths(const std::vector<std::vector<CellId>>& paths) {
 // Random rays over `cells` cells: primary rays and rays spawned at a random visit of an
 // earlier ray of the same ray tree (rays come one ray tree at a time, as the recorder writes
 // them), paths of 1..max_length visits without consecutive repeats, one sample per visit.
-inline CellTree RandomTree(std::mt19937& rng, CellId cells, int rays, int max_length = 6) {
+inline CellTree RandomTree(std::mt19937& rng, std::uint32_t cells, int rays, int max_length = 6) {
   RayBatch b(false);
-  std::uniform_int_distribution<CellId> cell(0, cells - 1);
+  std::uniform_int_distribution<std::uint32_t> cell_number(0, cells - 1);
+  const auto cell = [&](std::mt19937& r) { return CellId(cell_number(r)); };
   std::uniform_int_distribution<int> length(1, max_length);
   int tree_start = 0;
   for (int i = 0; i < rays; ++i) {
@@ -81,11 +83,11 @@ inline CellTree RandomTree(std::mt19937& rng, CellId cells, int rays, int max_le
 
 // Primary paths: the `cells` rotations of 0 1 .. cells-1. maxGen (the bound) `cells`,
 // optimum 2 cells - 1, Peel above the bound.
-inline CellTree Rotations(CellId cells) {
+inline CellTree Rotations(std::uint32_t cells) {
   std::vector<Schedule> paths;
-  for (CellId r = 0; r < cells; ++r) {
+  for (CellId r : CellRange(cells)) {
     Schedule p;
-    for (CellId i = 0; i < cells; ++i) p.push_back((r + i) % cells);
+    for (CellId i : CellRange(cells)) p.push_back(CellId((r.value() + i.value()) % cells));
     paths.push_back(p);
   }
   return FromPaths(paths);
@@ -119,7 +121,7 @@ inline std::size_t BruteForceOptimum(const CellTree& t) {
     std::vector<std::vector<bool>> next;
     for (const std::vector<bool>& done : level) {
       if (std::all_of(done.begin(), done.end(), [](bool d) { return d; })) return depth;
-      for (CellId c = 0; c < t.cell_count(); ++c) {
+      for (CellId c : CellRange(t.cell_count())) {
         std::vector<bool> after = done;
         for (NodeId n : t.nodes()) {
           if (!done[n.index()] && done[t.parent(n).index()] && t.cell(n) == c)

@@ -12,13 +12,14 @@
 #include <vector>
 
 #include "base/check.h"
+#include "tests/cell_list.h"
 #include "traces/record/cell_grid.h"
 
 namespace raycell {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-using Cells = std::vector<CellId>;
+using Cells = testing::CellList;
 
 double Get(const Vec3d& v, int a) { return a == 0 ? v.x : a == 1 ? v.y : v.z; }
 void Set(Vec3d& v, int a, double x) { (a == 0 ? v.x : a == 1 ? v.y : v.z) = x; }
@@ -81,12 +82,12 @@ TEST(CellGridTest, Accessors) {
   EXPECT_EQ(g.cell_count(), 24u);
   EXPECT_EQ(g.dims(), (std::array<std::uint32_t, 3>{2, 3, 4}));
   EXPECT_EQ(g.cell_size()[2], 1.0);
-  EXPECT_EQ(g.CellIndex({1, 2, 3}), 1u + 2 * (2 + 3 * 3));
-  EXPECT_EQ(g.CellCoords(23), (std::array<std::uint32_t, 3>{1, 2, 3}));
-  EXPECT_EQ(g.CellBounds(0), (Box3d{{-1, 0, 2}, {0, 1, 3}}));
-  EXPECT_EQ(g.CellBounds(23), (Box3d{{0, 2, 5}, {1, 3, 6}}));
+  EXPECT_EQ(g.CellIndex({1, 2, 3}), CellId(1u + 2 * (2 + 3 * 3)));
+  EXPECT_EQ(g.CellCoords(CellId(23)), (std::array<std::uint32_t, 3>{1, 2, 3}));
+  EXPECT_EQ(g.CellBounds(CellId(0)), (Box3d{{-1, 0, 2}, {0, 1, 3}}));
+  EXPECT_EQ(g.CellBounds(CellId(23)), (Box3d{{0, 2, 5}, {1, 3, 6}}));
   EXPECT_EQ(g.ToString(), "CellGrid[(-1, 0, 2) - (1, 3, 6), 2x3x4 cells]");
-  EXPECT_EQ(g.CellBounds(1).ToString(), "[(0, 0, 2) - (1, 1, 3)]");
+  EXPECT_EQ(g.CellBounds(CellId(1)).ToString(), "[(0, 0, 2) - (1, 1, 3)]");
 }
 
 TEST(CellGridTest, CellOfAndCellBoundsAgree) {
@@ -104,7 +105,7 @@ TEST(CellGridTest, CellOfAndCellBoundsAgree) {
       EXPECT_EQ(g.Plane(a, dims[a]), Get(hi, a));
       for (std::uint32_t k = 0; k < dims[a]; ++k) EXPECT_LT(g.Plane(a, k), g.Plane(a, k + 1));
     }
-    for (CellId c = 0; c < g.cell_count(); ++c) {
+    for (CellId c : CellRange(g.cell_count())) {
       const Box3d b = g.CellBounds(c);
       EXPECT_EQ(g.CellOf(b.lo), c) << g.ToString() << " cell " << c;
       EXPECT_EQ(g.CellOf(Mul(Add(b.lo, b.hi), 0.5)), c);
@@ -125,11 +126,11 @@ TEST(CellGridTest, CellOfAndCellBoundsAgree) {
 
 TEST(CellGridTest, CellOfClampsBoundaryPoints) {
   const auto g = UnitGrid(2);
-  EXPECT_EQ(g.CellOf({1, 1, 1}), 7u);
-  EXPECT_EQ(g.CellOf({1.5, -3, 0.5}), 1u + 4);
-  EXPECT_EQ(g.CellOf({0.5, 0.5, 0.5}), 7u);  // interior planes belong to the upper cell
-  EXPECT_EQ(g.CellOf({std::nextafter(0.5, 0.0), 0, 0}), 0u);
-  EXPECT_EQ(g.CellOf({-0.0, 0, 0}), 0u);
+  EXPECT_EQ(g.CellOf({1, 1, 1}), CellId(7));
+  EXPECT_EQ(g.CellOf({1.5, -3, 0.5}), CellId(1u + 4));
+  EXPECT_EQ(g.CellOf({0.5, 0.5, 0.5}), CellId(7));  // interior planes belong to the upper cell
+  EXPECT_EQ(g.CellOf({std::nextafter(0.5, 0.0), 0, 0}), CellId(0));
+  EXPECT_EQ(g.CellOf({-0.0, 0, 0}), CellId(0));
 }
 
 TEST(ParseCellDimsTest, ParsesAndRejects) {
@@ -153,7 +154,8 @@ TEST(ParseCellDimsTest, ParsesAndRejects) {
 TEST(CellDDATest, CornerDiagonalSkipsIntermediateCells) {
   const auto g = UnitGrid(2);
   auto segs = Trace(g, {-1, -1, -1}, {1, 1, 1});
-  EXPECT_EQ(segs, (std::vector<CellSegment>{{0, 1, 1.5}, {7, 1.5, 2}})) << Dump(segs);
+  EXPECT_EQ(segs, (std::vector<CellSegment>{{CellId(0), 1, 1.5}, {CellId(7), 1.5, 2}}))
+      << Dump(segs);
   EXPECT_EQ(TraceCells(g, {0, 0, 0}, {1, 1, 1}), (Cells{0, 7}));
   EXPECT_EQ(TraceCells(g, {1, 1, 1}, {-3, -3, -3}), (Cells{7, 0}));
   EXPECT_EQ(TraceCells(g, {1, 1, 1}, {3, 3, 3}), Cells{});  // starts on the corner, leaves
@@ -187,7 +189,7 @@ TEST(CellDDATest, AlongCellEdgesAndFaces) {
   const auto g = UnitGrid(2);
   // The edge y = z = 0.5 is owned by the cells above both planes.
   EXPECT_EQ(Trace(g, {-1, 0.5, 0.5}, {1, 0, 0}),
-            (std::vector<CellSegment>{{6, 1, 1.5}, {7, 1.5, 2}}));
+            (std::vector<CellSegment>{{CellId(6), 1, 1.5}, {CellId(7), 1.5, 2}}));
   EXPECT_EQ(TraceCells(g, {2, 0.5, 0.5}, {-1, 0, 0}), (Cells{7, 6}));
   // Edges and faces of the box are inside it (closed box).
   EXPECT_EQ(TraceCells(g, {-1, 0, 0}, {1, 0, 0}), (Cells{0, 1}));
@@ -202,15 +204,16 @@ TEST(CellDDATest, AlongCellEdgesAndFaces) {
 TEST(CellDDATest, ParallelToEachAxis) {
   const auto g = UnitGrid(2);
   EXPECT_EQ(Trace(g, {-1, 0.25, 0.75}, {2, 0, 0}),
-            (std::vector<CellSegment>{{4, 0.5, 0.75}, {5, 0.75, 1}}));
+            (std::vector<CellSegment>{{CellId(4), 0.5, 0.75}, {CellId(5), 0.75, 1}}));
   EXPECT_EQ(Trace(g, {0.75, -1, 0.25}, {0, 1, 0}),
-            (std::vector<CellSegment>{{1, 1, 1.5}, {3, 1.5, 2}}));
+            (std::vector<CellSegment>{{CellId(1), 1, 1.5}, {CellId(3), 1.5, 2}}));
   EXPECT_EQ(Trace(g, {0.25, 0.75, 5}, {0, 0, -1}),
-            (std::vector<CellSegment>{{6, 4, 4.5}, {2, 4.5, 5}}));
+            (std::vector<CellSegment>{{CellId(6), 4, 4.5}, {CellId(2), 4.5, 5}}));
   // Signed zeros and denormal components behave as parallel.
   const double tiny = std::numeric_limits<double>::denorm_min();
   for (Vec3d d : {Vec3d{1, -0.0, 0.0}, Vec3d{1, tiny, -tiny}, Vec3d{1, 1e-310, -0.0}}) {
-    EXPECT_EQ(Trace(g, {-1, 0.25, 0.75}, d), (std::vector<CellSegment>{{4, 1, 1.5}, {5, 1.5, 2}}));
+    EXPECT_EQ(Trace(g, {-1, 0.25, 0.75}, d),
+              (std::vector<CellSegment>{{CellId(4), 1, 1.5}, {CellId(5), 1.5, 2}}));
   }
   // Starting in a plane with a denormal component across it: the side the ray moves to.
   EXPECT_EQ(TraceCells(g, {-1, 0.5, 0.25}, {1, 0, 0}), (Cells{2, 3}));
@@ -221,14 +224,16 @@ TEST(CellDDATest, ParallelToEachAxis) {
 TEST(CellDDATest, StartingOnBoundaries) {
   const auto g = UnitGrid(2);
   EXPECT_EQ(Trace(g, {0, 0.25, 0.25}, {1, 0, 0}),
-            (std::vector<CellSegment>{{0, 0, 0.5}, {1, 0.5, 1}}));
+            (std::vector<CellSegment>{{CellId(0), 0, 0.5}, {CellId(1), 0.5, 1}}));
   EXPECT_EQ(TraceCells(g, {0, 0.25, 0.25}, {-1, 0, 0}), Cells{});  // on the box, pointing out
   EXPECT_EQ(TraceCells(g, {1, 0.25, 0.25}, {1, 0, 0}), Cells{});
   EXPECT_EQ(TraceCells(g, {1, 0.25, 0.25}, {-1, 0, 0}), (Cells{1, 0}));
   EXPECT_EQ(TraceCells(g, {1, 1, 1}, {-1, -1, -2}), (Cells{7, 3}));  // leaves by an edge of 3
   // On an interior plane: the cell the ray goes into.
-  EXPECT_EQ(Trace(g, {0.5, 0.25, 0.25}, {1, 0, 0}), (std::vector<CellSegment>{{1, 0, 0.5}}));
-  EXPECT_EQ(Trace(g, {0.5, 0.25, 0.25}, {-1, 0, 0}), (std::vector<CellSegment>{{0, 0, 0.5}}));
+  EXPECT_EQ(Trace(g, {0.5, 0.25, 0.25}, {1, 0, 0}),
+            (std::vector<CellSegment>{{CellId(1), 0, 0.5}}));
+  EXPECT_EQ(Trace(g, {0.5, 0.25, 0.25}, {-1, 0, 0}),
+            (std::vector<CellSegment>{{CellId(0), 0, 0.5}}));
   EXPECT_EQ(TraceCells(g, {0.5, 0.5, 0.5}, {1, 1, 1}), (Cells{7}));
   EXPECT_EQ(TraceCells(g, {0.5, 0.5, 0.5}, {-1, -1, -1}), (Cells{0}));
   EXPECT_EQ(TraceCells(g, {0.5, 0.5, 0.5}, {1, -1, 1}), (Cells{5}));
@@ -248,40 +253,44 @@ TEST(CellDDATest, MissingTouchingAndPointingAway) {
 TEST(CellDDATest, TRangeClipping) {
   const auto g = UnitGrid(2);
   const Vec3d o{-1, 0.25, 0.25}, d{1, 0, 0};
-  EXPECT_EQ(Trace(g, o, d, 1.25, 1.75), (std::vector<CellSegment>{{0, 1.25, 1.5}, {1, 1.5, 1.75}}));
-  EXPECT_EQ(Trace(g, o, d, 0, 1.5), (std::vector<CellSegment>{{0, 1, 1.5}}));
-  EXPECT_EQ(Trace(g, o, d, 1.5, 5), (std::vector<CellSegment>{{1, 1.5, 2}}));
+  EXPECT_EQ(Trace(g, o, d, 1.25, 1.75),
+            (std::vector<CellSegment>{{CellId(0), 1.25, 1.5}, {CellId(1), 1.5, 1.75}}));
+  EXPECT_EQ(Trace(g, o, d, 0, 1.5), (std::vector<CellSegment>{{CellId(0), 1, 1.5}}));
+  EXPECT_EQ(Trace(g, o, d, 1.5, 5), (std::vector<CellSegment>{{CellId(1), 1.5, 2}}));
   EXPECT_EQ(Trace(g, o, d, 1.6, 1.6), std::vector<CellSegment>{});
   EXPECT_EQ(Trace(g, o, d, 1.7, 1.6), std::vector<CellSegment>{});
   EXPECT_EQ(Trace(g, {0.25, 0.25, 0.25}, d, -kInf, kInf),
-            (std::vector<CellSegment>{{0, -0.25, 0.25}, {1, 0.25, 0.75}}));
+            (std::vector<CellSegment>{{CellId(0), -0.25, 0.25}, {CellId(1), 0.25, 0.75}}));
 }
 
 TEST(CellDDATest, ForcedStartCell) {
   const auto g = UnitGrid(2);
   const Vec3d d{1, 0, 0};
   // On the plane between cells 0 and 1, heading into 1.
-  EXPECT_EQ(Trace(g, {0.5, 0.25, 0.25}, d, 0, kInf, 0),
-            (std::vector<CellSegment>{{0, 0, 0}, {1, 0, 0.5}}));
-  EXPECT_EQ(Trace(g, {0.5, 0.25, 0.25}, d, 0, kInf, 1), (std::vector<CellSegment>{{1, 0, 0.5}}));
+  EXPECT_EQ(Trace(g, {0.5, 0.25, 0.25}, d, 0, kInf, CellId(0)),
+            (std::vector<CellSegment>{{CellId(0), 0, 0}, {CellId(1), 0, 0.5}}));
+  EXPECT_EQ(Trace(g, {0.5, 0.25, 0.25}, d, 0, kInf, CellId(1)),
+            (std::vector<CellSegment>{{CellId(1), 0, 0.5}}));
   // Rounding put the point a hair on the wrong side: the forced cell still comes first.
-  EXPECT_EQ(Trace(g, {0.5 - 1e-12, 0.25, 0.25}, d, 0, kInf, 1),
-            (std::vector<CellSegment>{{1, 0, 0.5 + 1e-12}}));
-  EXPECT_EQ(Trace(g, {0.5 + 1e-12, 0.25, 0.25}, d, 0, kInf, 0),
-            (std::vector<CellSegment>{{0, 0, 0}, {1, 0, 0.5 - 1e-12}}));
-  EXPECT_EQ(TraceCells(g, {0.5 + 1e-12, 0.5, 0.5}, {1, -1, -1}, 0, kInf, 0), (Cells{0, 1}));
+  EXPECT_EQ(Trace(g, {0.5 - 1e-12, 0.25, 0.25}, d, 0, kInf, CellId(1)),
+            (std::vector<CellSegment>{{CellId(1), 0, 0.5 + 1e-12}}));
+  EXPECT_EQ(Trace(g, {0.5 + 1e-12, 0.25, 0.25}, d, 0, kInf, CellId(0)),
+            (std::vector<CellSegment>{{CellId(0), 0, 0}, {CellId(1), 0, 0.5 - 1e-12}}));
+  EXPECT_EQ(TraceCells(g, {0.5 + 1e-12, 0.5, 0.5}, {1, -1, -1}, 0, kInf, CellId(0)), (Cells{0, 1}));
   // Leaves the box at once: one zero-length segment.
-  EXPECT_EQ(Trace(g, {1, 0.25, 0.25}, d, 0, kInf, 1), (std::vector<CellSegment>{{1, 0, 0}}));
-  EXPECT_EQ(Trace(g, {0.25, 0.25, 0.25}, d, 0, -1, 0), (std::vector<CellSegment>{{0, 0, 0}}));
+  EXPECT_EQ(Trace(g, {1, 0.25, 0.25}, d, 0, kInf, CellId(1)),
+            (std::vector<CellSegment>{{CellId(1), 0, 0}}));
+  EXPECT_EQ(Trace(g, {0.25, 0.25, 0.25}, d, 0, -1, CellId(0)),
+            (std::vector<CellSegment>{{CellId(0), 0, 0}}));
   // Parallel to a face and a hair outside it: the start cell says the ray is in.
-  EXPECT_EQ(Trace(g, {0.25, 1 + 1e-15, 0.25}, d, 0, kInf, 2),
-            (std::vector<CellSegment>{{2, 0, 0.25}, {3, 0.25, 0.75}}));
+  EXPECT_EQ(Trace(g, {0.25, 1 + 1e-15, 0.25}, d, 0, kInf, CellId(2)),
+            (std::vector<CellSegment>{{CellId(2), 0, 0.25}, {CellId(3), 0.25, 0.75}}));
   EXPECT_EQ(TraceCells(g, {0.25, 1 + 1e-15, 0.25}, d), Cells{});
   // Starts at tmin, not at the box entry.
-  EXPECT_EQ(Trace(g, {0.25, 0.25, 0.25}, d, 0.5, 0.6, 1),
-            (std::vector<CellSegment>{{1, 0.5, 0.6}}));
-  EXPECT_THROW(CellDDA(g, {0.25, 0.25, 0.25}, d, -kInf, kInf, 0), InputError);
-  EXPECT_THROW(CellDDA(g, {0.25, 0.25, 0.25}, d, 0, kInf, 8), InputError);
+  EXPECT_EQ(Trace(g, {0.25, 0.25, 0.25}, d, 0.5, 0.6, CellId(1)),
+            (std::vector<CellSegment>{{CellId(1), 0.5, 0.6}}));
+  EXPECT_THROW(CellDDA(g, {0.25, 0.25, 0.25}, d, -kInf, kInf, CellId(0)), InputError);
+  EXPECT_THROW(CellDDA(g, {0.25, 0.25, 0.25}, d, 0, kInf, CellId(8)), InputError);
 }
 
 // A spawned ray starts half a voxel off the surface its parent hit, which in cells smaller
@@ -293,33 +302,41 @@ TEST(CellDDATest, ForcedStartCellFarFromTheStartPoint) {
   const Vec3d d{1, 0, 0};
   const double p1 = 1.0 / 3, p2 = 2 * (1.0 / 3);  // interior planes
   // Behind the forced cell (x = 2): the ray crosses cells 0, 1 and 2 after it.
-  EXPECT_EQ(Trace(g, {0.1, 0.1, 0.1}, d, 0, kInf, 2),
-            (std::vector<CellSegment>{
-                {2, 0, 0}, {0, 0, p1 - 0.1}, {1, p1 - 0.1, p2 - 0.1}, {2, p2 - 0.1, 0.9}}));
+  EXPECT_EQ(Trace(g, {0.1, 0.1, 0.1}, d, 0, kInf, CellId(2)),
+            (std::vector<CellSegment>{{CellId(2), 0, 0},
+                                      {CellId(0), 0, p1 - 0.1},
+                                      {CellId(1), p1 - 0.1, p2 - 0.1},
+                                      {CellId(2), p2 - 0.1, 0.9}}));
   // Two cells past it.
-  EXPECT_EQ(Trace(g, {0.9, 0.1, 0.1}, d, 0, kInf, 0),
-            (std::vector<CellSegment>{{0, 0, 0}, {2, 0, 1 - 0.9}}));
+  EXPECT_EQ(Trace(g, {0.9, 0.1, 0.1}, d, 0, kInf, CellId(0)),
+            (std::vector<CellSegment>{{CellId(0), 0, 0}, {CellId(2), 0, 1 - 0.9}}));
   // Off its slab on an axis the ray is parallel to (y = 2, not 0): cells 6, 7, 8.
-  EXPECT_EQ(Trace(g, {0.1, 0.9, 0.1}, d, 0, kInf, 0),
-            (std::vector<CellSegment>{
-                {0, 0, 0}, {6, 0, p1 - 0.1}, {7, p1 - 0.1, p2 - 0.1}, {8, p2 - 0.1, 0.9}}));
+  EXPECT_EQ(Trace(g, {0.1, 0.9, 0.1}, d, 0, kInf, CellId(0)),
+            (std::vector<CellSegment>{{CellId(0), 0, 0},
+                                      {CellId(6), 0, p1 - 0.1},
+                                      {CellId(7), p1 - 0.1, p2 - 0.1},
+                                      {CellId(8), p2 - 0.1, 0.9}}));
   // Outside the box, entering it later: in the forced cell (one segment from tmin) ...
   EXPECT_EQ(
-      Trace(g, {-0.5, 0.1, 0.1}, d, 0, kInf, 0),
-      (std::vector<CellSegment>{{0, 0, p1 + 0.5}, {1, p1 + 0.5, p2 + 0.5}, {2, p2 + 0.5, 1.5}}));
+      Trace(g, {-0.5, 0.1, 0.1}, d, 0, kInf, CellId(0)),
+      (std::vector<CellSegment>{
+          {CellId(0), 0, p1 + 0.5}, {CellId(1), p1 + 0.5, p2 + 0.5}, {CellId(2), p2 + 0.5, 1.5}}));
   // ... or elsewhere (the forced cell until the box entry).
-  EXPECT_EQ(Trace(g, {-0.5, 0.1, 0.1}, d, 0, kInf, 4),
-            (std::vector<CellSegment>{
-                {4, 0, 0.5}, {0, 0.5, p1 + 0.5}, {1, p1 + 0.5, p2 + 0.5}, {2, p2 + 0.5, 1.5}}));
+  EXPECT_EQ(Trace(g, {-0.5, 0.1, 0.1}, d, 0, kInf, CellId(4)),
+            (std::vector<CellSegment>{{CellId(4), 0, 0.5},
+                                      {CellId(0), 0.5, p1 + 0.5},
+                                      {CellId(1), p1 + 0.5, p2 + 0.5},
+                                      {CellId(2), p2 + 0.5, 1.5}}));
   // Outside the box, never entering it: the forced cell alone.
-  EXPECT_EQ(Trace(g, {0.1, 2, 0.1}, d, 0, kInf, 0), (std::vector<CellSegment>{{0, 0, 0}}));
-  EXPECT_EQ(Trace(g, {0.1, 0.1, 0.1}, {-1, 0, 0}, 0, 0.05, 2),
-            (std::vector<CellSegment>{{2, 0, 0}, {0, 0, 0.05}}));
+  EXPECT_EQ(Trace(g, {0.1, 2, 0.1}, d, 0, kInf, CellId(0)),
+            (std::vector<CellSegment>{{CellId(0), 0, 0}}));
+  EXPECT_EQ(Trace(g, {0.1, 0.1, 0.1}, {-1, 0, 0}, 0, 0.05, CellId(2)),
+            (std::vector<CellSegment>{{CellId(2), 0, 0}, {CellId(0), 0, 0.05}}));
   // Within 1e-3 of a cell of the forced cell is rounding: the forced cell holds the ray.
-  EXPECT_EQ(
-      Trace(g, {p1 - 1e-4, 0.1, 0.1}, d, 0, kInf, 1),
-      (std::vector<CellSegment>{{1, 0, p2 - (p1 - 1e-4)}, {2, p2 - (p1 - 1e-4), 1 - (p1 - 1e-4)}}));
-  EXPECT_EQ(TraceCells(g, {p1 - 1e-3, 0.1, 0.1}, d, 0, kInf, 1), (Cells{1, 0, 1, 2}));
+  EXPECT_EQ(Trace(g, {p1 - 1e-4, 0.1, 0.1}, d, 0, kInf, CellId(1)),
+            (std::vector<CellSegment>{{CellId(1), 0, p2 - (p1 - 1e-4)},
+                                      {CellId(2), p2 - (p1 - 1e-4), 1 - (p1 - 1e-4)}}));
+  EXPECT_EQ(TraceCells(g, {p1 - 1e-3, 0.1, 0.1}, d, 0, kInf, CellId(1)), (Cells{1, 0, 1, 2}));
 }
 
 TEST(CellDDATest, InvalidRays) {
@@ -335,7 +352,7 @@ TEST(CellDDATest, InvalidRays) {
   const double tiny = std::numeric_limits<double>::denorm_min();
   EXPECT_THROW(CellDDA(g, {0.25, 0.25, 0.25}, {tiny, 0, 0}), InputError);
   EXPECT_EQ(Trace(g, {0.25, 0.25, 0.25}, {tiny, 0, 0}, 0, 1),
-            (std::vector<CellSegment>{{0, 0, 1}}));
+            (std::vector<CellSegment>{{CellId(0), 0, 1}}));
   try {
     CellDDA(g, {0, 0, 0}, {0, 0, 0});
     FAIL();
@@ -375,10 +392,11 @@ TEST(CellDDATest, HugeAndTinyScales) {
 
 TEST(CellDDATest, OneCellGridAndToString) {
   const auto g = CellGrid::Create({0, 0, 0}, {2, 2, 2}, {1, 1, 1});
-  EXPECT_EQ(Trace(g, {-1, 0.3, 1.7}, {1, 0.1, -0.1}), (std::vector<CellSegment>{{0, 1, 3}}));
+  EXPECT_EQ(Trace(g, {-1, 0.3, 1.7}, {1, 0.1, -0.1}),
+            (std::vector<CellSegment>{{CellId(0), 1, 3}}));
   CellDDA dda(g, {-1, 1, 1}, {1, 0, 0});
   EXPECT_NE(dda.ToString().find("CellDDA["), std::string::npos);
-  EXPECT_EQ((CellSegment{3, 0.25, 0.5}).ToString(), "{cell 3, t [0.25, 0.5]}");
+  EXPECT_EQ((CellSegment{CellId(3), 0.25, 0.5}).ToString(), "{cell 3, t [0.25, 0.5]}");
 }
 
 // ------------------------------------------------------------ CellDDA: random rays
@@ -447,7 +465,7 @@ std::string CheckTiling(const CellGrid& g, const Ray& r, const std::vector<CellS
   const auto eps = TestEps(g, r.o);
   for (std::size_t i = 0; i < segs.size(); ++i) {
     const CellSegment& s = segs[i];
-    if (s.cell >= g.cell_count()) return "cell out of range";
+    if (s.cell.value() >= g.cell_count()) return "cell out of range";
     if (std::isnan(s.t0) || std::isnan(s.t1)) return "NaN";
     if (!(s.t0 < s.t1) && !(forced && i == 0 && s.t0 == s.t1)) return "empty segment";
     if (i > 0 && s.t0 != segs[i - 1].t1) return "gap or overlap";

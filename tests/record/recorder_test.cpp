@@ -141,7 +141,7 @@ TEST(Recorder, EmptyCellsHaveFootprintZeroAndAreNeverVisited) {
   const RayBatch rays = reader.LoadFrame(0);
   ASSERT_GT(rays.visit_count(), 0u);
   std::array<std::uint64_t, 8> visits{};
-  for (CellId c : rays.cells()) ++visits[c];
+  for (CellId c : rays.cells()) ++visits[c.value()];
   for (int c = 1; c < 7; ++c) EXPECT_EQ(visits[c], 0u) << "cell " << c;
   EXPECT_GT(visits[0] + visits[7], 0u);
 }
@@ -278,7 +278,7 @@ void ExpectWellFormedRecord(const Rendered& r) {
   for (std::size_t i = 0; i < rays.size(); ++i) {
     const RayView ray = rays.ray(i);
     for (std::size_t v = 0; v < ray.visit_count; ++v) {
-      ASSERT_GT(r.footprints[ray.cells[v]], 0u) << "ray " << i << " visits an empty cell";
+      ASSERT_GT(r.footprints[ray.cells[v].value()], 0u) << "ray " << i << " visits an empty cell";
       if (v > 0) {
         ASSERT_NE(ray.cells[v], ray.cells[v - 1]) << "ray " << i;
       }
@@ -317,10 +317,10 @@ TEST(RecorderAtScale, CellGridsUpTo256CubedChangeTheRecordNotThePicture) {
   EXPECT_LT(three.stats.visits, fine.stats.visits);
   ExpectWellFormedRecord(fine);
   std::uint64_t nonempty = 0;
-  for (CellId c = 0; c < fine.footprints.size(); ++c) {
-    if (fine.footprints[c] == 0) continue;
+  for (CellId c : CellRange(fine.footprints.size())) {
+    if (fine.footprints[c.value()] == 0) continue;
     ++nonempty;
-    const std::uint32_t x = c % 256, y = (c / 256) % 256, z = c / 65536;
+    const std::uint32_t x = c.value() % 256, y = (c.value() / 256) % 256, z = c.value() / 65536;
     ASSERT_GT(coarse.footprints[x / 128 + 2 * (y / 128 + 2 * (z / 128))], 0u) << "cell " << c;
   }
   EXPECT_GT(nonempty, 1000u);

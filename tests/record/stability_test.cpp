@@ -157,7 +157,7 @@ InMemory RenderInMemory(const SceneSpec& spec, const CameraPathSpec& camera,
   InMemory out;
   out.visits_per_cell.assign(cells.cell_count(), 0);
   job.sink = [&](const RayBatch& b) {
-    for (CellId c : b.cells()) ++out.visits_per_cell.at(c);
+    for (CellId c : b.cells()) ++out.visits_per_cell.at(c.value());
     for (std::size_t v = 0; v < b.visit_count(); ++v) {
       const float t0 = b.t_enters()[v], t1 = b.t_exits()[v];
       if (!(std::isfinite(t0) && std::isfinite(t1) && t0 >= 0 && t0 <= t1)) ++out.bad_t;

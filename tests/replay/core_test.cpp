@@ -88,7 +88,7 @@ TEST(ReplayCore, EqualsTheReferenceOnRandomFramesAndConfigs) {
   std::mt19937 rng(2024);
   int compared = 0;
   for (int trial = 0; trial < 300; ++trial) {
-    const CellId cells = 2 + rng() % 7;
+    const std::uint32_t cells = 2 + rng() % 7;
     const RayBatch rays = testing::RandomReplayFrame(rng, cells, 60);
     const CellTree tree = testing::TreeOf(rays);
     const CellTree previous = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 60));
@@ -120,7 +120,7 @@ TEST(ReplayCore, EqualsTheReferenceOnRandomFramesAndConfigs) {
 TEST(ReplayCore, EqualsTheReferenceWhenEventsTie) {
   std::mt19937 rng(99);
   for (int trial = 0; trial < 100; ++trial) {
-    const CellId cells = 2 + rng() % 3;
+    const std::uint32_t cells = 2 + rng() % 3;
     const RayBatch rays = testing::RandomReplayFrame(rng, cells, 80);
     const CellTree tree = testing::TreeOf(rays);
     const std::vector<std::uint64_t> footprints(cells, 4096);
@@ -149,7 +149,7 @@ TEST(ReplayCore, EqualsTheReferenceWhenEventsTie) {
 TEST(ReplayCore, EqualsTheReferenceOnTheColumns) {
   std::mt19937 rng(7);
   for (int trial = 0; trial < 100; ++trial) {
-    const CellId cells = 2 + rng() % 5;
+    const std::uint32_t cells = 2 + rng() % 5;
     const RayBatch rays = testing::RandomReplayFrame(rng, cells, 40);
     const CellTree tree = testing::TreeOf(rays);
     std::vector<std::uint64_t> footprints(cells);
@@ -173,7 +173,7 @@ TEST(ReplayCore, EqualsTheReferenceOnTheColumns) {
 // `rays` with every cell id times `cell_scale` (up to 2^17 cells: varints of 3 bytes),
 // every sample count times `sample_scale`, and rays without visits added: primary ones, and
 // spawned ones at random visits of earlier rays (they do no work, RaySegmentWork skips them).
-RayBatch Widened(std::mt19937& rng, const RayBatch& rays, CellId cell_scale,
+RayBatch Widened(std::mt19937& rng, const RayBatch& rays, std::uint32_t cell_scale,
                  std::uint32_t sample_scale) {
   RayBatch out(false);
   std::vector<RayId> id(rays.size());
@@ -191,7 +191,7 @@ RayBatch Widened(std::mt19937& rng, const RayBatch& rays, CellId cell_scale,
     id[r] = RayId(out.size());
     out.BeginRay(ray.kind, ray.is_primary() ? kNoParent : id[ray.parent], ray.spawn, 0, 0);
     for (std::size_t v = 0; v < ray.visit_count; ++v) {
-      out.AddVisit(ray.cells[v] * cell_scale, ray.samples[v] * sample_scale, 0, 0);
+      out.AddVisit(CellId(ray.cells[v].value() * cell_scale), ray.samples[v] * sample_scale, 0, 0);
     }
   }
   return out;
@@ -199,7 +199,8 @@ RayBatch Widened(std::mt19937& rng, const RayBatch& rays, CellId cell_scale,
 
 // `rays` cut into batches of 1 to `max` rays with frame-local ids, as TraceReader delivers
 // them, fed to a RaySegmentWorkBuilder.
-WorkGraph CompactWork(std::mt19937& rng, const RayBatch& rays, CellId cells, std::size_t max) {
+WorkGraph CompactWork(std::mt19937& rng, const RayBatch& rays, std::uint32_t cells,
+                      std::size_t max) {
   RaySegmentWorkBuilder builder(cells);
   if (rng() % 2 == 0) {
     FrameSummary summary;
@@ -231,15 +232,17 @@ WorkGraph CompactWork(std::mt19937& rng, const RayBatch& rays, CellId cells, std
 TEST(ReplayCore, EqualsTheReferenceOnTheCompactForm) {
   std::mt19937 rng(31);
   for (int trial = 0; trial < 300; ++trial) {
-    const CellId base_cells = 2 + rng() % 6;
-    const CellId scale = trial % 10 == 0 ? (CellId{1} << 14) : trial % 2 == 0 ? 70 : 1;
+    const std::uint32_t base_cells = 2 + rng() % 6;
+    const std::uint32_t scale = trial % 10 == 0  ? (std::uint32_t{1} << 14)
+                                : trial % 2 == 0 ? 70
+                                                 : 1;
     const std::uint32_t sample_scale = trial % 4 == 0 ? 1 : trial % 4 == 1 ? 300 : 200'000'000;
     const RayBatch rays =
         Widened(rng, testing::RandomReplayFrame(rng, base_cells, 60), scale, sample_scale);
-    const CellId cells = (base_cells - 1) * scale + 1;
+    const std::uint32_t cells = (base_cells - 1) * scale + 1;
     const CellTree tree = testing::TreeOf(rays);
     std::vector<std::uint64_t> footprints(cells, 4096);
-    for (CellId c = 0; c < cells; c += scale) footprints[c] = 1 + rng() % 200'000;
+    for (std::uint32_t c = 0; c < cells; c += scale) footprints[c] = 1 + rng() % 200'000;
     ReplayConfig config = cells > 10'000 ? DefaultConfig() : RandomConfig(rng, footprints);
     config.granularity = ReplayConfig::Granularity::kRay;
     config.scheduler = &SchedulerByName(kSchedulers[trial % 5], "test");
@@ -262,7 +265,7 @@ TEST(ReplayCore, EqualsTheReferenceOnTheCompactForm) {
 // given a long worklist's room freed): the reference's results, in both forms.
 TEST(ReplayCore, EqualsTheReferenceOnLongWorklists) {
   std::mt19937 rng(2);
-  const CellId cells = 3;
+  const std::uint32_t cells = 3;
   const RayBatch rays = testing::RandomReplayFrame(rng, cells, 300'000, 2);
   ASSERT_GT(rays.size(), 250'000u);  // 283,850 rays: batches of more than 2^16 units
   const CellTree tree = testing::TreeOf(rays);
@@ -288,9 +291,9 @@ TEST(ReplayCore, EqualsTheReferenceOnLongWorklists) {
 TEST(ReplayCore, CompactBuilderRejectsAnUnknownParent) {
   RayBatch batch(false);
   batch.BeginRay(RayKind::kPrimary, kNoParent, 0, 0, 0);
-  batch.AddVisit(0, 1, 0, 0);
+  batch.AddVisit(CellId(0), 1, 0, 0);
   batch.BeginRay(RayKind::kShadow, 0, 3, 0, 0);  // spawn 3 of a one-visit parent
-  batch.AddVisit(0, 1, 0, 0);
+  batch.AddVisit(CellId(0), 1, 0, 0);
   RaySegmentWorkBuilder builder(1);
   EXPECT_THROW(builder.AddBatch(batch), InputError);
 }
@@ -299,14 +302,14 @@ TEST(ReplayCore, CompactBuilderRejectsAnUnknownParent) {
 TEST(ReplayCore, UnitsBeyondThirtyTwoBitsAreReadFromTheColumns) {
   RayBatch rays(false);
   rays.BeginRay(RayKind::kPrimary, kNoParent, 0, 0, 0);
-  rays.AddVisit(0, 4'000'000'000u, 0, 0);
+  rays.AddVisit(CellId(0), 4'000'000'000u, 0, 0);
   const CellTree tree = testing::TreeOf(rays);
   const WorkGraph w = NodeWork(tree, 1);
   ASSERT_FALSE(w.packed.empty());
   // Two rays through one node: 8e9 samples in it.
   RayBatch two = rays;
   two.BeginRay(RayKind::kPrimary, kNoParent, 0, 1, 0);
-  two.AddVisit(0, 4'000'000'000u, 0, 0);
+  two.AddVisit(CellId(0), 4'000'000'000u, 0, 0);
   const CellTree big = testing::TreeOf(two);
   const WorkGraph wide = NodeWork(big, 1);
   EXPECT_TRUE(wide.packed.empty());

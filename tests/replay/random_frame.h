@@ -10,10 +10,11 @@
 
 namespace raycell::testing {
 
-inline RayBatch RandomReplayFrame(std::mt19937& rng, CellId cells, int max_rays = 40,
+inline RayBatch RandomReplayFrame(std::mt19937& rng, std::uint32_t cells, int max_rays = 40,
                                   int max_extra_visits = 4) {
   RayBatch b(false);
-  std::uniform_int_distribution<CellId> cell(0, cells - 1);
+  std::uniform_int_distribution<std::uint32_t> cell_number(0, cells - 1);
+  const auto cell = [&](auto& r) { return CellId(cell_number(r)); };
   const int rays = 2 + int(rng() % std::uint32_t(max_rays));
   int tree_start = 0;
   for (int i = 0; i < rays; ++i) {

@@ -73,15 +73,16 @@ class Board : public Component {
  private:
   void Enqueue(UnitId u) {
     const CellId c = w_.cell[u];
-    queues_[c].push_back(u);
-    queued_rays_[c] += w_.queued_rays[u];
+    queues_[c.value()].push_back(u);
+    queued_rays_[c.value()] += w_.queued_rays[u];
     queued_total_ += w_.queued_rays[u];
     peak_queued_ = std::max(peak_queued_, queued_total_);
   }
 
   // The queues a scheduler may choose from: cells being worked are not available.
   QueueView View(std::uint32_t p) {
-    for (CellId c = 0; c < w_.cells; ++c) view_[c] = locked_[c] ? 0 : queued_rays_[c];
+    for (CellId c : CellRange(w_.cells))
+      view_[c.value()] = locked_[c.value()] ? 0 : queued_rays_[c.value()];
     return QueueView::Of(view_, processors_[p].cell);
   }
 
@@ -91,8 +92,8 @@ class Board : public Component {
       processors_[p].waiting = true;  // woken when work is released
       return;
     }
-    RAYCELL_CHECK(!queues_[*c].empty() && !locked_[*c]);
-    locked_[*c] = true;
+    RAYCELL_CHECK(!queues_[c->value()].empty() && !locked_[c->value()]);
+    locked_[c->value()] = true;
     processors_[p].cell = *c;
     const SimTime ready = memory_.Fetch(p, *c, sim.now());
     processors_[p].stall = processors_[p].stall + (ready - sim.now());
@@ -100,10 +101,10 @@ class Board : public Component {
   }
 
   void TakeQueue(ProcessorState& ps) {
-    auto& q = queues_[*ps.cell];
+    auto& q = queues_[ps.cell->value()];
     for (UnitId u : q) {
       ps.worklist.push_back(u);
-      queued_rays_[*ps.cell] -= w_.queued_rays[u];
+      queued_rays_[ps.cell->value()] -= w_.queued_rays[u];
       queued_total_ -= w_.queued_rays[u];
     }
     q.clear();
@@ -122,7 +123,7 @@ class Board : public Component {
     ProcessorState& ps = processors_[p];
     if (ps.worklist.empty()) TakeQueue(ps);  // units that arrived while the cell was loaded
     if (ps.worklist.empty()) {
-      locked_[*ps.cell] = false;
+      locked_[ps.cell->value()] = false;
       sim.Schedule(id_, SimTime::Zero(), kIdle, Pack(p, 0));
       return;
     }

@@ -6,6 +6,7 @@
 
 #include "replay/config.h"
 #include "replay/memory.h"
+#include "tests/cell_list.h"
 
 namespace raycell {
 namespace {
@@ -30,40 +31,40 @@ const std::vector<std::uint64_t> kFootprints(8, 100);
 
 TEST(Replacement, LruEvictsTheLeastRecentlyUsed) {
   CellStore s(Cells(2, LevelConfig::Replacement::kLru), &kFootprints);
-  Access(s, 0), Access(s, 1);
-  EXPECT_TRUE(Access(s, 0));   // 0 is now the most recent
-  EXPECT_FALSE(Access(s, 2));  // evicts 1
-  EXPECT_TRUE(s.Contains(0));
-  EXPECT_FALSE(s.Contains(1));
-  EXPECT_TRUE(s.Contains(2));
+  Access(s, CellId(0)), Access(s, CellId(1));
+  EXPECT_TRUE(Access(s, CellId(0)));   // 0 is now the most recent
+  EXPECT_FALSE(Access(s, CellId(2)));  // evicts 1
+  EXPECT_TRUE(s.Contains(CellId(0)));
+  EXPECT_FALSE(s.Contains(CellId(1)));
+  EXPECT_TRUE(s.Contains(CellId(2)));
 }
 
 TEST(Replacement, FifoEvictsTheOldestArrivalWhateverTheHits) {
   CellStore s(Cells(2, LevelConfig::Replacement::kFifo), &kFootprints);
-  Access(s, 0), Access(s, 1);
-  EXPECT_TRUE(Access(s, 0));   // a hit does not refresh 0
-  EXPECT_FALSE(Access(s, 2));  // evicts 0, the first in
-  EXPECT_FALSE(s.Contains(0));
-  EXPECT_TRUE(s.Contains(1));
+  Access(s, CellId(0)), Access(s, CellId(1));
+  EXPECT_TRUE(Access(s, CellId(0)));   // a hit does not refresh 0
+  EXPECT_FALSE(Access(s, CellId(2)));  // evicts 0, the first in
+  EXPECT_FALSE(s.Contains(CellId(0)));
+  EXPECT_TRUE(s.Contains(CellId(1)));
 }
 
 TEST(Replacement, PinnedCellsAreNeverEvicted) {
   CellStore s(Cells(2, LevelConfig::Replacement::kLru), &kFootprints);
-  Access(s, 0), Access(s, 1);
-  EXPECT_TRUE(s.Insert(2, CellId{0}));  // 0 is the least recent but pinned: 1 goes
-  EXPECT_TRUE(s.Contains(0));
-  EXPECT_FALSE(s.Contains(1));
+  Access(s, CellId(0)), Access(s, CellId(1));
+  EXPECT_TRUE(s.Insert(CellId(2), CellId{0}));  // 0 is the least recent but pinned: 1 goes
+  EXPECT_TRUE(s.Contains(CellId(0)));
+  EXPECT_FALSE(s.Contains(CellId(1)));
   CellStore one(Cells(1, LevelConfig::Replacement::kLru), &kFootprints);
-  Access(one, 3);
-  EXPECT_FALSE(one.Insert(4, CellId{3}));  // no room beside the pinned cell
-  EXPECT_TRUE(one.Contains(3));
+  Access(one, CellId(3));
+  EXPECT_FALSE(one.Insert(CellId(4), CellId{3}));  // no room beside the pinned cell
+  EXPECT_TRUE(one.Contains(CellId(3)));
 }
 
 TEST(Replacement, MinEvictsTheCellUsedFarthestAhead) {
   // Requests 0 1 2 0 1 3 0 with two cells: at the request of 2, 0 is next used at 3 and 1 at
   // 4, so 1 goes; at 3, 0 is next used at 6 and 2 never again, so 2 goes. Hits: 0 (at 3),
   // 0 (at 6): 5 misses, where LRU misses on all 7.
-  const std::vector<CellId> requests = {0, 1, 2, 0, 1, 3, 0};
+  const testing::CellList requests = {0, 1, 2, 0, 1, 3, 0};
   CellStore min(Cells(2, LevelConfig::Replacement::kMin), &kFootprints, requests);
   CellStore lru(Cells(2, LevelConfig::Replacement::kLru), &kFootprints);
   int min_misses = 0, lru_misses = 0;
@@ -78,12 +79,12 @@ TEST(Replacement, MinEvictsTheCellUsedFarthestAhead) {
 
 TEST(Replacement, MinTiesGoToTheLowestCellAndStrayingIsReported) {
   // Neither 0 nor 1 is requested again: the lowest, 0, is evicted.
-  CellStore s(Cells(2, LevelConfig::Replacement::kMin), &kFootprints, {0, 1, 2});
-  Access(s, 0), Access(s, 1), Access(s, 2);
-  EXPECT_FALSE(s.Contains(0));
-  EXPECT_TRUE(s.Contains(1));
+  CellStore s(Cells(2, LevelConfig::Replacement::kMin), &kFootprints, testing::CellList{0, 1, 2});
+  Access(s, CellId(0)), Access(s, CellId(1)), Access(s, CellId(2));
+  EXPECT_FALSE(s.Contains(CellId(0)));
+  EXPECT_TRUE(s.Contains(CellId(1)));
   EXPECT_FALSE(s.diverged());
-  Access(s, 5);  // not in the future it was given
+  Access(s, CellId(5));  // not in the future it was given
   EXPECT_TRUE(s.diverged());
 }
 
@@ -92,12 +93,12 @@ TEST(Replacement, BytesCapacityEvictsUntilTheCellFits) {
   LevelConfig l = Cells(100, LevelConfig::Replacement::kLru);
   l.capacity_unit = LevelConfig::CapacityUnit::kBytes;
   CellStore s(l, &sizes);
-  Access(s, 0), Access(s, 1);
+  Access(s, CellId(0)), Access(s, CellId(1));
   EXPECT_EQ(s.used(), 80u);
-  Access(s, 2);  // 70 bytes: after evicting 0, 40 + 70 is still over 100, so 1 goes too
-  EXPECT_FALSE(s.Contains(0));
-  EXPECT_FALSE(s.Contains(1));
-  EXPECT_TRUE(s.Contains(2));
+  Access(s, CellId(2));  // 70 bytes: after evicting 0, 40 + 70 is still over 100, so 1 goes too
+  EXPECT_FALSE(s.Contains(CellId(0)));
+  EXPECT_FALSE(s.Contains(CellId(1)));
+  EXPECT_TRUE(s.Contains(CellId(2)));
   EXPECT_EQ(s.used(), 70u);
 }
 
@@ -118,7 +119,7 @@ TEST(ReplacementRegistry, EachPolicyOnceByNameThroughTheConfiguration) {
     ReplayConfig c = DefaultConfig();
     ApplyOverride(c, "level.board.replacement", name);
     EXPECT_EQ(c.levels[1].replacement, kind) << name;
-    EXPECT_NE(MakeReplacement(kind, 4, {0, 1}), nullptr);
+    EXPECT_NE(MakeReplacement(kind, 4, testing::CellList{0, 1}), nullptr);
   }
   ReplayConfig c = DefaultConfig();
   try {

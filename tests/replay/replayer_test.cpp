@@ -17,7 +17,7 @@
 namespace raycell {
 namespace {
 
-constexpr CellId A = 0, B = 1, C = 2;
+constexpr CellId A{0}, B{1}, C{2};
 
 using testing::RandomReplayFrame;
 using testing::TestRay;
@@ -32,7 +32,7 @@ struct Outcome {
 };
 
 Outcome Replay(const RayBatch& rays, const std::string& scheduler, ReplayConfig config,
-               const CellTree* previous = nullptr, CellId cells = 3) {
+               const CellTree* previous = nullptr, std::uint32_t cells = 3) {
   config.scheduler = &SchedulerByName(scheduler, "test");
   const CellTree tree = TreeOf(rays);
   auto s = MakeScheduler(scheduler, config.seed);
@@ -94,7 +94,7 @@ std::uint64_t TotalSamples(const RayBatch& b) {
 TEST(Replay, ConservationBoundsGranularityAndDeterminismOnRandomFrames) {
   std::mt19937 rng(7);
   for (int trial = 0; trial < 400; ++trial) {
-    const CellId cells = 2 + rng() % 5;
+    const std::uint32_t cells = 2 + rng() % 5;
     const RayBatch f = RandomReplayFrame(rng, cells);
     const CellTree previous = TreeOf(RandomReplayFrame(rng, cells));
     for (const std::string& s : SchedulerNames()) {
@@ -159,7 +159,7 @@ TEST(Replay, TimingSanity) {
 TEST(Replay, MinNeverFetchesMoreThanLruOrFifo) {
   std::mt19937 rng(5);
   for (int trial = 0; trial < 200; ++trial) {
-    const CellId cells = 3 + rng() % 4;
+    const std::uint32_t cells = 3 + rng() % 4;
     const RayBatch f = RandomReplayFrame(rng, cells);
     std::uint64_t fetches[3];
     int k = 0;

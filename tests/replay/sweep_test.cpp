@@ -17,6 +17,7 @@
 #include "base/format.h"
 #include "base/parse.h"
 #include "replay/driver.h"
+#include "tests/cell_list.h"
 #include "tests/test_util.h"
 #include "traces/trace_writer.h"
 
@@ -61,7 +62,7 @@ TraceHeader MakeHeader(int frames) {
 
 // Rays through random cells, every third one a shadow ray spawned from the ray before,
 // starting in the cell of its spawn visit.
-RayBatch RandomFrame(std::mt19937& rng, std::size_t rays, CellId cells) {
+RayBatch RandomFrame(std::mt19937& rng, std::size_t rays, std::uint32_t cells) {
   RayBatch b(false);
   for (std::size_t i = 0; i < rays; ++i) {
     const bool child = i > 0 && i % 3 == 0 && b.ray(i - 1).visit_count > 0;
@@ -71,7 +72,7 @@ RayBatch RandomFrame(std::mt19937& rng, std::size_t rays, CellId cells) {
     CellId cell = child ? b.ray(i - 1).cells[spawn] : CellId(rng() % cells);
     for (int v = 0, n = 1 + int(rng() % 4); v < n; ++v) {
       b.AddVisit(cell, 1 + rng() % 20, 0, 0);
-      cell = (cell + 1 + rng() % (cells - 1)) % cells;
+      cell = CellId((cell.value() + 1 + rng() % (cells - 1)) % cells);
     }
   }
   return b;

@@ -28,17 +28,17 @@ namespace {
 using testing::Json;
 
 struct Frames {
-  CellId cells = 0;
+  std::uint32_t cells = 0;
   std::vector<std::uint64_t> footprints;
   std::vector<RayBatch> rays;
   std::vector<CellTree> trees;
 };
 
-Frames RandomFrames(std::uint32_t seed, int count, CellId cells) {
+Frames RandomFrames(std::uint32_t seed, int count, std::uint32_t cells) {
   std::mt19937 rng(seed);
   Frames f;
   f.cells = cells;
-  for (CellId c = 0; c < cells; ++c) f.footprints.push_back(1 + rng() % 300'000);
+  for (std::uint32_t c = 0; c < cells; ++c) f.footprints.push_back(1 + rng() % 300'000);
   for (int i = 0; i < count; ++i) {
     f.rays.push_back(testing::RandomReplayFrame(rng, cells, 80));
     f.trees.push_back(testing::TreeOf(f.rays.back()));

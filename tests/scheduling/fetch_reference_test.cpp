@@ -11,13 +11,14 @@
 #include "scheduling/best_scheduler.h"
 #include "scheduling/cell_tree_scheduler.h"
 #include "scheduling/scheduler.h"
+#include "tests/cell_list.h"
 #include "tests/graph/test_trees.h"
 
 namespace raycell {
 namespace {
 
-constexpr CellId A = 0, B = 1, C = 2;
-using Schedule = std::vector<CellId>;
+constexpr CellId A{0}, B{1}, C{2};
+using Schedule = testing::CellList;
 
 // One ray of a test frame. Rays are listed in id order, one ray tree at a time (a primary
 // ray, then its descendants), as CellTreeBuilder wants them.
@@ -43,7 +44,7 @@ struct ReplayResult {
 // at once, recursively (spawned rays are not queued).
 class FunctionalReplay {
  public:
-  FunctionalReplay(const TestFrame& frame, CellId cells)
+  FunctionalReplay(const TestFrame& frame, std::uint32_t cells)
       : frame_(frame), queues_(cells), counts_(cells, 0), spawned_(frame.size()) {
     for (std::size_t r = 0; r < frame.size(); ++r) {
       worked_.emplace_back(frame[r].cells.size(), 0);
@@ -58,9 +59,10 @@ class FunctionalReplay {
     ReplayResult out;
     std::optional<CellId> loaded;
     while (const std::optional<CellId> c = scheduler.Next(QueueView::Of(counts_, loaded))) {
-      EXPECT_LT(*c, counts_.size());
-      EXPECT_GT(counts_[*c], 0u) << "fetch " << out.fetches() << " of a cell without work";
-      if (*c >= counts_.size() || counts_[*c] == 0 || out.fetches() > kMaxFetches) return out;
+      EXPECT_LT(c->value(), counts_.size());
+      EXPECT_GT(counts_[c->value()], 0u) << "fetch " << out.fetches() << " of a cell without work";
+      if (c->value() >= counts_.size() || counts_[c->value()] == 0 || out.fetches() > kMaxFetches)
+        return out;
       Fetch(*c);
       loaded = *c;
       out.fetched.push_back(*c);
@@ -75,15 +77,15 @@ class FunctionalReplay {
 
   void Enqueue(std::size_t ray, std::size_t visit) {
     const CellId c = frame_[ray].cells[visit];
-    queues_[c].push_back({ray, visit});
-    ++counts_[c];
+    queues_[c.value()].push_back({ray, visit});
+    ++counts_[c.value()];
   }
   void Fetch(CellId c) {
     std::vector<std::pair<std::size_t, std::size_t>> work;
-    work.swap(queues_[c]);
-    counts_[c] = 0;
+    work.swap(queues_[c.value()]);
+    counts_[c.value()] = 0;
     for (const auto& [ray, visit] : work) Work(ray, visit, c);
-    EXPECT_EQ(counts_[c], 0u) << "a ray was queued at the loaded cell " << c;
+    EXPECT_EQ(counts_[c.value()], 0u) << "a ray was queued at the loaded cell " << c;
   }
   void Work(std::size_t ray, std::size_t visit, CellId loaded) {
     EXPECT_EQ(frame_[ray].cells[visit], loaded);
@@ -107,7 +109,7 @@ class FunctionalReplay {
   std::vector<std::vector<int>> worked_;                        // [ray][visit] -> times
 };
 
-ReplayResult Replay(const std::string& name, const TestFrame& frame, CellId cells,
+ReplayResult Replay(const std::string& name, const TestFrame& frame, std::uint32_t cells,
                     std::size_t index = 0, const CellTree* previous = nullptr) {
   const CellTree tree = TreeOf(frame);
   const std::unique_ptr<Scheduler> s = MakeScheduler(name, 5);
@@ -200,10 +202,11 @@ TEST(FetchReferenceTest, CellTreeStatsCountFollowedSkippedAndMaxWork) {
 // visit spawns a ray (starting in the visit's cell) with probability 1/4, to depth 2.
 class FrameMaker {
  public:
-  FrameMaker(std::uint64_t seed, CellId cells) : rng_(seed), cells_(cells) {}
+  FrameMaker(std::uint64_t seed, std::uint32_t cells) : rng_(seed), cells_(cells) {}
   TestFrame Make() {
     TestFrame frame;
-    for (std::uint64_t t = 1 + Draw(6); t > 0; --t) AddRay(frame, kNoParent, 0, Draw(cells_), 0);
+    for (std::uint64_t t = 1 + Draw(6); t > 0; --t)
+      AddRay(frame, kNoParent, 0, CellId(Draw(cells_)), 0);
     return frame;
   }
 
@@ -213,8 +216,8 @@ class FrameMaker {
     const RayId id = frame.size();
     frame.push_back({parent, spawn, {first}});
     for (std::uint64_t n = Draw(5); n > 0; --n) {
-      const CellId step = static_cast<CellId>(1 + Draw(cells_ - 1));
-      frame[id].cells.push_back((frame[id].cells.back() + step) % cells_);
+      const std::uint64_t step = 1 + Draw(cells_ - 1);
+      frame[id].cells.push_back(CellId((frame[id].cells.back().value() + step) % cells_));
     }
     if (depth == 2) return;
     for (std::uint32_t v = 0; v < frame[id].cells.size(); ++v) {
@@ -223,7 +226,7 @@ class FrameMaker {
   }
 
   std::mt19937_64 rng_;  // the engine's output is fixed by the standard; only % is used
-  CellId cells_;
+  std::uint32_t cells_;
 };
 
 // Over 1000 seeded frames (250 each on 2, 3, 4 and 8 cells, each frame's Cell Tree passed on
@@ -234,7 +237,7 @@ class FrameMaker {
 // skipping Peel entries, Max Work missing the bound, Cell Tree scheduling beating Max Work.
 TEST(FetchReferenceTest, RandomFrames) {
   std::size_t frames = 0, oracle_skips = 0, max_work_above_bound = 0, cell_tree_wins = 0;
-  for (CellId cells : {2u, 3u, 4u, 8u}) {
+  for (std::uint32_t cells : {2u, 3u, 4u, 8u}) {
     FrameMaker maker(1000 + cells, cells);
     std::optional<CellTree> previous;
     for (std::size_t i = 0; i < 250; ++i, ++frames) {

@@ -12,18 +12,19 @@
 #include "scheduling/peel_oracle.h"
 #include "scheduling/random_scheduler.h"
 #include "scheduling/round_robin.h"
+#include "tests/cell_list.h"
 #include "tests/graph/test_trees.h"
 
 namespace raycell {
 namespace {
 
-constexpr CellId A = 0, B = 1, C = 2;
+constexpr CellId A{0}, B{1}, C{2};
 using Queues = std::vector<std::uint64_t>;
-using Schedule = std::vector<CellId>;
+using Schedule = testing::CellList;
 
 std::optional<CellId> Ask(Scheduler& s, const Queues& q) { return s.Next(QueueView::Of(q)); }
 
-FrameInfo Frame(std::size_t index, CellId cells, const CellTree* current = nullptr,
+FrameInfo Frame(std::size_t index, std::uint32_t cells, const CellTree* current = nullptr,
                 const CellTree* previous = nullptr) {
   return {index, current, previous, cells};
 }
@@ -39,7 +40,7 @@ TEST(QueueViewTest, HasWorkAndEmpty) {
   EXPECT_EQ(v.loaded, B);
   EXPECT_FALSE(v.has_work(A));
   EXPECT_TRUE(v.has_work(B));
-  EXPECT_FALSE(v.has_work(7));  // outside the grid
+  EXPECT_FALSE(v.has_work(CellId(7)));  // outside the grid
   EXPECT_FALSE(v.empty());
   EXPECT_TRUE(QueueView::Of(Queues{0, 0}).empty());
   EXPECT_TRUE(QueueView::Of(Queues{}).empty());
@@ -49,10 +50,10 @@ TEST(MaxWorkTest, MostQueuedLowestOnTies) {
   MaxWorkScheduler s;
   s.BeginFrame(Frame(0, 4));
   EXPECT_EQ(s.Name(), "maxwork");
-  EXPECT_EQ(Ask(s, {1, 5, 2, 5}), 1u);
-  EXPECT_EQ(Ask(s, {1, 5, 2, 6}), 3u);
-  EXPECT_EQ(Ask(s, {4, 4, 4, 4}), 0u);
-  EXPECT_EQ(Ask(s, {0, 0, 0, 1}), 3u);
+  EXPECT_EQ(Ask(s, {1, 5, 2, 5}), CellId(1));
+  EXPECT_EQ(Ask(s, {1, 5, 2, 6}), CellId(3));
+  EXPECT_EQ(Ask(s, {4, 4, 4, 4}), CellId(0));
+  EXPECT_EQ(Ask(s, {0, 0, 0, 1}), CellId(3));
   EXPECT_EQ(Ask(s, {0, 0, 0, 0}), std::nullopt);
   EXPECT_EQ(Ask(s, {}), std::nullopt);
 }
@@ -63,22 +64,22 @@ TEST(RoundRobinTest, NextCellWithWorkAfterTheLastAndWraps) {
   RoundRobinScheduler s;
   s.BeginFrame(Frame(0, 5));
   EXPECT_EQ(s.Name(), "roundrobin");
-  EXPECT_EQ(Ask(s, {0, 2, 0, 1, 1}), 1u);  // starts the search at 0
-  EXPECT_EQ(Ask(s, {0, 0, 0, 1, 1}), 3u);
-  EXPECT_EQ(Ask(s, {9, 0, 0, 1, 1}), 4u);  // after 3, not the fullest
-  EXPECT_EQ(Ask(s, {9, 0, 0, 1, 0}), 0u);  // wraps
-  EXPECT_EQ(Ask(s, {0, 0, 0, 1, 0}), 3u);
-  EXPECT_EQ(Ask(s, {0, 0, 0, 1, 0}), 3u);  // the only cell with work, again
+  EXPECT_EQ(Ask(s, {0, 2, 0, 1, 1}), CellId(1));  // starts the search at 0
+  EXPECT_EQ(Ask(s, {0, 0, 0, 1, 1}), CellId(3));
+  EXPECT_EQ(Ask(s, {9, 0, 0, 1, 1}), CellId(4));  // after 3, not the fullest
+  EXPECT_EQ(Ask(s, {9, 0, 0, 1, 0}), CellId(0));  // wraps
+  EXPECT_EQ(Ask(s, {0, 0, 0, 1, 0}), CellId(3));
+  EXPECT_EQ(Ask(s, {0, 0, 0, 1, 0}), CellId(3));  // the only cell with work, again
   EXPECT_EQ(Ask(s, {0, 0, 0, 0, 0}), std::nullopt);
 }
 
 TEST(RoundRobinTest, EachFrameStartsAtCellZero) {
   RoundRobinScheduler s;
   s.BeginFrame(Frame(0, 3));
-  EXPECT_EQ(Ask(s, {1, 1, 1}), 0u);
-  EXPECT_EQ(Ask(s, {0, 1, 1}), 1u);
+  EXPECT_EQ(Ask(s, {1, 1, 1}), CellId(0));
+  EXPECT_EQ(Ask(s, {0, 1, 1}), CellId(1));
   s.BeginFrame(Frame(1, 3));
-  EXPECT_EQ(Ask(s, {1, 1, 1}), 0u);
+  EXPECT_EQ(Ask(s, {1, 1, 1}), CellId(0));
 }
 
 // ------------------------------------------------------------------ Random
@@ -105,7 +106,7 @@ TEST(RandomTest, BelowStaysInRangeAndCoversIt) {
 }
 
 std::vector<CellId> Draws(RandomScheduler& s, std::size_t frame, const Queues& q, int n) {
-  s.BeginFrame(Frame(frame, static_cast<CellId>(q.size())));
+  s.BeginFrame(Frame(frame, static_cast<std::uint32_t>(q.size())));
   std::vector<CellId> out;
   for (int i = 0; i < n; ++i) out.push_back(*Ask(s, q));
   return out;
@@ -116,9 +117,10 @@ TEST(RandomTest, OnlyCellsWithWorkAllOfThem) {
   EXPECT_EQ(s.Name(), "random");
   const Queues q = {0, 3, 0, 1, 0, 0, 8, 0};
   const std::vector<CellId> d = Draws(s, 0, q, 300);
-  EXPECT_EQ(std::set<CellId>(d.begin(), d.end()), (std::set<CellId>{1, 3, 6}));
+  EXPECT_EQ(std::set<CellId>(d.begin(), d.end()),
+            (std::set<CellId>{CellId(1), CellId(3), CellId(6)}));
   EXPECT_EQ(Ask(s, {0, 0, 0}), std::nullopt);
-  EXPECT_EQ(Ask(s, {0, 0, 2}), 2u);
+  EXPECT_EQ(Ask(s, {0, 0, 2}), CellId(2));
 }
 
 TEST(RandomTest, DeterministicPerSeedAndFrameDifferentAcrossFrames) {
@@ -136,7 +138,7 @@ TEST(RandomTest, ChoicesArePinned) {
   // Pins the stream: the same on every compiler and standard library. If this changes,
   // recorded Random baselines stop being reproducible.
   RandomScheduler s(2002);
-  EXPECT_EQ(Draws(s, 5, Queues(10, 1), 8), (std::vector<CellId>{3, 7, 6, 8, 2, 4, 4, 0}));
+  EXPECT_EQ(Draws(s, 5, Queues(10, 1), 8), (testing::CellList{3, 7, 6, 8, 2, 4, 4, 0}));
 }
 
 // ------------------------------------------------------------------ Peel oracle, Cell Tree
@@ -240,7 +242,7 @@ CellTree Rotations() { return FromPaths({{0, 1, 2, 3}, {1, 2, 3, 0}, {2, 3, 0, 1
 
 // Paths C A D B and A C A: Peel gives A C A D B A (6), the optimum is A C A D B (5).
 TEST(BestSchedulersTest, TheOracleFollowsItsOwnTreesBestSchedule) {
-  const CellTree t = FromPaths({{C, A, 3, B}, {A, C, A}});
+  const CellTree t = FromPaths({{C, A, CellId(3), B}, {A, C, A}});
   BestOracleScheduler s(3);
   s.BeginFrame(Frame(0, 4, &t, nullptr));
   const Schedule plan = s.follower().schedule();

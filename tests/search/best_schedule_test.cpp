@@ -215,7 +215,7 @@ TEST(BestScheduleTest, OnlyOddChainsHaveLargeWindows) {
 // nodes over 4096 cells; random paths, so nearly every visit is a node).
 TEST(BestScheduleTest, LargeTreesAndManyCells) {
   std::mt19937 rng(4096);
-  for (const auto& [cells, rays] : {std::pair<CellId, int>{512, 6000}, {4096, 900}}) {
+  for (const auto& [cells, rays] : {std::pair<std::uint32_t, int>{512, 6000}, {4096, 900}}) {
     const CellTree t = RandomTree(rng, cells, rays);
     BestScheduleOptions o;
     o.chains = 2;

@@ -10,6 +10,7 @@
 
 #include "graph/peel.h"
 #include "graph/schedule.h"
+#include "tests/cell_list.h"
 #include "tests/graph/test_trees.h"
 
 namespace raycell {
@@ -45,7 +46,7 @@ TEST(OptimumTest, ChainIsTheBound) {
 
 TEST(OptimumTest, StarIsTheCellCount) {
   std::vector<Schedule> paths;
-  for (CellId c = 0; c < 10; ++c) paths.push_back({c});
+  for (CellId c : CellRange(10)) paths.push_back({c});
   const CellTree t = FromPaths(paths);
   EXPECT_EQ(Bound(t), 10u);
   ExpectOptimal(t, 10);
@@ -142,7 +143,7 @@ template <typename Fn>
 void ForSmallRandomTrees(int count, Fn fn) {
   std::mt19937 rng(19940622);
   for (int i = 0; i < count;) {
-    const CellId cells = 2 + rng() % 4;
+    const std::uint32_t cells = 2 + rng() % 4;
     const int rays = 1 + static_cast<int>(rng() % 8);
     const CellTree t = RandomTree(rng, cells, rays);
     if (t.node_count() > 25) continue;
@@ -205,7 +206,7 @@ TEST(OptimumIncumbentTest, OptimalIncumbentIsConfirmed) {
 TEST(OptimumIncumbentTest, LongerIncumbentIsImproved) {
   const CellTree t = Rotations(4);  // optimum 7
   OptimumOptions o;
-  o.incumbent = {0, 1, 2, 3, 0, 1, 2, 3};
+  o.incumbent = testing::CellList{0, 1, 2, 3, 0, 1, 2, 3};
   const OptimumResult r = ExactOptimum(t, o);
   ASSERT_EQ(r.status, OptimumResult::kOptimal);
   EXPECT_EQ(r.length, 7u);
@@ -217,7 +218,7 @@ TEST(OptimumIncumbentTest, LongerIncumbentIsImproved) {
 TEST(OptimumIncumbentTest, LowerBoundMetNeedsNoSearch) {
   const CellTree t = Rotations(4);
   OptimumOptions o;
-  o.incumbent = {0, 1, 2, 3, 0, 1, 2};
+  o.incumbent = testing::CellList{0, 1, 2, 3, 0, 1, 2};
   o.lower_bound = 7;
   const OptimumResult r = ExactOptimum(t, o);
   ASSERT_EQ(r.status, OptimumResult::kOptimal);

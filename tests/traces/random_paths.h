@@ -19,9 +19,10 @@ namespace raycell::testing {
 // Ray trees one at a time (each ray's parent is an earlier ray of its tree), random kinds,
 // pixels (a spawned ray mostly keeps its parent's), cells below `cells` without consecutive
 // repeats, samples 0..999 (sometimes all 1), a few rays without visits.
-inline RayBatch RandomFrame(std::mt19937& rng, CellId cells, int rays) {
+inline RayBatch RandomFrame(std::mt19937& rng, std::uint32_t cells, int rays) {
   RayBatch b(false);
-  std::uniform_int_distribution<CellId> cell(0, cells - 1);
+  std::uniform_int_distribution<std::uint32_t> cell_number(0, cells - 1);
+  const auto cell = [&](auto& r) { return CellId(cell_number(r)); };
   std::size_t tree_start = 0;
   for (int i = 0; i < rays; ++i) {
     std::vector<std::size_t> parents;  // rays of this tree with visits
@@ -58,6 +59,12 @@ inline std::string List(const std::vector<std::uint32_t>& v, std::size_t begin, 
   std::string s = "[";
   for (std::size_t i = begin; i < end; ++i) s += (i > begin ? "," : "") + std::to_string(v[i]);
   return s + "]";
+}
+
+inline std::string List(const std::vector<CellId>& v, std::size_t begin, std::size_t end) {
+  std::vector<std::uint32_t> numbers;
+  for (std::size_t i = begin; i < end; ++i) numbers.push_back(v[i].value());
+  return List(numbers, 0, numbers.size());
 }
 
 // The line `raycell trace cat` writes for ray i.

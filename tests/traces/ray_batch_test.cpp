@@ -4,6 +4,8 @@
 
 #include <random>
 
+#include "tests/cell_list.h"
+
 namespace raycell {
 namespace {
 
@@ -12,14 +14,14 @@ namespace {
 RayBatch SmallBatch(bool store_t) {
   RayBatch b(store_t);
   b.BeginRay(RayKind::kPrimary, kNoParent, 0, 4, 5);
-  b.AddVisit(3, 10, 0.5f, 1.5f);
-  b.AddVisit(4, 20, 1.5f, 2.5f);
+  b.AddVisit(CellId(3), 10, 0.5f, 1.5f);
+  b.AddVisit(CellId(4), 20, 1.5f, 2.5f);
   b.BeginRay(RayKind::kShadow, 0, 1, 4, 5);
-  b.AddVisit(4, 7, 0.f, 0.25f);
+  b.AddVisit(CellId(4), 7, 0.f, 0.25f);
   b.BeginRay(RayKind::kReflection, 0, 0, 4, 5);
-  b.AddVisit(3, 1, 0.f, 0.1f);
-  b.AddVisit(0, 2, 0.1f, 0.2f);
-  b.AddVisit(1, 3, 0.2f, 0.3f);
+  b.AddVisit(CellId(3), 1, 0.f, 0.1f);
+  b.AddVisit(CellId(0), 2, 0.1f, 0.2f);
+  b.AddVisit(CellId(1), 3, 0.2f, 0.3f);
   return b;
 }
 
@@ -27,7 +29,7 @@ TEST(RayBatchTest, BeginRayAndAddVisitFillColumnsAndViews) {
   const RayBatch b = SmallBatch(true);
   ASSERT_EQ(b.size(), 3u);
   EXPECT_EQ(b.visit_count(), 6u);
-  EXPECT_EQ(b.cells(), (std::vector<CellId>{3, 4, 4, 3, 0, 1}));
+  EXPECT_EQ(b.cells(), (testing::CellList{3, 4, 4, 3, 0, 1}));
   EXPECT_EQ(b.samples(), (std::vector<std::uint32_t>{10, 20, 7, 1, 2, 3}));
   EXPECT_EQ(b.visit_begin(2), 3u);
   EXPECT_EQ(b.visit_end(2), 6u);
@@ -38,7 +40,7 @@ TEST(RayBatchTest, BeginRayAndAddVisitFillColumnsAndViews) {
   EXPECT_EQ(r.kind, RayKind::kShadow);
   EXPECT_FALSE(r.is_primary());
   ASSERT_EQ(r.visit_count, 1u);
-  EXPECT_EQ(r.visit(0), (Visit{4, 7, 0.f, 0.25f}));
+  EXPECT_EQ(r.visit(0), (Visit{CellId(4), 7, 0.f, 0.25f}));
   EXPECT_TRUE(b.ray(0).is_primary());
 }
 
@@ -46,7 +48,7 @@ TEST(RayBatchTest, WithoutTViewsHaveNoTAndVisitsReadZero) {
   const RayBatch b = SmallBatch(false);
   EXPECT_TRUE(b.t_enters().empty());
   EXPECT_EQ(b.ray(0).t_enter, nullptr);
-  EXPECT_EQ(b.ray(0).visit(1), (Visit{4, 20, 0.f, 0.f}));
+  EXPECT_EQ(b.ray(0).visit(1), (Visit{CellId(4), 20, 0.f, 0.f}));
 }
 
 TEST(RayBatchTest, AddSamplesToLastVisit) {
@@ -59,10 +61,10 @@ TEST(RayBatchTest, PopRayRemovesTheLastRayAndItsVisits) {
   RayBatch b = SmallBatch(true);
   RayBatch two(true);
   two.BeginRay(RayKind::kPrimary, kNoParent, 0, 4, 5);
-  two.AddVisit(3, 10, 0.5f, 1.5f);
-  two.AddVisit(4, 20, 1.5f, 2.5f);
+  two.AddVisit(CellId(3), 10, 0.5f, 1.5f);
+  two.AddVisit(CellId(4), 20, 1.5f, 2.5f);
   two.BeginRay(RayKind::kShadow, 0, 1, 4, 5);
-  two.AddVisit(4, 7, 0.f, 0.25f);
+  two.AddVisit(CellId(4), 7, 0.f, 0.25f);
   b.PopRay();
   EXPECT_EQ(b, two);
   b.BeginRay(RayKind::kRefraction, 1, 0, 1, 1);  // a ray without visits
@@ -81,16 +83,16 @@ TEST(RayBatchTest, AppendRebasedKeepsParentsPointingAtTheSameRays) {
   RayBatch shifted(false);
   shifted.set_first_id(100);
   shifted.BeginRay(RayKind::kPrimary, kNoParent, 0, 1, 2);
-  shifted.AddVisit(2, 2, 0, 0);
+  shifted.AddVisit(CellId(2), 2, 0, 0);
   shifted.BeginRay(RayKind::kShadow, 100, 0, 1, 2);
-  shifted.AddVisit(2, 1, 0, 0);
+  shifted.AddVisit(CellId(2), 1, 0, 0);
   a.AppendRebased(shifted);
   ASSERT_EQ(a.size(), 5u);
   EXPECT_EQ(a.ray(3).parent, kNoParent);
   EXPECT_EQ(a.ray(4).parent, 3u);  // was 100 = first ray of `shifted`
   EXPECT_EQ(a.ray(4).id, 4u);
   EXPECT_EQ(a.visit_begin(3), 6u);
-  EXPECT_EQ(a.cells().back(), 2u);
+  EXPECT_EQ(a.cells().back(), CellId(2));
   RayBatch c(false);
   c.set_first_id(10);
   c.AppendRebased(SmallBatch(false));
@@ -104,7 +106,8 @@ TEST(RayBatchTest, AppendRebasedOfSplitBatchEqualsWhole) {
     const bool primary = i == 0 || rng() % 4 == 0;
     const RayId parent = primary ? kNoParent : rng() % i;
     whole.BeginRay(primary ? RayKind::kPrimary : RayKind::kShadow, parent, 0, rng() % 9, i);
-    for (unsigned v = 0; v < rng() % 4; ++v) whole.AddVisit(rng() % 27, rng() % 50, v, v + 1);
+    for (unsigned v = 0; v < rng() % 4; ++v)
+      whole.AddVisit(CellId(rng() % 27), rng() % 50, v, v + 1);
   }
   RayBatch first(true), second(true), joined(true);
   for (std::size_t i = 0; i < whole.size(); ++i) {
@@ -135,15 +138,15 @@ TEST(RayBatchTest, EqualityLooksAtEveryColumn) {
   b = SmallBatch(true);
   b.PopRay();
   b.BeginRay(RayKind::kReflection, 0, 0, 4, 5);
-  b.AddVisit(3, 1, 0.f, 0.1f);
-  b.AddVisit(0, 2, 0.1f, 0.2f);
-  b.AddVisit(1, 3, 0.2f, 0.3001f);
+  b.AddVisit(CellId(3), 1, 0.f, 0.1f);
+  b.AddVisit(CellId(0), 2, 0.1f, 0.2f);
+  b.AddVisit(CellId(1), 3, 0.2f, 0.3001f);
   EXPECT_NE(a, b);
   b.PopRay();
   b.BeginRay(RayKind::kRefraction, 0, 0, 4, 5);
-  b.AddVisit(3, 1, 0.f, 0.1f);
-  b.AddVisit(0, 2, 0.1f, 0.2f);
-  b.AddVisit(1, 3, 0.2f, 0.3f);
+  b.AddVisit(CellId(3), 1, 0.f, 0.1f);
+  b.AddVisit(CellId(0), 2, 0.1f, 0.2f);
+  b.AddVisit(CellId(1), 3, 0.2f, 0.3f);
   EXPECT_NE(a, b);
 }
 
@@ -168,11 +171,11 @@ TEST(RayBatchRebase, ShiftsIdsAndInsideParentsOnly) {
   RayBatch b(false);
   b.set_first_id(10);
   b.BeginRay(RayKind::kPrimary, kNoParent, 0, 0, 0);
-  b.AddVisit(1, 1, 0, 0);
+  b.AddVisit(CellId(1), 1, 0, 0);
   b.BeginRay(RayKind::kShadow, 10, 0, 0, 0);  // parent inside the batch
-  b.AddVisit(1, 1, 0, 0);
+  b.AddVisit(CellId(1), 1, 0, 0);
   b.BeginRay(RayKind::kShadow, 3, 0, 0, 0);  // parent before the batch
-  b.AddVisit(2, 1, 0, 0);
+  b.AddVisit(CellId(2), 1, 0, 0);
   b.Rebase(100);
   EXPECT_EQ(b.first_id(), 100u);
   EXPECT_EQ(b.ray(0).id, 100u);

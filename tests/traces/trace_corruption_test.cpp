@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "base/check.h"
+#include "tests/cell_list.h"
 #include "tests/test_util.h"
 #include "tests/traces/trace_format.h"
 #include "tests/traces/trace_test_util.h"
@@ -342,10 +343,10 @@ RawBatch GoodBatch() {
 FrameSummary GoodSummary() {
   RayBatch rays(true);
   rays.BeginRay(RayKind::kPrimary, kNoParent, 0, 1, 1);
-  rays.AddVisit(3, 5, 0, 0);
-  rays.AddVisit(2, 6, 0, 0);
+  rays.AddVisit(CellId(3), 5, 0, 0);
+  rays.AddVisit(CellId(2), 6, 0, 0);
   rays.BeginRay(RayKind::kShadow, 0, 1, 1, 1);
-  rays.AddVisit(2, 7, 0, 0);
+  rays.AddVisit(CellId(2), 7, 0, 0);
   FrameAccumulator acc(5, true);
   for (std::size_t i = 0; i < rays.size(); ++i) acc.AddRay(rays.ray(i));
   return acc.Summary();
@@ -384,7 +385,7 @@ TEST_F(InvalidContentTest, CraftedGoodFrameReads) {
   const TraceReader reader = Read({GoodBatch()}, GoodSummary());
   ASSERT_EQ(reader.frames().size(), 1u) << reader.warning();
   const RayBatch frame = reader.LoadFrame(0);
-  EXPECT_EQ(frame.cells(), (std::vector<CellId>{3, 2, 2}));
+  EXPECT_EQ(frame.cells(), (testing::CellList{3, 2, 2}));
   EXPECT_EQ(frame.ray(1).parent, 0u);
   EXPECT_EQ(frame.ray(1).spawn, 1u);
 }

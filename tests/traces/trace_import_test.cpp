@@ -44,7 +44,7 @@ TEST(TraceImportTest, ImportThenCatIsTheIdentity) {
     o.out = trace;
     o.cells = {std::uint32_t(1 + rng() % 4), std::uint32_t(1 + rng() % 3),
                std::uint32_t(1 + rng() % 3)};
-    const CellId cells = o.cells[0] * o.cells[1] * o.cells[2];
+    const std::uint32_t cells = o.cells[0] * o.cells[1] * o.cells[2];
     const int frame_count = 1 + rng() % 5;
     std::set<int> numbers;
     while (int(numbers.size()) < frame_count) numbers.insert(int(rng() % 400) - 100);

@@ -397,14 +397,14 @@ TEST(TraceIoTest, ZstdAndCapnpDecodeTheWholeFile) {
 RayBatch HandMadeFrame() {
   RayBatch b(false);
   b.BeginRay(RayKind::kPrimary, kNoParent, 0, 5, 7);
-  b.AddVisit(5, 12, 0, 0);
-  b.AddVisit(4, 30, 0, 0);
-  b.AddVisit(1, 2, 0, 0);
+  b.AddVisit(CellId(5), 12, 0, 0);
+  b.AddVisit(CellId(4), 30, 0, 0);
+  b.AddVisit(CellId(1), 2, 0, 0);
   b.BeginRay(RayKind::kReflection, 0, 2, 5, 7);
-  b.AddVisit(1, 3, 0, 0);
+  b.AddVisit(CellId(1), 3, 0, 0);
   b.BeginRay(RayKind::kShadow, 0, 1, 5, 7);
-  b.AddVisit(4, 300, 0, 0);
-  b.AddVisit(26, 0, 0, 0);
+  b.AddVisit(CellId(4), 300, 0, 0);
+  b.AddVisit(CellId(26), 0, 0, 0);
   b.BeginRay(RayKind::kPrimary, kNoParent, 0, 70000, 8);
   return b;
 }
@@ -502,20 +502,20 @@ TEST(TraceIoTest, ErrorsNameTheFile) {
 RayBatch SiblingFrame() {
   RayBatch b(false);
   b.BeginRay(RayKind::kPrimary, kNoParent, 0, 5, 7);
-  b.AddVisit(4, 30, 0, 0);
-  b.AddVisit(5, 31, 0, 0);
-  b.AddVisit(13, 29, 0, 0);
+  b.AddVisit(CellId(4), 30, 0, 0);
+  b.AddVisit(CellId(5), 31, 0, 0);
+  b.AddVisit(CellId(13), 29, 0, 0);
   for (int i = 1; i <= 50; ++i) {
     const std::uint32_t spawn = i <= 20 ? 0 : i <= 40 ? 1 : 2;
     b.BeginRay(RayKind::kShadow, 0, spawn, 5, 7);
     if (spawn == 0) {
-      b.AddVisit(4, 6, 0, 0);
-      b.AddVisit(1, 3, 0, 0);
+      b.AddVisit(CellId(4), 6, 0, 0);
+      b.AddVisit(CellId(1), 3, 0, 0);
     } else if (spawn == 1) {
-      b.AddVisit(5, i == 30 ? 10 : 9, 0, 0);
+      b.AddVisit(CellId(5), i == 30 ? 10 : 9, 0, 0);
     } else {
-      b.AddVisit(13, 2, 0, 0);
-      b.AddVisit(12, 2, 0, 0);
+      b.AddVisit(CellId(13), 2, 0, 0);
+      b.AddVisit(CellId(12), 2, 0, 0);
     }
   }
   return b;

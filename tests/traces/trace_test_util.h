@@ -56,12 +56,13 @@ inline RayBatch RandomFrame(std::mt19937_64& rng, std::size_t rays, bool store_t
     const RayKind kind = parent == kNoParent ? RayKind::kPrimary : RayKind(1 + rng() % 3);
     const std::uint32_t big = rng() % 50 == 0 ? 100000 : 0;
     b.BeginRay(kind, parent, spawn, big + rng() % 320, rng() % 200);
-    std::uint32_t cell = parent == kNoParent ? rng() % cell_count : b.ray(parent).cells[spawn];
+    std::uint32_t cell =
+        parent == kNoParent ? rng() % cell_count : b.ray(parent).cells[spawn].value();
     const int n = static_cast<int>(rng() % (max_visits + 1));
     for (int v = 0; v < std::max(n, parent == kNoParent ? 0 : 1); ++v) {
       const std::uint32_t samples =
           rng() % 20 == 0 ? static_cast<std::uint32_t>(rng()) : rng() % 200;
-      b.AddVisit(cell, samples, t(rng), t(rng));
+      b.AddVisit(CellId(cell), samples, t(rng), t(rng));
       cell = (cell + 1 + rng() % (cell_count - 1)) % cell_count;
     }
   }

@@ -57,7 +57,7 @@ struct Args {
   bool union_frames = false;  // the union of frames f-1 and f (celltree-union's plans)
   std::vector<int> frames;    // empty: all
   BestScheduleOptions options;
-  CellId cells = 27;
+  std::uint32_t cells = 27;
   std::size_t max_nodes = 100000;
 };
 
@@ -124,7 +124,7 @@ Args Parse(int argc, char** argv) {
     } else if (arg == "--seed") {
       a.options.seed = number();
     } else if (arg == "--cells") {
-      a.cells = CellId(number());
+      a.cells = std::uint32_t(number());
     } else if (arg == "--max-nodes") {
       a.max_nodes = number();
     } else if (!arg.empty() && arg[0] != '-' && a.capture.empty()) {
@@ -153,7 +153,7 @@ Row Measure(const CellTree& tree, const Args& a) {
   std::snprintf(r.exact, sizeof r.exact, "%s", b.exact_status.c_str());
   if (a.schedules) {
     std::printf("  schedule:");
-    for (CellId c : b.schedule) std::printf(" %u", c);
+    for (CellId c : b.schedule) std::printf(" %u", c.value());
     std::printf("\n");
     std::fflush(stdout);
   }
@@ -287,7 +287,7 @@ int Capture(const Args& a) {
 
 // Random ray trees as in bench/cell_tree_scaling.cpp: a primary ray and 0-4 spawned rays,
 // each a random walk of 1-8 visits over `cells` cells, until the tree has `target` nodes.
-CellTree Synthetic(std::size_t target, CellId cells, std::uint64_t seed) {
+CellTree Synthetic(std::size_t target, std::uint32_t cells, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   CellTreeBuilder builder;
   RayBatch batch(false);

@@ -20,9 +20,10 @@ namespace {
 // Random ray trees (a primary ray and a few spawned rays), each ray a random walk over
 // `cells` cells, streamed to the builder in batches of 1024 ray trees, until the tree has at
 // least `target` nodes.
-std::pair<CellTree, double> Build(std::size_t target, CellId cells, std::mt19937_64& rng) {
+std::pair<CellTree, double> Build(std::size_t target, std::uint32_t cells, std::mt19937_64& rng) {
   CellTreeBuilder builder;
-  std::uniform_int_distribution<CellId> cell(0, cells - 1);
+  std::uniform_int_distribution<std::uint32_t> cell_number(0, cells - 1);
+  const auto cell = [&](auto& r) { return CellId(cell_number(r)); };
   std::uniform_int_distribution<int> length(1, 8), children(0, 4);
   RayBatch batch(false);
   RayId next = 0;
@@ -75,7 +76,7 @@ double Slope(const std::vector<double>& x, const std::vector<double>& y) {
 
 int Main(int argc, char** argv) {
   const std::size_t max_nodes = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 10'000'000;
-  const CellId cells = argc > 2 ? CellId(std::atoi(argv[2])) : 27;
+  const std::uint32_t cells = argc > 2 ? std::uint32_t(std::atoi(argv[2])) : 27;
   std::mt19937_64 rng(argc > 3 ? std::strtoull(argv[3], nullptr, 10) : 1);
   std::printf("%12s %12s %10s %12s %10s %12s %9s\n", "nodes", "rays", "build s", "build n/s",
               "peel s", "peel n/s", "splits");

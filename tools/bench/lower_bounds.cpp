@@ -95,7 +95,7 @@ CellTree Synthetic(std::size_t target, std::mt19937_64& rng) {
   RayId next = 0;
   std::uniform_int_distribution<int> length(2, 9), children(0, 3), axis(0, 2), sign(0, 1);
   auto step = [&](CellId c) {
-    int xyz[3] = {int(c % 3), int(c / 3 % 3), int(c / 9)};
+    int xyz[3] = {int(c.value() % 3), int(c.value() / 3 % 3), int(c.value() / 9)};
     for (;;) {
       const int a = axis(rng), d = sign(rng) ? 1 : -1;
       if (xyz[a] + d < 0 || xyz[a] + d > 2) continue;
@@ -110,7 +110,8 @@ CellTree Synthetic(std::size_t target, std::mt19937_64& rng) {
     for (int v = length(rng); v > 1; --v) batch.AddVisit(c = step(c), 1, 0, 0);
     return next++;
   };
-  std::uniform_int_distribution<CellId> cell(0, 26);
+  std::uniform_int_distribution<std::uint32_t> cell_number(0, 26);
+  const auto cell = [&](auto& r) { return CellId(cell_number(r)); };
   while (builder.node_count() < target) {
     batch.Clear();
     batch.set_first_id(next);
@@ -171,7 +172,7 @@ void Row(const std::string& label, const CellTree& tree, const LowerBoundOptions
     std::printf("#   group %2zu cells %4u strings maxgen %3u scs >= %3u %s %8llu states:",
                 g.cells.size(), g.strings, g.max_gen_sum, g.scs_lower, g.exact ? "exact" : "     ",
                 (unsigned long long)g.states);
-    for (CellId c : g.cells) std::printf(" %u", c);
+    for (CellId c : g.cells) std::printf(" %u", c.value());
     std::printf("\n");
   }
   std::fflush(stdout);

@@ -64,7 +64,8 @@ class SyntheticScene {
       const V3 q = p + d * (step * i);
       if (!Inside(q)) break;
       const int c = CellOf(q);
-      if (c != last) b.AddVisit(c, 0, static_cast<float>(step * i), static_cast<float>(step * i));
+      if (c != last)
+        b.AddVisit(CellId(c), 0, static_cast<float>(step * i), static_cast<float>(step * i));
       b.AddSamplesToLastVisit(1);
       last = c;
       visit_of_sample.push_back(static_cast<std::uint32_t>(b.visit_count() - first - 1));

@@ -63,7 +63,7 @@ std::uint64_t ParseDim(std::string_view text, std::string_view part) {
 }
 
 void CheckCellCount(const std::array<std::uint64_t, 3>& d, const std::string& what) {
-  const std::uint64_t max = std::numeric_limits<CellId>::max();
+  const std::uint64_t max = std::numeric_limits<std::uint32_t>::max();
   if (d[0] > max || d[1] > max || d[0] * d[1] > max || d[0] * d[1] * d[2] > max)
     throw InputError(what + ": cell count " + std::to_string(d[0]) + "*" + std::to_string(d[1]) +
                      "*" + std::to_string(d[2]) + " exceeds " + std::to_string(max));
@@ -141,12 +141,13 @@ CellId CellGrid::CellOf(const Vec3d& p) const {
 
 CellId CellGrid::CellIndex(const std::array<std::uint32_t, 3>& xyz) const {
   for (int a = 0; a < 3; ++a) RAYCELL_CHECK_LT(xyz[a], dims_[a]);
-  return xyz[0] + dims_[0] * (xyz[1] + dims_[1] * xyz[2]);
+  return CellId(xyz[0] + dims_[0] * (xyz[1] + dims_[1] * xyz[2]));
 }
 
 std::array<std::uint32_t, 3> CellGrid::CellCoords(CellId cell) const {
-  RAYCELL_CHECK_LT(cell, cell_count());
-  return {cell % dims_[0], (cell / dims_[0]) % dims_[1], cell / (dims_[0] * dims_[1])};
+  const std::uint32_t c = cell.value();
+  RAYCELL_CHECK_LT(c, cell_count());
+  return {c % dims_[0], (c / dims_[0]) % dims_[1], c / (dims_[0] * dims_[1])};
 }
 
 Box3d CellGrid::CellBounds(CellId cell) const {
@@ -164,7 +165,7 @@ std::string CellGrid::ToString() const {
 // ----------------------------------------------------------------------------- CellDDA
 
 std::string CellSegment::ToString() const {
-  return "{cell " + std::to_string(cell) + ", t [" + Num(t0) + ", " + Num(t1) + "]}";
+  return "{cell " + std::to_string(cell.value()) + ", t [" + Num(t0) + ", " + Num(t1) + "]}";
 }
 
 CellDDA::CellDDA(const CellGrid& grid, const Vec3d& origin, const Vec3d& dir, double tmin,
@@ -177,8 +178,8 @@ CellDDA::CellDDA(const CellGrid& grid, const Vec3d& origin, const Vec3d& dir, do
   if (std::isnan(tmin) || std::isnan(tmax)) throw InputError(ray() + ": t range is NaN");
   InitAxes(origin, dir);
   if (start_cell) {
-    if (*start_cell >= grid_.cell_count())
-      throw InputError(ray() + ": start cell " + std::to_string(*start_cell) + " outside " +
+    if (start_cell->value() >= grid_.cell_count())
+      throw InputError(ray() + ": start cell " + std::to_string(start_cell->value()) + " outside " +
                        grid_.ToString());
     InitForced(*start_cell, tmin, tmax);
   } else {
@@ -235,7 +236,7 @@ void CellDDA::InitFree(double tmin, double tmax) {
 
 void CellDDA::InitForced(CellId start, double tmin, double tmax) {
   if (!std::isfinite(tmin))
-    throw InputError("ray with forced start cell " + std::to_string(start) +
+    throw InputError("ray with forced start cell " + std::to_string(start.value()) +
                      ": tmin must be finite, not " + Num(tmin));
   const auto xyz = grid_.CellCoords(start);
   if (StartsOutside(xyz, tmin)) {

@@ -79,7 +79,7 @@ class CellGrid {
   const Vec3d& hi() const { return hi_; }
   const std::array<std::uint32_t, 3>& dims() const { return dims_; }
   std::uint32_t dim(int axis) const { return dims_[axis]; }
-  CellId cell_count() const { return dims_[0] * dims_[1] * dims_[2]; }
+  std::uint32_t cell_count() const { return dims_[0] * dims_[1] * dims_[2]; }
   // Nominal cell size (hi-lo)/n along each axis.
   const std::array<double, 3>& cell_size() const { return size_; }
 
@@ -107,7 +107,7 @@ class CellGrid {
 
 // One piece of a ray inside one cell: parameters [t0, t1] in units of the ray's direction.
 struct CellSegment {
-  CellId cell = 0;
+  CellId cell{0};
   double t0 = 0, t1 = 0;
   bool operator==(const CellSegment& o) const { return cell == o.cell && t0 == o.t0 && t1 == o.t1; }
   // "{cell 3, t [0.25, 0.5]}".

@@ -90,7 +90,7 @@ class Path {
     cursor_ = 0;
     CellDDA dda(grid, o, d, 0.0, tmax, start);
     for (CellSegment s; dda.Next(&s);) {
-      if (!nonempty[s.cell]) continue;
+      if (!nonempty[s.cell.value()]) continue;
       cells_.push_back(s.cell), t0_.push_back(s.t0), t1_.push_back(s.t1);
       samples_.push_back(0);
     }
