@@ -21,8 +21,8 @@ BracketOptions BracketEffort(const std::string& name) {
   if (name == "quick") {
     o.lower.triples = false;
     o.lower.max_blocks = 60;
-    // Half the states of before (10^6): raycell study's 27-cell bracket 315 -> 178 s of CPU
-    // (the whole study 183 -> 111 s on 2 cores), its lower bounds 1981 -> 1969 summed.
+    // 500,000 states in all: raycell study in about two minutes on 2 cores; twice as many give
+    // slightly higher bounds for far more time (BENCHMARKS.md "Bracketing the optimum").
     o.lower.max_total_states = 500'000;
     o.lower.max_cut_rounds = 40;
     o.best.beam_width = 64;

@@ -18,7 +18,7 @@
 //
 // Cost: dominated by the SCS and budget searches, each limited in states, and all together by
 // max_total_states (deterministic: no time limit). With the defaults, a 27-cell frame of
-// ~2,700-3,600 nodes takes about 15-30 s of CPU and under 100 MB (BENCHMARKS.md "Lower
+// ~2,700-3,600 nodes takes about 15-50 s of CPU and under 100 MB (BENCHMARKS.md "Lower
 // bounds at 27 cells"); an 8-cell frame well under a second. The SCS heuristic's
 // sub-searches (bounds/scs.h) are limited per sub-search, not counted in max_total_states. Trees
 // with many cells and few nodes are cheap: pairs and triples are taken only among cells that share

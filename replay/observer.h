@@ -2,7 +2,7 @@
 // replay/timeline.h). The replay core (replay/replayer.h) and the memory levels
 // (replay/memory.h) call a ReplayObserver when one is given; they hold a null pointer
 // otherwise, and every call is behind a test of that pointer, so a replay without an
-// observer does the same work as before and gives the same results byte for byte.
+// observer does no observer work, and a replay with one gives the same results byte for byte.
 //
 // Times are a run's own simulated time: each run of a frame starts at zero. Calls come in the
 // replay's event order, so a processor's calls come in time order; transfers may be reported

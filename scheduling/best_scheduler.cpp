@@ -15,16 +15,11 @@ BestScheduleOptions PlanEffort(std::uint64_t seed) {
   o.seed = seed;
   o.beam_width = 64;
   o.chains = 1;
-  // The one chain with large windows (LocalSearchOptions::large_every), which the portfolio
-  // gives only to odd chains: on the current-renderer study capture (27 cells, seeds 0-3) the
-  // plans' fetches fell from 2861.5 to 2808.2 for celltree-best and from 2802.3 to 2768.5
-  // for celltree-union, for 0.40 s of planning per frame instead of 0.16 (BENCHMARKS.md).
-  o.vary_windows = false;
-  o.threads = 1;
-  // 2000 windows within 2*10^8 node visits (the work limit bound first at 1000 and 10^8):
-  // on the same capture celltree-best 2808.25 -> 2799.25 fetches over seeds 0-3 (spread 66 ->
-  // 40), celltree-union 2768.5 -> 2743.25, for 0.70 s of planning per frame instead of 0.40
-  // (0.41 s since the beam search scores each state once: the same plans).
+  // The one chain has the large windows (LocalSearchOptions::large_every) that the portfolio
+  // gives only to odd chains: they shorten the plans more than they cost. 2000 windows within
+  // 2*10^8 node visits (the work limit binds first): about 0.4 s of planning per 27-cell frame,
+  // so that a plan is ready while the frame before it is replayed (BENCHMARKS.md "Online:
+  // fetches against Max Work" has the plans' fetches and times).
   o.local.max_windows = 2000;
   o.local.max_work = 200'000'000;
   o.exact_states = 20000;

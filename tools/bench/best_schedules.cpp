@@ -11,7 +11,7 @@
 //   --windows N         windows per chain   --threads N    chains at once
 //   --max-work N        node visits per chain (LocalSearchOptions::max_work)
 //   --min-window N, --max-window N, --exact-window N, --kick-after N, --kick-size N,
-//   --large-every N (0: no large windows, as before), --large-min N, --large-max N
+//   --large-every N (0: no large windows), --large-min N, --large-max N
 //                       local search (LocalSearchOptions)
 //   --exact-states N    exact search states --seed N
 //   --cells N           cells of the synthetic trees (27)
