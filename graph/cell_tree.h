@@ -19,29 +19,18 @@
 #include <unordered_map>
 #include <vector>
 
+#include "base/typed_id.h"
 #include "traces/ray_batch.h"
 
 namespace raycell {
 
-// A node of a Cell Tree: its index in the tree's flat arrays. A type of its own, not a plain
-// number, so that a node and a cell (CellId, also 32 bits) never convert into each other:
-// a NodeId is made from a number only explicitly, NodeId(i), and gives it back only through
-// index(). Four bytes, trivially copyable: it costs nothing over the number it holds.
-class NodeId {
+// A node of a Cell Tree: its index in the tree's flat arrays (base/typed_id.h). A node and a
+// cell never convert into each other: a NodeId is made from a number only explicitly,
+// NodeId(i), and gives it back only through index().
+class NodeId : public TypedId<NodeId> {
  public:
-  NodeId() = default;  // uninitialised, as a plain number; NodeId{} is node 0
-  constexpr explicit NodeId(std::uint32_t index) : index_(index) {}
-  constexpr std::uint32_t index() const { return index_; }
-  friend constexpr bool operator==(NodeId a, NodeId b) { return a.index_ == b.index_; }
-  friend constexpr bool operator!=(NodeId a, NodeId b) { return a.index_ != b.index_; }
-  friend constexpr bool operator<(NodeId a, NodeId b) { return a.index_ < b.index_; }
-  friend constexpr bool operator>(NodeId a, NodeId b) { return a.index_ > b.index_; }
-  friend constexpr bool operator<=(NodeId a, NodeId b) { return a.index_ <= b.index_; }
-  friend constexpr bool operator>=(NodeId a, NodeId b) { return a.index_ >= b.index_; }
-  friend std::ostream& operator<<(std::ostream& out, NodeId n) { return out << n.index_; }
-
- private:
-  std::uint32_t index_;
+  using TypedId::TypedId;
+  constexpr std::uint32_t index() const { return number(); }
 };
 static_assert(sizeof(NodeId) == sizeof(std::uint32_t) && std::is_trivially_copyable_v<NodeId>);
 

@@ -7,19 +7,10 @@
 
 #include <cstdint>
 
+#include "base/random.h"
 #include "scheduling/scheduler.h"
 
 namespace raycell {
-
-// splitmix64 (Steele, Lea, Flood 2014; Vigna's reference code).
-class SplitMix64 {
- public:
-  explicit SplitMix64(std::uint64_t seed) : state_(seed) {}
-  std::uint64_t Next();
-
- private:
-  std::uint64_t state_;
-};
 
 // xoshiro256** 1.0 (Blackman and Vigna 2018).
 class Xoshiro256 {

@@ -1,9 +1,7 @@
 // A cell of the scene's grid (docs/design.md §1 "Cell and node ids"): cell = x + nx*(y + ny*z).
-// A type of its own, not a plain number, so that a cell, a Cell Tree node (NodeId, also 32
-// bits) and a count never convert into each other: a CellId is made from a number only
-// explicitly, CellId(i), and gives it back only through value(). ++c steps to the next cell
-// in that numbering, for loops over a grid's cells. Four bytes, trivially copyable: it costs
-// nothing over the number it holds.
+// A type of its own (base/typed_id.h), so that a cell, a Cell Tree node (NodeId) and a count
+// never convert into each other: a CellId is made from a number only explicitly, CellId(i),
+// and gives it back only through value(). ++c steps to the next cell in that numbering.
 #pragma once
 
 #include <cstddef>
@@ -13,27 +11,18 @@
 #include <ostream>
 #include <type_traits>
 
+#include "base/typed_id.h"
+
 namespace raycell {
 
-class CellId {
+class CellId : public TypedId<CellId> {
  public:
-  CellId() = default;  // uninitialised, as a plain number; CellId{} is cell 0
-  constexpr explicit CellId(std::uint32_t value) : value_(value) {}
-  constexpr std::uint32_t value() const { return value_; }
+  using TypedId::TypedId;
+  constexpr std::uint32_t value() const { return number(); }
   constexpr CellId& operator++() {
-    ++value_;
+    Increment();
     return *this;
   }
-  friend constexpr bool operator==(CellId a, CellId b) { return a.value_ == b.value_; }
-  friend constexpr bool operator!=(CellId a, CellId b) { return a.value_ != b.value_; }
-  friend constexpr bool operator<(CellId a, CellId b) { return a.value_ < b.value_; }
-  friend constexpr bool operator>(CellId a, CellId b) { return a.value_ > b.value_; }
-  friend constexpr bool operator<=(CellId a, CellId b) { return a.value_ <= b.value_; }
-  friend constexpr bool operator>=(CellId a, CellId b) { return a.value_ >= b.value_; }
-  friend std::ostream& operator<<(std::ostream& out, CellId c) { return out << c.value_; }
-
- private:
-  std::uint32_t value_;
 };
 static_assert(sizeof(CellId) == sizeof(std::uint32_t) && std::is_trivially_copyable_v<CellId>);
 

@@ -5,22 +5,13 @@
 #include <cstdint>
 #include <vector>
 
+#include "base/random.h"
 #include "engine/event_queue.h"
 
 namespace raycell {
 namespace {
 
 enum class Kind : std::uint8_t { kNone, kA, kB };
-
-struct SplitMix64 {
-  std::uint64_t state;
-  std::uint64_t operator()() {
-    std::uint64_t z = (state += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-  }
-};
 
 // One handled event: which slot, when, its insertion number and kind.
 struct Handled {
@@ -40,11 +31,11 @@ struct Handled {
 // replay's processors do.
 std::vector<Handled> RunSlots(std::uint32_t slots, std::uint64_t span, std::uint64_t seed,
                               int steps) {
-  SplitMix64 rng{seed};
+  SplitMix64 rng(seed);
   SlotQueue<Kind> q(slots);
   std::vector<bool> quiet(slots, false);
   for (std::uint32_t i = 0; i < slots; ++i) {
-    q.Schedule(i, SimTime::Picoseconds(rng() % (span + 1)), Kind::kA);
+    q.Schedule(i, SimTime::Picoseconds(rng.Next() % (span + 1)), Kind::kA);
     q.Update(i);
   }
   std::vector<Handled> out;
@@ -54,11 +45,12 @@ std::vector<Handled> RunSlots(std::uint32_t slots, std::uint64_t span, std::uint
     out.push_back({p, s.time.picoseconds(), s.seq, s.kind});
     const SimTime now = s.time;
     q.Clear(p);
-    const std::uint64_t r = rng();
+    const std::uint64_t r = rng.Next();
     if (r % 5 == 0) {
       quiet[p] = true;  // waits until woken
     } else {
-      q.Schedule(p, now + SimTime::Picoseconds(rng() % (span + 1)), r % 2 ? Kind::kA : Kind::kB);
+      q.Schedule(p, now + SimTime::Picoseconds(rng.Next() % (span + 1)),
+                 r % 2 ? Kind::kA : Kind::kB);
     }
     if (r % 3 == 0) {  // wakes every quiet component, in slot order, at now
       for (std::uint32_t o = 0; o < slots; ++o) {
@@ -74,7 +66,7 @@ std::vector<Handled> RunSlots(std::uint32_t slots, std::uint64_t span, std::uint
 
 std::vector<Handled> RunHeap(std::uint32_t slots, std::uint64_t span, std::uint64_t seed,
                              int steps) {
-  SplitMix64 rng{seed};
+  SplitMix64 rng(seed);
   BinaryHeapQueue q;
   std::uint64_t seq = 0;
   std::vector<bool> quiet(slots, false);
@@ -82,18 +74,18 @@ std::vector<Handled> RunHeap(std::uint32_t slots, std::uint64_t span, std::uint6
     q.Push(Event{when, 0, seq++, slot, std::uint32_t(kind), 0});
   };
   for (std::uint32_t i = 0; i < slots; ++i) {
-    push(i, SimTime::Picoseconds(rng() % (span + 1)), Kind::kA);
+    push(i, SimTime::Picoseconds(rng.Next() % (span + 1)), Kind::kA);
   }
   std::vector<Handled> out;
   while (!q.Empty() && int(out.size()) < steps) {
     const Event e = q.Pop();
     const std::uint32_t p = e.target;
     out.push_back({p, e.time.picoseconds(), e.seq, Kind(e.kind)});
-    const std::uint64_t r = rng();
+    const std::uint64_t r = rng.Next();
     if (r % 5 == 0) {
       quiet[p] = true;
     } else {
-      push(p, e.time + SimTime::Picoseconds(rng() % (span + 1)), r % 2 ? Kind::kA : Kind::kB);
+      push(p, e.time + SimTime::Picoseconds(rng.Next() % (span + 1)), r % 2 ? Kind::kA : Kind::kB);
     }
     if (r % 3 == 0) {
       for (std::uint32_t o = 0; o < slots; ++o) {

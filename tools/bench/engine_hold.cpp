@@ -25,6 +25,7 @@
 
 #include "base/check.h"
 #include "base/cpu_time.h"
+#include "base/random.h"
 #include "engine/calendar_queue.h"
 #include "engine/event_queue.h"
 #include "engine/simulator.h"
@@ -33,22 +34,17 @@
 namespace raycell {
 namespace {
 
-struct SplitMix64 {
-  std::uint64_t state;
-  std::uint64_t operator()() {
-    std::uint64_t z = (state += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-  }
-  SimTime Delay() { return SimTime::Picoseconds((*this)() % 2001); }
+// The hold model's delays, from a seeded splitmix64.
+struct Delays {
+  SplitMix64 rng;
+  SimTime Delay() { return SimTime::Picoseconds(rng.Next() % 2001); }
 };
 
 // Bare queue: N events, `warmup` untimed holds, then `ops` timed holds. Returns events/s.
 template <typename Queue>
 double QueueHold(std::size_t n, std::uint64_t warmup, std::uint64_t ops, std::uint64_t seed,
                  std::uint64_t* checksum) {
-  SplitMix64 rng{seed};
+  Delays rng{SplitMix64(seed)};
   Queue q(n);
   std::uint64_t seq = 0;
   for (; seq < n; ++seq) q.Push(Event{rng.Delay(), 0, seq, 0, 0, 0});
@@ -71,7 +67,7 @@ double QueueHold(std::size_t n, std::uint64_t warmup, std::uint64_t ops, std::ui
 double SlotHold(std::size_t n, std::uint64_t warmup, std::uint64_t ops, std::uint64_t seed,
                 std::uint64_t* checksum) {
   enum class Kind : std::uint8_t { kNone, kHold };
-  SplitMix64 rng{seed};
+  Delays rng{SplitMix64(seed)};
   SlotQueue<Kind> q{static_cast<std::uint32_t>(n)};
   for (std::uint32_t i = 0; i < n; ++i) {
     q.Schedule(i, rng.Delay(), Kind::kHold);
@@ -95,7 +91,7 @@ double SlotHold(std::size_t n, std::uint64_t warmup, std::uint64_t ops, std::uin
 
 class Holder : public Component {
  public:
-  explicit Holder(std::uint64_t seed) : rng_{seed} {}
+  explicit Holder(std::uint64_t seed) : rng_{SplitMix64(seed)} {}
   void Handle(const Event&, Simulator& sim) override {
     sim.NoteProgress();
     sim.Schedule(0, rng_.Delay(), 0);
@@ -106,7 +102,7 @@ class Holder : public Component {
   std::uint64_t budget = 0;  // events until Stop()
 
  private:
-  SplitMix64 rng_;
+  Delays rng_;
 };
 
 // Full loop: the same hold through Simulator::Run. Returns events/s.
