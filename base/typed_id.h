@@ -31,4 +31,29 @@ class TypedId {
   std::uint32_t number_;
 };
 
+// The ids first .. end-1 of one kind, in order: for (CellId c : CellRange(n)).
+template <typename Id>
+class IdRange {
+ public:
+  class Iterator {
+   public:
+    constexpr explicit Iterator(std::uint32_t number) : number_(number) {}
+    constexpr Id operator*() const { return Id(number_); }
+    constexpr Iterator& operator++() {
+      ++number_;
+      return *this;
+    }
+    constexpr bool operator!=(Iterator o) const { return number_ != o.number_; }
+
+   private:
+    std::uint32_t number_;
+  };
+  constexpr IdRange(std::uint32_t first, std::uint32_t end) : first_(first), end_(end) {}
+  constexpr Iterator begin() const { return Iterator(first_); }
+  constexpr Iterator end() const { return Iterator(end_); }
+
+ private:
+  std::uint32_t first_, end_;
+};
+
 }  // namespace raycell

@@ -90,27 +90,10 @@ class CellTree {
   std::uint64_t rays_ = 0;
 };
 
-class CellTree::NodeRange {
+// The nodes 1 .. size()-1 (the root left out), in creation order.
+class CellTree::NodeRange : public IdRange<NodeId> {
  public:
-  class Iterator {
-   public:
-    constexpr explicit Iterator(std::uint32_t i) : i_(i) {}
-    constexpr NodeId operator*() const { return NodeId(i_); }
-    Iterator& operator++() {
-      ++i_;
-      return *this;
-    }
-    constexpr bool operator!=(Iterator o) const { return i_ != o.i_; }
-
-   private:
-    std::uint32_t i_;
-  };
-  constexpr explicit NodeRange(std::uint32_t end) : end_(end) {}
-  constexpr Iterator begin() const { return Iterator(1); }
-  constexpr Iterator end() const { return Iterator(end_); }
-
- private:
-  std::uint32_t end_;
+  constexpr explicit NodeRange(std::uint32_t end) : IdRange(1, end) {}
 };
 inline CellTree::NodeRange CellTree::nodes() const {
   return NodeRange(static_cast<std::uint32_t>(size()));  // AddNode keeps size() below 2^32

@@ -27,27 +27,9 @@ class CellId : public TypedId<CellId> {
 static_assert(sizeof(CellId) == sizeof(std::uint32_t) && std::is_trivially_copyable_v<CellId>);
 
 // The cells 0 .. count-1 in order: for (CellId c : CellRange(count)).
-class CellRange {
+class CellRange : public IdRange<CellId> {
  public:
-  class Iterator {
-   public:
-    constexpr explicit Iterator(std::uint32_t v) : v_(v) {}
-    constexpr CellId operator*() const { return CellId(v_); }
-    constexpr Iterator& operator++() {
-      ++v_;
-      return *this;
-    }
-    constexpr bool operator!=(Iterator o) const { return v_ != o.v_; }
-
-   private:
-    std::uint32_t v_;
-  };
-  constexpr explicit CellRange(std::uint32_t count) : count_(count) {}
-  constexpr Iterator begin() const { return Iterator(0); }
-  constexpr Iterator end() const { return Iterator(count_); }
-
- private:
-  std::uint32_t count_;
+  constexpr explicit CellRange(std::uint32_t count) : IdRange(0, count) {}
 };
 
 // No cell: the Cell Tree root's, and a separator where lists of cells are flattened.
