@@ -38,7 +38,11 @@ std::string Scene(const StudyResult& r) {
   } else {
     s << "Scene `" << a.scene << "`, " << frames.size() << " frames";
   }
-  s << " orbiting " << a.orbit_degrees() << " degrees";
+  if (a.orbit_degrees() == 0) {
+    s << " with a still camera";
+  } else {
+    s << " orbiting " << a.orbit_degrees() << " degrees";
+  }
   s << ", " << a.res << ". ";
   return s.str();
 }
@@ -140,7 +144,9 @@ std::string GridReport(const GridStudy& g) {
       << (std::string(k.name) == "celltree" ? " (the paper: 30% fewer)" : "") << " | "
       << Percent(f - double(mw), double(mw)) << " |\n";
   }
-  const std::string closed = Percent(double(peel) - double(best), double(peel) - double(lower));
+  // Nothing to close when Peel already meets the lower bound.
+  const std::string closed =
+      peel == lower ? "-" : Percent(double(peel) - double(best), double(peel) - double(lower));
   s << "\nThe optimum of each frame's Cell Tree (fewest fetches with a one-cell cache) lies "
        "between the best lower bound and the best schedule found:\n\n"
     << "![bracket of the optimum](bracket_" << g.cells << ".png)\n\n"

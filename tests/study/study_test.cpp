@@ -20,6 +20,18 @@
 namespace raycell {
 namespace {
 
+// The folder of this process's study, removed when the tests end.
+std::filesystem::path StudyDir() {
+  static const std::filesystem::path dir = testing::TempDir("study");
+  return dir;
+}
+
+class RemoveStudyDir : public ::testing::Environment {
+ public:
+  void TearDown() override { std::filesystem::remove_all(StudyDir()); }
+};
+const auto* const kRemoveStudyDir = ::testing::AddGlobalTestEnvironment(new RemoveStudyDir);
+
 // One study for the tests below: the built-in scene, 3 frames at 24x24 in 2x2x2 and 1x2x1
 // cells, run time against error on 1 frame at 16x16.
 const StudyResult& TinyStudy() {
@@ -31,7 +43,7 @@ const StudyResult& TinyStudy() {
     o.accuracy_frames = 1;
     o.accuracy_res = "16x16";
     o.quiet = true;
-    o.out = (testing::TempDir("study") / "study").string();
+    o.out = (StudyDir() / "study").string();
     return RunStudy(o);
   }();
   return result;
@@ -145,6 +157,58 @@ TEST(Study, TheReportTellsWhatTheResultHolds) {
     EXPECT_EQ(lines[i + 1].rfind(k.knob + "," + k.value + ",", 0), 0u) << lines[i + 1];
     EXPECT_NE(lines[i + 1].find(k.is_default ? ",True" : ",False"), std::string::npos);
   }
+}
+
+// A grid whose numbers are given: Peel meets the lower bound on every frame, or not.
+GridStudy HandMadeGrid(std::uint64_t peel, std::uint64_t lower, std::uint64_t best) {
+  GridStudy g;
+  g.cells = "1x2x1";
+  g.heading = "1x2x1 cells";
+  g.capture = "capture_1x2x1.rct";
+  FrameAnalysis t;
+  t.rays = 10, t.nodes = 4, t.bound = lower;
+  t.peel_schedule.assign(peel, CellId{0});
+  t.lower_bound = lower, t.best_length = best;
+  g.trees = {t, t};
+  for (const SchedulerEntry* s : StudySchedulers()) {
+    SchedulerReplay r{s, {}};
+    r.replay.total.fetches = 2 * peel;
+    g.replays.push_back(r);
+  }
+  return g;
+}
+
+TEST(Study, NothingToCloseWhenPeelMeetsTheLowerBound) {
+  const std::string row =
+      "| share of Peel's distance to the lower bound closed by the best schedule |";
+  // In the tiny study, Peel is optimal on every frame with two cells, not with eight.
+  for (const GridStudy& g : TinyStudy().grids) {
+    std::uint64_t peel = 0, lower = 0;
+    for (const FrameAnalysis& t : g.trees) peel += t.peel_length(), lower += *t.lower_bound;
+    EXPECT_EQ(peel == lower, g.cells == "1x2x1")
+        << g.cells << ": Peel " << peel << ", lower " << lower;
+    EXPECT_EQ(GridReport(g).find(row + " - |") != std::string::npos, peel == lower)
+        << GridReport(g);
+  }
+  const std::string met = GridReport(HandMadeGrid(3, 3, 3));
+  EXPECT_NE(met.find(row + " - |"), std::string::npos) << met;
+  const std::string open = GridReport(HandMadeGrid(5, 3, 4));
+  EXPECT_NE(open.find(row + " 50.0% |"), std::string::npos) << open;
+}
+
+TEST(Study, AStillCameraIsSaidSo) {
+  StudyResult r;
+  r.options.orbit = 0;
+  r.options.orbit_given = true;
+  r.options.res = "16x16";
+  r.frame_numbers = {0, 1, 2, 3};
+  EXPECT_NE(StudyReport(r).find("Scene `builtin`, 4 frames with a still camera, 16x16. "),
+            std::string::npos)
+      << StudyReport(r);
+  r.options.orbit = 45;
+  EXPECT_NE(StudyReport(r).find("Scene `builtin`, 4 frames orbiting 45 degrees, 16x16. "),
+            std::string::npos)
+      << StudyReport(r);
 }
 
 TEST(Study, AccuracyCsvIsWhatPythonsCsvWrites) {

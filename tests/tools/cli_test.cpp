@@ -283,6 +283,11 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
             std::string::npos);
   EXPECT_NE(report.find("![fetches per frame](fetches_2x2x2.png)"), std::string::npos);
   EXPECT_NE(report.find("![bracket of the optimum](bracket_2x2x2.png)"), std::string::npos);
+  // With two cells Peel meets the lower bound on every frame: nothing to close.
+  EXPECT_NE(report.find("| share of Peel's distance to the lower bound closed by the best "
+                        "schedule | - |"),
+            std::string::npos)
+      << report;
   const std::string fetches = raycell::testing::ReadBytes((out / "fetches_2x2x2.csv").string());
   EXPECT_EQ(std::count(fetches.begin(), fetches.end(), '\n'), 4);  // header + 3 frames
   EXPECT_EQ(fetches.substr(0, fetches.find('\n')),
