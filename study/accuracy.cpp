@@ -145,12 +145,37 @@ Replayed ReplayKnob(const std::string& trace, const std::string& granularity,
   return {SecondsSince(start), t.total.fetches, t.total.time.picoseconds()};
 }
 
-// (value - reference) / reference, as Python divides two integers (exactly rounded: both are
-// far below 2^53 here). InputError when the reference is 0.
+// Bits in a number's binary form: 0 for 0, 1 for 1, 64 for 2^63.
+int BitLength(std::uint64_t v) { return v ? 64 - __builtin_clzll(v) : 0; }
+
+// num / den (den > 0) rounded to the nearest double, ties to even, as Python's int / int
+// divides, whatever the size of the integers (a division of doubles would round them first
+// from 2^53 up): the quotient scaled by 2^k into [2^52, 2^53), rounded on its remainder.
+double IntegerRatio(std::uint64_t num, std::uint64_t den) {
+  RAYCELL_CHECK(den > 0);
+  if (num == 0) return 0.0;
+  using U128 = unsigned __int128;
+  int k = 52 + BitLength(den) - BitLength(num);  // the quotient then has 52 or 53 bits
+  const auto scaled = [&](int shift, U128* q, U128* r, U128* d) {
+    const U128 n = shift >= 0 ? U128{num} << shift : U128{num};
+    *d = shift >= 0 ? U128{den} : U128{den} << -shift;
+    *q = n / *d, *r = n % *d;
+  };
+  U128 q, r, d;
+  scaled(k, &q, &r, &d);
+  if (q < (U128{1} << 52)) scaled(++k, &q, &r, &d);
+  RAYCELL_CHECK(q >= (U128{1} << 52) && q < (U128{1} << 53));
+  if (2 * r > d || (2 * r == d && (q & 1))) ++q;  // to nearest, ties to even
+  return std::ldexp(double(std::uint64_t(q)), -k);
+}
+
+// (value - reference) / reference, as Python computes it from the two integers. InputError
+// when the reference is 0.
 double Change(std::uint64_t value, std::uint64_t reference, const std::string& what) {
   if (reference == 0) throw InputError("run time against error: " + what + " is 0");
-  RAYCELL_CHECK(value < (std::uint64_t{1} << 53) && reference < (std::uint64_t{1} << 53));
-  return (double(value) - double(reference)) / double(reference);
+  const double magnitude =
+      IntegerRatio(value >= reference ? value - reference : reference - value, reference);
+  return value >= reference ? magnitude : -magnitude;
 }
 
 double AbsChange(std::uint64_t value, std::uint64_t reference, const std::string& what) {
