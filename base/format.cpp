@@ -1,5 +1,6 @@
 #include "base/format.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -53,6 +54,39 @@ std::string FormatReal(double v) {
   const auto r = std::to_chars(buf, buf + sizeof(buf), v);  // shortest round-trip form
   RAYCELL_CHECK(r.ec == std::errc());
   return std::string(buf, r.ptr);
+}
+
+std::string FormatPythonFloat(double v) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v < 0 ? "-inf" : "inf";
+  char buf[64];
+  // d.ddde[+-]XX: the shortest round-trip digits and the decimal exponent.
+  const auto r = std::to_chars(buf, buf + sizeof(buf), v, std::chars_format::scientific);
+  RAYCELL_CHECK(r.ec == std::errc());
+  const std::string text(buf, r.ptr);
+  const std::size_t e = text.find('e');
+  const bool negative = text[0] == '-';
+  std::string digits = text.substr(negative ? 1 : 0, e - (negative ? 1 : 0));
+  digits.erase(std::remove(digits.begin(), digits.end(), '.'), digits.end());
+  const int exponent = std::stoi(text.substr(e + 1));
+  std::string out = negative ? "-" : "";
+  if (exponent < -4 || exponent >= 16) {  // Python's repr: d[.ddd]e[+-]XX
+    out += digits.substr(0, 1);
+    if (digits.size() > 1) out += "." + digits.substr(1);
+    const int magnitude = exponent < 0 ? -exponent : exponent;
+    out += std::string(exponent < 0 ? "e-" : "e+") + (magnitude < 10 ? "0" : "") +
+           std::to_string(magnitude);
+  } else if (exponent < 0) {  // 0.000ddd
+    out += "0." + std::string(std::size_t(-exponent - 1), '0') + digits;
+  } else {  // ddd.ddd, at least one decimal
+    const std::size_t point = std::size_t(exponent) + 1;
+    if (digits.size() <= point) {
+      out += digits + std::string(point - digits.size(), '0') + ".0";
+    } else {
+      out += digits.substr(0, point) + "." + digits.substr(point);
+    }
+  }
+  return out;
 }
 
 std::string FormatFixed(double v, int digits) {

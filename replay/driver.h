@@ -125,7 +125,7 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
 // with all its descendants, SampleRayTrees) and scales back what grows with the rays: rays,
 // segments, samples and work times k, and the simulated time by the added work spread over
 // the processors. Fetches, stall and the bound are those of the sample: the error the
-// sampling makes is what tools/bench/accuracy.py measures.
+// sampling makes is what the study's run time against error measures (study/accuracy.h).
 //
 // `observer` (may be null) watches every frame's replay (ReplayFrame); it needs
 // sample_every = 1, since it would see the sample's times, not the scaled ones.

@@ -2,13 +2,14 @@
 """Checks that includes follow the module order of docs/design.md §4.
 
     base < engine, traces < graph < bounds, search < analysis
-                                    search < scheduling < replay < tools
+                                    search < scheduling < replay
+                 traces/record, analysis, replay < study < tools
 
 A module may include its own headers and those of the modules below it (DEPS, closed
 transitively); base includes no other module; bounds (GLPK) and search (threads) are siblings,
 and neither scheduling nor replay sees bounds or analysis, so they never link GLPK;
-traces/record (the renderer) is included only from tools and the tests; OpenVDB headers appear
-only in traces/record. Every target exports the project root as its include path, so a wrong
+traces/record (the renderer) is included only from study, tools and the tests; OpenVDB headers
+appear only in traces/record. Every target exports the project root as its include path, so a wrong
 edge through a header is caught by nothing else.
 
 Usage: tools/check_deps.py [ROOT]   (exit 1 and one line per wrong include)
@@ -29,7 +30,8 @@ DEPS = {
     "analysis": {"bounds", "search"},
     "scheduling": {"search"},
     "replay": {"engine", "scheduling"},
-    "tools": {"traces/record", "analysis", "replay"},
+    "study": {"analysis", "replay", "traces/record"},
+    "tools": {"study", "traces/record", "analysis", "replay"},
 }
 
 

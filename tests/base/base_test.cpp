@@ -126,6 +126,27 @@ TEST(Format, JsonCsvAndNumbers) {
   EXPECT_EQ(FormatHex64(~0ull), "ffffffffffffffff");
 }
 
+// Python's repr of the same doubles (Python 3.11).
+TEST(Format, PythonFloatIsPythonsRepr) {
+  EXPECT_EQ(FormatPythonFloat(1.0), "1.0");
+  EXPECT_EQ(FormatPythonFloat(0.0), "0.0");
+  EXPECT_EQ(FormatPythonFloat(-0.0), "-0.0");
+  EXPECT_EQ(FormatPythonFloat(0.25), "0.25");
+  EXPECT_EQ(FormatPythonFloat(1.057131486000003), "1.057131486000003");
+  EXPECT_EQ(FormatPythonFloat(-0.08681672025723473), "-0.08681672025723473");
+  EXPECT_EQ(FormatPythonFloat(0.000898373563476485), "0.000898373563476485");
+  EXPECT_EQ(FormatPythonFloat(0.0001), "0.0001");
+  EXPECT_EQ(FormatPythonFloat(0.00001), "1e-05");
+  EXPECT_EQ(FormatPythonFloat(1.5e-05), "1.5e-05");
+  EXPECT_EQ(FormatPythonFloat(-2.5e-300), "-2.5e-300");
+  EXPECT_EQ(FormatPythonFloat(123456.5), "123456.5");
+  EXPECT_EQ(FormatPythonFloat(1e15), "1000000000000000.0");
+  EXPECT_EQ(FormatPythonFloat(1e16), "1e+16");
+  EXPECT_EQ(FormatPythonFloat(1.2345e17), "1.2345e+17");
+  EXPECT_EQ(FormatPythonFloat(5e-324), "5e-324");
+  EXPECT_EQ(FormatPythonFloat(1.0 / 0.0), "inf");
+}
+
 // The hash is part of the trace format: its values must never change. The expected values
 // come from an independent Python transcription of the algorithm in traces/trace.capnp
 // ("Checksums"), not from this code.

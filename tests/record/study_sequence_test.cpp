@@ -49,8 +49,7 @@ TEST(StudySequence, FramesAToBStudyTheSequenceWithAStillCamera) {
   EXPECT_EQ(frames, "5 6 7 ") << trees;
   const std::string report = ReadBytes((out / "report.md").string());
   EXPECT_NE(report.find("Scene `" + pattern +
-                        "` (one volume per frame), frames 5..7 orbiting 0 "
-                        "degrees, 16x16."),
+                        "` (one volume per frame), frames 5..7 with a still camera, 16x16."),
             std::string::npos)
       << report;
   EXPECT_NE(report.find("## Run time against error"), std::string::npos) << report;

@@ -19,6 +19,10 @@ CASES = [
     ("scheduling/s.cpp", "search/best_schedule.h", True),
     ("replay/r.cpp", "engine/slot_queue.h", True),
     ("tools/t.cpp", "traces/record/scene.h", True),
+    ("tools/t.cpp", "study/study.h", True),
+    ("study/s.cpp", "traces/record/recorder.h", True),
+    ("study/s.cpp", "replay/driver.h", True),
+    ("study/s.h", "analysis/analysis.h", True),
     ("graph/g.h", "search/optimum.h", False),       # the core above the searches
     ("graph/g.cpp", "bounds/scs.h", False),
     ("bounds/b.cpp", "search/late_bound.h", False),  # siblings
@@ -31,6 +35,10 @@ CASES = [
     ("replay/r.cpp", "bounds/scs.h", False),
     ("engine/e.h", "graph/cell_tree.h", False),
     ("replay/r.cpp", "traces/record/scene.h", False),
+    ("replay/r.cpp", "study/study.h", False),  # the study stands on replay and analysis
+    ("analysis/a.h", "study/report.h", False),
+    ("traces/record/r.cpp", "study/accuracy.h", False),
+    ("study/s.cpp", "tools/commands.h", False),
     ("traces/x.cpp", "openvdb/openvdb.h", False),
     ("base/x.h", "traces/trace_reader.h", False),
 ]

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "study/accuracy.h"
 #include "tests/test_util.h"
 #include "tests/tools/cli_util.h"
 #include "tests/tools/json_value.h"
@@ -237,6 +238,25 @@ TEST(Cli, ReplayAndSweepAreDeterministicWhateverTheJobs) {
   EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), 2 + 6);  // comment, header, 6 rows
 }
 
+// The fields of one CSV line (quoted fields unquoted).
+std::vector<std::string> CsvRow(const std::string& line) {
+  std::vector<std::string> fields(1);
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (c == '"' && quoted && i + 1 < line.size() && line[i + 1] == '"') {
+      fields.back() += '"', ++i;
+    } else if (c == '"') {
+      quoted = !quoted;
+    } else if (c == ',' && !quoted) {
+      fields.emplace_back();
+    } else {
+      fields.back() += c;
+    }
+  }
+  return fields;
+}
+
 TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
   // The interpreter the study runs (tools/study_command.cpp: /usr/bin/python3 where it exists).
   const char* python = std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
@@ -263,6 +283,11 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
             std::string::npos);
   EXPECT_NE(report.find("![fetches per frame](fetches_2x2x2.png)"), std::string::npos);
   EXPECT_NE(report.find("![bracket of the optimum](bracket_2x2x2.png)"), std::string::npos);
+  // With two cells Peel meets the lower bound on every frame: nothing to close.
+  EXPECT_NE(report.find("| share of Peel's distance to the lower bound closed by the best "
+                        "schedule | - |"),
+            std::string::npos)
+      << report;
   const std::string fetches = raycell::testing::ReadBytes((out / "fetches_2x2x2.csv").string());
   EXPECT_EQ(std::count(fetches.begin(), fetches.end(), '\n'), 4);  // header + 3 frames
   EXPECT_EQ(fetches.substr(0, fetches.find('\n')),
@@ -300,7 +325,22 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
   EXPECT_NE(report.find("![run time against error](accuracy/accuracy.png)"), std::string::npos);
   EXPECT_GT(std::filesystem::file_size(out / "accuracy" / "accuracy.png"), 1000u);
   const std::string acc = raycell::testing::ReadBytes((out / "accuracy" / "accuracy.csv").string());
-  EXPECT_EQ(std::count(acc.begin(), acc.end(), '\n'), 1 + 5 + 3 + 1 + 2 + 5) << acc;
+  // One row per knob setting the library declares, in its order, with its value and default.
+  std::vector<std::vector<std::string>> rows;
+  for (std::size_t at = 0, end; (end = acc.find("\r\n", at)) != std::string::npos; at = end + 2) {
+    rows.push_back(CsvRow(acc.substr(at, end - at)));
+  }
+  const std::vector<raycell::AccuracyKnob>& knobs = raycell::AccuracyKnobs();
+  ASSERT_EQ(rows.size(), 1 + knobs.size()) << acc;
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"knob", "value", "seconds", "time_ratio", "error",
+                                               "error_kind", "fetch_change", "default"}));
+  for (std::size_t i = 0; i < knobs.size(); ++i) {
+    const std::vector<std::string>& row = rows[i + 1];
+    ASSERT_EQ(row.size(), 8u) << acc;
+    EXPECT_EQ(row[0], knobs[i].knob) << acc;
+    EXPECT_EQ(row[1], knobs[i].value) << acc;
+    EXPECT_EQ(row[7], knobs[i].is_default ? "True" : "False") << acc;
+  }
   EXPECT_EQ(acc.find("nan"), std::string::npos) << acc;
   EXPECT_EQ(acc.find("inf"), std::string::npos) << acc;
 

@@ -119,20 +119,25 @@ void WritePng(const Image& image, const std::string& path, PngEncoding encoding)
   WriteFileAtomically(path, bytes);
 }
 
-Image ReadPng(const std::string& path, PngEncoding encoding) {
+Rgb8Image ReadPng8(const std::string& path) {
   PngRead r;
   r.file = std::fopen(path.c_str(), "rb");
   if (!r.file) throw InputError(path + ": cannot open the PNG");
   if (!ReadPngInfo(&r)) throw InputError(path + ": not a readable 8-bit PNG");
-  Image out(r.width, r.height);
-  std::vector<std::uint8_t> buf(std::size_t(r.width) * r.height * 3);
+  Rgb8Image out{r.width, r.height, std::vector<std::uint8_t>(std::size_t(r.width) * r.height * 3)};
   std::vector<png_bytep> rows(r.height);
-  for (std::size_t y = 0; y < rows.size(); ++y) rows[y] = &buf[y * std::size_t(r.width) * 3];
+  for (std::size_t y = 0; y < rows.size(); ++y) rows[y] = &out.rgb[y * std::size_t(r.width) * 3];
   if (!ReadPngRows(&r, rows.data())) throw InputError(path + ": PNG decode failed");
+  return out;
+}
+
+Image ReadPng(const std::string& path, PngEncoding encoding) {
+  const Rgb8Image png = ReadPng8(path);
+  Image out(png.width, png.height);
   const auto decode = encoding == PngEncoding::kSrgb ? FromSrgb8 : FromLinear8;
-  for (std::uint32_t y = 0; y < r.height; ++y) {
-    for (std::uint32_t x = 0; x < r.width; ++x) {
-      const std::uint8_t* p = rows[y] + std::size_t(x) * 3;
+  for (std::uint32_t y = 0; y < png.height; ++y) {
+    for (std::uint32_t x = 0; x < png.width; ++x) {
+      const std::uint8_t* p = &png.rgb[(std::size_t(y) * png.width + x) * 3];
       out.at(x, y) = {decode(p[0]), decode(p[1]), decode(p[2])};
     }
   }

@@ -49,4 +49,12 @@ void WritePng(const Image& image, const std::string& path,
 // tests and accuracy benchmarks. InputError naming the path if it is not such a PNG.
 Image ReadPng(const std::string& path, PngEncoding encoding);
 
+// A PNG's 8-bit values as stored, converted to RGB as ReadPng converts them: row by row from
+// the top, 3 bytes a pixel. What image comparisons measure on (the study's image RMSE).
+struct Rgb8Image {
+  std::uint32_t width = 0, height = 0;
+  std::vector<std::uint8_t> rgb;
+};
+Rgb8Image ReadPng8(const std::string& path);
+
 }  // namespace raycell

@@ -1,0 +1,266 @@
+#include "study/report.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <sstream>
+
+#include "base/check.h"
+#include "base/file.h"
+#include "base/format.h"
+
+namespace raycell {
+namespace {
+
+namespace fs = std::filesystem;
+
+double Mean(const std::vector<FrameAnalysis>& t, double (*f)(const FrameAnalysis&)) {
+  double sum = 0;
+  for (const FrameAnalysis& x : t) sum += f(x);
+  return t.empty() ? 0 : sum / double(t.size());
+}
+
+std::string Percent(double part, double whole) {
+  return FormatFixed(whole != 0 ? 100.0 * part / whole : 0.0, 1) + "%";
+}
+
+// The first sentence of report.md: what was recorded, or that captures were given.
+std::string Scene(const StudyResult& r) {
+  const StudyOptions& a = r.options;
+  if (!a.traces.empty()) return "Given captures, every frame of each. ";
+  std::ostringstream s;
+  const std::vector<int>& frames = r.frame_numbers;
+  if (a.sequence()) {
+    s << "Scene `" << a.scene << "` (one volume per frame), frames " << frames.front() << ".."
+      << frames.back();
+  } else {
+    s << "Scene `" << a.scene << "`, " << frames.size() << " frames";
+  }
+  if (a.orbit_degrees() == 0) {
+    s << " with a still camera";
+  } else {
+    s << " orbiting " << a.orbit_degrees() << " degrees";
+  }
+  s << ", " << a.res << ". ";
+  return s.str();
+}
+
+std::string Python() {
+  return access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
+}
+
+// 'text' for the shell.
+std::string Quote(const std::string& text) {
+  std::string q = "'";
+  for (char c : text) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+// Runs a plot script; InputError naming the command if it fails.
+void RunPlot(const std::string& cmd) {
+  if (std::system(cmd.c_str()) != 0) {
+    throw InputError("plots failed: `" + cmd +
+                     "` (it needs python3 with matplotlib: Debian "
+                     "package python3-matplotlib, installed by tools/setup.sh)");
+  }
+}
+
+void Plot(const std::string& out, const std::vector<std::string>& cells) {
+  std::string cmd =
+      Python() + " " + Quote(RAYCELL_SOURCE_DIR "/tools/plot_study.py") + " " + Quote(out);
+  for (const auto& c : cells) cmd += " " + Quote(c);
+  RunPlot(cmd);
+  for (const auto& c : cells) {
+    for (const char* p : {"fetches_", "cell_trees_", "bracket_"}) {
+      if (!fs::exists(fs::path(out) / (p + c + ".png"))) throw InputError("plot missing: " + c);
+    }
+  }
+}
+
+// Writes `text` to dir/name via a temporary file.
+void WriteFile(const std::string& dir, const std::string& name, const std::string& text) {
+  WriteFileAtomically((fs::path(dir) / name).string(), text);
+}
+
+}  // namespace
+
+std::string TreesCsv(const GridStudy& g) {
+  std::ostringstream s;
+  s << "frame,rays,nodes,rays_per_node,bound,peel_length,splits,optimum,lower_bound,"
+       "best_length,gap\n";
+  for (const FrameAnalysis& t : g.trees) {
+    s << t.frame << ',' << t.rays << ',' << t.nodes << ',' << FormatFixed(t.rays_per_node(), 2)
+      << ',' << t.bound << ',' << t.peel_length() << ',' << t.splits << ','
+      << (t.optimum ? std::to_string(*t.optimum) : "") << ',' << *t.lower_bound << ','
+      << *t.best_length << ',' << FormatFixed(*t.gap(), 4) << '\n';
+  }
+  return s.str();
+}
+
+std::string FetchesCsv(const GridStudy& g) {
+  std::ostringstream s;
+  s << "frame";
+  for (const SchedulerReplay& r : g.replays) s << ',' << r.scheduler->name;
+  s << ",bound,lower_bound,best_length\n";
+  for (std::size_t i = 0; i < g.trees.size(); ++i) {
+    s << g.trees[i].frame;
+    for (const SchedulerReplay& r : g.replays) s << ',' << r.replay.frames[i].fetches;
+    s << ',' << g.trees[i].bound << ',' << *g.trees[i].lower_bound << ',' << *g.trees[i].best_length
+      << '\n';
+  }
+  return s.str();
+}
+
+std::string GridReport(const GridStudy& g) {
+  std::ostringstream s;
+  const auto& tr = g.trees;
+  const std::uint64_t mw = g.replay("maxwork").total.fetches;
+  std::uint64_t bound = 0, peel = 0, lower = 0, best = 0, proved = 0;
+  for (const FrameAnalysis& t : tr) {
+    bound += t.bound, peel += t.peel_length(), lower += *t.lower_bound, best += *t.best_length;
+    proved += t.optimum ? 1 : 0;
+  }
+  s << "## " << g.heading << "\n\n"
+    << "![fetches per frame](fetches_" << g.cells << ".png)\n\n"
+    << "| | value |\n|---|---:|\n"
+    << "| frames | " << tr.size() << " |\n"
+    << "| rays per frame (mean) | "
+    << FormatFixed(Mean(tr, [](const FrameAnalysis& x) { return double(x.rays); }), 0) << " |\n"
+    << "| Cell Tree nodes per frame (mean) | "
+    << FormatFixed(Mean(tr, [](const FrameAnalysis& x) { return double(x.nodes); }), 1) << " |\n"
+    << "| rays per node (mean; the paper: about 100) | "
+    << FormatFixed(Mean(tr, [](const FrameAnalysis& x) { return x.rays_per_node(); }), 1) << " |\n";
+  for (const SchedulerReplay& r : g.replays) {
+    s << "| fetches, " << r.scheduler->label << " | " << r.replay.total.fetches << " |\n";
+  }
+  s << "| maxGen bound (summed) | " << bound << " |\n";
+  for (const SchedulerReplay& r : g.replays) {
+    const SchedulerEntry& k = *r.scheduler;
+    if (k.oracle || std::string(k.name) == "maxwork") continue;
+    const double f = double(r.replay.total.fetches);
+    s << "| " << k.label << " against Max Work"
+      << (std::string(k.name) == "celltree" ? " (the paper: 30% fewer)" : "") << " | "
+      << Percent(f - double(mw), double(mw)) << " |\n";
+  }
+  // Nothing to close when Peel already meets the lower bound.
+  const std::string closed =
+      peel == lower ? "-" : Percent(double(peel) - double(best), double(peel) - double(lower));
+  s << "\nThe optimum of each frame's Cell Tree (fewest fetches with a one-cell cache) lies "
+       "between the best lower bound and the best schedule found:\n\n"
+    << "![bracket of the optimum](bracket_" << g.cells << ".png)\n\n"
+    << "| | value |\n|---|---:|\n"
+    << "| maxGen bound (summed) | " << bound << " |\n"
+    << "| best lower bound (summed) | " << lower << " |\n"
+    << "| best schedule found (summed) | " << best << " |\n"
+    << "| Peel schedule (summed) | " << peel << " |\n"
+    << "| best schedule against Peel | " << Percent(double(best) - double(peel), double(peel))
+    << " |\n"
+    << "| share of Peel's distance to the lower bound closed by the best schedule | " << closed
+    << " |\n"
+    << "| gap (best - lower) / lower, mean over frames | "
+    << Percent(Mean(tr, [](const FrameAnalysis& x) { return *x.gap(); }), 1) << " |\n"
+    << "| frames whose optimum was proved | " << proved << " of " << tr.size() << " |\n";
+  s << "\n![Cell Tree size](cell_trees_" << g.cells << ".png)\n\n"
+    << "Per frame: `cell_trees_" << g.cells
+    << ".csv` (rays, nodes, bound, Peel, optimum, lower bound, best schedule, gap), `fetches_"
+    << g.cells << ".csv` (fetches per scheduler, the bound and the bracket)"
+    << (g.images.empty() ? "" : "; images in `" + g.images + "`") << "; the capture `" << g.capture
+    << "`.\n\n";
+  return s.str();
+}
+
+std::string AccuracyCsv(const std::vector<AccuracyRow>& rows) {
+  std::string s = "knob,value,seconds,time_ratio,error,error_kind,fetch_change,default\r\n";
+  for (const AccuracyRow& r : rows) {
+    s += CsvField(r.knob) + ',' + CsvField(r.value) + ',' + FormatPythonFloat(r.seconds) + ',' +
+         FormatPythonFloat(r.time_ratio) + ',' + FormatPythonFloat(r.error) + ',' +
+         CsvField(r.error_kind) + ',' + FormatPythonFloat(r.fetch_change) + ',' +
+         (r.is_default ? "True" : "False") + "\r\n";
+  }
+  return s;
+}
+
+std::string AccuracyTable(const std::vector<AccuracyRow>& rows) {
+  std::string s =
+      "| knob | value | time (ratio to most accurate) | error | fetch change | default |\n"
+      "|---|---:|---:|---:|---:|---|\n";
+  for (const AccuracyRow& r : rows) {
+    char change[64];
+    std::snprintf(change, sizeof change, "%+.1f%%", 100 * r.fetch_change);
+    s += "| " + r.knob + " | " + r.value + " | " + FormatFixed(r.seconds, 2) + " s (" +
+         FormatFixed(r.time_ratio, 2) + ") | " + FormatFixed(r.error, 4) + " (" + r.error_kind +
+         ") | " + change + " | " + (r.is_default ? "yes" : "") + " |\n";
+  }
+  return s;
+}
+
+std::string AccuracyReport(const AccuracyStudy& a) {
+  if (!a.measured && a.not_measured.empty()) return "";
+  if (!a.measured) return "## Run time against error\n\nNot measured: " + a.not_measured + ".\n";
+  std::ostringstream s;
+  s << "## Run time against error\n\n"
+    << "The knobs that trade accuracy for speed, on " << a.options.frames << " frame(s) of the "
+    << "same scene at " << a.options.res << " in 3x3x3 cells (`study/accuracy.h`; "
+    << "times are ratios to the most accurate setting measured in the same run). Renderer "
+    << "rows: image RMSE against a capture with a four times finer step, and the change in "
+    << "Cell Tree scheduling's fetches. Replay rows: error in simulated time and fetches "
+    << "against per-ray-segment replay without sampling.\n\n"
+    << AccuracyTable(a.rows) << "\n![run time against error](accuracy/accuracy.png)\n\n"
+    << "CSV: `accuracy/accuracy.csv`.\n";
+  return s.str();
+}
+
+std::string StudyReport(const StudyResult& r) {
+  const StudyOptions& a = r.options;
+  std::ostringstream s;
+  s << "# raycell study\n\n" << Scene(r);
+  s << "Replays use the default GI-Cube configuration (one block "
+    << "processor with a one-cell cache; `raycell replay --print-config`), per Cell Tree "
+    << "node (exact for this configuration). Online schedulers: Max Work, Cell Tree "
+    << "scheduling (frame i+1 follows the Peel schedule of frame i's tree; frame 0 runs Max "
+    << "Work), and the same with the best schedule found for frame i's tree, or for frames "
+    << "i-1 and i together, instead of Peel's. Oracles: each frame's own Peel schedule, and "
+    << "its own best schedule. Each frame's optimum is bracketed as `raycell analyze "
+    << "--bracket --effort " << a.effort << "` does (lower bound: projections of the paths "
+    << "on groups of cells combined by an integer program; upper: beam and local search, "
+    << "exact search on small trees)"
+    << (a.effort == "quick"
+            ? ", with the study's small budget: `raycell study --effort default` (about ten "
+              "times the work) or `raycell analyze CAPTURE --bracket` narrow it further"
+            : "")
+    << ". Every budget counts states, not seconds: the numbers are the same on any "
+    << "machine. An oracle's replay can fetch fewer cells than its schedule is long (an "
+    << "entry whose cell has no ready ray is skipped), and the best-schedule oracle replays "
+    << "the plan the online schedulers make (`raycell replay --scheduler best`), whose budget "
+    << "is smaller than the bracket's.\n\n";
+  for (const GridStudy& g : r.grids) s << GridReport(g);
+  s << AccuracyReport(r.accuracy);
+  return s.str();
+}
+
+void PlotAccuracy(const std::string& dir) {
+  RunPlot(Python() + " " + Quote(RAYCELL_SOURCE_DIR "/tools/plot_accuracy.py") + " " + Quote(dir));
+  if (!fs::exists(fs::path(dir) / "accuracy.png")) throw InputError("plot missing: accuracy");
+}
+
+std::string WriteStudyReport(const StudyResult& r) {
+  const std::string& out = r.options.out;
+  std::vector<std::string> labels;
+  for (const GridStudy& g : r.grids) {
+    labels.push_back(g.cells);
+    WriteFile(out, "cell_trees_" + g.cells + ".csv", TreesCsv(g));
+    WriteFile(out, "fetches_" + g.cells + ".csv", FetchesCsv(g));
+  }
+  Plot(out, labels);
+  if (r.accuracy.measured) {
+    WriteFile(r.accuracy.options.out, "accuracy.csv", AccuracyCsv(r.accuracy.rows));
+    PlotAccuracy(r.accuracy.options.out);
+  }
+  const std::string report = (fs::path(out) / "report.md").string();
+  WriteFileAtomically(report, StudyReport(r));
+  return report;
+}
+
+}  // namespace raycell

@@ -1,0 +1,40 @@
+// What a study writes into its folder, from its StudyResult: report.md (the tables of every
+// grid and the run time against error table), the CSV behind each table (cell_trees_*.csv,
+// fetches_*.csv, accuracy/accuracy.csv) and the plots drawn from those CSVs by
+// tools/plot_study.py and tools/plot_accuracy.py (python3 with matplotlib). The texts are
+// functions of the result alone, so tests can check them without running a study.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "study/accuracy.h"
+#include "study/study.h"
+
+namespace raycell {
+
+// Per frame: rays, nodes, bound, Peel, optimum, the bracket of the optimum and its gap.
+std::string TreesCsv(const GridStudy& g);
+// Per frame: the fetches of every studied scheduler, the bound and the bracket.
+std::string FetchesCsv(const GridStudy& g);
+// One grid's section of report.md: its summary table and the bracket of the optimum.
+std::string GridReport(const GridStudy& g);
+// accuracy.csv, one line per row, as Python's csv.DictWriter writes such rows (CRLF line
+// ends, a field quoted when it holds a comma, floats as Python's repr, True/False).
+std::string AccuracyCsv(const std::vector<AccuracyRow>& rows);
+// The Markdown table of the rows (seconds and ratio to two decimals, error to four, fetch
+// change in percent with its sign, "yes" for the default settings).
+std::string AccuracyTable(const std::vector<AccuracyRow>& rows);
+// report.md's run time against error section: the table, or why it was not measured; empty
+// when it was not asked for.
+std::string AccuracyReport(const AccuracyStudy& a);
+// report.md.
+std::string StudyReport(const StudyResult& r);
+
+// Draws DIR/accuracy.png from DIR/accuracy.csv. InputError if it cannot (no matplotlib).
+void PlotAccuracy(const std::string& dir);
+// Writes report.md, the CSVs and the plots into the study's folder; returns report.md's path.
+// InputError if the plots cannot be drawn.
+std::string WriteStudyReport(const StudyResult& r);
+
+}  // namespace raycell

@@ -1,0 +1,270 @@
+#include "study/study.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "base/check.h"
+#include "base/format.h"
+#include "base/parse.h"
+#include "base/progress.h"
+#include "replay/config.h"
+#include "traces/record/cell_grid.h"
+#include "traces/record/recorder.h"
+#include "traces/record/scene.h"
+#include "traces/trace_reader.h"
+
+namespace raycell {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kMinFrames = 2, kMaxFrames = 10000;
+
+// "N": frames 0..N-1 (an orbit of one volume); "A..B" (or "A-B"): frames A to B, as record
+// reads them, which a sequence pattern needs (its files are numbered). Cell Tree scheduling
+// follows frame i's tree in frame i+1, so a study needs at least two frames.
+std::vector<int> StudyFrames(const StudyOptions& a) {
+  const bool count =
+      !a.frames.empty() && a.frames.find_first_not_of("0123456789") == std::string::npos;
+  if (count && a.sequence()) {
+    throw InputError("--frames '" + a.frames + "': --scene '" + a.scene +
+                     "' is a sequence pattern: give the frame numbers of its files, A..B");
+  }
+  if (count) {
+    const auto n = ParseInt(a.frames, "--frames (a count of frames)", kMinFrames, kMaxFrames);
+    return ParseFrameRange("0.." + std::to_string(n - 1));
+  }
+  const std::vector<int> frames = ParseFrameRange(a.frames);
+  if (frames.size() < std::size_t{kMinFrames} || frames.size() > std::size_t{kMaxFrames}) {
+    throw InputError("--frames '" + a.frames + "': a study needs " + std::to_string(kMinFrames) +
+                     " to " + std::to_string(kMaxFrames) + " frames");
+  }
+  return frames;
+}
+
+std::vector<std::string> SplitList(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) {
+    ParseCellDims(item);  // validates, InputError naming the text
+    out.push_back(item);
+  }
+  if (out.empty()) throw InputError("--cells '" + text + "': expected e.g. 2x2x2,3x3x3");
+  return out;
+}
+
+TraceReader RecordGrid(const StudyOptions& a, const std::vector<int>& frames,
+                       const std::string& cells) {
+  RecordOptions o;
+  o.scene.source = a.scene;
+  o.frames = frames;
+  o.camera.orbit_degrees = a.orbit_degrees();
+  o.cells = ParseCellDims(cells);
+  const auto wh = ParseResolution(a.res);
+  o.settings.width = wh[0], o.settings.height = wh[1];
+  o.out = (fs::path(a.out) / ("capture_" + cells + ".rct")).string();
+  o.images_dir = (fs::path(a.out) / ("images_" + cells)).string();
+  o.threads = a.threads;
+  o.progress = !a.quiet;
+  std::ostringstream log;
+  const RecordSummary s = Record(o, log);
+  std::cerr << "recorded " << s.frames << " frames in " << cells << " cells (" << s.rays
+            << " rays) in " << FormatFixed(s.seconds, 1) << " s\n";
+  return TraceReader::Open(o.out);
+}
+
+std::string Dims(const TraceHeader& h) {
+  return std::to_string(h.cells[0]) + "x" + std::to_string(h.cells[1]) + "x" +
+         std::to_string(h.cells[2]);
+}
+
+// Brackets the optimum of every tree (AnalyzeTree with --bracket), frames in parallel on the
+// machine's threads; each frame's result depends only on its tree, so on no thread count.
+std::vector<FrameAnalysis> AnalyzeTrees(const std::vector<CellTree>& trees,
+                                        const AnalyzeOptions& options, const std::string& label,
+                                        bool quiet) {
+  std::vector<FrameAnalysis> out(trees.size());
+  std::atomic<std::size_t> next{0}, done{0};
+  std::mutex mutex;
+  Progress progress(!quiet);
+  const auto work = [&] {
+    for (std::size_t i; (i = next++) < trees.size();) {
+      out[i] = AnalyzeTree(trees[i], options);
+      std::lock_guard<std::mutex> lock(mutex);
+      progress.Update(double(++done) / double(trees.size()),
+                      label + ": bracketing the optimum, " + std::to_string(done) + "/" +
+                          std::to_string(trees.size()) + " frames");
+    }
+  };
+  std::vector<std::thread> threads;
+  const unsigned n = std::max(1u, std::min(std::thread::hardware_concurrency(), 8u));
+  for (unsigned t = 1; t < n; ++t) threads.emplace_back(work);
+  work();
+  for (std::thread& t : threads) t.join();
+  progress.Done();
+  return out;
+}
+
+// Replays the capture under each scheduler in one pass over the frames (ReplayFrames: each
+// frame decoded and its tree built once), keeping the trees; then brackets every tree's
+// optimum with the study's budget.
+GridStudy StudyTrace(const TraceReader& reader, GridStudy g, const StudyOptions& a) {
+  std::vector<std::size_t> all;
+  const std::size_t n = reader.frames().size();
+  for (std::size_t i = 0; i < n; ++i) all.push_back(i);
+  std::vector<ReplayConfig> configs;
+  for (const SchedulerEntry* s : StudySchedulers()) {
+    ReplayConfig config = DefaultConfig();
+    config.scheduler = s;
+    config.granularity = ReplayConfig::Granularity::kNode;  // exact with a one-cell cache
+    configs.push_back(config);
+  }
+  std::vector<CellTree> trees;
+  std::vector<std::int32_t> numbers;
+  {
+    Progress progress(!a.quiet);
+    std::vector<TraceReplay> replays(configs.size());
+    ReplayFrames(reader, all, configs, {},
+                 [&](const LoadedFrame& frame, const std::vector<ReplayResult>& results) {
+                   progress.Update(double(frame.position + 1) / n,
+                                   g.cells + ": replayed frame " +
+                                       std::to_string(frame.position + 1) + "/" +
+                                       std::to_string(n));
+                   trees.push_back(*frame.tree);
+                   numbers.push_back(frame.number);
+                   for (std::size_t k = 0; k < results.size(); ++k) {
+                     Accumulate(results[k], &replays[k].total);
+                     replays[k].frames.push_back(results[k]);
+                   }
+                   return true;
+                 });
+    for (std::size_t k = 0; k < configs.size(); ++k) {
+      FinishTotal(configs[k].processors.count, &replays[k].total);
+      g.replays.push_back({configs[k].scheduler, std::move(replays[k])});
+    }
+  }
+  AnalyzeOptions options;
+  options.bracket = true;
+  options.bracket_options = BracketEffort(a.effort);
+  options.bracket_options.lower.grid = reader.header().cells;
+  options.bracket_options.best.threads = 1;  // the frames run in parallel instead
+  options.bracket_options.overlap = false;
+  g.trees = AnalyzeTrees(trees, options, g.cells, a.quiet);
+  for (std::size_t i = 0; i < n; ++i) g.trees[i].frame = numbers[i];
+  return g;
+}
+
+GridStudy StudyGrid(const StudyOptions& a, const std::vector<int>& frames,
+                    const std::string& cells) {
+  const TraceReader reader = RecordGrid(a, frames, cells);
+  GridStudy g;
+  g.cells = cells;
+  g.heading = cells + " cells";
+  g.capture = "capture_" + cells + ".rct";
+  g.images = "images_" + cells + "/";
+  return StudyTrace(reader, std::move(g), a);
+}
+
+std::string Stem(const std::string& path) { return fs::path(path).stem().string(); }
+
+// The given traces, opened and checked before any work: readable, with frames, and with
+// file stems (their labels) that differ, as their CSVs and plots would collide.
+std::vector<TraceReader> OpenGivenTraces(const StudyOptions& a) {
+  std::vector<TraceReader> readers;
+  for (std::size_t i = 0; i < a.traces.size(); ++i) {
+    const std::string& path = a.traces[i];
+    for (std::size_t j = 0; j < i; ++j) {
+      if (Stem(a.traces[j]) == Stem(path)) {
+        throw InputError("--trace '" + path + "': another trace is also named '" + Stem(path) +
+                         "' (their CSVs and plots would collide)");
+      }
+    }
+    readers.push_back(TraceReader::Open(path));
+    if (readers.back().frames().empty()) throw InputError("--trace '" + path + "': no frames");
+  }
+  return readers;
+}
+
+// The given traces, each labelled by its file stem.
+std::vector<GridStudy> StudyGivenTraces(const StudyOptions& a,
+                                        const std::vector<TraceReader>& readers) {
+  std::vector<GridStudy> grids;
+  for (std::size_t i = 0; i < readers.size(); ++i) {
+    const std::string& path = a.traces[i];
+    const TraceReader& reader = readers[i];
+    std::cerr << "reusing " << path << ": " << reader.frames().size() << " frames in "
+              << Dims(reader.header()) << " cells\n";
+    GridStudy g;
+    g.cells = Stem(path);
+    g.heading = "`" + path + "` (" + Dims(reader.header()) + " cells)";
+    g.capture = path;
+    grids.push_back(StudyTrace(reader, std::move(g), a));
+  }
+  return grids;
+}
+
+}  // namespace
+
+bool StudyOptions::sequence() const { return IsSequencePattern(scene); }
+
+std::vector<const SchedulerEntry*> StudySchedulers() {
+  std::vector<const SchedulerEntry*> out;
+  for (const bool oracle : {false, true}) {
+    for (const SchedulerEntry& e : SchedulerRegistry()) {
+      if (e.studied && e.oracle == oracle) out.push_back(&e);
+    }
+  }
+  return out;
+}
+
+const TraceReplay& GridStudy::replay(std::string_view name) const {
+  for (const SchedulerReplay& r : replays) {
+    if (r.scheduler->name == name) return r.replay;
+  }
+  RAYCELL_CHECK(false && "scheduler not studied");
+  return replays.front().replay;
+}
+
+StudyResult RunStudy(const StudyOptions& a) {
+  StudyResult result;
+  result.options = a;
+  if (a.traces.empty()) result.frame_numbers = StudyFrames(a);
+  if (a.accuracy_frames < 0 || a.accuracy_frames > 1000) {
+    throw InputError("--accuracy-frames: must be in 0..1000");
+  }
+  ParseResolution(a.accuracy_res);  // InputError naming it, before any work
+  BracketEffort(a.effort);          // likewise
+  if (!std::isfinite(a.orbit_degrees())) {
+    throw InputError("--orbit: must be a finite number of degrees");
+  }
+  AccuracyOptions accuracy;
+  accuracy.res = a.accuracy_res;
+  accuracy.frames = a.accuracy_frames;
+  accuracy.out = (fs::path(a.out) / "accuracy").string();
+  accuracy.quiet = a.quiet;
+  if (a.traces.empty()) {
+    // A sequence's knobs are measured on the volume of its first frame.
+    accuracy.scene = a.sequence() ? FrameFile(a.scene, result.frame_numbers.front()) : a.scene;
+    const std::vector<std::string> cells = SplitList(a.cells);
+    fs::create_directories(a.out);
+    for (const std::string& c : cells) {
+      result.grids.push_back(StudyGrid(a, result.frame_numbers, c));
+    }
+  } else {
+    const std::vector<TraceReader> readers = OpenGivenTraces(a);
+    fs::create_directories(a.out);
+    result.grids = StudyGivenTraces(a, readers);
+    accuracy.scene = readers.front().header().scene;
+  }
+  result.accuracy.options = accuracy;
+  if (a.accuracy_frames > 0) result.accuracy = MeasureAccuracy(accuracy);
+  return result;
+}
+
+}  // namespace raycell

@@ -1,0 +1,73 @@
+// `raycell study` as a library: for each cell grid (or given capture) it records the scene,
+// replays the capture under every studied scheduler, brackets each frame's optimum, and
+// measures run time against error for the knobs that trade one for the other. RunStudy
+// returns what it found as data; study/report.h turns that into report.md, CSVs and plots,
+// and the command (tools/study_command.cpp) only parses options into StudyOptions.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "analysis/analysis.h"
+#include "replay/driver.h"
+#include "scheduling/scheduler.h"
+#include "study/accuracy.h"
+
+namespace raycell {
+
+struct StudyOptions {
+  std::string scene = "builtin", cells = "2x2x2,3x3x3", res = "256x256", out = "study";
+  std::string accuracy_res = "128x128";
+  std::string frames = "24";        // a count N (frames 0..N-1) or frame numbers A..B
+  int accuracy_frames = 2;          // 0: no run time against error section
+  std::vector<std::string> traces;  // reused captures instead of recording
+  std::string effort = "quick";     // the bracket's budget (BracketEffort)
+  // Degrees the camera turns over the frames. Default: 90 for one volume (3.75 degrees per
+  // frame over 24: consecutive frames alike, as in an animation), 0 for a sequence, whose
+  // volumes are the animation.
+  double orbit = 90;
+  bool orbit_given = false;
+  int threads = 0;        // rendering threads of the grids' captures, 0 = all cores
+  bool quiet = false;     // no progress bars (the one-line summaries are still printed)
+  bool sequence() const;  // the scene is a printf pattern of one volume per frame
+  double orbit_degrees() const { return orbit_given || !sequence() ? orbit : 0; }
+};
+
+// The schedulers the study replays, in the report's order: the registry's studied ones,
+// online first (they plan frame i+1 from what frame i showed, as hardware could), then the
+// oracles (they know the frame itself).
+std::vector<const SchedulerEntry*> StudySchedulers();
+
+struct SchedulerReplay {
+  const SchedulerEntry* scheduler = nullptr;
+  TraceReplay replay;  // per Cell Tree node, the default configuration otherwise
+};
+
+// The results for one cell grid (recorded) or one given trace.
+struct GridStudy {
+  std::string cells;    // the label in file names: "3x3x3", or the given trace's file stem
+  std::string heading;  // the report's section title: "3x3x3 cells", or the trace and its grid
+  std::string capture;  // the trace: relative to the study folder when recorded, else as given
+  std::string images;   // the frames' images, relative to the study folder; empty for a trace
+  std::vector<FrameAnalysis> trees;      // per frame, with the bracket of the optimum
+  std::vector<SchedulerReplay> replays;  // one per StudySchedulers() entry, in its order
+
+  // The replay under the scheduler named `name`; CHECK-fails if it was not studied.
+  const TraceReplay& replay(std::string_view name) const;
+};
+
+struct StudyResult {
+  StudyOptions options;
+  std::vector<int> frame_numbers;  // what options.frames says; empty for given traces
+  std::vector<GridStudy> grids;    // in the order of --cells, or of the given traces
+  AccuracyStudy accuracy;
+};
+
+// Runs the study: checks the options (InputError naming the option, before any work),
+// records and studies each grid (or each given trace) into options.out, then measures run
+// time against error into options.out/accuracy/. One summary line per capture on stderr,
+// progress bars unless quiet.
+StudyResult RunStudy(const StudyOptions& options);
+
+}  // namespace raycell

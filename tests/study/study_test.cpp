@@ -1,0 +1,262 @@
+// The study as a library: RunStudy on a tiny setting, with assertions on the data it returns
+// (every knob measured, the exact settings exact, every scheduler replaying the whole
+// capture, the bracket ordered); the report's texts on hand-made results; the image error
+// against values numpy computed.
+#include "study/study.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "study/accuracy.h"
+#include "study/image_error.h"
+#include "study/report.h"
+#include "tests/test_util.h"
+#include "traces/trace_reader.h"
+
+namespace raycell {
+namespace {
+
+// The folder of this process's study, removed when the tests end.
+std::filesystem::path StudyDir() {
+  static const std::filesystem::path dir = testing::TempDir("study");
+  return dir;
+}
+
+class RemoveStudyDir : public ::testing::Environment {
+ public:
+  void TearDown() override { std::filesystem::remove_all(StudyDir()); }
+};
+const auto* const kRemoveStudyDir = ::testing::AddGlobalTestEnvironment(new RemoveStudyDir);
+
+// One study for the tests below: the built-in scene, 3 frames at 24x24 in 2x2x2 and 1x2x1
+// cells, run time against error on 1 frame at 16x16.
+const StudyResult& TinyStudy() {
+  static const StudyResult result = [] {
+    StudyOptions o;
+    o.res = "24x24";
+    o.frames = "3";
+    o.cells = "2x2x2,1x2x1";
+    o.accuracy_frames = 1;
+    o.accuracy_res = "16x16";
+    o.quiet = true;
+    o.out = (StudyDir() / "study").string();
+    return RunStudy(o);
+  }();
+  return result;
+}
+
+const AccuracyRow& RowOf(const std::vector<AccuracyRow>& rows, const std::string& knob,
+                         const std::string& value) {
+  for (const AccuracyRow& r : rows) {
+    if (r.knob == knob && r.value == value) return r;
+  }
+  ADD_FAILURE() << "no row " << knob << " " << value;
+  return rows.front();
+}
+
+TEST(Study, MeasuresEveryKnobTheLibraryDeclares) {
+  const AccuracyStudy& a = TinyStudy().accuracy;
+  ASSERT_TRUE(a.measured) << a.not_measured;
+  const std::vector<AccuracyKnob>& knobs = AccuracyKnobs();
+  ASSERT_EQ(a.rows.size(), knobs.size());
+  for (std::size_t i = 0; i < knobs.size(); ++i) {
+    const AccuracyRow& r = a.rows[i];
+    EXPECT_EQ(r.knob, knobs[i].knob) << i;
+    EXPECT_EQ(r.value, knobs[i].value) << i;
+    EXPECT_EQ(r.is_default, knobs[i].is_default) << r.knob << " " << r.value;
+    EXPECT_TRUE(std::isfinite(r.error) && r.error >= 0)
+        << r.knob << " " << r.value << " " << r.error;
+    EXPECT_TRUE(std::isfinite(r.fetch_change)) << r.knob << " " << r.value;
+    EXPECT_TRUE(r.seconds > 0 && std::isfinite(r.time_ratio) && r.time_ratio > 0)
+        << r.knob << " " << r.value << " " << r.seconds << " " << r.time_ratio;
+  }
+  // One default per knob that has one: step 1, node granularity, no sampling.
+  EXPECT_EQ(RowOf(a.rows, "renderer step", "1").is_default, true);
+  const AccuracyRow& reference = a.rows.front();
+  EXPECT_EQ(reference.error_kind, "reference");
+  EXPECT_EQ(reference.error, 0.0);
+  EXPECT_EQ(reference.time_ratio, 1.0);
+  EXPECT_EQ(reference.fetch_change, 0.0);
+  // A renderer setting other than the reference renders other images.
+  EXPECT_GT(RowOf(a.rows, "renderer step", "4").error, 0.0);
+  // With one processor, replay per Cell Tree node is exact, and sampling 1 in 1 is no sampling.
+  const AccuracyRow& node = RowOf(a.rows, "replay granularity", "node");
+  EXPECT_EQ(node.error, 0.0);
+  EXPECT_EQ(node.fetch_change, 0.0);
+  const AccuracyRow& all = RowOf(a.rows, "replay sampling 1 in k (per ray)", "1");
+  EXPECT_EQ(all.error, 0.0);
+  EXPECT_EQ(all.fetch_change, 0.0);
+  EXPECT_EQ(RowOf(a.rows, "replay granularity", "ray").time_ratio, 1.0);
+  // The captures measured are where the study says.
+  for (const AccuracyKnob& k : knobs) {
+    if (k.folder.empty()) continue;
+    EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(a.options.out) / k.folder / "c.rct"))
+        << k.folder;
+  }
+}
+
+TEST(Study, EverySchedulerReplaysTheWholeCaptureOfEachGrid) {
+  const StudyResult& s = TinyStudy();
+  ASSERT_EQ(s.grids.size(), 2u);
+  EXPECT_EQ(s.frame_numbers, (std::vector<int>{0, 1, 2}));
+  const std::vector<const SchedulerEntry*> schedulers = StudySchedulers();
+  for (const GridStudy& g : s.grids) {
+    const TraceReader reader =
+        TraceReader::Open((std::filesystem::path(s.options.out) / g.capture).string());
+    std::uint64_t rays = 0, visits = 0, samples = 0;
+    for (const FrameSummary& f : reader.frames()) {
+      rays += f.rays, visits += f.visits, samples += f.samples;
+    }
+    ASSERT_EQ(g.trees.size(), 3u) << g.cells;
+    ASSERT_EQ(g.replays.size(), schedulers.size()) << g.cells;
+    for (std::size_t k = 0; k < schedulers.size(); ++k) {
+      const SchedulerReplay& r = g.replays[k];
+      EXPECT_EQ(r.scheduler, schedulers[k]) << g.cells;
+      EXPECT_EQ(&g.replay(r.scheduler->name), &r.replay);
+      ASSERT_EQ(r.replay.frames.size(), reader.frames().size())
+          << g.cells << " " << r.scheduler->name;
+      EXPECT_EQ(r.replay.total.rays, rays) << g.cells << " " << r.scheduler->name;
+      EXPECT_EQ(r.replay.total.segments, visits) << g.cells << " " << r.scheduler->name;
+      EXPECT_EQ(r.replay.total.samples, samples) << g.cells << " " << r.scheduler->name;
+      for (std::size_t i = 0; i < g.trees.size(); ++i) {
+        EXPECT_EQ(r.replay.frames[i].frame, g.trees[i].frame) << g.cells;
+        EXPECT_EQ(r.replay.frames[i].rays, reader.frames()[i].rays) << g.cells;
+      }
+    }
+    for (const FrameAnalysis& t : g.trees) {
+      ASSERT_TRUE(t.lower_bound && t.best_length) << g.cells << " frame " << t.frame;
+      EXPECT_LE(t.bound, *t.lower_bound) << g.cells << " frame " << t.frame;
+      EXPECT_LE(*t.lower_bound, *t.best_length) << g.cells << " frame " << t.frame;
+      EXPECT_LE(*t.best_length, t.peel_length()) << g.cells << " frame " << t.frame;
+    }
+  }
+}
+
+TEST(Study, TheReportTellsWhatTheResultHolds) {
+  const StudyResult& s = TinyStudy();
+  const std::string report = StudyReport(s);
+  EXPECT_NE(report.find("Scene `builtin`, 3 frames orbiting 90 degrees, 24x24. "),
+            std::string::npos)
+      << report;
+  for (const GridStudy& g : s.grids) EXPECT_NE(report.find(GridReport(g)), std::string::npos);
+  EXPECT_NE(report.find(AccuracyTable(s.accuracy.rows)), std::string::npos) << report;
+  // The CSV: a header, then each row with the library's knob, value and default.
+  const std::string csv = AccuracyCsv(s.accuracy.rows);
+  std::vector<std::string> lines;
+  for (std::size_t at = 0, end; (end = csv.find("\r\n", at)) != std::string::npos; at = end + 2) {
+    lines.push_back(csv.substr(at, end - at));
+  }
+  ASSERT_EQ(lines.size(), 1 + AccuracyKnobs().size()) << csv;
+  EXPECT_EQ(lines[0], "knob,value,seconds,time_ratio,error,error_kind,fetch_change,default");
+  for (std::size_t i = 0; i < AccuracyKnobs().size(); ++i) {
+    const AccuracyKnob& k = AccuracyKnobs()[i];
+    EXPECT_EQ(lines[i + 1].rfind(k.knob + "," + k.value + ",", 0), 0u) << lines[i + 1];
+    EXPECT_NE(lines[i + 1].find(k.is_default ? ",True" : ",False"), std::string::npos);
+  }
+}
+
+// A grid whose numbers are given: Peel meets the lower bound on every frame, or not.
+GridStudy HandMadeGrid(std::uint64_t peel, std::uint64_t lower, std::uint64_t best) {
+  GridStudy g;
+  g.cells = "1x2x1";
+  g.heading = "1x2x1 cells";
+  g.capture = "capture_1x2x1.rct";
+  FrameAnalysis t;
+  t.rays = 10, t.nodes = 4, t.bound = lower;
+  t.peel_schedule.assign(peel, CellId{0});
+  t.lower_bound = lower, t.best_length = best;
+  g.trees = {t, t};
+  for (const SchedulerEntry* s : StudySchedulers()) {
+    SchedulerReplay r{s, {}};
+    r.replay.total.fetches = 2 * peel;
+    g.replays.push_back(r);
+  }
+  return g;
+}
+
+TEST(Study, NothingToCloseWhenPeelMeetsTheLowerBound) {
+  const std::string row =
+      "| share of Peel's distance to the lower bound closed by the best schedule |";
+  // In the tiny study, Peel is optimal on every frame with two cells, not with eight.
+  for (const GridStudy& g : TinyStudy().grids) {
+    std::uint64_t peel = 0, lower = 0;
+    for (const FrameAnalysis& t : g.trees) peel += t.peel_length(), lower += *t.lower_bound;
+    EXPECT_EQ(peel == lower, g.cells == "1x2x1")
+        << g.cells << ": Peel " << peel << ", lower " << lower;
+    EXPECT_EQ(GridReport(g).find(row + " - |") != std::string::npos, peel == lower)
+        << GridReport(g);
+  }
+  const std::string met = GridReport(HandMadeGrid(3, 3, 3));
+  EXPECT_NE(met.find(row + " - |"), std::string::npos) << met;
+  const std::string open = GridReport(HandMadeGrid(5, 3, 4));
+  EXPECT_NE(open.find(row + " 50.0% |"), std::string::npos) << open;
+}
+
+TEST(Study, AStillCameraIsSaidSo) {
+  StudyResult r;
+  r.options.orbit = 0;
+  r.options.orbit_given = true;
+  r.options.res = "16x16";
+  r.frame_numbers = {0, 1, 2, 3};
+  EXPECT_NE(StudyReport(r).find("Scene `builtin`, 4 frames with a still camera, 16x16. "),
+            std::string::npos)
+      << StudyReport(r);
+  r.options.orbit = 45;
+  EXPECT_NE(StudyReport(r).find("Scene `builtin`, 4 frames orbiting 45 degrees, 16x16. "),
+            std::string::npos)
+      << StudyReport(r);
+}
+
+TEST(Study, AccuracyCsvIsWhatPythonsCsvWrites) {
+  AccuracyRow r{"replay granularity", "node",  0.05001592899998286,
+                0.6370030497380503,   1.5e-05, "simulated time, relative",
+                -0.12202380952380952, true};
+  EXPECT_EQ(AccuracyCsv({r}),
+            "knob,value,seconds,time_ratio,error,error_kind,fetch_change,default\r\n"
+            "replay granularity,node,0.05001592899998286,0.6370030497380503,1.5e-05,"
+            "\"simulated time, relative\",-0.12202380952380952,True\r\n");
+  EXPECT_EQ(AccuracyTable({r}),
+            "| knob | value | time (ratio to most accurate) | error | fetch change | default |\n"
+            "|---|---:|---:|---:|---:|---|\n"
+            "| replay granularity | node | 0.05 s (0.64) | 0.0000 (simulated time, relative) | "
+            "-12.2% | yes |\n");
+}
+
+// Expected values: numpy 1.24 (np.add.reduce, and the RMSE as the study's Python computed it).
+TEST(ImageError, SumsAsNumpyDoes) {
+  const auto values = [](std::size_t n) {
+    std::vector<double> v(n);
+    for (std::size_t i = 0; i < n; ++i) v[i] = 1.0 / double(i + 1) + double(i % 7) * 0.1;
+    return v;
+  };
+  EXPECT_EQ(NumpySum(values(5).data(), 5), 3.2833333333333337);
+  EXPECT_EQ(NumpySum(values(100).data(), 100), 34.687377517639625);  // pairwise, not in turn
+  EXPECT_EQ(NumpySum(values(1000).data(), 1000), 307.18547086055037);
+  EXPECT_EQ(NumpySum(values(8193).data(), 8193), 2466.8883121015087);
+  EXPECT_EQ(NumpySum(values(20000).data(), 20000), 6010.18072821723);  // in blocks of 8192
+  EXPECT_EQ(NumpyMean(values(30000)), 0.30034620616640406);
+}
+
+TEST(ImageError, RmseAsMatplotlibAndNumpyGiveIt) {
+  // 64x48 frames of values from a linear congruential generator (9216 values a frame: more
+  // than a block of numpy's sums).
+  const auto image = [](std::uint64_t x) {
+    Rgb8Image im{64, 48, std::vector<std::uint8_t>(64 * 48 * 3)};
+    for (std::uint8_t& v : im.rgb) {
+      x = (x * 1103515245 + 12345) % (std::uint64_t{1} << 31);
+      v = std::uint8_t((x >> 16) & 255);
+    }
+    return im;
+  };
+  const std::vector<Rgb8Image> a = {image(1), image(2)}, b = {image(3), image(4)};
+  EXPECT_EQ(ImageRmse(a, b), 0.40905463566980016);
+  EXPECT_EQ(ImageRmse(a, a), 0.0);
+  EXPECT_NE(testing::ErrorOf([&] { ImageRmse(a, {b[0]}); }), "");
+}
+
+}  // namespace
+}  // namespace raycell

@@ -1,0 +1,31 @@
+// The options of `raycell record` as its command line holds them, and the one mapping from
+// them to RecordOptions. The record command fills RecordFlags from its flags; the study's run
+// time against error captures fill them as `raycell record` with the same flags would, so a
+// capture made in the study is the one the command makes.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "traces/record/recorder.h"
+
+namespace raycell {
+
+struct RecordFlags {
+  RecordFlags() { opt.images_dir = "images"; }
+  // What the command line sets directly (--scene, --step, --shadow-step, --cutoff, --out,
+  // --images, ...), with record's defaults; images go to "images/" unless told otherwise.
+  RecordOptions opt;
+  // What is parsed below: --frames A..B, --cells, --res, --orbit DEGREES or FRAMES:DEGREES,
+  // --eye, --target, --up, --precision, --image-encoding, --light (repeatable).
+  std::string frames, cells = "2x2x2", res = "256x256", orbit, eye, target, up = "0,1,0",
+                      precision = "double", image_encoding = "srgb";
+  std::vector<std::string> lights;
+  bool no_images = false, quiet = false;
+};
+
+// The options the flags give. InputError naming the flag on bad text (and for a sequence
+// pattern without --frames A..B).
+RecordOptions ToRecordOptions(const RecordFlags& flags);
+
+}  // namespace raycell
