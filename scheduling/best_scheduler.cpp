@@ -20,6 +20,8 @@ BestScheduleOptions PlanEffort(std::uint64_t seed) {
   // 2*10^8 node visits (the work limit binds first): about 0.4 s of planning per 27-cell frame,
   // so that a plan is ready while the frame before it is replayed (BENCHMARKS.md "Online:
   // fetches against Max Work" has the plans' fetches and times).
+  o.vary_windows = false;
+  o.threads = 1;
   o.local.max_windows = 2000;
   o.local.max_work = 200'000'000;
   o.exact_states = 20000;

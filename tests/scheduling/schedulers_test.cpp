@@ -241,6 +241,23 @@ TEST(CellTreeDeathTest, TreeCellsMustBeInTheGrid) {
 CellTree Rotations() { return FromPaths({{0, 1, 2, 3}, {1, 2, 3, 0}, {2, 3, 0, 1}, {3, 0, 1, 2}}); }
 
 // Paths C A D B and A C A: Peel gives A C A D B A (6), the optimum is A C A D B (5).
+// PlanEffort is part of what a planner means (docs/design.md §5 "Planners and PlanEffort"):
+// beam 64, one local-search chain with the large windows (vary_windows off gives every chain
+// them), 2000 windows within 2*10^8 node visits, the exact search to 20,000 states on trees of
+// at most 1000 nodes, one thread, the seed given. A change here changes every planner's plans.
+TEST(BestSchedulersTest, PlanEffortIsTheDocumentedBudget) {
+  const BestScheduleOptions o = PlanEffort(7);
+  EXPECT_EQ(o.seed, 7u);
+  EXPECT_EQ(o.beam_width, 64u);
+  EXPECT_EQ(o.chains, 1u);
+  EXPECT_FALSE(o.vary_windows);
+  EXPECT_EQ(o.threads, 1u);
+  EXPECT_EQ(o.local.max_windows, 2000u);
+  EXPECT_EQ(o.local.max_work, 200'000'000u);
+  EXPECT_EQ(o.exact_states, 20000u);
+  EXPECT_EQ(o.exact_max_nodes, 1000u);
+}
+
 TEST(BestSchedulersTest, TheOracleFollowsItsOwnTreesBestSchedule) {
   const CellTree t = FromPaths({{C, A, CellId(3), B}, {A, C, A}});
   BestOracleScheduler s(3);
