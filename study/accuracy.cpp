@@ -195,6 +195,15 @@ AccuracyRow Row(const AccuracyKnob& k, double seconds, double time_ratio, double
   return {k.knob, k.value, seconds, time_ratio, error, error_kind, fetch_change, k.is_default};
 }
 
+// A replay row: replay `r` against the replay `base` it is measured from (`what`: "per ray
+// segment", "without sampling").
+AccuracyRow ReplayRow(const AccuracyKnob& k, const Replayed& r, const Replayed& base,
+                      const std::string& what) {
+  return Row(k, r.seconds, r.seconds / base.seconds,
+             AbsChange(r.time_ps, base.time_ps, "the simulated time " + what),
+             "simulated time, relative", Change(r.fetches, base.fetches, "the fetches " + what));
+}
+
 }  // namespace
 
 const std::vector<AccuracyKnob>& AccuracyKnobs() {
@@ -245,11 +254,7 @@ AccuracyStudy MeasureAccuracy(const AccuracyOptions& o) {
         const Replayed r = ReplayKnob(trace, k.granularity, k.sample);
         if (k.granularity == "ray") per_segment = r;  // the first row, the baseline
         RAYCELL_CHECK(per_segment.seconds > 0);
-        study.rows.push_back(
-            Row(k, r.seconds, r.seconds / per_segment.seconds,
-                AbsChange(r.time_ps, per_segment.time_ps, "the simulated time per ray segment"),
-                "simulated time, relative",
-                Change(r.fetches, per_segment.fetches, "the fetches per ray segment")));
+        study.rows.push_back(ReplayRow(k, r, per_segment, "per ray segment"));
         break;
       }
       case AccuracyPart::kSampling: {
@@ -257,11 +262,7 @@ AccuracyStudy MeasureAccuracy(const AccuracyOptions& o) {
         // without sampling, measured once before the sampled ones.
         if (unsampled.seconds == 0) unsampled = ReplayKnob(trace, "ray", 1);
         const Replayed r = ReplayKnob(trace, k.granularity, k.sample);
-        study.rows.push_back(
-            Row(k, r.seconds, r.seconds / unsampled.seconds,
-                AbsChange(r.time_ps, unsampled.time_ps, "the simulated time without sampling"),
-                "simulated time, relative",
-                Change(r.fetches, unsampled.fetches, "the fetches without sampling")));
+        study.rows.push_back(ReplayRow(k, r, unsampled, "without sampling"));
         break;
       }
     }
