@@ -82,12 +82,12 @@ class CountProgram {
     ++live_programs;
     glp_ = glp_create_prob();
     glp_set_obj_dir(glp_, GLP_MIN);
-    for (CellId c : CellRange(max_gen.size())) {
-      if (max_gen[c.value()] == 0) continue;
+    for (std::size_t c = 0; c < max_gen.size(); ++c) {
+      if (max_gen[c] == 0) continue;
       const int j = glp_add_cols(glp_, 1);
-      column_[c.value()] = j;
+      column_[c] = j;
       glp_set_col_kind(glp_, j, GLP_IV);
-      glp_set_col_bnds(glp_, j, GLP_LO, max_gen[c.value()], 0);
+      glp_set_col_bnds(glp_, j, GLP_LO, max_gen[c], 0);
       glp_set_obj_coef(glp_, j, 1);
     }
   }
@@ -139,9 +139,8 @@ class CountProgram {
     const bool has_x = status == GLP_OPT || status == GLP_FEAS;
     if (has_x) {
       s.x.assign(max_gen_.size(), 0);
-      for (CellId c : CellRange(max_gen_.size())) {
-        if (column_[c.value()] != 0)
-          s.x[c.value()] = Round(glp_mip_col_val(glp_, column_[c.value()]));
+      for (std::size_t c = 0; c < max_gen_.size(); ++c) {
+        if (column_[c] != 0) s.x[c] = Round(glp_mip_col_val(glp_, column_[c]));
       }
     }
     if (rc == 0 && status == GLP_OPT) {

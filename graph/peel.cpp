@@ -68,8 +68,7 @@ class Peeler {
     top_ = MaxGenerations(t_);
     base_.assign(cells_, 0);
     std::size_t total = 0;
-    for (CellId c : CellRange(cells_))
-      base_[c.value()] = std::exchange(total, total + top_[c.value()]);
+    for (std::uint32_t c = 0; c < cells_; ++c) base_[c] = std::exchange(total, total + top_[c]);
     count_.assign(total, 0);
     leaf_count_.assign(total, 0);
     children_.assign(t_.size(), 0);
@@ -78,9 +77,9 @@ class Peeler {
       if (t_.parent(n) != kRootNode) ++children_[t_.parent(n).index()];
     }
     non_leaf_top_.assign(cells_, 0);
-    for (CellId c : CellRange(cells_))
-      non_leaf_top_[c.value()] =
-          top_[c.value()] ? count_[base_[c.value()] + top_[c.value()] - 1] : 0;
+    for (std::uint32_t c = 0; c < cells_; ++c) {
+      non_leaf_top_[c] = top_[c] ? count_[base_[c] + top_[c] - 1] : 0;
+    }
     leaves_.resize(cells_);
   }
 

@@ -283,6 +283,26 @@ const DefaultLevel* DefaultLevelOf(const std::string& name) {
   return nullptr;
 }
 
+// The defaults of the key tables, parsed once: DefaultConfig() is a copy.
+const ReplayConfig& Defaults() {
+  static const ReplayConfig defaults = [] {
+    ReplayConfig c;
+    for (const Key<ReplayConfig>& k : ConfigKeys()) {
+      k.parse(k.default_value, "default " + k.name, c);
+    }
+    for (const DefaultLevel& d : kDefaultLevels) {
+      LevelConfig level;
+      level.name = d.name;
+      for (const Key<LevelConfig>& k : LevelKeys()) {
+        k.parse(d.Of(k.name).value, "default level." + level.name + "." + k.name, level);
+      }
+      c.levels.push_back(level);
+    }
+    return c;
+  }();
+  return defaults;
+}
+
 // The part of a dotted key after its last '.': the key inside its TOML table.
 std::string TableKey(const std::string& name) { return name.substr(name.rfind('.') + 1); }
 bool InProcessors(const std::string& name) { return name.rfind("processors.", 0) == 0; }
@@ -423,7 +443,7 @@ LevelConfig ReadLevel(const toml::table& table, std::size_t index, const std::st
   }
   // A level named like a default level starts from it; any other needs every value.
   bool is_default = false;
-  for (const LevelConfig& d : DefaultConfig().levels) {
+  for (const LevelConfig& d : Defaults().levels) {
     if (d.name == level.name) {
       level = d;
       is_default = true;
@@ -500,8 +520,7 @@ void WriteKey(std::ostringstream& out, std::string meaning, const std::string& s
 }
 
 const LevelConfig* DefaultLevelConfig(const std::string& name) {
-  static const ReplayConfig defaults = DefaultConfig();
-  for (const LevelConfig& l : defaults.levels) {
+  for (const LevelConfig& l : Defaults().levels) {
     if (l.name == name) return &l;
   }
   return nullptr;
@@ -560,24 +579,7 @@ std::string FormatCapacity(const LevelConfig& level) {
   return std::to_string(level.capacity) + (level.capacity == 1 ? " cell" : " cells");
 }
 
-ReplayConfig DefaultConfig() {
-  static const ReplayConfig defaults = [] {
-    ReplayConfig c;
-    for (const Key<ReplayConfig>& k : ConfigKeys()) {
-      k.parse(k.default_value, "default " + k.name, c);
-    }
-    for (const DefaultLevel& d : kDefaultLevels) {
-      LevelConfig level;
-      level.name = d.name;
-      for (const Key<LevelConfig>& k : LevelKeys()) {
-        k.parse(d.Of(k.name).value, "default level." + level.name + "." + k.name, level);
-      }
-      c.levels.push_back(level);
-    }
-    return c;
-  }();
-  return defaults;
-}
+ReplayConfig DefaultConfig() { return Defaults(); }
 void ValidateConfig(const ReplayConfig& config, const std::string& where) {
   if (config.levels.empty()) Fail(where, "at least one level is required");
   std::set<std::string> names;
@@ -653,7 +655,7 @@ void ApplyOverride(ReplayConfig& config, const std::string& key, const std::stri
 }
 
 std::string ToToml(const ReplayConfig& config) {
-  const ReplayConfig d = DefaultConfig();
+  const ReplayConfig& d = Defaults();
   std::ostringstream out;
   out << "# raycell replay configuration (docs/design.md §2).\n"
          "# Defaults model the GI-Cube board on the slides: a PCI board whose block processors\n"
@@ -683,7 +685,7 @@ std::string ToToml(const ReplayConfig& config) {
 }
 
 std::string DefaultsHelp() {
-  const ReplayConfig d = DefaultConfig();
+  const ReplayConfig& d = Defaults();
   std::vector<std::array<std::string, 3>> rows;  // key, value, source
   for (const Key<ReplayConfig>& k : ConfigKeys()) rows.push_back({k.name, k.text(d), k.source});
   for (const LevelConfig& l : d.levels) {

@@ -58,7 +58,7 @@ PeelResult NaivePeel(const CellTree& t) {
       leaves[t.cell(n).value()] += leaf[n.index()] ? 1 : 0;
     }
     std::vector<bool> ready(t.cell_count());
-    for (CellId c : CellRange(t.cell_count())) ready[c.value()] = top[c.value()] > 0;
+    for (std::uint32_t c = 0; c < t.cell_count(); ++c) ready[c] = top[c] > 0;
     for (NodeId n : t.nodes()) {
       if (!gone[n.index()] && !leaf[n.index()] && t.generation(n) == top[t.cell(n).value()])
         ready[t.cell(n).value()] = false;

@@ -85,9 +85,9 @@ inline CellTree RandomTree(std::mt19937& rng, std::uint32_t cells, int rays, int
 // optimum 2 cells - 1, Peel above the bound.
 inline CellTree Rotations(std::uint32_t cells) {
   std::vector<Schedule> paths;
-  for (CellId r : CellRange(cells)) {
+  for (std::uint32_t r = 0; r < cells; ++r) {
     Schedule p;
-    for (CellId i : CellRange(cells)) p.push_back(CellId((r.value() + i.value()) % cells));
+    for (std::uint32_t i = 0; i < cells; ++i) p.push_back(CellId((r + i) % cells));
     paths.push_back(p);
   }
   return FromPaths(paths);

@@ -81,8 +81,7 @@ class Board : public Component {
 
   // The queues a scheduler may choose from: cells being worked are not available.
   QueueView View(std::uint32_t p) {
-    for (CellId c : CellRange(w_.cells))
-      view_[c.value()] = locked_[c.value()] ? 0 : queued_rays_[c.value()];
+    for (std::uint32_t c = 0; c < w_.cells; ++c) view_[c] = locked_[c] ? 0 : queued_rays_[c];
     return QueueView::Of(view_, processors_[p].cell);
   }
 
