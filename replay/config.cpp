@@ -54,6 +54,12 @@ ReplayConfig::Granularity ParseGranularity(std::string_view text, const std::str
   Fail(what, "unknown granularity '" + std::string(text) + "' (expected ray, node or auto)");
 }
 
+MemoryConfig::AcrossFrames ParseAcrossFrames(std::string_view text, const std::string& what) {
+  if (text == "warm") return MemoryConfig::AcrossFrames::kWarm;
+  if (text == "cold") return MemoryConfig::AcrossFrames::kCold;
+  Fail(what, "unknown memory.across_frames '" + std::string(text) + "' (expected warm or cold)");
+}
+
 LevelConfig::Replacement ParseReplacement(std::string_view text, const std::string& what) {
   std::vector<std::string> names;
   for (const ReplacementEntry& e : ReplacementRegistry()) {
@@ -207,6 +213,15 @@ const std::vector<Key<ReplayConfig>>& ConfigKeys() {
        },
        [](const ReplayConfig& c) { return std::string(c.processors.prefetch ? "true" : "false"); },
        "false", "no double buffering, the paper's model"},
+      {"memory.across_frames",
+       "warm: every level keeps its cells from one frame to the next (a static volume stays on "
+       "the board) | cold: every frame starts with empty levels",
+       TomlKind::kString, "a string", 0, 0,
+       [](std::string_view t, const std::string& what, ReplayConfig& c) {
+         c.memory.across_frames = ParseAcrossFrames(Trim(t), what);
+       },
+       [](const ReplayConfig& c) { return std::string(ToString(c.memory.across_frames)); },
+       "warm", "the board's memory is not cleared between frames; cold is the paper's comparison"},
   };
   return keys;
 }
@@ -305,7 +320,11 @@ const ReplayConfig& Defaults() {
 
 // The part of a dotted key after its last '.': the key inside its TOML table.
 std::string TableKey(const std::string& name) { return name.substr(name.rfind('.') + 1); }
-bool InProcessors(const std::string& name) { return name.rfind("processors.", 0) == 0; }
+// The table a key lives in: "" (the top level), "processors" or "memory".
+std::string SectionOf(const std::string& name) {
+  const std::size_t dot = name.find('.');
+  return dot == std::string::npos ? std::string() : name.substr(0, dot);
+}
 
 // A value as TOML writes it: booleans and integers that fit a TOML integer bare, the rest as
 // strings.
@@ -489,14 +508,22 @@ std::vector<LevelConfig> ReadLevels(const toml::node& node, const std::string& f
 ReplayConfig ReadConfig(const toml::table& root, const std::string& file) {
   ReplayConfig config = DefaultConfig();
   Section s(root, "the top-level table", "", file);
+  std::vector<std::string> sections;  // in the key table's order
   for (const Key<ReplayConfig>& key : ConfigKeys()) {
-    if (!InProcessors(key.name)) s.Read(key, config);
+    const std::string section = SectionOf(key.name);
+    if (section.empty()) {
+      s.Read(key, config);
+    } else if (std::find(sections.begin(), sections.end(), section) == sections.end()) {
+      sections.push_back(section);
+    }
   }
-  if (const toml::node* n = s.Get("processors")) {
-    if (!n->is_table()) s.TypeError(*n, "processors", "a [processors] table");
-    Section p(*n->as_table(), "[processors]", "processors.", file);
+  for (const std::string& section : sections) {
+    const toml::node* n = s.Get(section.c_str());
+    if (n == nullptr) continue;
+    if (!n->is_table()) s.TypeError(*n, section.c_str(), ("a [" + section + "] table").c_str());
+    Section p(*n->as_table(), "[" + section + "]", section + ".", file);
     for (const Key<ReplayConfig>& key : ConfigKeys()) {
-      if (InProcessors(key.name)) p.Read(key, config);
+      if (SectionOf(key.name) == section) p.Read(key, config);
     }
     p.ReportUnused();
   }
@@ -556,7 +583,8 @@ bool operator==(const ProcessorConfig& a, const ProcessorConfig& b) {
 bool operator!=(const ProcessorConfig& a, const ProcessorConfig& b) { return !(a == b); }
 
 bool operator==(const ReplayConfig& a, const ReplayConfig& b) {
-  return a.levels == b.levels && a.processors == b.processors && a.scheduler == b.scheduler &&
+  return a.levels == b.levels && a.processors == b.processors && a.memory == b.memory &&
+         a.scheduler == b.scheduler &&
          a.seed == b.seed && a.granularity == b.granularity;
 }
 bool operator!=(const ReplayConfig& a, const ReplayConfig& b) { return !(a == b); }
@@ -566,6 +594,10 @@ std::string_view ToString(ReplayConfig::Granularity g) {
   return g == ReplayConfig::Granularity::kRay    ? "ray"
          : g == ReplayConfig::Granularity::kNode ? "node"
                                                  : "auto";
+}
+
+std::string_view ToString(MemoryConfig::AcrossFrames a) {
+  return a == MemoryConfig::AcrossFrames::kWarm ? "warm" : "cold";
 }
 
 std::string_view ToString(LevelConfig::CapacityUnit u) {
@@ -660,10 +692,12 @@ std::string ToToml(const ReplayConfig& config) {
   out << "# raycell replay configuration (docs/design.md §2).\n"
          "# Defaults model the GI-Cube board on the slides: a PCI board whose block processors\n"
          "# are backed by Direct RDRAM, with host memory reached over PCI.\n\n";
-  bool in_processors = false;
+  std::string section;  // the table being written
   for (const Key<ReplayConfig>& k : ConfigKeys()) {
-    if (InProcessors(k.name) && !in_processors) out << "\n[processors]\n";
-    in_processors = InProcessors(k.name);
+    if (SectionOf(k.name) != section) {
+      section = SectionOf(k.name);
+      out << "\n[" << section << "]\n";
+    }
     WriteKey(out, k.meaning, k.source, TomlLiteral(k.kind, k.text(d)), TableKey(k.name),
              TomlLiteral(k.kind, k.text(config)));
   }

@@ -47,6 +47,17 @@ struct ProcessorConfig {
   bool prefetch = false;  // double buffering: fetch the next scheduled cell while working
 };
 
+// What the memory levels hold when a frame starts (docs/design.md §2 "Memory").
+struct MemoryConfig {
+  // kWarm: what the previous frame's replay left (frame 0: empty); kCold: empty, the paper's
+  // model of every frame on its own.
+  enum class AcrossFrames { kWarm, kCold };
+  AcrossFrames across_frames = AcrossFrames::kWarm;
+};
+inline bool operator==(const MemoryConfig& a, const MemoryConfig& b) {
+  return a.across_frames == b.across_frames;
+}
+
 struct ReplayConfig {
   // kAuto: per node where that is exact (one processor), per ray segment otherwise.
   enum class Granularity { kRay, kNode, kAuto };
@@ -54,6 +65,7 @@ struct ReplayConfig {
   // Nearest (on-chip cache) to farthest; the level below the last is host memory, unlimited.
   std::vector<LevelConfig> levels;
   ProcessorConfig processors;
+  MemoryConfig memory;
   // An entry of SchedulerRegistry() (scheduling/scheduler.h), resolved from its name once,
   // where the configuration is read; never null in a valid configuration.
   const SchedulerEntry* scheduler = nullptr;
@@ -76,6 +88,8 @@ bool operator!=(const ReplayConfig& a, const ReplayConfig& b);
 // "lru" | "fifo" | "min" (ReplacementRegistry()); "ray" | "node"; "bytes" | "cells".
 std::string_view ToString(LevelConfig::Replacement r);
 std::string_view ToString(ReplayConfig::Granularity g);
+// "warm" | "cold".
+std::string_view ToString(MemoryConfig::AcrossFrames a);
 // The granularity a replay of `config` runs at: kAuto resolved.
 ReplayConfig::Granularity EffectiveGranularity(const ReplayConfig& config);
 std::string_view ToString(LevelConfig::CapacityUnit u);

@@ -154,7 +154,8 @@ void FinishTotal(std::uint32_t processors, ReplayResult* t) {
 
 FrameWalker::FrameWalker(const TraceReader& reader, std::vector<std::size_t> frame_indices,
                          bool need_segments, bool need_nodes, std::uint32_t sample_every,
-                         std::uint32_t history, std::uint64_t compact_above_visits)
+                         std::uint32_t history, std::uint64_t compact_above_visits,
+                         bool warm_up)
     : reader_(reader),
       indices_(std::move(frame_indices)),
       need_segments_(need_segments),
@@ -164,6 +165,16 @@ FrameWalker::FrameWalker(const TraceReader& reader, std::vector<std::size_t> fra
       compact_above_(compact_above_visits) {
   if (k_ < 1) throw InputError("sampling: 1 in k ray trees needs k >= 1");
   for (std::size_t p = 1; p < indices_.size(); ++p) RAYCELL_CHECK_LT(indices_[p - 1], indices_[p]);
+  asked_ = indices_.size();
+  if (warm_up && !indices_.empty()) {
+    std::vector<std::size_t> all(indices_.back() + 1);
+    for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+    asked_for_.assign(all.size(), false);
+    for (std::size_t i : indices_) asked_for_[i] = true;
+    indices_ = std::move(all);
+  } else {
+    asked_for_.assign(indices_.size(), true);
+  }
 }
 
 const LoadedFrame* FrameWalker::Next() {
@@ -210,7 +221,10 @@ const LoadedFrame* FrameWalker::Next() {
   }
   if (need_nodes_) f.nodes = std::make_unique<WorkGraph>(NodeWork(*f.tree, cells));
   f.bound = Bound(*f.tree);
-  f.position = position_++;
+  f.warm_up = !asked_for_[position_];
+  f.position = reported_;
+  if (!f.warm_up) ++reported_;
+  ++position_;
   f.index = i;
   f.number = reader_.frames()[i].frame;
   return &f;
@@ -218,14 +232,15 @@ const LoadedFrame* FrameWalker::Next() {
 
 ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& header,
                                const ReplayConfig& config, Scheduler& scheduler,
-                               std::uint32_t sample_every, ReplayObserver* observer) {
+                               std::uint32_t sample_every, ReplayObserver* observer,
+                               MemoryState* memory) {
   const bool per_ray = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay;
   const WorkGraph* work = per_ray ? frame.segments.get() : frame.nodes.get();
   RAYCELL_CHECK(work != nullptr);  // the walker was asked for this granularity
   const FrameInfo info{frame.index, frame.tree.get(), frame.previous.get(), header.cell_count(),
                        frame.before_previous.get()};
   ReplayResult r =
-      ReplayFrame(*work, header.footprints, config, scheduler, info, frame.bound, observer);
+      ReplayFrame(*work, header.footprints, config, scheduler, info, frame.bound, observer, memory);
   ScaleBack(r, sample_every, config.processors.count);
   r.frame = frame.number;
   return r;
@@ -274,27 +289,44 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
   std::stable_partition(order.begin(), order.end(), [&](std::size_t d) {
     return distinct[d].granularity == ReplayConfig::Granularity::kRay;
   });
+  // Per distinct configuration with warm memory, what its levels hold between frames.
+  std::vector<std::unique_ptr<MemoryState>> memory(distinct.size());
+  std::vector<std::size_t> warm;  // order's entries with warm memory
+  for (std::size_t d : order) {
+    if (distinct[d].memory.across_frames != MemoryConfig::AcrossFrames::kWarm) continue;
+    memory[d] = std::make_unique<MemoryState>();
+    warm.push_back(d);
+  }
   const TraceHeader& header = reader.header();
   FrameWalker walker(reader, frame_indices, need_segments, need_nodes, options.sample_every,
-                     history, options.compact_above_visits);
+                     history, options.compact_above_visits, !warm.empty());
   WorkerPool pool(unsigned(
       std::clamp<std::size_t>(options.jobs, 1, std::max<std::size_t>(distinct.size(), 1))));
   std::vector<ReplayResult> distinct_results(distinct.size()), results(configs.size());
   ReplayFramesStats stats;
   stats.distinct = distinct.size();
+  std::size_t walked = 0;
   while (const LoadedFrame* frame = walker.Next()) {
-    pool.ParallelFor(distinct.size(), [&](std::size_t n) {
-      const std::size_t d = order[n];
+    ++walked;
+    const std::vector<std::size_t>& run = frame->warm_up ? warm : order;
+    // A warm-up frame is not watched: the observer sees the frames asked for.
+    ReplayObserver* observer = frame->warm_up ? nullptr : options.observer;
+    pool.ParallelFor(run.size(), [&](std::size_t n) {
+      const std::size_t d = run[n];
       distinct_results[d] = ReplayLoadedFrame(*frame, header, distinct[d], *schedulers[d],
-                                              options.sample_every, options.observer);
+                                              options.sample_every, observer, memory[d].get());
     });
+    if (frame->warm_up) {
+      if (options.progress) options.progress(double(walked) / double(walker.walked()));
+      continue;
+    }
     for (std::size_t i = 0; i < configs.size(); ++i) {
       results[i] = distinct_results[which[i]];
       results[i].peak_queued_bytes =
           CheckedMul(results[i].peak_queued_rays, configs[i].processors.queue_record_bytes);
     }
     ++stats.frames;
-    if (options.progress) options.progress(double(stats.frames) / double(walker.size()));
+    if (options.progress) options.progress(double(walked) / double(walker.walked()));
     if (!on_frame(*frame, results)) break;
   }
   return stats;

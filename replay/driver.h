@@ -35,7 +35,10 @@ void FinishTotal(std::uint32_t processors, ReplayResult* t);
 
 // One frame as the replays need it, built once for all configurations.
 struct LoadedFrame {
-  std::size_t position = 0;  // in the list of frames being walked
+  std::size_t position = 0;  // in the list of frames asked for (warm-up: of the next one)
+  // A frame replayed only for the memory state it leaves (FrameWalker's warm_up), not
+  // reported.
+  bool warm_up = false;
   std::size_t index = 0;     // into reader.frames()
   std::int32_t number = 0;   // the frame number
   std::unique_ptr<CellTree> tree;
@@ -57,16 +60,22 @@ class FrameWalker {
   // history: earlier frames' trees to keep (1: the previous; 2: also the one before it).
   // The per-segment work of a frame of more than `compact_above_visits` visits (not sampled)
   // is built in the Compact form (work.h) from the frame's batches, without holding its rays.
+  // warm_up: also walk every frame before the last one asked for that is not asked for,
+  // marked LoadedFrame::warm_up (warm memory needs the frames before a range replayed).
   FrameWalker(const TraceReader& reader, std::vector<std::size_t> frame_indices, bool need_segments,
               bool need_nodes, std::uint32_t sample_every = 1, std::uint32_t history = 1,
-              std::uint64_t compact_above_visits = kCompactAboveVisits);
+              std::uint64_t compact_above_visits = kCompactAboveVisits, bool warm_up = false);
   // The next frame, or nullptr after the last. Valid until the next call.
   const LoadedFrame* Next();
-  std::size_t size() const { return indices_.size(); }
+  // Frames asked for; frames walked (with the warm-up ones).
+  std::size_t size() const { return asked_; }
+  std::size_t walked() const { return indices_.size(); }
 
  private:
   const TraceReader& reader_;
-  std::vector<std::size_t> indices_;
+  std::vector<std::size_t> indices_;  // walked
+  std::vector<bool> asked_for_;       // per walked frame
+  std::size_t asked_ = 0, reported_ = 0;
   bool need_segments_, need_nodes_;
   std::uint32_t k_, history_;
   std::uint64_t compact_above_;
@@ -77,9 +86,11 @@ class FrameWalker {
 // Replays `frame` under `config` with `scheduler` (made by MakeScheduler for the config and
 // kept across frames): ReplayFrame on the frame's work graph of the config's granularity,
 // scaled back when the frame is sampled (see ReplayTrace), numbered.
+// `memory`: as ReplayFrame takes it (null: cold).
 ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& header,
                                const ReplayConfig& config, Scheduler& scheduler,
-                               std::uint32_t sample_every = 1, ReplayObserver* observer = nullptr);
+                               std::uint32_t sample_every = 1, ReplayObserver* observer = nullptr,
+                               MemoryState* memory = nullptr);
 
 // What a frame's result cannot depend on, removed: granularity resolved (EffectiveGranularity),
 // the seed unless the scheduler uses it (SchedulerEntry::seeded: random and the planners),
@@ -107,7 +118,12 @@ struct ReplayFramesStats {
 };
 
 // Replays every configuration on every frame of `frame_indices`, each frame loaded once (see
-// FrameWalker), configurations that share a canonical form once (CanonicalConfig). After
+// FrameWalker), configurations that share a canonical form once (CanonicalConfig). A
+// configuration with warm memory (memory.across_frames) carries each frame's memory state to
+// the next; when some has it, the frames before the last one asked for that are not asked for
+// are replayed first for it alone (warm-up, not reported), so that every frame starts from
+// the state a replay of the whole trace gives it: frame ranges, shards and resumed sweeps
+// give the rows of one run. After
 // each frame, calls on_frame(frame, results) with the result of every configuration, in
 // the order of `configs`, on the calling thread; it returns false to stop there. The
 // results are those of ReplayTrace for each configuration alone, whatever `jobs`.

@@ -49,9 +49,13 @@ bool CellStore::Insert(CellId cell, std::optional<CellId> pinned) {
   return true;
 }
 
+void CellStore::Restore(const std::vector<CellId>& cells) {
+  for (const CellId c : cells) RAYCELL_CHECK(Insert(c));
+}
+
 MemoryHierarchy::MemoryHierarchy(const ReplayConfig& config,
                                  const std::vector<std::uint64_t>& footprints,
-                                 const Requests& futures)
+                                 const Requests& futures, const MemoryState& start)
     : levels_(config.levels), footprints_(footprints) {
   RAYCELL_CHECK(!levels_.empty());
   for (std::size_t i = 0; i < levels_.size(); ++i) {
@@ -68,6 +72,13 @@ MemoryHierarchy::MemoryHierarchy(const ReplayConfig& config,
     link_free_.emplace_back(copies, SimTime::Zero());
     stats_.push_back({levels_[i].name, 0, 0});
   }
+  if (!start.empty()) {
+    RAYCELL_CHECK_EQ(start.held.size(), stores_.size());
+    for (std::size_t i = 0; i < stores_.size(); ++i) {
+      RAYCELL_CHECK_EQ(start.held[i].size(), stores_[i].size());
+      for (std::size_t k = 0; k < stores_[i].size(); ++k) stores_[i][k].Restore(start.held[i][k]);
+    }
+  }
   arrival_.assign(config.processors.count, std::vector<SimTime>(footprints.size()));
   prefetched_.assign(config.processors.count, std::vector<bool>(footprints.size(), false));
 }
@@ -78,6 +89,26 @@ MemoryHierarchy::Requests MemoryHierarchy::requests() const {
     for (const CellStore& s : stores_[i]) r[i].push_back(s.requests());
   }
   return r;
+}
+
+MemoryState MemoryHierarchy::State() const {
+  MemoryState state;
+  for (const auto& level : stores_) {
+    state.held.emplace_back();
+    for (const CellStore& s : level) state.held.back().push_back(s.Held());
+  }
+  return state;
+}
+
+std::vector<std::vector<bool>> HeldAnywhere(const MemoryState& state, std::uint32_t cells) {
+  std::vector<std::vector<bool>> held;
+  for (const auto& level : state.held) {
+    held.emplace_back(cells, false);
+    for (const auto& copy : level) {
+      for (const CellId c : copy) held.back()[c.value()] = true;
+    }
+  }
+  return held;
 }
 
 bool MemoryHierarchy::diverged() const {

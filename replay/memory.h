@@ -40,6 +40,11 @@ class CellStore {
   std::uint64_t used() const { return used_; }
   const std::vector<CellId>& requests() const { return requests_; }
   bool diverged() const { return policy_->diverged(); }
+  // The held cells, first victim first (ReplacementPolicy::EvictionOrder).
+  std::vector<CellId> Held() const { return policy_->EvictionOrder(held_); }
+  // Keeps `cells` (as Held() listed them) without counting them as requests or fetches: the
+  // state a frame starts from. They fit by construction (the same level held them).
+  void Restore(const std::vector<CellId>& cells);
 
  private:
   std::uint64_t Size(CellId cell) const;
@@ -51,6 +56,16 @@ class CellStore {
   std::uint64_t used_ = 0;
   std::vector<CellId> requests_;
 };
+
+// What the levels hold: per level and copy (processor for level 0, else one), the held cells
+// in the order the copy's policy would evict them. A frame with warm memory starts from the
+// state the previous frame ended with (docs/design.md §2 "Memory"); empty: every level empty.
+struct MemoryState {
+  std::vector<std::vector<std::vector<CellId>>> held;  // [level][copy]
+  bool empty() const { return held.empty(); }
+};
+// Per level of `state`, per cell of `cells`: whether some copy of the level holds it.
+std::vector<std::vector<bool>> HeldAnywhere(const MemoryState& state, std::uint32_t cells);
 
 struct LevelStats {
   std::string name;
@@ -64,8 +79,12 @@ class MemoryHierarchy {
   using Requests = std::vector<std::vector<std::vector<CellId>>>;
   // `futures`: for levels with MIN replacement, the requests of a previous run; empty on the
   // first run, when MIN levels run LRU to learn them.
+  // `start`: what the levels hold when the frame starts (empty: nothing), as State() gave it
+  // for the same configuration and footprints.
   MemoryHierarchy(const ReplayConfig& config, const std::vector<std::uint64_t>& footprints,
-                  const Requests& futures = {});
+                  const Requests& futures = {}, const MemoryState& start = {});
+  // What the levels hold now.
+  MemoryState State() const;
   Requests requests() const;
   // True when a MIN level's requests strayed from its future (run again with requests()).
   bool diverged() const;

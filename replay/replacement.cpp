@@ -40,6 +40,14 @@ std::unique_ptr<ReplacementPolicy> MakeReplacement(LevelConfig::Replacement kind
   return ReplacementOf(kind).make(cells, std::move(future));
 }
 
+std::vector<CellId> ReplacementPolicy::EvictionOrder(const std::vector<bool>& held) const {
+  std::vector<CellId> order;
+  for (std::uint32_t c = 0; c < held.size(); ++c) {
+    if (held[c]) order.push_back(CellId(c));
+  }
+  return order;
+}
+
 // ---- LRU and FIFO ------------------------------------------------------------------------
 
 RecencyReplacement::RecencyReplacement(std::uint32_t cells, bool move_on_hit)
@@ -60,6 +68,10 @@ std::optional<CellId> RecencyReplacement::Victim(std::optional<CellId> pinned) c
     if (c != pinned) return c;
   }
   return std::nullopt;
+}
+
+std::vector<CellId> RecencyReplacement::EvictionOrder(const std::vector<bool>&) const {
+  return {order_.begin(), order_.end()};
 }
 
 // ---- MIN ---------------------------------------------------------------------------------

@@ -29,6 +29,11 @@ class ReplacementPolicy {
   virtual std::optional<CellId> Victim(std::optional<CellId> pinned) const = 0;
   // MIN only: whether the requests strayed from the future it was given.
   virtual bool diverged() const { return false; }
+  // The held cells (held[c]) in the order this policy would evict them, first victim first,
+  // so that inserting them into a new policy in this order gives it the same state (memory
+  // kept across frames). Default: by cell number, for policies whose victims do not depend on
+  // the order cells came in (MIN).
+  virtual std::vector<CellId> EvictionOrder(const std::vector<bool>& held) const;
 };
 
 // Every replacement policy: the one list that configurations (parsing, printing, the key's
@@ -65,6 +70,7 @@ class RecencyReplacement : public ReplacementPolicy {
   void Inserted(CellId cell) override;
   void Evicted(CellId cell) override;
   std::optional<CellId> Victim(std::optional<CellId> pinned) const override;
+  std::vector<CellId> EvictionOrder(const std::vector<bool>& held) const override;
 
  private:
   bool move_on_hit_;

@@ -55,9 +55,15 @@ struct ReplayResult {
 //
 // `observer` (replay/observer.h), when not null, is told what each run does; the result is the
 // same with or without one.
+//
+// `memory`, when not null, is what the levels hold when the frame starts (empty: nothing) and
+// is replaced by what they hold when it ends: the caller carries it to the next frame when
+// memory is warm (docs/design.md §2 "Memory"). With a warm cell in the cache, the maxGen bound
+// reported is one less: a schedule may start with that cell without fetching it.
 ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                          const ReplayConfig& config, Scheduler& scheduler, const FrameInfo& frame,
-                         std::uint64_t bound, ReplayObserver* observer = nullptr);
+                         std::uint64_t bound, ReplayObserver* observer = nullptr,
+                         MemoryState* memory = nullptr);
 
 // Whether the maxGen bound holds for `config`: one processor whose cache holds one cell.
 bool BoundHolds(const ReplayConfig& config);

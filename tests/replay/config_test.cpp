@@ -165,14 +165,18 @@ TEST(LoadConfig, NewLevelNeedsEveryValue) {
 TEST(LoadConfig, UnknownKeyNamesFileLineColumnAndKey) {
   EXPECT_EQ(LoadError("seed = 3\nsceduler = \"peel\"\n"),
             "replay.toml:2:1: unknown key 'sceduler' in the top-level table (valid keys: "
-            "granularity, level, processors, scheduler, seed)");
+            "granularity, level, memory, processors, scheduler, seed)");
   const std::string e = LoadError("[processors]\ncount = 2\n  time_per_sampel = \"1ns\"\n");
   EXPECT_EQ(e.rfind("replay.toml:3:3: unknown key 'time_per_sampel' in [processors]", 0), 0u) << e;
   const std::string l = LoadError(
       "[[level]]\nname = \"cache\"\n\n[[level]]\nname = \"board\"\nbandwith = \"1GB/s\"\n");
   EXPECT_EQ(l.rfind("replay.toml:6:1: unknown key 'bandwith' in [[level]] 'board'", 0), 0u) << l;
-  EXPECT_EQ(LoadError("[memory]\nsize = 1\n").rfind("replay.toml:1:2: unknown key 'memory'", 0),
+  EXPECT_EQ(LoadError("[memory]\nsize = 1\n").rfind("replay.toml:2:1: unknown key 'size' in [memory]", 0),
             0u);
+  EXPECT_EQ(LoadError("[memory]\nacross_frames = \"tepid\"\n"),
+            "replay.toml:2:17: memory.across_frames: unknown memory.across_frames 'tepid' "
+            "(expected warm or cold)");
+  EXPECT_EQ(LoadError("[mem]\n").rfind("replay.toml:1:2: unknown key 'mem'", 0), 0u);
   // The first unknown key in the file is reported, whatever the table order.
   EXPECT_EQ(LoadError("zzz = 1\naaa = 2\n").rfind("replay.toml:1:1: unknown key 'zzz'", 0), 0u);
 }
@@ -377,7 +381,7 @@ TEST(ApplyOverride, ErrorsNameTheKeyAndLeaveTheConfigUnchanged) {
 
 TEST(OverrideKeys, ListsLevelKeysByName) {
   const std::vector<std::string> keys = OverrideKeys(DefaultConfig());
-  EXPECT_EQ(keys.size(), 7u + 2 * 4);
+  EXPECT_EQ(keys.size(), 8u + 2 * 4);
   EXPECT_EQ(keys.back(), "level.board.replacement");
 }
 

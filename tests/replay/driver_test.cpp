@@ -57,8 +57,18 @@ class DriverTest : public ::testing::Test {
     delete path_;
   }
 
-  // Frame i under `config`, everything built by hand; `k` samples 1 in k ray trees.
+  // Frame i under `config`, everything built by hand; `k` samples 1 in k ray trees. With warm
+  // memory, frames 0 .. i - 1 are replayed first and their memory carried to frame i.
   static ReplayResult ByHand(std::size_t i, const ReplayConfig& config, std::uint32_t k = 1) {
+    if (config.memory.across_frames == MemoryConfig::AcrossFrames::kCold) {
+      return ByHand(i, config, k, nullptr);
+    }
+    MemoryState memory;
+    for (std::size_t j = 0; j < i; ++j) ByHand(j, config, k, &memory);
+    return ByHand(i, config, k, &memory);
+  }
+  static ReplayResult ByHand(std::size_t i, const ReplayConfig& config, std::uint32_t k,
+                             MemoryState* memory) {
     const TraceHeader& h = reader_->header();
     const RayBatch rays = SampleRayTrees(reader_->LoadFrame(i), k);
     const CellTree tree = testing::TreeOf(rays);
@@ -73,7 +83,7 @@ class DriverTest : public ::testing::Test {
     const bool two = config.scheduler->history == 2 && i > 1;
     const FrameInfo info{i, &tree, i > 0 ? &previous : nullptr, h.cell_count(),
                          two ? &before : nullptr};
-    ReplayResult r = ReplayFrame(w, h.footprints, config, *s, info, Bound(tree));
+    ReplayResult r = ReplayFrame(w, h.footprints, config, *s, info, Bound(tree), nullptr, memory);
     r.frame = reader_->frames()[i].frame;
     if (k > 1) {  // as ReplayTrace scales a sample back
       const SimTime extra = r.work * (k - 1);
@@ -105,7 +115,11 @@ TEST_F(DriverTest, EveryFrameEqualsItsReplayBuiltByHand) {
          {"celltree", "peel", "maxwork", "random", "best", "celltree-best", "celltree-union"}) {
       for (std::uint32_t processors : {1u, 2u}) {
         for (std::uint32_t k : {1u, 2u}) {
-          const ReplayConfig config = Config(scheduler, processors);
+          ReplayConfig config = Config(scheduler, processors);
+          // Warm memory for the schedulers that follow plans, cold for the others.
+          if (std::string(scheduler) == "maxwork" || std::string(scheduler) == "random") {
+            config.memory.across_frames = MemoryConfig::AcrossFrames::kCold;
+          }
           const TraceReplay t = ReplayTrace(*reader_, frames, config, {}, k);
           ASSERT_EQ(t.frames.size(), frames.size());
           ReplayResult total;
