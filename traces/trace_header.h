@@ -68,6 +68,11 @@ struct TraceHeader {
   std::vector<CameraKey> cameras;  // one per frame, in frame order
   RenderSettings settings;
   std::uint32_t cell_count() const { return cells[0] * cells[1] * cells[2]; }
+  // Whether the volume changes from frame to frame: a sequence of files, one per frame (the
+  // recorder's --scene pattern with '%'). The trace keeps one footprint per cell, the largest
+  // over the frames, not which cells changed: warm memory keeps nothing between the frames of
+  // such a capture (docs/design.md §2 "Memory").
+  bool volume_changes() const { return scene.find('%') != std::string::npos; }
   bool operator==(const TraceHeader& o) const {
     return format_version == o.format_version && producer == o.producer && scene == o.scene &&
            grids == o.grids && box_min == o.box_min && box_max == o.box_max && cells == o.cells &&

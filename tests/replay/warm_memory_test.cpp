@@ -196,5 +196,35 @@ TEST_F(StaticVolume, FrameRangesStartFromTheWholeReplaysMemory) {
   }
 }
 
+// A capture of a sequence of volumes (a --scene pattern) is new data every frame: warm memory
+// keeps nothing there, and gives what cold gives.
+TEST(WarmMemory, ASequenceOfVolumesKeepsNothing) {
+  const std::string path = testing::TempPath("warm", "sequence.rct");
+  TraceHeader h;
+  h.producer = "raycell test";
+  h.scene = "fluid_%04d.vdb";
+  h.cells = {2, 2, 1};
+  h.footprints.assign(4, 4096);
+  for (int f = 0; f < 3; ++f) h.cameras.push_back({f, {1, 2, 3.0 + f}, {0, 0, 0}, {0, 1, 0}, 40});
+  h.settings.store_t = false;
+  TraceWriter w = TraceWriter::Create(path, h, 3);
+  std::mt19937 rng(5);
+  for (int f = 0; f < 3; ++f) {
+    w.BeginFrame(f);
+    w.Append(testing::RandomReplayFrame(rng, 4, 20));
+    w.EndFrame();
+  }
+  w.Finish();
+  const TraceReader reader = TraceReader::Open(path);
+  ASSERT_TRUE(reader.header().volume_changes());
+  ReplayConfig config = DefaultConfig();
+  const TraceReplay warm = ReplayTrace(reader, {0, 1, 2}, config);
+  config.memory.across_frames = kCold;
+  const TraceReplay cold = ReplayTrace(reader, {0, 1, 2}, config);
+  EXPECT_EQ(warm.total.levels[1].fetches, cold.total.levels[1].fetches);
+  EXPECT_EQ(warm.total.time, cold.total.time);
+  std::remove(path.c_str());
+}
+
 }  // namespace
 }  // namespace raycell
