@@ -221,7 +221,11 @@ class Board {
     // A mask, not a branch per cell: the loop vectorises (a processor asks on every idle event,
     // and with several processors most of them find every queued cell being worked).
     for (std::uint32_t c = 0; c < w_.cells; ++c) view_[c] = queued_rays_[c] & open_[c];
-    return QueueView::Of(view_, processors_[p].cell);
+    QueueView v = QueueView::Of(view_, processors_[p].cell);
+    v.processor = p;
+    v.processors = std::uint32_t(processors_.size());
+    v.open = open_.data();
+    return v;
   }
 
   void OnIdle(std::uint32_t p) {

@@ -31,7 +31,8 @@ std::optional<CellId> MostQueuedCell(const QueueView& queues) {
 
 std::string ScheduleFollower::Stats::ToString() const {
   std::ostringstream s;
-  s << "followed " << followed << ", skipped " << skipped << ", max work " << max_work;
+  s << "followed " << followed << ", skipped " << skipped << ", deferred " << deferred
+    << ", max work " << max_work;
   return s.str();
 }
 
@@ -39,6 +40,7 @@ void ScheduleFollower::Reset(std::vector<CellId> schedule, std::uint32_t cells) 
   for (CellId c : schedule) RAYCELL_CHECK_LT(c.value(), cells);
   schedule_ = std::move(schedule);
   cursor_ = 0;
+  used_.assign(schedule_.size(), false);
   stats_ = {};
   last_how_ = 0;
   last_skipped_ = 0;
@@ -48,11 +50,16 @@ std::optional<CellId> Scheduler::Peek(const QueueView& queues) const {
   return MostQueuedCell(queues);
 }
 
-std::optional<CellId> ScheduleFollower::Peek(const QueueView& queues) const {
+std::size_t ScheduleFollower::Find(const QueueView& queues) const {
   for (std::size_t i = cursor_; i < schedule_.size(); ++i) {
-    if (queues.has_work(schedule_[i])) return schedule_[i];
+    if (!used_[i] && queues.has_work(schedule_[i])) return i;
   }
-  return MostQueuedCell(queues);
+  return schedule_.size();
+}
+
+std::optional<CellId> ScheduleFollower::Peek(const QueueView& queues) const {
+  const std::size_t i = Find(queues);
+  return i < schedule_.size() ? std::optional<CellId>(schedule_[i]) : MostQueuedCell(queues);
 }
 
 std::optional<CellId> ScheduleFollower::Next(const QueueView& queues) {
@@ -60,19 +67,29 @@ std::optional<CellId> ScheduleFollower::Next(const QueueView& queues) {
   // No work anywhere in view (with several processors: the cells with work are all being
   // worked): nothing to choose, and the schedule keeps its place. Walking on would skip
   // every entry left and hand the rest of the frame to Max Work.
-  if (cursor_ < schedule_.size() && !queues.has_work(schedule_[cursor_]) && queues.empty()) {
+  if (queues.empty()) {
     last_how_ = 0;
     return std::nullopt;
   }
-  while (cursor_ < schedule_.size()) {
-    const CellId c = schedule_[cursor_++];
-    if (queues.has_work(c)) {
-      ++stats_.followed;
-      last_how_ = 1;
-      return c;
+  const std::size_t found = Find(queues);
+  // Entries before the one taken: used up when their cell has no work and is free, deferred
+  // (kept) when another processor is working it.
+  for (std::size_t i = cursor_; i < found; ++i) {
+    if (used_[i]) continue;
+    if (queues.busy(schedule_[i])) {
+      ++stats_.deferred;
+      continue;
     }
+    used_[i] = true;
     ++stats_.skipped;
     ++last_skipped_;
+  }
+  if (found < schedule_.size()) used_[found] = true;
+  while (cursor_ < schedule_.size() && used_[cursor_]) ++cursor_;
+  if (found < schedule_.size()) {
+    ++stats_.followed;
+    last_how_ = 1;
+    return schedule_[found];
   }
   const std::optional<CellId> c = MostQueuedCell(queues);
   stats_.max_work += c ? 1 : 0;

@@ -22,8 +22,15 @@ struct QueueView {
   const std::uint64_t* queued_rays = nullptr;  // queued_rays[c] for c < cells
   std::uint32_t cells = 0;
   std::optional<CellId> loaded;
+  // Several processors (docs/design.md §2): the one asking, their number, and the cells the
+  // others are working (open[c] == 0: busy, its queued rays masked out of queued_rays; null:
+  // none is).
+  std::uint32_t processor = 0, processors = 1;
+  const std::uint64_t* open = nullptr;
 
   std::uint64_t queued(CellId c) const { return queued_rays[c.value()]; }
+  // Whether another processor is working `c` (work released there is done by that one).
+  bool busy(CellId c) const { return open != nullptr && open[c.value()] == 0; }
   bool has_work(CellId c) const { return c.value() < cells && queued_rays[c.value()] > 0; }
   // True when no cell has queued work.
   bool empty() const;
@@ -76,18 +83,22 @@ class Scheduler {
 // no cell has work.
 std::optional<CellId> MostQueuedCell(const QueueView& queues);
 
-// Walks a fixed schedule with a cursor, skipping entries whose cell has no queued work (no
-// fetch); once the schedule is used up, Max Work. When no cell has work in view (with several
-// processors, a processor woken while the others work every cell that has some), Next
-// returns nullopt without skipping anything. Shared by the Peel oracle, Cell Tree scheduling
-// and the planners.
+// Walks a fixed schedule with a cursor, skipping (using up) entries whose cell has no queued
+// work (no fetch); once the schedule is used up, Max Work. With several processors an entry
+// whose cell another processor is working (QueueView::busy) is deferred, not used up: Next
+// takes the first entry after it whose cell has work in view, and the deferred entry stays
+// first in line for when its cell is free; when every entry left is deferred, Max Work
+// chooses and the entries stay. When no cell has work in view (a processor woken while the
+// others work every cell that has some), Next returns nullopt without skipping anything.
+// Shared by the Peel oracle, Cell Tree scheduling and the planners.
 class ScheduleFollower {
  public:
   struct Stats {
     std::size_t followed = 0;  // entries fetched
     std::size_t skipped = 0;   // entries skipped, their cell having no work
-    std::size_t max_work = 0;  // fetches chosen by Max Work after the schedule
-    // "followed 5, skipped 2, max work 1".
+    std::size_t deferred = 0;  // times an entry was passed over, its cell busy
+    std::size_t max_work = 0;  // fetches chosen by Max Work (schedule used up, or all deferred)
+    // "followed 5, skipped 2, deferred 0, max work 1".
     std::string ToString() const;
   };
 
@@ -105,8 +116,13 @@ class ScheduleFollower {
   const Stats& stats() const { return stats_; }
 
  private:
+  // The entry Next would take, from cursor_ on, and whether it would use up the entries
+  // before it that are not deferred; schedule_.size() when none has work in view.
+  std::size_t Find(const QueueView& queues) const;
+
   std::vector<CellId> schedule_;
-  std::size_t cursor_ = 0;
+  std::size_t cursor_ = 0;    // entries before it are used up
+  std::vector<bool> used_;    // per entry: used up (those from cursor_ on, taken out of order)
   Stats stats_;
   // The last Next: how it chose (0 none, 1 followed, 2 max work) and the entries it skipped.
   std::uint8_t last_how_ = 0;

@@ -81,8 +81,16 @@ class Board : public Component {
 
   // The queues a scheduler may choose from: cells being worked are not available.
   QueueView View(std::uint32_t p) {
-    for (std::uint32_t c = 0; c < w_.cells; ++c) view_[c] = locked_[c] ? 0 : queued_rays_[c];
-    return QueueView::Of(view_, processors_[p].cell);
+    open_.resize(w_.cells);
+    for (std::uint32_t c = 0; c < w_.cells; ++c) {
+      view_[c] = locked_[c] ? 0 : queued_rays_[c];
+      open_[c] = locked_[c] ? 0 : 1;
+    }
+    QueueView v = QueueView::Of(view_, processors_[p].cell);
+    v.processor = p;
+    v.processors = std::uint32_t(processors_.size());
+    v.open = open_.data();
+    return v;
   }
 
   void OnIdle(std::uint32_t p, Simulator& sim) {
@@ -168,6 +176,7 @@ class Board : public Component {
   std::vector<std::vector<UnitId>> queues_;
   std::vector<std::uint64_t> queued_rays_, view_;
   std::vector<bool> locked_;
+  std::vector<std::uint64_t> open_;  // the view's mask: 0 where locked
   std::vector<ProcessorState> processors_;
   ComponentId id_ = 0;
   std::uint64_t done_ = 0, queued_total_ = 0, peak_queued_ = 0;

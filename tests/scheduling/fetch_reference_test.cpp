@@ -193,7 +193,7 @@ TEST(FetchReferenceTest, CellTreeStatsCountFollowedSkippedAndMaxWork) {
   s.BeginFrame({1, nullptr, &frame0, 3});
   // C (r1 to A), A (r1 done, r2 to B), B (r0 to C; r2, r3 done), then Max Work C.
   EXPECT_EQ(FunctionalReplay(frame1, 3).Run(s).fetched, (Schedule{C, A, B, C}));
-  EXPECT_EQ(s.follower().stats().ToString(), "followed 3, skipped 0, max work 1");
+  EXPECT_EQ(s.follower().stats().ToString(), "followed 3, skipped 0, deferred 0, max work 1");
 }
 
 // ------------------------------------------------------------------ random frames

@@ -161,7 +161,7 @@ TEST_F(FollowTest, PeelOracleFollowsTheScheduleThenMaxWork) {
   EXPECT_EQ(s.follower().cursor(), 3u);
   EXPECT_EQ(Ask(s, {1, 5, 5}), B);  // used up: Max Work
   EXPECT_EQ(Ask(s, {0, 0, 0}), std::nullopt);
-  EXPECT_EQ(s.follower().stats().ToString(), "followed 3, skipped 0, max work 1");
+  EXPECT_EQ(s.follower().stats().ToString(), "followed 3, skipped 0, deferred 0, max work 1");
 }
 
 TEST_F(FollowTest, PeelOracleSkipsEntriesWithoutWork) {
@@ -174,7 +174,7 @@ TEST_F(FollowTest, PeelOracleSkipsEntriesWithoutWork) {
   EXPECT_EQ(s.Reason(), "max work (skipped 1)");
   EXPECT_EQ(Ask(s, {0, 0, 4}), C);
   EXPECT_EQ(s.Reason(), "max work");
-  EXPECT_EQ(s.follower().stats().ToString(), "followed 1, skipped 2, max work 2");
+  EXPECT_EQ(s.follower().stats().ToString(), "followed 1, skipped 2, deferred 0, max work 2");
   s.BeginFrame(Frame(1, 3, &tree_));  // starts over
   EXPECT_EQ(s.Reason(), "");
   EXPECT_EQ(Ask(s, {1, 1, 1}), C);
@@ -198,7 +198,49 @@ TEST_F(FollowTest, AnEmptyViewSkipsNothing) {
   EXPECT_EQ(s.Reason(), "followed");
   EXPECT_EQ(Ask(s, {0, 0, 0}), std::nullopt);
   EXPECT_EQ(Ask(s, {3, 0, 0}), A);
-  EXPECT_EQ(s.follower().stats().ToString(), "followed 2, skipped 0, max work 0");
+  EXPECT_EQ(s.follower().stats().ToString(), "followed 2, skipped 0, deferred 0, max work 0");
+}
+
+// With several processors an entry whose cell another processor is working is deferred, not
+// used up: the next entry with work is taken, and the deferred one stays first in line until
+// its cell is free; only a free cell without work is skipped.
+TEST(ScheduleFollowerTest, EntriesOfBusyCellsAreDeferredNotLost) {
+  ScheduleFollower f;
+  f.Reset({A, B, C, A}, 3);
+  // A is busy (open 0) and masked out of the queues; B has work.
+  std::vector<std::uint64_t> open = {0, ~std::uint64_t{0}, ~std::uint64_t{0}};
+  const auto view = [&](const Queues& q) {
+    QueueView v = QueueView::Of(q);
+    v.processors = 2;
+    v.open = open.data();
+    return v;
+  };
+  Queues q1 = {0, 3, 0};
+  EXPECT_EQ(f.Next(view(q1)), B);
+  EXPECT_EQ(f.cursor(), 0u);  // the first A waits
+  // Still busy, C has work: C, the first A still deferred.
+  Queues q2 = {0, 0, 2};
+  EXPECT_EQ(f.Next(view(q2)), C);
+  // A free again with work: its first entry, not Max Work's B.
+  open[0] = ~std::uint64_t{0};
+  Queues q3 = {1, 4, 0};
+  EXPECT_EQ(f.Next(view(q3)), A);
+  EXPECT_EQ(f.cursor(), 3u);  // entries 0..2 taken
+  EXPECT_EQ(f.Next(view(q3)), A);  // the last entry
+  EXPECT_EQ(f.stats().ToString(), "followed 4, skipped 0, deferred 2, max work 0");
+  // Every entry left deferred: Max Work chooses, the entries stay.
+  f.Reset({A, B}, 3);
+  open[0] = 0;
+  open[1] = 0;
+  Queues q4 = {0, 0, 5};
+  EXPECT_EQ(f.Next(view(q4)), C);
+  EXPECT_EQ(f.Reason(), "max work");
+  EXPECT_EQ(f.cursor(), 0u);
+  // A free cell without work is skipped (used up) as with one processor.
+  open[0] = ~std::uint64_t{0};
+  EXPECT_EQ(f.Next(view(q4)), C);
+  EXPECT_EQ(f.Reason(), "max work (skipped 1)");
+  EXPECT_EQ(f.cursor(), 1u);  // A used up, B deferred
 }
 
 TEST_F(FollowTest, CellTreeFrameZeroIsMaxWork) {
