@@ -148,6 +148,7 @@ class Board {
         queued_rays_(w.cells, 0),
         view_(w.cells, 0),
         open_(w.cells, kOpen),
+        holders_(w.cells, 0),
         processors_(config.processors.count),
         slots_(config.processors.count),
         obs_(observer) {
@@ -210,7 +211,9 @@ class Board {
 
   void Enqueue(const Entry& e, CellId c, std::uint64_t q) {
     queues_[c.value()].push_back(e);
-    available_ += (queued_rays_[c.value()] == 0) & (q != 0) & (open_[c.value()] != 0);
+    const bool starts = (queued_rays_[c.value()] == 0) & (q != 0);
+    available_ += starts & (open_[c.value()] != 0);
+    joinable_ += starts & (open_[c.value()] == 0);
     queued_rays_[c.value()] += q;
     queued_total_ += q;
     peak_queued_ = std::max(peak_queued_, queued_total_);
@@ -225,6 +228,8 @@ class Board {
     v.processor = p;
     v.processors = std::uint32_t(processors_.size());
     v.open = open_.data();
+    v.working = working_;
+    v.all_queued = queued_rays_.data();
     return v;
   }
 
@@ -232,17 +237,24 @@ class Board {
     // With no cell in view having work, every scheduler answers nothing and changes nothing
     // (Scheduler::Next), so it is not asked: with several processors most idle events are
     // of processors woken by work released into a cell that another one is working.
-    const std::optional<CellId> c = available_ == 0 ? std::nullopt : scheduler_.Next(View(p));
+    // (A busy cell with queued rays may be joined: the scheduler is asked then too.)
+    const std::optional<CellId> c =
+        available_ == 0 && joinable_ == 0 ? std::nullopt : scheduler_.Next(View(p));
     if (!c) {
-      RAYCELL_CHECK_EQ(available_, 0u);  // Next answers nothing only when nothing is in view
-      processors_[p].waiting = true;     // woken when work is released
+      // Next answers nothing only when nothing is in view, or postpones while others work.
+      RAYCELL_CHECK(available_ == 0 || working_ > 0);
+      processors_[p].waiting = true;  // woken when work is released
       ++waiting_;
       return;
     }
-    RAYCELL_CHECK(!queues_[c->value()].empty() && open_[c->value()] == kOpen &&
-                  queued_rays_[c->value()] != 0);
-    open_[c->value()] = 0;
-    --available_;
+    RAYCELL_CHECK(!queues_[c->value()].empty() && queued_rays_[c->value()] != 0);
+    if (holders_[c->value()] == 0) {  // lock it: its queued rays now wait for a holder
+      open_[c->value()] = 0;
+      --available_;
+      ++joinable_;
+    }
+    ++holders_[c->value()];  // more than one: processors sharing a cell (Scheduler::Next)
+    ++working_;
     processors_[p].cell = *c;
     const std::uint64_t fetches = obs_ ? memory_.stats()[0].fetches : 0;  // observed only
     const SimTime ready = memory_.Fetch(p, *c, now_);
@@ -261,6 +273,7 @@ class Board {
     std::vector<Entry>& q = queues_[c.value()];
     if (q.empty()) return;
     if (obs_) obs_->QueueTaken(p, c, queued_rays_[c.value()], now_);
+    joinable_ -= queued_rays_[c.value()] != 0;
     queued_total_ -= queued_rays_[c.value()];
     queued_rays_[c.value()] = 0;
     if (ps.head == ps.worklist.size()) {
@@ -295,7 +308,8 @@ class Board {
       if (obs_) obs_->BatchEnd(p, *ps.cell, now_);
       RAYCELL_CHECK_EQ(queued_rays_[ps.cell->value()],
                        0u);  // so unlocking leaves available_ as it is
-      open_[ps.cell->value()] = kOpen;
+      if (--holders_[ps.cell->value()] == 0) open_[ps.cell->value()] = kOpen;
+      --working_;
       Schedule(p, now_, Kind::kIdle);
       return;
     }
@@ -385,6 +399,11 @@ class Board {
   // locked its cell, and a cell is unlocked only with an empty queue, so only Enqueue and
   // the lock in OnIdle change it.
   std::uint32_t available_ = 0;
+  std::uint32_t working_ = 0;  // processors working a cell
+  // Per cell: the processors working it (more than one only when a scheduler joins it);
+  // busy cells with queued rays, which a scheduler may join.
+  std::vector<std::uint32_t> holders_;
+  std::uint32_t joinable_ = 0;
   std::vector<Processor<Entry>> processors_;
   SlotQueue<Kind> slots_;
   std::uint32_t waiting_ = 0;
@@ -435,11 +454,22 @@ ReplayResult Replay(const WorkGraph& work, Units units,
                     ReplayObserver* observer, MemoryState* memory) {
   static const MemoryState kEmpty;
   const MemoryState& start = memory ? *memory : kEmpty;
+  // The schedulers' estimate of a fetch: the first link's time, in samples.
+  std::vector<double> fetch_samples(footprints.size());
+  const LevelConfig& l0 = config.levels.front();
+  const double tps = double(config.processors.time_per_sample.picoseconds());
+  for (std::size_t c = 0; c < footprints.size(); ++c) {
+    const SimTime t = l0.latency_below + l0.bandwidth_below.TransferTime(footprints[c]);
+    fetch_samples[c] = double(t.picoseconds()) / tps;
+  }
+  FrameInfo info = frame;
+  info.fetch_samples = &fetch_samples;
+  info.processors = config.processors.count;
   const bool min = NeedsFuture(config);
   const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
   MemoryHierarchy::Requests futures;
   for (std::uint32_t pass = 1;; ++pass) {
-    scheduler.BeginFrame(frame);
+    scheduler.BeginFrame(info);
     Board<Units> board(work, units, footprints, config, scheduler, futures, start, observer);
     board.Run(frame.frame_index);
     const bool converged = pass > 1 && !board.memory().diverged();

@@ -5,6 +5,7 @@
 
 #include "base/check.h"
 #include "base/parse.h"
+#include "scheduling/balanced_scheduler.h"
 #include "scheduling/best_scheduler.h"
 #include "scheduling/cell_tree_scheduler.h"
 #include "scheduling/max_work.h"
@@ -104,6 +105,9 @@ std::string ScheduleFollower::Reason() const {
   return r;
 }
 
+template <bool kPlan, bool kPartition, bool kSteal, bool kAffinity, bool kPostpone, bool kShare>
+std::unique_ptr<Scheduler> MakeBalanced(std::uint64_t seed);
+
 const std::vector<SchedulerEntry>& SchedulerRegistry() {
   static const std::vector<SchedulerEntry> registry = {
       {"maxwork", "Max Work: the cell with the most queued rays", "Max Work",
@@ -151,8 +155,53 @@ const std::vector<SchedulerEntry>& SchedulerRegistry() {
          return std::make_unique<CellTreeBestScheduler>(seed, true);
        },
        2, true},
+      // Several processors (balanced_scheduler.h): (a) cell affinity, (b) a partitioned plan,
+      // (c) work stealing, (d) combinations. With one processor `partition`,
+      // `partition-steal` and `balanced` choose exactly as celltree-best.
+      {"affinity",
+       "cell affinity: the cell in the processor's cache if it has work, else Max Work weighted "
+       "to the cells its last cell sends rays to (frame i's tree)",
+       "cell affinity", MakeBalanced<false, false, false, true, false, false>, 1, false, true,
+       false, false},
+      {"partition",
+       "frame i's best schedule split over the processors by list scheduling (each cell on one "
+       "processor), each following its part; Max Work when its cells have no work",
+       "partitioned plan", MakeBalanced<true, true, false, false, false, false>, 1, true, true,
+       false, false},
+      {"steal",
+       "cells split over the processors by list scheduling, Max Work on one's own; with none "
+       "ready, the largest queue of the processor with the most queued rays (work stealing)",
+       "work stealing", MakeBalanced<false, true, true, false, false, false>, 1, false, true,
+       false, false},
+      {"partition-steal", "the partitioned plan, stealing when a processor's own cells have no work",
+       "partitioned plan with stealing", MakeBalanced<true, true, true, false, false, false>, 1,
+       true, true, false, false},
+      {"share",
+       "Max Work over every queue, busy cells' too: a processor may join a cell another works",
+       "Max Work with shared cells", MakeBalanced<false, false, false, false, false, true>, 1,
+       false, true, false, false},
+      {"balanced",
+       "celltree-best's plan shared by the processors (busy entries deferred); off the plan the "
+       "cached cell, else affinity-weighted Max Work over every queue (joining busy cells); while "
+       "all others work, a batch under 3 fetches' worth of work waits",
+       "balanced (plan, affinity, shared cells, postponing)",
+       MakeBalanced<true, false, false, true, true, true>, 1, true, true, false, false},
   };
   return registry;
+}
+
+// The entry's name, found by its factory (each registry entry has its own).
+template <bool kPlan, bool kPartition, bool kSteal, bool kAffinity, bool kPostpone, bool kShare>
+std::unique_ptr<Scheduler> MakeBalanced(std::uint64_t seed) {
+  const auto make = &MakeBalanced<kPlan, kPartition, kSteal, kAffinity, kPostpone, kShare>;
+  for (const SchedulerEntry& e : SchedulerRegistry()) {
+    if (e.make == make) {
+      return std::make_unique<BalancedScheduler>(
+          e.name, BalanceOptions{kPlan, kPartition, kSteal, kAffinity, kPostpone, kShare}, seed);
+    }
+  }
+  RAYCELL_CHECK(false);  // only the registry names these factories
+  return nullptr;
 }
 
 const std::vector<std::string>& SchedulerNames() {

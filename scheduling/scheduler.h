@@ -27,6 +27,14 @@ struct QueueView {
   // none is).
   std::uint32_t processor = 0, processors = 1;
   const std::uint64_t* open = nullptr;
+  // Processors other than the one asking that are working a cell now. While some are, a
+  // scheduler may postpone (Scheduler::Next).
+  std::uint32_t working = 0;
+  // Queued rays of every cell, busy ones included (null: not given). A scheduler may choose a
+  // busy cell with queued rays: the processor then *joins* it, working it beside the others
+  // (a cell is read-only volume data, so each holds a copy); every queue the holders take is
+  // taken whole by the first that asks. Only the `share` schedulers do.
+  const std::uint64_t* all_queued = nullptr;
 
   std::uint64_t queued(CellId c) const { return queued_rays[c.value()]; }
   // Whether another processor is working `c` (work released there is done by that one).
@@ -47,6 +55,11 @@ struct FrameInfo {
   std::uint32_t cells = 0;             // cells of the grid; every tree's cell_count() <= cells
   // Frame i-2's tree, for schedulers whose registry entry has history 2; else null.
   const CellTree* before_previous = nullptr;
+  // Per cell: how long bringing it into a processor's cache from the level below takes (the
+  // first link's latency + footprint / bandwidth), in units of one sample's work; null when
+  // unknown (a scheduler asked outside a replay).
+  const std::vector<double>* fetch_samples = nullptr;
+  std::uint32_t processors = 1;  // block processors of the replay
 };
 
 // A scheduling policy. Per frame: BeginFrame once, then Next once per fetch.
@@ -55,7 +68,11 @@ struct FrameInfo {
 // frames did: a replay of frames A..B then gives each frame what a replay of the whole trace
 // gives it (frame shards and resumed sweeps rely on this).
 //
-// Next returns a cell with queued work, or nullopt iff no cell has any. A scheduler may keep
+// Next returns a cell with queued work, or nullopt when no cell has any. It may also return
+// nullopt with work in view while another processor is working (QueueView::working > 0):
+// it *postpones*, the processor waiting until work is released somewhere (Aila and Karras's
+// postponing of small batches); it then changes nothing, as with no work. With no other
+// processor working it must choose, so a replay always progresses. A scheduler may keep
 // state between calls (a cursor into a schedule), so the caller must call Next again only
 // after it has processed the returned cell's queue (fetched it and worked its rays). When no
 // cell has work, Next changes nothing that a later Next, Peek or Reason could show (no

@@ -223,7 +223,8 @@ TEST(LoadConfig, BadUnitsAndValuesNameFileAndLine) {
             "replay.toml:1:8: seed: must be in 0..18446744073709551615, got -1");
   EXPECT_EQ(LoadError("scheduler = \"fastest\"\n"),
             "replay.toml:1:13: scheduler: unknown scheduler 'fastest' (expected maxwork, "
-            "roundrobin, random, peel, celltree, best, celltree-best or celltree-union)");
+            "roundrobin, random, peel, celltree, best, celltree-best, celltree-union, affinity, "
+            "partition, steal, partition-steal, share or balanced)");
   EXPECT_EQ(
       LoadError("granularity = \"cell\"\n"),
       "replay.toml:1:15: granularity: unknown granularity 'cell' (expected ray, node or auto)");
@@ -375,7 +376,8 @@ TEST(ApplyOverride, ErrorsNameTheKeyAndLeaveTheConfigUnchanged) {
             "override 'processors.prefetch': expected true or false, got 'yes'");
   EXPECT_EQ(err("scheduler", "fastest"),
             "override 'scheduler': unknown scheduler 'fastest' (expected maxwork, roundrobin, "
-            "random, peel, celltree, best, celltree-best or celltree-union)");
+            "random, peel, celltree, best, celltree-best, celltree-union, affinity, partition, "
+            "steal, partition-steal, share or balanced)");
   EXPECT_EQ(c, DefaultConfig());
 }
 

@@ -3,7 +3,9 @@
 // Test-only: the reference the fast core must equal exactly (tests/replay/core_test.cpp).
 #include "tests/replay/reference_replayer.h"
 
+#include <algorithm>
 #include <deque>
+#include <numeric>
 #include <sstream>
 
 #include "base/check.h"
@@ -40,7 +42,7 @@ class Board : public Component {
         queues_(w.cells),
         queued_rays_(w.cells, 0),
         view_(w.cells, 0),
-        locked_(w.cells, false),
+        locked_(w.cells, 0),
         processors_(config.processors.count) {
     for (UnitId u : w.roots) Enqueue(u);
   }
@@ -90,6 +92,8 @@ class Board : public Component {
     v.processor = p;
     v.processors = std::uint32_t(processors_.size());
     v.open = open_.data();
+    v.working = std::accumulate(locked_.begin(), locked_.end(), 0u);
+    v.all_queued = queued_rays_.data();
     return v;
   }
 
@@ -99,8 +103,8 @@ class Board : public Component {
       processors_[p].waiting = true;  // woken when work is released
       return;
     }
-    RAYCELL_CHECK(!queues_[c->value()].empty() && !locked_[c->value()]);
-    locked_[c->value()] = true;
+    RAYCELL_CHECK(!queues_[c->value()].empty());
+    ++locked_[c->value()];  // more than one when a scheduler joins a busy cell
     processors_[p].cell = *c;
     const SimTime ready = memory_.Fetch(p, *c, sim.now());
     processors_[p].stall = processors_[p].stall + (ready - sim.now());
@@ -130,7 +134,7 @@ class Board : public Component {
     ProcessorState& ps = processors_[p];
     if (ps.worklist.empty()) TakeQueue(ps);  // units that arrived while the cell was loaded
     if (ps.worklist.empty()) {
-      locked_[ps.cell->value()] = false;
+      --locked_[ps.cell->value()];
       sim.Schedule(id_, SimTime::Zero(), kIdle, Pack(p, 0));
       return;
     }
@@ -175,7 +179,7 @@ class Board : public Component {
   MemoryHierarchy memory_;
   std::vector<std::vector<UnitId>> queues_;
   std::vector<std::uint64_t> queued_rays_, view_;
-  std::vector<bool> locked_;
+  std::vector<std::uint32_t> locked_;  // per cell: the processors working it
   std::vector<std::uint64_t> open_;  // the view's mask: 0 where locked
   std::vector<ProcessorState> processors_;
   ComponentId id_ = 0;
@@ -226,8 +230,19 @@ ReplayResult ReferenceReplayFrame(const WorkGraph& work,
   const bool min = UsesMin(config);
   const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
   MemoryHierarchy::Requests futures;
+  // A fetch from the board, in samples, for the schedulers that weigh it.
+  std::vector<double> fetch_samples;
+  for (const std::uint64_t f : footprints) {
+    const LevelConfig& l0 = config.levels[0];
+    fetch_samples.push_back(
+        double((l0.latency_below + l0.bandwidth_below.TransferTime(f)).picoseconds()) /
+        double(config.processors.time_per_sample.picoseconds()));
+  }
+  FrameInfo info = frame;
+  info.fetch_samples = &fetch_samples;
+  info.processors = config.processors.count;
   for (std::uint32_t pass = 1;; ++pass) {
-    scheduler.BeginFrame(frame);
+    scheduler.BeginFrame(info);
     Board board(work, footprints, config, scheduler, futures);
     Simulator sim;
     board.set_id(sim.Add(board));

@@ -351,7 +351,7 @@ TEST(MakeSchedulerTest, EveryNameRoundTrips) {
     ASSERT_NE(s, nullptr);
     EXPECT_EQ(s->Name(), name);
   }
-  EXPECT_EQ(SchedulerNames().size(), 8u);
+  EXPECT_EQ(SchedulerNames().size(), 14u);
   EXPECT_NE(dynamic_cast<RandomScheduler*>(MakeScheduler("random", 99).get()), nullptr);
   EXPECT_EQ(dynamic_cast<RandomScheduler&>(*MakeScheduler("random", 99)).seed(), 99u);
 }
@@ -363,7 +363,8 @@ TEST(MakeSchedulerTest, UnknownNameListsTheValidOnes) {
   } catch (const InputError& e) {
     EXPECT_STREQ(e.what(),
                  "scheduler: unknown scheduler 'MaxWork' (expected maxwork, roundrobin, random, "
-                 "peel, celltree, best, celltree-best or celltree-union)");
+                 "peel, celltree, best, celltree-best, celltree-union, affinity, partition, steal, "
+            "partition-steal, share or balanced)");
   }
   EXPECT_THROW(MakeScheduler("", 0), InputError);
 }

@@ -1,0 +1,191 @@
+#include "scheduling/balanced_scheduler.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include "base/check.h"
+#include "scheduling/best_scheduler.h"
+
+namespace raycell {
+
+BalancedScheduler::BalancedScheduler(std::string name, BalanceOptions options, std::uint64_t seed)
+    : name_(std::move(name)), options_(options), seed_(seed) {}
+
+void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
+  cells_ = frame.cells;
+  fetch_samples_ = frame.fetch_samples;
+  reason_.clear();
+  plan_.clear();
+  if (options_.plan && frame.previous != nullptr) plan_ = PlanFor(*frame.previous, seed_);
+  // What frame i-1's tree says of each cell: its work, samples per visit, where rays go next.
+  work_.assign(cells_, 0.0);
+  samples_per_visit_.assign(cells_, 0.0);
+  flow_.clear();
+  std::vector<double> visits(cells_, 0.0);
+  if (frame.previous != nullptr) {
+    const CellTree& t = *frame.previous;
+    if (options_.affinity) flow_.assign(std::size_t{cells_} * cells_, 0.0);
+    for (const NodeId n : t.nodes()) {
+      const std::uint32_t c = t.cell(n).value();
+      work_[c] += double(t.samples(n));
+      visits[c] += double(t.visits(n));
+      const NodeId parent = t.parent(n);
+      if (options_.affinity && parent != kRootNode) {
+        flow_[std::size_t{t.cell(parent).value()} * cells_ + c] += double(t.enter(n));
+      }
+    }
+    for (std::uint32_t c = 0; c < cells_; ++c) {
+      if (visits[c] > 0) samples_per_visit_[c] = work_[c] / visits[c];
+    }
+    for (std::uint32_t from = 0; from < cells_ && !flow_.empty(); ++from) {
+      double* row = flow_.data() + std::size_t{from} * cells_;
+      const double out = std::accumulate(row, row + cells_, 0.0);
+      if (out > 0) std::for_each(row, row + cells_, [out](double& x) { x /= out; });
+    }
+  }
+  // The cells over the processors: list scheduling, largest work first, each to the
+  // processor with the least work so far (then the fewest cells, then the lowest number).
+  const std::uint32_t p = options_.partition ? std::max<std::uint32_t>(frame.processors, 1) : 1;
+  owner_.assign(cells_, 0);
+  if (p > 1) {
+    std::vector<std::uint32_t> order(cells_);
+    std::iota(order.begin(), order.end(), 0u);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::uint32_t a, std::uint32_t b) { return work_[a] > work_[b]; });
+    std::vector<double> load(p, 0.0);
+    std::vector<std::uint32_t> count(p, 0);
+    for (const std::uint32_t c : order) {
+      std::uint32_t best = 0;
+      for (std::uint32_t k = 1; k < p; ++k) {
+        if (load[k] < load[best] || (load[k] == load[best] && count[k] < count[best])) best = k;
+      }
+      owner_[c] = best;
+      load[best] += work_[c];
+      ++count[best];
+    }
+  }
+  followers_.assign(p, ScheduleFollower());
+  std::vector<std::vector<CellId>> parts(p);
+  for (const CellId c : plan_) parts[owner_[c.value()]].push_back(c);
+  for (std::uint32_t k = 0; k < p; ++k) followers_[k].Reset(std::move(parts[k]), cells_);
+}
+
+QueueView BalancedScheduler::Own(const QueueView& queues) const {
+  if (followers_.size() <= 1) return queues;
+  own_.assign(queues.queued_rays, queues.queued_rays + queues.cells);
+  for (std::uint32_t c = 0; c < queues.cells; ++c) {
+    if (owner_[c] != queues.processor) own_[c] = 0;
+  }
+  QueueView v = queues;
+  v.queued_rays = own_.data();
+  return v;
+}
+
+template <typename Take>
+std::optional<CellId> BalancedScheduler::Best(const QueueView& queues, const std::uint64_t* queued,
+                                              Take take) const {
+  const double* flow = nullptr;
+  if (!flow_.empty() && queues.loaded && queues.loaded->value() < cells_) {
+    flow = flow_.data() + std::size_t{queues.loaded->value()} * cells_;
+  }
+  std::optional<CellId> best;
+  double best_score = 0;
+  for (std::uint32_t c = 0; c < queues.cells; ++c) {
+    const std::uint64_t q = queued[c];
+    if (q == 0 || !take(c)) continue;
+    const double score = double(q) * (1.0 + (flow ? flow[c] : 0.0));
+    if (!best || score > best_score) best = CellId(c), best_score = score;
+  }
+  return best;
+}
+
+std::optional<CellId> BalancedScheduler::Choose(const QueueView& queues,
+                                                ScheduleFollower** follower) const {
+  *follower = nullptr;
+  // Affinity: the cell in the processor's cache, when it has work, costs no fetch.
+  if (options_.affinity && queues.loaded) {
+    const std::uint64_t* q =
+        options_.share && queues.all_queued != nullptr ? queues.all_queued : queues.queued_rays;
+    if (q[queues.loaded->value()] > 0) return queues.loaded;
+  }
+  const std::uint32_t k =
+      followers_.size() > 1 ? std::min<std::uint32_t>(queues.processor, followers_.size() - 1) : 0;
+  const QueueView own = Own(queues);
+  const auto mine = [&](std::uint32_t c) { return followers_.size() <= 1 || owner_[c] == k; };
+  if (options_.plan) {
+    // Follower k's next entry with work in view, or Max Work over k's cells.
+    const std::optional<CellId> c = followers_[k].Peek(own);
+    if (c) {
+      *follower = const_cast<ScheduleFollower*>(&followers_[k]);
+      return c;
+    }
+  } else if (const std::optional<CellId> c = Best(queues, queues.queued_rays, mine)) {
+    return c;
+  }
+  if (options_.steal && followers_.size() > 1) {
+    // The processor with the most queued rays gives up its largest queue.
+    std::vector<std::uint64_t> load(followers_.size(), 0);
+    for (std::uint32_t c = 0; c < queues.cells; ++c) load[owner_[c]] += queues.queued_rays[c];
+    load[k] = 0;
+    const std::uint32_t victim =
+        std::uint32_t(std::max_element(load.begin(), load.end()) - load.begin());
+    if (load[victim] > 0) {
+      return Best(queues, queues.queued_rays, [&](std::uint32_t c) { return owner_[c] == victim; });
+    }
+  }
+  // Sharing: busy cells' queues count too (the processor joins the cell).
+  const bool share = options_.share && queues.all_queued != nullptr;
+  return Best(queues, share ? queues.all_queued : queues.queued_rays,
+              [](std::uint32_t) { return true; });
+}
+
+bool BalancedScheduler::TooSmall(const QueueView& queues, CellId c) const {
+  if (fetch_samples_ == nullptr || samples_per_visit_[c.value()] <= 0) return false;
+  if (queues.loaded == c) return false;  // in the cache: no fetch
+  const std::uint64_t* q =
+      options_.share && queues.all_queued != nullptr ? queues.all_queued : queues.queued_rays;
+  const double work = double(q[c.value()]) * samples_per_visit_[c.value()];
+  return work < kPostponeFactor * (*fetch_samples_)[c.value()];
+}
+
+bool BalancedScheduler::NoWork(const QueueView& queues) const {
+  if (!queues.empty()) return false;
+  if (!options_.share || queues.all_queued == nullptr) return true;
+  return std::all_of(queues.all_queued, queues.all_queued + queues.cells,
+                     [](std::uint64_t q) { return q == 0; });
+}
+
+std::optional<CellId> BalancedScheduler::Peek(const QueueView& queues) const {
+  if (NoWork(queues)) return std::nullopt;
+  ScheduleFollower* follower = nullptr;
+  return Choose(queues, &follower);
+}
+
+std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
+  if (NoWork(queues)) return std::nullopt;
+  ScheduleFollower* follower = nullptr;
+  std::optional<CellId> c = Choose(queues, &follower);
+  RAYCELL_CHECK(c.has_value());
+  reason_ = follower ? follower->Reason() : "max work";
+  // Postpone only while every other processor is working: at most one waits by choice.
+  if (options_.postpone && queues.working > 0 && queues.working + 1 >= queues.processors &&
+      TooSmall(queues, *c)) {
+    const std::optional<CellId> largest = Best(
+        queues, options_.share && queues.all_queued ? queues.all_queued : queues.queued_rays,
+        [](std::uint32_t) { return true; });
+    if (largest && !TooSmall(queues, *largest)) {
+      reason_ = "largest (plan's batch too small)";
+      return largest;  // the plan keeps its place
+    }
+    reason_.clear();
+    return std::nullopt;  // postponed: wait for released work
+  }
+  if (follower) {
+    const std::optional<CellId> taken = follower->Next(Own(queues));
+    RAYCELL_CHECK(taken == c);
+    reason_ = follower->Reason();
+  }
+  return c;
+}
+
+}  // namespace raycell

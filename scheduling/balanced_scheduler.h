@@ -1,0 +1,97 @@
+// Schedulers for several block processors (docs/design.md §5 "Load balancing"): the paper
+// schedules one processor; with P of them the question is also which processor takes which
+// cell, and when a processor should rather wait than fetch a cell for a handful of rays.
+// One class, its parts switched by BalanceOptions, each combination a registry entry:
+//  - plan: follow the best schedule of frame i-1's tree (celltree-best's plan, entries of
+//    busy cells deferred); without it, Max Work's order.
+//  - partition: the plan's cells split over the processors before the frame, by list
+//    scheduling (Graham): cells in order of their work in frame i-1's tree, each to the
+//    processor with the least work so far, so every cell stays on one processor; a
+//    processor follows the entries of its own cells (or Max Work over them).
+//  - steal: a processor with none of its own cells ready takes a whole cell's queue from the
+//    processor with the most queued rays (its largest queue); without steal it takes Max
+//    Work's choice among the other cells.
+//  - affinity: the cell in the processor's cache first when it has work (no fetch); else,
+//    among the cells with work, those the processor's last cell sends its rays to (by frame
+//    i-1's tree: rays entering a node of cell c from a node of the last cell): Max Work on
+//    queued rays x (1 + the share of the last cell's rays going there).
+//  - share: off the plan, busy cells' queues count too (QueueView::all_queued): a processor
+//    may join a cell another one works, so the hot cells of a frame do not leave the other
+//    processors idle.
+//  - postpone: while every other processor is working, a cell whose queued work (queued rays
+//    x the cell's samples per ray visit in frame i-1's tree) is less than kPostponeFactor
+//    fetches (FrameInfo::fetch_samples) is not fetched: the largest queue is taken instead if
+//    it is large enough, else the processor waits for released work (Scheduler::Next).
+//    Aila and Karras's postponing of rays until queues fill, as a rule on batch size; at
+//    most one processor waits by choice, so the tails of frames are not serialised.
+// With one processor nothing is busy, shared, stolen or postponed, the cached cell never has
+// work when the processor asks, and the one partition is the whole plan: `partition`,
+// `partition-steal` and `balanced` then choose exactly as celltree-best (a test).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "scheduling/scheduler.h"
+
+namespace raycell {
+
+struct BalanceOptions {
+  bool plan = false;
+  bool partition = false;
+  bool steal = false;
+  bool affinity = false;
+  bool postpone = false;
+  bool share = false;
+};
+
+// A batch is postponed when its estimated work is below this many fetch times.
+// Chosen on the study's capture (BENCHMARKS.md "Several processors": 0.5 to 4 tried).
+inline constexpr double kPostponeFactor = 3.0;
+
+class BalancedScheduler : public Scheduler {
+ public:
+  BalancedScheduler(std::string name, BalanceOptions options, std::uint64_t seed);
+  std::string Name() const override { return name_; }
+  void BeginFrame(const FrameInfo& frame) override;
+  std::optional<CellId> Next(const QueueView& queues) override;
+  std::optional<CellId> Peek(const QueueView& queues) const override;
+  std::string Reason() const override { return reason_; }
+
+ private:
+  // The choice for `queues` without the postponing rule, and the follower it came from (null:
+  // not a plan entry).
+  std::optional<CellId> Choose(const QueueView& queues, ScheduleFollower** follower) const;
+  // `queues` with the cells of other processors masked out (partition), in own_.
+  QueueView Own(const QueueView& queues) const;
+  // Max Work over the cells with work in view that `take` accepts, weighted by affinity.
+  // `queued`: per cell (queues.queued_rays, or all_queued to count busy cells too).
+  template <typename Take>
+  std::optional<CellId> Best(const QueueView& queues, const std::uint64_t* queued, Take take) const;
+  // Whether no cell has queued rays this scheduler may take.
+  bool NoWork(const QueueView& queues) const;
+  // Whether a batch of `c` is too small to fetch while others work.
+  bool TooSmall(const QueueView& queues, CellId c) const;
+
+  std::string name_;
+  BalanceOptions options_;
+  std::uint64_t seed_;
+  std::uint32_t cells_ = 0;
+  std::vector<CellId> plan_;
+  const std::vector<double>* fetch_samples_ = nullptr;
+  std::vector<double> samples_per_visit_;  // per cell, from frame i-1's tree; 0: unknown
+  std::vector<double> work_;               // per cell: samples in frame i-1's tree
+  // Affinity: flow_[from * cells + to], rays entering nodes of `to` from nodes of `from`,
+  // as shares of what leaves `from`.
+  std::vector<double> flow_;
+  // Each cell's processor and one follower per processor over the plan's entries of its
+  // cells (one follower, owner 0 everywhere, without partition).
+  std::vector<std::uint32_t> owner_;
+  std::vector<ScheduleFollower> followers_;
+  mutable std::vector<std::uint64_t> own_;  // scratch for Own()
+  std::string reason_;
+};
+
+}  // namespace raycell
