@@ -80,6 +80,8 @@ MemoryHierarchy::MemoryHierarchy(const ReplayConfig& config,
     }
   }
   arrival_.assign(config.processors.count, std::vector<SimTime>(footprints.size()));
+  arrives_.assign(levels_.size(), std::vector<SimTime>());
+  for (std::size_t i = 1; i < levels_.size(); ++i) arrives_[i].assign(footprints.size(), SimTime());
   prefetched_.assign(config.processors.count, std::vector<bool>(footprints.size(), false));
 }
 
@@ -130,6 +132,9 @@ SimTime& MemoryHierarchy::LinkFree(std::size_t level, std::uint32_t processor) {
 
 SimTime MemoryHierarchy::Transfer(std::uint32_t processor, CellId cell, std::size_t from, SimTime t,
                                   std::optional<CellId> pinned) {
+  // A shared level holds a cell from when it is asked for there, but can pass it on only
+  // once it has arrived (another processor's transfer of it may still be on its way).
+  if (from >= 1 && from < levels_.size()) t = std::max(t, arrives_[from][cell.value()]);
   for (std::size_t i = from; i-- > 0;) {  // down through every level above `from`
     SimTime& free = LinkFree(i, processor);
     const SimTime start = std::max(t, free);
@@ -141,6 +146,7 @@ SimTime MemoryHierarchy::Transfer(std::uint32_t processor, CellId cell, std::siz
                           processor, pinned.has_value());
     }
     Store(i, processor).Insert(cell, i == 0 ? pinned : std::nullopt);
+    if (i >= 1) arrives_[i][cell.value()] = t;
     CheckedIncrement(stats_[i].fetches);
     CheckedIncrement(stats_[i].bytes, footprints_[cell.value()]);
   }

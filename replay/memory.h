@@ -117,6 +117,7 @@ class MemoryHierarchy {
   std::vector<LevelStats> stats_;
   std::vector<std::vector<SimTime>> arrival_;  // [processor][cell]: when a prefetch lands
   std::vector<std::vector<bool>> prefetched_;  // [processor][cell]: not yet used
+  std::vector<std::vector<SimTime>> arrives_;  // [shared level][cell]: when it gets there
   std::uint64_t prefetches_ = 0, prefetch_hits_ = 0;
   ReplayObserver* observer_ = nullptr;
 };

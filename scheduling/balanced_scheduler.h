@@ -15,9 +15,10 @@
 //    among the cells with work, those the processor's last cell sends its rays to (by frame
 //    i-1's tree: rays entering a node of cell c from a node of the last cell): Max Work on
 //    queued rays x (1 + the share of the last cell's rays going there).
-//  - share: off the plan, busy cells' queues count too (QueueView::all_queued): a processor
-//    may join a cell another one works, so the hot cells of a frame do not leave the other
-//    processors idle.
+//  - share: when no free cell has work in view, the busy cell with the most queued rays
+//    (QueueView::all_queued): the processor joins a cell another one works, so the hot cells
+//    of a frame do not leave the other processors idle. The holders take the cell's queue
+//    whole, whoever asks first, so a join may find it taken and leave with nothing.
 //  - postpone: while every other processor is working, a cell whose queued work (queued rays
 //    x the cell's samples per ray visit in frame i-1's tree) is less than kPostponeFactor
 //    fetches (FrameInfo::fetch_samples) is not fetched: the largest queue is taken instead if

@@ -177,13 +177,14 @@ const std::vector<SchedulerEntry>& SchedulerRegistry() {
        "partitioned plan with stealing", MakeBalanced<true, true, true, false, false, false>, 1,
        true, true, false, false},
       {"share",
-       "Max Work over every queue, busy cells' too: a processor may join a cell another works",
+       "Max Work; with no free cell ready, the busy cell with the most queued rays (a "
+       "processor joins a cell another works)",
        "Max Work with shared cells", MakeBalanced<false, false, false, false, false, true>, 1,
        false, true, false, false},
       {"balanced",
        "celltree-best's plan shared by the processors (busy entries deferred); off the plan the "
-       "cached cell, else affinity-weighted Max Work over every queue (joining busy cells); while "
-       "all others work, a batch under 3 fetches' worth of work waits",
+       "cached cell, else affinity-weighted Max Work, joining busy cells when no free one is "
+       "ready; while all others work, a batch under 3 fetches' worth of work waits",
        "balanced (plan, affinity, shared cells, postponing)",
        MakeBalanced<true, false, false, true, true, true>, 1, true, true, false, false},
   };

@@ -1,0 +1,144 @@
+// The schedulers for several processors (scheduling/balanced_scheduler.h) in the replay: every
+// ray, segment and sample processed exactly once for 1..16 processors (counted from the rays,
+// not from the work graph), with one processor the planners choose as celltree-best, and a
+// processor that joins a busy cell or postpones changes the replay as documented.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <sstream>
+
+#include "replay/replayer.h"
+#include "replay/work.h"
+#include "scheduling/scheduler.h"
+#include "tests/graph/test_trees.h"
+#include "tests/replay/random_frame.h"
+
+namespace raycell {
+namespace {
+
+const char* const kBalancing[] = {"affinity", "partition", "steal",
+                                  "partition-steal", "share", "balanced"};
+
+std::string Describe(const ReplayResult& r) {
+  std::ostringstream s;
+  s << r.fetches << " " << r.time << " " << r.work << " " << r.stall << " " << r.idle << " "
+    << r.events << " " << r.peak_queued_rays;
+  for (const LevelStats& l : r.levels) s << " " << l.fetches;
+  return s.str();
+}
+
+struct Counts {
+  std::uint64_t rays = 0, segments = 0, samples = 0;
+};
+
+// Counted from the rays themselves: rays with a visit, visits, samples.
+Counts Count(const RayBatch& rays) {
+  Counts c;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    if (rays.visit_end(i) > rays.visit_begin(i)) ++c.rays;
+  }
+  c.segments = rays.cells().size();
+  for (const std::uint32_t s : rays.samples()) c.samples += s;
+  return c;
+}
+
+TEST(Balance, EveryRaySegmentAndSampleOnceForOneToSixteenProcessors) {
+  std::mt19937 rng(22);
+  int replays = 0;
+  for (int trial = 0; trial < 16; ++trial) {
+    const std::uint32_t cells = 2 + rng() % 12;
+    const RayBatch rays = testing::RandomReplayFrame(rng, cells, 80);
+    const RayBatch before = testing::RandomReplayFrame(rng, cells, 80);
+    const CellTree tree = testing::TreeOf(rays), previous = testing::TreeOf(before);
+    const Counts expected = Count(rays);
+    std::vector<std::uint64_t> footprints(cells);
+    for (auto& f : footprints) f = 1000 + rng() % 300'000;
+    for (const std::uint32_t p : {1u, 2u, 3u, 4u, 8u, 16u}) {
+      for (const char* name : kBalancing) {
+        ReplayConfig config = DefaultConfig();
+        config.scheduler = &SchedulerByName(name, "test");
+        config.processors.count = p;
+        if (trial % 2 == 1) config.levels[0].capacity = 2;
+        const WorkGraph w = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay
+                                ? RaySegmentWork(rays, cells)
+                                : NodeWork(tree, cells);
+        auto s = MakeScheduler(*config.scheduler, config.seed);
+        const FrameInfo info{1, &tree, trial % 3 == 0 ? nullptr : &previous, cells};
+        const ReplayResult r = ReplayFrame(w, footprints, config, *s, info, Bound(tree));
+        EXPECT_EQ(r.rays, expected.rays) << name << " P" << p << " trial " << trial;
+        EXPECT_EQ(r.segments, expected.segments) << name << " P" << p;
+        EXPECT_EQ(r.samples, expected.samples) << name << " P" << p;
+        EXPECT_EQ(r.work, config.processors.time_per_sample * expected.samples) << name;
+        // Each processor's work, stall and idle add up to the time.
+        EXPECT_EQ(r.work + r.stall + r.idle, r.time * p) << name << " P" << p;
+        ++replays;
+      }
+    }
+  }
+  EXPECT_EQ(replays, 16 * 6 * int(std::size(kBalancing)));
+}
+
+// With one processor nothing is busy, shared or postponed, and the one partition is the whole
+// plan: the planners replay exactly as celltree-best, frame 0 (Max Work) included.
+TEST(Balance, OneProcessorFollowsThePlanAsCellTreeBest) {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 24; ++trial) {
+    const std::uint32_t cells = 2 + rng() % 10;
+    const RayBatch rays = testing::RandomReplayFrame(rng, cells, 60);
+    const CellTree tree = testing::TreeOf(rays);
+    const CellTree previous = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 60));
+    const std::vector<std::uint64_t> footprints(cells, 50'000);
+    ReplayConfig config = DefaultConfig();
+    config.granularity = trial % 2 ? ReplayConfig::Granularity::kRay : ReplayConfig::Granularity::kNode;
+    const WorkGraph w = trial % 2 ? RaySegmentWork(rays, cells) : NodeWork(tree, cells);
+    const FrameInfo info{std::size_t(trial % 2), &tree, trial % 4 == 0 ? nullptr : &previous,
+                         cells};
+    const auto replay = [&](const char* name) {
+      config.scheduler = &SchedulerByName(name, "test");
+      auto s = MakeScheduler(*config.scheduler, 1);
+      return Describe(ReplayFrame(w, footprints, config, *s, info, Bound(tree)));
+    };
+    const std::string reference = replay("celltree-best");
+    for (const char* name : {"partition", "partition-steal", "balanced"}) {
+      EXPECT_EQ(replay(name), reference) << name << " trial " << trial;
+    }
+  }
+}
+
+// Two processors, per ray segment; 40 rays A B and one ray C, 2 us a visit; a fetch into a
+// cache takes 10.04 us (40 ns + 16000 B at 1.6 GB/s), the board costs nothing.
+// Max Work: p0 takes A (ready 10.04), p1 takes C (10.04, done 12.04), then B, whose first ray
+// p0 released at 12.04 (ready 22.08); p0 releases a B ray every 2 us until 90.04 and p1, never
+// starved, takes B's queue whenever its worklist runs out (6 rays at 22.08, 34.08, ..., 82.08)
+// and works the 40 until 22.08 + 80 = 102.08 us: 3 fetches.
+// `share` chooses as Max Work while a free cell has work, so the same until 90.04, when p0,
+// done with A, finds only B, busy, with 4 rays queued (84.04 .. 90.04): it joins B (ready
+// 100.08), but p1 took those 4 at 94.08, so p0 leaves with nothing: 4 fetches, same time.
+TEST(Balance, ASharingProcessorJoinsBusyCellsHandWorked) {
+  constexpr CellId A{0}, B{1}, C{2};
+  std::vector<testing::TestRay> paths;
+  for (int i = 0; i < 40; ++i) paths.push_back({kNoParent, 0, {A, B}});
+  paths.push_back({kNoParent, 0, {C}});
+  const RayBatch rays = testing::RaysOf(paths, 200);
+  const CellTree tree = testing::TreeOf(rays);
+  const WorkGraph w = RaySegmentWork(rays, 3);
+  const std::vector<std::uint64_t> footprints(3, 16'000);
+  ReplayConfig config = DefaultConfig();
+  config.processors.count = 2;
+  config.levels[1].bandwidth_below = ParseBandwidth("unlimited", "test");
+  config.levels[1].latency_below = SimTime::Zero();
+  const auto replay = [&](const char* name) {
+    config.scheduler = &SchedulerByName(name, "test");
+    auto s = MakeScheduler(*config.scheduler, 1);
+    return ReplayFrame(w, footprints, config, *s, FrameInfo{0, &tree, nullptr, 3}, Bound(tree));
+  };
+  const ReplayResult maxwork = replay("maxwork"), share = replay("share");
+  EXPECT_EQ(maxwork.fetches, 3u);
+  EXPECT_EQ(maxwork.time, SimTime::Picoseconds(102'080'000));
+  EXPECT_EQ(share.fetches, 4u);
+  EXPECT_EQ(share.time, SimTime::Picoseconds(102'080'000));
+  EXPECT_EQ(share.samples, maxwork.samples);
+}
+
+}  // namespace
+}  // namespace raycell
