@@ -168,7 +168,10 @@ std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
   RAYCELL_CHECK(c.has_value());
   reason_ = follower ? follower->Reason() : "max work";
   // Postpone only while every other processor is working: at most one waits by choice.
-  if (options_.postpone && queues.working > 0 && queues.working + 1 >= queues.processors &&
+  // Postpone only while every other processor is working, and only on boards of
+  // kPostponeMinProcessors or more, where one waiting processor is a small part of the whole.
+  if (options_.postpone && queues.processors >= kPostponeMinProcessors &&
+      queues.working + 1 >= queues.processors &&
       TooSmall(queues, *c)) {
     const std::optional<CellId> largest = Best(
         queues, options_.share && queues.all_queued ? queues.all_queued : queues.queued_rays,

@@ -19,7 +19,8 @@
 //    (QueueView::all_queued): the processor joins a cell another one works, so the hot cells
 //    of a frame do not leave the other processors idle. The holders take the cell's queue
 //    whole, whoever asks first, so a join may find it taken and leave with nothing.
-//  - postpone: while every other processor is working, a cell whose queued work (queued rays
+//  - postpone: on boards of kPostponeMinProcessors or more, while every other processor is
+//    working, a cell whose queued work (queued rays
 //    x the cell's samples per ray visit in frame i-1's tree) is less than kPostponeFactor
 //    fetches (FrameInfo::fetch_samples) is not fetched: the largest queue is taken instead if
 //    it is large enough, else the processor waits for released work (Scheduler::Next).
@@ -51,6 +52,9 @@ struct BalanceOptions {
 // A batch is postponed when its estimated work is below this many fetch times.
 // Chosen on the study's capture (BENCHMARKS.md "Several processors": 0.5 to 4 tried).
 inline constexpr double kPostponeFactor = 3.0;
+// Processors a board needs for postponing: with fewer, the one that waits is too large a share
+// (on the study's capture postponing costs 60% at 2 processors and 17% at 4, saves 16% at 8).
+inline constexpr std::uint32_t kPostponeMinProcessors = 8;
 
 class BalancedScheduler : public Scheduler {
  public:
