@@ -7,6 +7,7 @@
 #include "base/checked.h"
 #include "engine/simulator.h"  // SimulationStalled
 #include "engine/slot_queue.h"
+#include "replay/time_bound.h"
 
 namespace raycell {
 namespace {
@@ -440,6 +441,7 @@ ReplayResult Replay(const WorkGraph& work, Units units,
     if (!min || converged || pass == max_passes) {
       ReplayResult r = board.Result();
       if (BoundHolds(config)) r.bound = bound;
+      r.time_bound = TimeLowerBound(work, footprints, config, nullptr);
       r.passes = pass;
       r.min_converged = !min || converged;
       return r;

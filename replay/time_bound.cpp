@@ -1,0 +1,181 @@
+#include "replay/time_bound.h"
+
+#include <algorithm>
+#include <utility>
+
+#include "base/check.h"
+#include "base/checked.h"
+
+namespace raycell {
+namespace {
+
+// ---- (c) The longest chain, and the cells used ----------------------------------------
+// The work graph is a forest (each unit has one predecessor), walked depth first from each
+// root in turn with an explicit stack of (unit, samples of the path before it): every unit is
+// pushed once, and the stack holds only the units waiting beside one root's path. Path sums
+// are at most the frame's samples, which fit 64 bits (WorkGraph::totals). Each walk marks the
+// cells of the units it reaches in `used`.
+
+// The breadth-first records (work.h): entry x's successors are entries first_child[x] ..
+// first_child[x + 1], the roots are entries 0 .. roots.
+std::uint64_t LongestPackedChain(const WorkGraph& w, std::vector<bool>* used) {
+  const WorkGraph::Packed* p = w.packed.data();
+  std::uint64_t longest = 0;
+  std::vector<std::pair<std::uint32_t, std::uint64_t>> stack;
+  for (std::uint32_t root = 0; root < w.roots.size(); ++root) {
+    stack.push_back({root, 0});
+    while (!stack.empty()) {
+      const auto [x, before] = stack.back();
+      stack.pop_back();
+      (*used)[p[x].cell.value()] = true;
+      const std::uint64_t done = before + p[x].samples;
+      longest = std::max(longest, done);
+      for (std::uint32_t k = p[x].first_child; k < p[x + 1].first_child; ++k) {
+        stack.push_back({k, done});
+      }
+    }
+  }
+  return longest;
+}
+
+// The columns: unit u's successors are succ[succ_begin[u] .. succ_begin[u + 1]].
+std::uint64_t LongestColumnChain(const WorkGraph& w, std::vector<bool>* used) {
+  std::uint64_t longest = 0;
+  std::vector<std::pair<UnitId, std::uint64_t>> stack;
+  for (UnitId root : w.roots) {
+    stack.push_back({root, 0});
+    while (!stack.empty()) {
+      const auto [u, before] = stack.back();
+      stack.pop_back();
+      (*used)[w.cell[u].value()] = true;
+      const std::uint64_t done = before + w.samples[u];
+      longest = std::max(longest, done);
+      for (UnitId k = w.succ_begin[u]; k < w.succ_begin[u + 1]; ++k) {
+        stack.push_back({w.succ[k], done});
+      }
+    }
+  }
+  return longest;
+}
+
+// The Compact form (work.h), walked a ray at a time: a ray's visits one after the other,
+// each ray spawned at a visit pushed with the path up to that visit's end. `spawned` is
+// ordered by the visit spawned at, and a ray's first unit points at the first entry at or
+// after its first visit, so one cursor follows the ray's visits (as CompactUnits in
+// replayer.cpp).
+std::uint64_t LongestCompactChain(const WorkGraph& w, std::vector<bool>* used) {
+  const WorkGraph::Compact& c = w.compact;
+  const std::uint8_t* stream = c.stream.data();
+  const std::size_t spawned = c.spawned.size();
+  std::uint64_t longest = 0;
+  std::vector<std::pair<WorkGraph::CompactUnit, std::uint64_t>> stack;
+  for (const WorkGraph::CompactUnit& root : c.roots) {
+    stack.push_back({root, 0});
+    while (!stack.empty()) {
+      const auto [first, before] = stack.back();
+      stack.pop_back();
+      std::uint64_t done = before;
+      std::uint32_t at = first.offset, visit = first.visit;
+      std::size_t k = first.spawned;
+      for (bool last = false; !last; ++visit) {
+        const std::uint32_t cell_last = ReadVarint(stream, &at);
+        (*used)[cell_last >> 1] = true;
+        last = (cell_last & 1) != 0;
+        done += ReadVarint(stream, &at);
+        for (; k < spawned && c.spawned[k].at == visit; ++k) {
+          stack.push_back({c.spawned[k].unit, done});
+        }
+      }
+      longest = std::max(longest, done);
+    }
+  }
+  return longest;
+}
+
+// ---- (b) The links ----------------------------------------------------------------------
+
+// Moving `bytes` across the link below `level`.
+SimTime LinkCost(const LevelConfig& level, std::uint64_t bytes) {
+  return level.latency_below + level.bandwidth_below.TransferTime(bytes);
+}
+
+// Whether the shared links' term holds (time_bound.h (b)): not with prefetch on several
+// processors, whose prefetched cells others may take from a shared level mid-transfer.
+bool SharedLinksBound(const ReplayConfig& config) {
+  return config.processors.count == 1 || !config.processors.prefetch;
+}
+
+SimTime LinksTerm(const std::vector<bool>& used, const std::vector<std::uint64_t>& footprints,
+                  const ReplayConfig& config, const std::vector<std::vector<bool>>* held) {
+  const std::size_t cells = used.size();
+  // held_up_to[c]: some copy of a level <= i holds c at the start, for the level i at hand.
+  std::vector<bool> held_up_to(cells, false);
+  const auto hold = [&](std::size_t level) {
+    if (held == nullptr) return;
+    for (std::size_t c = 0; c < cells; ++c) held_up_to[c] = held_up_to[c] || (*held)[level][c];
+  };
+  // The links below level 0, one per processor: the sum over cells, shared out over them.
+  // In 128 bits: P links may carry more than one SimTime's worth between them.
+  hold(0);
+  unsigned __int128 below_caches = 0;
+  for (std::size_t c = 0; c < cells; ++c) {
+    if (used[c] && !held_up_to[c])
+      below_caches += LinkCost(config.levels[0], footprints[c]).picoseconds();
+  }
+  const std::uint32_t p = config.processors.count;
+  const unsigned __int128 per_processor = below_caches / p + (below_caches % p != 0 ? 1 : 0);
+  RAYCELL_CHECK(per_processor <= SimTime::Max().picoseconds());
+  SimTime links = SimTime::Picoseconds(std::uint64_t(per_processor));
+  if (!SharedLinksBound(config)) return links;
+  for (std::size_t i = 1; i < config.levels.size(); ++i) {
+    hold(i);
+    SimTime shared;
+    for (std::size_t c = 0; c < cells; ++c) {
+      if (used[c] && !held_up_to[c]) shared = shared + LinkCost(config.levels[i], footprints[c]);
+    }
+    links = std::max(links, shared);
+  }
+  return links;
+}
+
+}  // namespace
+
+SimTime TimeBoundTerms::value() const { return std::max({work, links, chain}); }
+
+std::string TimeBoundTerms::ToString() const {
+  return "work " + work.ToString() + ", links " + links.ToString() + ", chain " + chain.ToString();
+}
+
+TimeBoundTerms TimeLowerBoundTerms(const WorkGraph& work,
+                                   const std::vector<std::uint64_t>& footprints,
+                                   const ReplayConfig& config,
+                                   const std::vector<std::vector<bool>>* held_at_start) {
+  RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
+  RAYCELL_CHECK(!config.levels.empty() && config.processors.count > 0);
+  if (held_at_start != nullptr) {
+    RAYCELL_CHECK_EQ(held_at_start->size(), config.levels.size());
+    for (const std::vector<bool>& level : *held_at_start) {
+      RAYCELL_CHECK_EQ(level.size(), std::size_t(work.cells));
+    }
+  }
+  const SimTime tps = config.processors.time_per_sample;
+  std::vector<bool> used(work.cells, false);
+  const std::uint64_t chain = work.compact.units != 0 ? LongestCompactChain(work, &used)
+                              : !work.packed.empty()  ? LongestPackedChain(work, &used)
+                                                      : LongestColumnChain(work, &used);
+  TimeBoundTerms t;
+  const std::uint64_t total = (tps * work.total_samples()).picoseconds();
+  const std::uint32_t p = config.processors.count;
+  t.work = SimTime::Picoseconds(total / p + (total % p != 0 ? 1 : 0));
+  t.links = LinksTerm(used, footprints, config, held_at_start);
+  t.chain = tps * chain;
+  return t;
+}
+
+SimTime TimeLowerBound(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
+                       const ReplayConfig& config,
+                       const std::vector<std::vector<bool>>* held_at_start) {
+  return TimeLowerBoundTerms(work, footprints, config, held_at_start).value();
+}
+
+}  // namespace raycell
