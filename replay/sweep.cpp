@@ -30,7 +30,7 @@ constexpr char kCombinationsPart[] = " combinations=";
 constexpr char kShardPart[] = " shard=";
 constexpr char kCheckpointStart[] = "# raycell sweep checkpoint ";
 // The totals' columns at the end of every row (replay/result_table.h, kSweepColumns).
-constexpr std::size_t kResultColumns = 12;
+constexpr std::size_t kResultColumns = 13;
 
 // Whole decimal number, or false.
 bool ParseSize(const std::string& s, std::size_t* out) {
@@ -124,15 +124,16 @@ ParsedRow ParseRow(const std::string& row, const std::string& where) {
   t.fetches = Field(fields[0], where);
   if (!fields[1].empty()) t.bound = Field(fields[1], where);
   t.time = SimTime::Picoseconds(Field(fields[2], where));
-  t.work = SimTime::Picoseconds(Field(fields[3], where));
-  t.stall = SimTime::Picoseconds(Field(fields[4], where));
-  t.idle = SimTime::Picoseconds(Field(fields[5], where));
-  // fields[6], utilisation, is recomputed from the times
-  t.peak_queued_rays = Field(fields[7], where);
-  t.peak_queued_bytes = Field(fields[8], where);
-  t.rays = Field(fields[9], where);
-  t.segments = Field(fields[10], where);
-  t.samples = Field(fields[11], where);
+  t.time_bound = SimTime::Picoseconds(Field(fields[3], where));
+  t.work = SimTime::Picoseconds(Field(fields[4], where));
+  t.stall = SimTime::Picoseconds(Field(fields[5], where));
+  t.idle = SimTime::Picoseconds(Field(fields[6], where));
+  // fields[7], utilisation, is recomputed from the times
+  t.peak_queued_rays = Field(fields[8], where);
+  t.peak_queued_bytes = Field(fields[9], where);
+  t.rays = Field(fields[10], where);
+  t.segments = Field(fields[11], where);
+  t.samples = Field(fields[12], where);
   return r;
 }
 

@@ -34,9 +34,10 @@ std::string ExpectedRow(std::size_t index, const std::vector<std::string>& value
   s << index;
   for (const std::string& v : values) s << ',' << v;
   s << ',' << r.fetches << ',' << (r.bound ? std::to_string(*r.bound) : "") << ','
-    << r.time.picoseconds() << ',' << r.work.picoseconds() << ',' << r.stall.picoseconds() << ','
-    << r.idle.picoseconds() << ',' << FormatFixed(r.utilisation, 4) << ',' << r.peak_queued_rays
-    << ',' << r.peak_queued_bytes << ',' << r.rays << ',' << r.segments << ',' << r.samples << '\n';
+    << r.time.picoseconds() << ',' << r.time_bound.picoseconds() << ',' << r.work.picoseconds()
+    << ',' << r.stall.picoseconds() << ',' << r.idle.picoseconds() << ','
+    << FormatFixed(r.utilisation, 4) << ',' << r.peak_queued_rays << ',' << r.peak_queued_bytes
+    << ',' << r.rays << ',' << r.segments << ',' << r.samples << '\n';
   return s.str();
 }
 
@@ -250,8 +251,8 @@ TEST_F(SweepTest, BadValuesFailBeforeAnyWork) {
 
 constexpr char kMixedHeader[] =
     "index,scheduler,processors.count,level.cache.capacity,processors.prefetch,"
-    "level.board.bandwidth,fetches,bound,time_ps,work_ps,stall_ps,idle_ps,utilisation,"
-    "peak_queued_rays,peak_queued_bytes,rays,segments,samples\n";
+    "level.board.bandwidth,fetches,bound,time_ps,time_bound_ps,work_ps,stall_ps,idle_ps,"
+    "utilisation,peak_queued_rays,peak_queued_bytes,rays,segments,samples\n";
 
 // Every row of the mixed sweep is its combination's ReplayTrace, whatever the jobs and the
 // blocks (several blocks of 7 combinations, or one).
@@ -271,8 +272,8 @@ TEST_F(SweepTest, RowsEqualSingleReplaysWithTheBound) {
   const std::string rows = Run(spec, "bound.csv", 2);
   EXPECT_EQ(rows, Expected(spec,
                            "index,scheduler,processors.count,level.cache.capacity,fetches,bound,"
-                           "time_ps,work_ps,stall_ps,idle_ps,utilisation,peak_queued_rays,"
-                           "peak_queued_bytes,rays,segments,samples\n"));
+                           "time_ps,time_bound_ps,work_ps,stall_ps,idle_ps,utilisation,"
+                           "peak_queued_rays,peak_queued_bytes,rays,segments,samples\n"));
   EXPECT_NE(rows.find("\n0,maxwork,1,1 cell,"), std::string::npos);
   EXPECT_NE(rows.find("\n11,peel,2,2 cells,"), std::string::npos);
 }
@@ -295,9 +296,9 @@ TEST_F(SweepTest, CombinationsShareReplaysOnlyWhereNoResultCanDiffer) {
   EXPECT_EQ(ReadBytes(out), Expected(spec,
                                      "index,scheduler,seed,processors.prefetch,"
                                      "processors.queue_record_bytes,granularity,fetches,bound,"
-                                     "time_ps,work_ps,stall_ps,idle_ps,utilisation,"
-                                     "peak_queued_rays,peak_queued_bytes,rays,segments,"
-                                     "samples\n"));
+                                     "time_ps,time_bound_ps,work_ps,stall_ps,idle_ps,"
+                                     "utilisation,peak_queued_rays,peak_queued_bytes,rays,"
+                                     "segments,samples\n"));
   // Two processors: granularity auto is ray, which node is not; every combination differs.
   spec.base.processors.count = 2;
   spec.varies = {Vary::Parse("scheduler=maxwork,random"), Vary::Parse("granularity=auto,node")};
