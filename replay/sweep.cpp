@@ -427,6 +427,14 @@ void ParseComment(const std::string& comment, ShardFile* f) {
   }
 }
 
+// ",fetches,bound,time_ps,...,samples": the totals' columns this version writes at the end of
+// every header.
+std::string TotalsHeader() {
+  std::string totals = "," + ToCsvHeader(ToStatsTable(ReplayResult{}, kSweepColumns));
+  totals.pop_back();  // the '\n'
+  return totals;
+}
+
 ShardFile ReadShard(const std::string& path) {
   ShardFile f;
   f.path = path;
@@ -439,6 +447,13 @@ ShardFile ReadShard(const std::string& path) {
   if (f.rows.size() < 2) throw InputError(path + ": no comment line and header");
   ParseComment(f.rows[0], &f);
   f.header = f.rows[1];
+  const std::string totals = TotalsHeader();
+  if (f.header.size() < totals.size() ||
+      f.header.compare(f.header.size() - totals.size(), totals.size(), totals) != 0) {
+    throw InputError(path + ": line 2: the header does not end with the totals' columns (" +
+                     totals.substr(1) +
+                     "): written by another version of raycell? Rerun that shard to merge it");
+  }
   f.rows.erase(f.rows.begin(), f.rows.begin() + 2);
   return f;
 }

@@ -396,6 +396,33 @@ TEST_F(SweepTest, MergeRejectsShardsOfAnotherSweep) {
   EXPECT_NE(error.find("not a shard of the same sweep"), std::string::npos) << error;
 }
 
+// Shards written before time_bound_ps was a column (their totals one column short) are
+// refused, not misread: frame shards' rows are parsed and added, and their last thirteen
+// fields are not this version's totals.
+TEST_F(SweepTest, MergeRejectsShardsWithOtherTotalsColumns) {
+  std::vector<std::string> old;
+  for (const char* range : {"0..1", "2..3"}) {
+    old.push_back(Fresh(std::string("old_") + range + ".csv"));
+    RunSweep(*reader_, Frames(Spec(), range), old.back(), {});
+    std::string text;
+    for (const std::string& line : Split(ReadBytes(old.back()), '\n')) {
+      if (line.empty() || line[0] == '#') {
+        text += line.empty() ? "" : line + "\n";
+        continue;
+      }
+      std::vector<std::string> fields = Split(line, ',');
+      fields.erase(fields.end() - 10);  // time_bound_ps, the 4th of 13 totals
+      text += Join(fields, ",") + "\n";
+    }
+    ASSERT_NE(text.find(",time_ps,work_ps,"), std::string::npos) << text;
+    WriteText(old.back(), text);
+  }
+  const std::string error = ErrorOf([&] { MergeSweepShards(Fresh("old.csv"), old); });
+  EXPECT_NE(error.find(old[0] + ": line 2: the header does not end with the totals' columns"),
+            std::string::npos)
+      << error;
+}
+
 TEST_F(SweepTest, InterruptedSweepResumes) {
   const SweepSpec spec = Spec();
   const std::string whole = Run(spec, "uninterrupted.csv", 2);
