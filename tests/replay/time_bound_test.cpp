@@ -320,5 +320,23 @@ TEST(TimeBound, EveryFormOfTheWorkGivesTheSameBound) {
   }
 }
 
+// A frame of hundreds of thousands of rays: the walks' queues and stacks grow, and the packed
+// walk drops the front of its queue many times; still the same terms in every form.
+TEST(TimeBound, EveryFormGivesTheSameBoundOnALargeFrame) {
+  std::mt19937 rng(8);
+  const std::uint32_t cells = 6;
+  const RayBatch rays = testing::RandomReplayFrame(rng, cells, 300'000, 3);
+  ASSERT_GT(rays.size(), 100'000u);  // 150,725
+  const std::vector<std::uint64_t> footprints = {10, 20, 30, 40, 50, 60};
+  ReplayConfig config = RandomBoard(rng, 4, footprints);
+  const WorkGraph packed = RaySegmentWork(rays, cells);
+  WorkGraph columns = packed;
+  columns.packed.clear();
+  const WorkGraph compact = testing::CompactWork(rng, rays, cells, 70'000);
+  const std::string expected = TimeLowerBoundTerms(packed, footprints, config).ToString();
+  EXPECT_EQ(TimeLowerBoundTerms(columns, footprints, config).ToString(), expected);
+  EXPECT_EQ(TimeLowerBoundTerms(compact, footprints, config).ToString(), expected);
+}
+
 }  // namespace
 }  // namespace raycell
