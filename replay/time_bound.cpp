@@ -5,6 +5,7 @@
 
 #include "base/check.h"
 #include "base/checked.h"
+#include "scheduling/scheduler.h"
 
 namespace raycell {
 namespace {
@@ -111,9 +112,13 @@ SimTime LinkCost(const LevelConfig& level, std::uint64_t bytes) {
 }
 
 // Whether the shared links' term holds (time_bound.h (b)): not with prefetch on several
-// processors, whose prefetched cells others may take from a shared level mid-transfer.
+// processors, whose prefetched cells others may take from a shared level mid-transfer. A
+// scheduler that predicts nothing prefetches nothing (SchedulerEntry::predicts, as
+// CanonicalConfig has it), so its replays get the term whatever processors.prefetch says.
 bool SharedLinksBound(const ReplayConfig& config) {
-  return config.processors.count == 1 || !config.processors.prefetch;
+  const bool prefetches =
+      config.processors.prefetch && (config.scheduler == nullptr || config.scheduler->predicts);
+  return config.processors.count == 1 || !prefetches;
 }
 
 SimTime LinksTerm(const std::vector<std::uint8_t>& used,

@@ -14,14 +14,15 @@
 //      level i, whatever the replacement does later.
 //       - Shared link below level i >= 1 (one transfer at a time): those first transfers are
 //         disjoint intervals on the link, starting at 0 or later and ending by the end of the
-//         fetch that made them, itself at most T; so T >= their sum. Only without prefetch, or
-//         with one processor: a prefetch inserts its cell into the shared levels when it starts,
-//         so with several processors another one may take the cell from there (over its own
-//         link) and finish the frame while the prefetch still holds the shared link; the sum
-//         may then exceed T (tests/replay/time_bound_test.cpp has such a frame). With one
-//         processor a prefetched cell has queued work, so the processor fetches it later, and
-//         that fetch ends after the prefetch (over the same link below level 0, or waiting for
-//         the prefetch's arrival).
+//         fetch that made them, itself at most T; so T >= their sum. Only without prefetch (or
+//         with a scheduler that predicts nothing, so prefetches nothing: SchedulerEntry::
+//         predicts), or with one processor: a prefetch inserts its cell into the shared levels
+//         when it starts, so with several processors another one may take the cell from there
+//         (over its own link) and finish the frame while the prefetch still holds the shared
+//         link; the sum may then exceed T (tests/replay/time_bound_test.cpp has such a frame).
+//         With one processor a prefetched cell has queued work, so the processor fetches it
+//         later, and that fetch ends after the prefetch (over the same link below level 0, or
+//         waiting for the prefetch's arrival).
 //       - The links below level 0, one per processor: the worker's first fetch of a cell that
 //         no level-0 copy holds at the start either crosses its own link, or finds the cell in
 //         its cache, brought there by its own earlier fetch or prefetch, which crossed that link

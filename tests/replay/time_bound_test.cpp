@@ -126,6 +126,9 @@ TEST(TimeBound, SharedLinkBindsOnCostlyFetches) {
   // With two it keeps only the caches' links: ceil(280 / 2) = 140 ps.
   config.processors.count = 2;
   EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(10, 140, 20));
+  // Unless the scheduler predicts nothing, and so prefetches nothing: the board's 2000 ps.
+  config.scheduler = &SchedulerByName("random", "test");
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(10, 2000, 20));
 }
 
 // Three one-sample rays in A, B, C (1, 2 and 4 bytes) on two processors whose cache links
@@ -266,10 +269,10 @@ TEST(TimeBound, NeverAboveTheReplaysTimeUnderAnyScheduler) {
     const WorkGraph w = EffectiveGranularity(base) == ReplayConfig::Granularity::kRay
                             ? RaySegmentWork(rays, cells)
                             : NodeWork(tree, cells);
-    const TimeBoundTerms terms = TimeLowerBoundTerms(w, footprints, base);
     for (const SchedulerEntry& entry : SchedulerRegistry()) {
       ReplayConfig config = base;
       config.scheduler = &entry;
+      const TimeBoundTerms terms = TimeLowerBoundTerms(w, footprints, config);
       auto s = MakeScheduler(entry, 1 + trial);
       const ReplayResult r = ReplayFrame(w, footprints, config, *s, info, Bound(tree));
       ASSERT_LE(r.time_bound, r.time)
