@@ -115,7 +115,10 @@ void ScaleBack(ReplayResult& r, std::uint32_t k, std::uint32_t processors) {
   r.segments = CheckedMul(r.segments, k);
   r.samples = CheckedMul(r.samples, k);
   r.work = r.work * k;
-  r.time = r.time + SimTime::Picoseconds(extra.picoseconds() / processors);
+  // The added work spread over the processors, in the time and its bound alike.
+  const SimTime spread = SimTime::Picoseconds(extra.picoseconds() / processors);
+  r.time = r.time + spread;
+  r.time_bound = r.time_bound + spread;
 }
 
 }  // namespace
@@ -130,6 +133,7 @@ void Accumulate(const ReplayResult& f, ReplayResult* t) {
   CheckedIncrement(t->fetches, f.fetches);
   if (f.bound) t->bound = CheckedAdd(t->bound.value_or(0), *f.bound);
   t->time = t->time + f.time;
+  t->time_bound = t->time_bound + f.time_bound;  // every frame starts at time 0
   t->work = t->work + f.work;
   t->stall = t->stall + f.stall;
   t->idle = t->idle + f.idle;

@@ -27,8 +27,9 @@ struct TraceReplay {
 };
 
 // Adds frame result `f` to the running total `t` as TraceReplay::total is formed: counts,
-// bytes and times summed, peaks and passes as maxima, the bound summed where it holds,
-// min_converged only if every frame's. Utilisation is not summed: FinishTotal sets it.
+// bytes and times summed (time_bound too: each frame starts at time 0), peaks and passes as
+// maxima, the bound summed where it holds, min_converged only if every frame's. Utilisation
+// is not summed: FinishTotal sets it.
 void Accumulate(const ReplayResult& f, ReplayResult* t);
 // Sets a total's utilisation from its summed times: work / (time x processors), as a frame's.
 void FinishTotal(std::uint32_t processors, ReplayResult* t);
@@ -139,9 +140,10 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
 //
 // Sampling (sample_every = k > 1) replays only 1 in k ray trees of each frame (a primary ray
 // with all its descendants, SampleRayTrees) and scales back what grows with the rays: rays,
-// segments, samples and work times k, and the simulated time by the added work spread over
-// the processors. Fetches, stall and the bound are those of the sample: the error the
-// sampling makes is what the study's run time against error measures (study/accuracy.h).
+// segments, samples and work times k, and the simulated time and its lower bound
+// (time_bound) by the added work spread over the processors (so the bound stays at most the
+// time). Fetches, stall and the bound are those of the sample: the error the sampling makes
+// is what the study's run time against error measures (study/accuracy.h).
 //
 // `observer` (may be null) watches every frame's replay (ReplayFrame); it needs
 // sample_every = 1, since it would see the sample's times, not the scaled ones.

@@ -7,6 +7,7 @@
 #include "base/checked.h"
 #include "engine/simulator.h"  // SimulationStalled
 #include "engine/slot_queue.h"
+#include "replay/time_bound.h"
 
 namespace raycell {
 namespace {
@@ -480,6 +481,9 @@ ReplayResult Replay(const WorkGraph& work, Units units,
         const bool warm_cache = !start.empty() && !start.held[0][0].empty();
         r.bound = warm_cache && bound > 0 ? bound - 1 : bound;
       }
+      const std::vector<std::vector<bool>> held =
+          start.empty() ? std::vector<std::vector<bool>>() : HeldAnywhere(start, work.cells);
+      r.time_bound = TimeLowerBound(work, footprints, config, start.empty() ? nullptr : &held);
       r.passes = pass;
       r.min_converged = !min || converged;
       if (memory) *memory = board.memory().State();

@@ -31,6 +31,7 @@ struct ReplayResult {
   std::uint64_t fetches = 0;           // into the processors' caches (levels[0].fetches)
   std::optional<std::uint64_t> bound;  // maxGen bound, where it holds (1 processor, 1 cell)
   SimTime time;                        // until the last unit is done
+  SimTime time_bound;                  // <= time under any scheduler (replay/time_bound.h)
   SimTime work, stall, idle;           // summed over processors; each processor's add up
                                        // to `time`
   double utilisation = 0;              // work / (time * processors)

@@ -10,6 +10,7 @@ void AddResult(const ReplayResult& r, const ResultColumns& columns, StatsTable* 
     t->AddNone("bound");
   }
   t->AddCount("time_ps", r.time.picoseconds())
+      .AddCount("time_bound_ps", r.time_bound.picoseconds())
       .AddCount("work_ps", r.work.picoseconds())
       .AddCount("stall_ps", r.stall.picoseconds())
       .AddCount("idle_ps", r.idle.picoseconds())

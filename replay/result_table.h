@@ -20,8 +20,8 @@ inline constexpr ResultColumns kReplayJsonColumns{true, true};    // `replay --f
 inline constexpr ResultColumns kReplayTableColumns{false, true};  // `replay --format table`
 
 // Appends, in this order: fetches, bound (no value where it does not hold), time_ps,
-// work_ps, stall_ps, idle_ps, utilisation (4 decimals), peak_queued_rays, peak_queued_bytes,
-// rays, segments, samples; then the extras and levels `columns` asks for.
+// time_bound_ps, work_ps, stall_ps, idle_ps, utilisation (4 decimals), peak_queued_rays,
+// peak_queued_bytes, rays, segments, samples; then the extras and levels `columns` asks for.
 void AddResult(const ReplayResult& result, const ResultColumns& columns, StatsTable* table);
 StatsTable ToStatsTable(const ReplayResult& result, const ResultColumns& columns);
 

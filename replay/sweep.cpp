@@ -30,7 +30,7 @@ constexpr char kCombinationsPart[] = " combinations=";
 constexpr char kShardPart[] = " shard=";
 constexpr char kCheckpointStart[] = "# raycell sweep checkpoint ";
 // The totals' columns at the end of every row (replay/result_table.h, kSweepColumns).
-constexpr std::size_t kResultColumns = 12;
+constexpr std::size_t kResultColumns = 13;
 
 // Whole decimal number, or false.
 bool ParseSize(const std::string& s, std::size_t* out) {
@@ -124,15 +124,16 @@ ParsedRow ParseRow(const std::string& row, const std::string& where) {
   t.fetches = Field(fields[0], where);
   if (!fields[1].empty()) t.bound = Field(fields[1], where);
   t.time = SimTime::Picoseconds(Field(fields[2], where));
-  t.work = SimTime::Picoseconds(Field(fields[3], where));
-  t.stall = SimTime::Picoseconds(Field(fields[4], where));
-  t.idle = SimTime::Picoseconds(Field(fields[5], where));
-  // fields[6], utilisation, is recomputed from the times
-  t.peak_queued_rays = Field(fields[7], where);
-  t.peak_queued_bytes = Field(fields[8], where);
-  t.rays = Field(fields[9], where);
-  t.segments = Field(fields[10], where);
-  t.samples = Field(fields[11], where);
+  t.time_bound = SimTime::Picoseconds(Field(fields[3], where));
+  t.work = SimTime::Picoseconds(Field(fields[4], where));
+  t.stall = SimTime::Picoseconds(Field(fields[5], where));
+  t.idle = SimTime::Picoseconds(Field(fields[6], where));
+  // fields[7], utilisation, is recomputed from the times
+  t.peak_queued_rays = Field(fields[8], where);
+  t.peak_queued_bytes = Field(fields[9], where);
+  t.rays = Field(fields[10], where);
+  t.segments = Field(fields[11], where);
+  t.samples = Field(fields[12], where);
   return r;
 }
 
@@ -426,6 +427,14 @@ void ParseComment(const std::string& comment, ShardFile* f) {
   }
 }
 
+// ",fetches,bound,time_ps,...,samples": the totals' columns this version writes at the end of
+// every header.
+std::string TotalsHeader() {
+  std::string totals = "," + ToCsvHeader(ToStatsTable(ReplayResult{}, kSweepColumns));
+  totals.pop_back();  // the '\n'
+  return totals;
+}
+
 ShardFile ReadShard(const std::string& path) {
   ShardFile f;
   f.path = path;
@@ -438,6 +447,13 @@ ShardFile ReadShard(const std::string& path) {
   if (f.rows.size() < 2) throw InputError(path + ": no comment line and header");
   ParseComment(f.rows[0], &f);
   f.header = f.rows[1];
+  const std::string totals = TotalsHeader();
+  if (f.header.size() < totals.size() ||
+      f.header.compare(f.header.size() - totals.size(), totals.size(), totals) != 0) {
+    throw InputError(path + ": line 2: the header does not end with the totals' columns (" +
+                     totals.substr(1) +
+                     "): written by another version of raycell? Rerun that shard to merge it");
+  }
   f.rows.erase(f.rows.begin(), f.rows.begin() + 2);
   return f;
 }

@@ -10,8 +10,8 @@
 //   # raycell sweep schema="raycell-sweep/1" trace="a.rct" config="gicube.toml" config_hash=...
 //     vary="scheduler=..."
 //     frames="all" combinations=6 shard="all"                       (one line)
-//   index,scheduler,processors.count,fetches,bound,time_ps,work_ps,stall_ps,idle_ps,
-//     utilisation,peak_queued_rays,peak_queued_bytes,rays,segments,samples
+//   index,scheduler,processors.count,fetches,bound,time_ps,time_bound_ps,work_ps,stall_ps,
+//     idle_ps,utilisation,peak_queued_rays,peak_queued_bytes,rays,segments,samples
 //   0,maxwork,1,...
 //
 // Values are totals over the selected frames, as `raycell replay` prints them

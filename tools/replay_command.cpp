@@ -66,22 +66,34 @@ std::string Ms(std::uint64_t ps) {
   return buf;
 }
 
+// How far the time is from its lower bound: "1.234", or "-" for a bound of 0 (no work).
+std::string TimeOverBound(std::uint64_t time_ps, std::uint64_t bound_ps) {
+  if (bound_ps == 0) return "-";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", double(time_ps) / double(bound_ps));
+  return buf;
+}
+
 void TableRow(const std::string& frame, const StatsTable& t, std::ostream& out) {
   const StatValue& bound = *t.Find("bound");
   char line[512];
-  std::snprintf(line, sizeof line, "%8s %9llu %7s %12s %12s %12s %12s %6.1f%% %10llu %12llu\n",
-                frame.c_str(), (unsigned long long)t.Count("fetches"),
-                std::holds_alternative<NoValue>(bound) ? "-" : FormatValue(bound).c_str(),
-                Ms(t.Count("time_ps")).c_str(), Ms(t.Count("work_ps")).c_str(),
-                Ms(t.Count("stall_ps")).c_str(), Ms(t.Count("idle_ps")).c_str(),
-                100 * t.Real("utilisation"), (unsigned long long)t.Count("peak_queued_rays"),
-                (unsigned long long)t.Count("segments"));
+  std::snprintf(
+      line, sizeof line, "%8s %9llu %7s %12s %13s %10s %12s %12s %12s %6.1f%% %10llu %12llu\n",
+      frame.c_str(), (unsigned long long)t.Count("fetches"),
+      std::holds_alternative<NoValue>(bound) ? "-" : FormatValue(bound).c_str(),
+      Ms(t.Count("time_ps")).c_str(), Ms(t.Count("time_bound_ps")).c_str(),
+      TimeOverBound(t.Count("time_ps"), t.Count("time_bound_ps")).c_str(),
+      Ms(t.Count("work_ps")).c_str(), Ms(t.Count("stall_ps")).c_str(),
+      Ms(t.Count("idle_ps")).c_str(), 100 * t.Real("utilisation"),
+      (unsigned long long)t.Count("peak_queued_rays"), (unsigned long long)t.Count("segments"));
   out << line;
 }
 
+// `time bound ms` is the lower bound on the time under any scheduler (time_bound_ps), and
+// `time/bound` how far the replay is from it.
 void PrintTable(const TraceReplay& t, std::ostream& out) {
-  out << "   frame   fetches   bound      time ms      work ms     stall ms      idle ms   util"
-         " peak rays     segments\n";
+  out << "   frame   fetches   bound      time ms time bound ms time/bound      work ms"
+         "     stall ms      idle ms   util peak rays     segments\n";
   for (const ReplayResult& r : t.frames) {
     TableRow(std::to_string(r.frame), ToStatsTable(r, kReplayTableColumns), out);
   }
@@ -191,7 +203,9 @@ void AddReplayCommand(CLI::App& app) {
       "rays move on to the queue of their next cell, spawned rays are worked in place.\n"
       "Reported per frame and in total: fetches into the processors' caches (and bytes per\n"
       "level), the maxGen bound where it holds (one processor with a one-cell cache),\n"
-      "simulated time split into work, fetch stall and idle, utilisation, peak queued rays,\n"
+      "simulated time split into work, fetch stall and idle, a lower bound on the time that\n"
+      "no scheduler beats (the work over the processors, the busiest link's transfers, the\n"
+      "longest chain of dependent work) and the time over it, utilisation, peak queued rays,\n"
       "and the rays, segments and samples processed (equal to the trace's).\n\n"
       "Schedulers:\n" +
       SchedulersHelp() + "\nDefaults (see --print-config):\n" + DefaultsHelp() +

@@ -71,6 +71,7 @@ TEST(Balance, EveryRaySegmentAndSampleOnceForOneToSixteenProcessors) {
         EXPECT_EQ(r.work, config.processors.time_per_sample * expected.samples) << name;
         // Each processor's work, stall and idle add up to the time.
         EXPECT_EQ(r.work + r.stall + r.idle, r.time * p) << name << " P" << p;
+        EXPECT_LE(r.time_bound, r.time) << name << " P" << p;
         ++replays;
       }
     }

@@ -199,35 +199,6 @@ RayBatch Widened(std::mt19937& rng, const RayBatch& rays, std::uint32_t cell_sca
   return out;
 }
 
-// `rays` cut into batches of 1 to `max` rays with frame-local ids, as TraceReader delivers
-// them, fed to a RaySegmentWorkBuilder.
-WorkGraph CompactWork(std::mt19937& rng, const RayBatch& rays, std::uint32_t cells,
-                      std::size_t max) {
-  RaySegmentWorkBuilder builder(cells);
-  if (rng() % 2 == 0) {
-    FrameSummary summary;
-    summary.rays = rays.size();
-    summary.visits = rays.visit_count();
-    summary.rays_by_kind[0] = rays.size() / 2;  // a wrong hint must not matter
-    builder.Reserve(summary);
-  }
-  for (std::size_t r = 0; r < rays.size();) {
-    const std::size_t n = std::min(rays.size() - r, 1 + rng() % max);
-    RayBatch batch(false);
-    batch.set_first_id(RayId(r));
-    for (std::size_t i = r; i < r + n; ++i) {
-      const RayView ray = rays.ray(i);
-      batch.BeginRay(ray.kind, ray.parent, ray.spawn, 0, 0);
-      for (std::size_t v = 0; v < ray.visit_count; ++v) {
-        batch.AddVisit(ray.cells[v], ray.samples[v], 0, 0);
-      }
-    }
-    builder.AddBatch(batch);
-    r += n;
-  }
-  return builder.Finish();
-}
-
 // The Compact form (large frames, built batch by batch without the frame) gives the
 // reference's results on the columns of RaySegmentWork, field by field: cells and samples
 // of several varint bytes, rays without visits, parents in earlier batches.
@@ -250,7 +221,7 @@ TEST(ReplayCore, EqualsTheReferenceOnTheCompactForm) {
     config.scheduler = &SchedulerByName(kSchedulers[trial % 5], "test");
     if (cells > 10'000) config.processors.count = 1 + rng() % 3;
     const WorkGraph columns = RaySegmentWork(rays, cells);
-    const WorkGraph compact = CompactWork(rng, rays, cells, 1 + rng() % 20);
+    const WorkGraph compact = testing::CompactWork(rng, rays, cells, 1 + rng() % 20);
     ASSERT_TRUE(compact.packed.empty() && compact.cell.empty());
     ASSERT_EQ(compact.size(), columns.size());
     const FrameInfo info{0, &tree, nullptr, cells};
@@ -274,7 +245,7 @@ TEST(ReplayCore, EqualsTheReferenceOnLongWorklists) {
   const std::vector<std::uint64_t> footprints(cells, 4096);
   const FrameInfo info{0, &tree, nullptr, cells};
   const WorkGraph packed = RaySegmentWork(rays, cells);
-  const WorkGraph compact = CompactWork(rng, rays, cells, 70'000);
+  const WorkGraph compact = testing::CompactWork(rng, rays, cells, 70'000);
   for (std::uint32_t processors : {1u, 3u}) {
     ReplayConfig config = DefaultConfig();
     config.granularity = ReplayConfig::Granularity::kRay;

@@ -22,9 +22,10 @@ namespace {
 std::string Describe(const ReplayResult& r) {
   std::ostringstream s;
   s << r.frame << " " << r.fetches << " " << (r.bound ? std::to_string(*r.bound) : "-") << " "
-    << r.time << " " << r.work << " " << r.stall << " " << r.idle << " " << r.utilisation << " "
-    << r.peak_queued_rays << " " << r.peak_queued_bytes << " " << r.rays << " " << r.segments << " "
-    << r.samples << " " << r.events << " " << r.prefetches << " " << r.prefetch_hits;
+    << r.time << " " << r.time_bound << " " << r.work << " " << r.stall << " " << r.idle << " "
+    << r.utilisation << " " << r.peak_queued_rays << " " << r.peak_queued_bytes << " " << r.rays
+    << " " << r.segments << " " << r.samples << " " << r.events << " " << r.prefetches << " "
+    << r.prefetch_hits;
   for (const LevelStats& l : r.levels) s << " " << l.name << " " << l.fetches << " " << l.bytes;
   return s.str();
 }
@@ -89,6 +90,8 @@ class DriverTest : public ::testing::Test {
       const SimTime extra = r.work * (k - 1);
       r.rays *= k, r.segments *= k, r.samples *= k, r.work = r.work * k;
       r.time = r.time + SimTime::Picoseconds(extra.picoseconds() / config.processors.count);
+      r.time_bound =
+          r.time_bound + SimTime::Picoseconds(extra.picoseconds() / config.processors.count);
     }
     return r;
   }
@@ -123,14 +126,18 @@ TEST_F(DriverTest, EveryFrameEqualsItsReplayBuiltByHand) {
           const TraceReplay t = ReplayTrace(*reader_, frames, config, {}, k);
           ASSERT_EQ(t.frames.size(), frames.size());
           ReplayResult total;
+          SimTime time_bounds;  // added here, not by Accumulate
           for (std::size_t n = 0; n < frames.size(); ++n) {
             const ReplayResult expected = ByHand(frames[n], config, k);
             EXPECT_EQ(Describe(t.frames[n]), Describe(expected))
                 << scheduler << " P" << processors << " k" << k << " frame " << frames[n];
+            EXPECT_LE(t.frames[n].time_bound, t.frames[n].time);  // scaled back alike
             Accumulate(expected, &total);
+            time_bounds = time_bounds + expected.time_bound;
           }
           FinishTotal(processors, &total);
           EXPECT_EQ(Describe(t.total), Describe(total));
+          EXPECT_EQ(t.total.time_bound, time_bounds);
           EXPECT_EQ(t.total.frame, 0);
         }
       }

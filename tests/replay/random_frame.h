@@ -1,11 +1,13 @@
 // Random frames for the replay tests: ray trees (a primary ray, then rays spawned at visits
 // of earlier rays of its tree, each starting in its spawn visit's cell), walks without
 // consecutive repeats, and sample counts that include zeros (units that take no time, so
-// that events tie).
+// that events tie); and a frame's per-segment work in the Compact form, built batch by batch.
 #pragma once
 
+#include <algorithm>
 #include <random>
 
+#include "replay/work.h"
 #include "traces/ray_batch.h"
 
 namespace raycell::testing {
@@ -34,6 +36,35 @@ inline RayBatch RandomReplayFrame(std::mt19937& rng, std::uint32_t cells, int ma
     }
   }
   return b;
+}
+
+// `rays` cut into batches of 1 to `max` rays with frame-local ids, as TraceReader delivers
+// them, fed to a RaySegmentWorkBuilder.
+inline WorkGraph CompactWork(std::mt19937& rng, const RayBatch& rays, std::uint32_t cells,
+                             std::size_t max) {
+  RaySegmentWorkBuilder builder(cells);
+  if (rng() % 2 == 0) {
+    FrameSummary summary;
+    summary.rays = rays.size();
+    summary.visits = rays.visit_count();
+    summary.rays_by_kind[0] = rays.size() / 2;  // a wrong hint must not matter
+    builder.Reserve(summary);
+  }
+  for (std::size_t r = 0; r < rays.size();) {
+    const std::size_t n = std::min(rays.size() - r, 1 + rng() % max);
+    RayBatch batch(false);
+    batch.set_first_id(RayId(r));
+    for (std::size_t i = r; i < r + n; ++i) {
+      const RayView ray = rays.ray(i);
+      batch.BeginRay(ray.kind, ray.parent, ray.spawn, 0, 0);
+      for (std::size_t v = 0; v < ray.visit_count; ++v) {
+        batch.AddVisit(ray.cells[v], ray.samples[v], 0, 0);
+      }
+    }
+    builder.AddBatch(batch);
+    r += n;
+  }
+  return builder.Finish();
 }
 
 }  // namespace raycell::testing

@@ -34,9 +34,10 @@ std::string ExpectedRow(std::size_t index, const std::vector<std::string>& value
   s << index;
   for (const std::string& v : values) s << ',' << v;
   s << ',' << r.fetches << ',' << (r.bound ? std::to_string(*r.bound) : "") << ','
-    << r.time.picoseconds() << ',' << r.work.picoseconds() << ',' << r.stall.picoseconds() << ','
-    << r.idle.picoseconds() << ',' << FormatFixed(r.utilisation, 4) << ',' << r.peak_queued_rays
-    << ',' << r.peak_queued_bytes << ',' << r.rays << ',' << r.segments << ',' << r.samples << '\n';
+    << r.time.picoseconds() << ',' << r.time_bound.picoseconds() << ',' << r.work.picoseconds()
+    << ',' << r.stall.picoseconds() << ',' << r.idle.picoseconds() << ','
+    << FormatFixed(r.utilisation, 4) << ',' << r.peak_queued_rays << ',' << r.peak_queued_bytes
+    << ',' << r.rays << ',' << r.segments << ',' << r.samples << '\n';
   return s.str();
 }
 
@@ -250,8 +251,8 @@ TEST_F(SweepTest, BadValuesFailBeforeAnyWork) {
 
 constexpr char kMixedHeader[] =
     "index,scheduler,processors.count,level.cache.capacity,processors.prefetch,"
-    "level.board.bandwidth,fetches,bound,time_ps,work_ps,stall_ps,idle_ps,utilisation,"
-    "peak_queued_rays,peak_queued_bytes,rays,segments,samples\n";
+    "level.board.bandwidth,fetches,bound,time_ps,time_bound_ps,work_ps,stall_ps,idle_ps,"
+    "utilisation,peak_queued_rays,peak_queued_bytes,rays,segments,samples\n";
 
 // Every row of the mixed sweep is its combination's ReplayTrace, whatever the jobs and the
 // blocks (several blocks of 7 combinations, or one).
@@ -271,8 +272,8 @@ TEST_F(SweepTest, RowsEqualSingleReplaysWithTheBound) {
   const std::string rows = Run(spec, "bound.csv", 2);
   EXPECT_EQ(rows, Expected(spec,
                            "index,scheduler,processors.count,level.cache.capacity,fetches,bound,"
-                           "time_ps,work_ps,stall_ps,idle_ps,utilisation,peak_queued_rays,"
-                           "peak_queued_bytes,rays,segments,samples\n"));
+                           "time_ps,time_bound_ps,work_ps,stall_ps,idle_ps,utilisation,"
+                           "peak_queued_rays,peak_queued_bytes,rays,segments,samples\n"));
   EXPECT_NE(rows.find("\n0,maxwork,1,1 cell,"), std::string::npos);
   EXPECT_NE(rows.find("\n11,peel,2,2 cells,"), std::string::npos);
 }
@@ -295,9 +296,9 @@ TEST_F(SweepTest, CombinationsShareReplaysOnlyWhereNoResultCanDiffer) {
   EXPECT_EQ(ReadBytes(out), Expected(spec,
                                      "index,scheduler,seed,processors.prefetch,"
                                      "processors.queue_record_bytes,granularity,fetches,bound,"
-                                     "time_ps,work_ps,stall_ps,idle_ps,utilisation,"
-                                     "peak_queued_rays,peak_queued_bytes,rays,segments,"
-                                     "samples\n"));
+                                     "time_ps,time_bound_ps,work_ps,stall_ps,idle_ps,"
+                                     "utilisation,peak_queued_rays,peak_queued_bytes,rays,"
+                                     "segments,samples\n"));
   // Two processors: granularity auto is ray, which node is not; every combination differs.
   spec.base.processors.count = 2;
   spec.varies = {Vary::Parse("scheduler=maxwork,random"), Vary::Parse("granularity=auto,node")};
@@ -393,6 +394,33 @@ TEST_F(SweepTest, MergeRejectsShardsOfAnotherSweep) {
   RunSweep(*reader_, other, b, {});
   const std::string error = ErrorOf([&] { MergeSweepShards(Fresh("ab.csv"), {a, b}); });
   EXPECT_NE(error.find("not a shard of the same sweep"), std::string::npos) << error;
+}
+
+// Shards written before time_bound_ps was a column (their totals one column short) are
+// refused, not misread: frame shards' rows are parsed and added, and their last thirteen
+// fields are not this version's totals.
+TEST_F(SweepTest, MergeRejectsShardsWithOtherTotalsColumns) {
+  std::vector<std::string> old;
+  for (const char* range : {"0..1", "2..3"}) {
+    old.push_back(Fresh(std::string("old_") + range + ".csv"));
+    RunSweep(*reader_, Frames(Spec(), range), old.back(), {});
+    std::string text;
+    for (const std::string& line : Split(ReadBytes(old.back()), '\n')) {
+      if (line.empty() || line[0] == '#') {
+        text += line.empty() ? "" : line + "\n";
+        continue;
+      }
+      std::vector<std::string> fields = Split(line, ',');
+      fields.erase(fields.end() - 10);  // time_bound_ps, the 4th of 13 totals
+      text += Join(fields, ",") + "\n";
+    }
+    ASSERT_NE(text.find(",time_ps,work_ps,"), std::string::npos) << text;
+    WriteText(old.back(), text);
+  }
+  const std::string error = ErrorOf([&] { MergeSweepShards(Fresh("old.csv"), old); });
+  EXPECT_NE(error.find(old[0] + ": line 2: the header does not end with the totals' columns"),
+            std::string::npos)
+      << error;
 }
 
 TEST_F(SweepTest, InterruptedSweepResumes) {

@@ -163,6 +163,9 @@ TEST_F(StaticVolume, CrossesPciOncePerCaptureWhenItFits) {
       EXPECT_EQ(cold.total.levels[1].fetches, per_frame) << s.name << " P" << p;
       EXPECT_EQ(warm.total.samples, cold.total.samples);
       EXPECT_LE(warm.total.time, cold.total.time) << s.name << " P" << p;
+      // The time bound counts what warm memory holds at each frame's start, and still holds.
+      for (const ReplayResult& f : warm.frames) EXPECT_LE(f.time_bound, f.time) << s.name;
+      EXPECT_LT(warm.total.time_bound, cold.total.time_bound) << s.name << " P" << p;
     }
   }
 }

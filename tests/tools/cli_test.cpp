@@ -206,6 +206,33 @@ std::uint64_t TotalOf(const std::string& json, const std::string& key) {
   return std::stoull(json.substr(at + key.size() + 3));
 }
 
+// The table shows each frame's time beside its lower bound under any scheduler and the
+// time over the bound (at least 1), as the JSON's time_ps and time_bound_ps give them.
+TEST(Cli, ReplayTableShowsTheTimeAgainstItsBound) {
+  const auto d = Dir();
+  const std::string trace = (d / "table.rct").string();
+  ASSERT_EQ(Raycell("record --res 24x24 --orbit 2:90 --no-images --quiet --out " + trace).code, 0);
+  for (const std::string options : {"", " --set processors.count=3"}) {
+    const Result table = Raycell("replay " + trace + " --quiet" + options);
+    const Result json = Raycell("replay " + trace + " --format json --quiet" + options);
+    ASSERT_EQ(table.code, 0) << table.out;
+    ASSERT_EQ(json.code, 0) << json.out;
+    EXPECT_NE(table.out.find("      time ms time bound ms time/bound      work ms"),
+              std::string::npos)
+        << table.out;
+    const std::uint64_t time = TotalOf(json.out, "time_ps");
+    const std::uint64_t bound = TotalOf(json.out, "time_bound_ps");
+    ASSERT_GT(bound, 0u) << json.out;
+    EXPECT_LE(bound, time);
+    char row[64];
+    std::snprintf(row, sizeof row, " %12.3f %13.3f %10.3f ", double(time) * 1e-9,
+                  double(bound) * 1e-9, double(time) / double(bound));
+    const std::size_t total = table.out.find("\n   total ");
+    ASSERT_NE(total, std::string::npos) << table.out;
+    EXPECT_NE(table.out.find(row, total), std::string::npos) << row << "\n" << table.out;
+  }
+}
+
 TEST(Cli, ReplayAndSweepAreDeterministicWhateverTheJobs) {
   const auto d = Dir();
   const std::string trace = (d / "sweep.rct").string();
