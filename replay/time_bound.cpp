@@ -147,6 +147,15 @@ SimTime LinksTerm(const std::vector<std::uint8_t>& used,
 
 }  // namespace
 
+WorkGraph::Shape ShapeOf(const WorkGraph& work) {
+  WorkGraph::Shape shape;
+  shape.used.assign(work.cells, 0);
+  shape.chain_samples = work.compact.units != 0 ? LongestCompactChain(work, &shape.used)
+                        : !work.packed.empty()  ? LongestPackedChain(work, &shape.used)
+                                                : LongestColumnChain(work, &shape.used);
+  return shape;
+}
+
 SimTime TimeBoundTerms::value() const { return std::max({work, links, chain}); }
 
 std::string TimeBoundTerms::ToString() const {
@@ -166,10 +175,10 @@ TimeBoundTerms TimeLowerBoundTerms(const WorkGraph& work,
     }
   }
   const SimTime tps = config.processors.time_per_sample;
-  std::vector<std::uint8_t> used(work.cells, 0);
-  const std::uint64_t chain = work.compact.units != 0 ? LongestCompactChain(work, &used)
-                              : !work.packed.empty()  ? LongestPackedChain(work, &used)
-                                                      : LongestColumnChain(work, &used);
+  const WorkGraph::Shape walked = work.shape ? WorkGraph::Shape() : ShapeOf(work);
+  const WorkGraph::Shape& shape = work.shape ? *work.shape : walked;
+  const std::vector<std::uint8_t>& used = shape.used;
+  const std::uint64_t chain = shape.chain_samples;
   TimeBoundTerms t;
   const std::uint64_t total = (tps * work.total_samples()).picoseconds();
   const std::uint32_t p = config.processors.count;

@@ -62,6 +62,9 @@ TimeBoundTerms TimeLowerBoundTerms(const WorkGraph& work,
                                    const ReplayConfig& config,
                                    const std::vector<std::vector<bool>>* held_at_start = nullptr);
 
+// The longest chain and the used cells, the walk the terms need (WorkGraph::Shape).
+WorkGraph::Shape ShapeOf(const WorkGraph& work);
+
 // The bound: the largest of the terms.
 SimTime TimeLowerBound(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                        const ReplayConfig& config,

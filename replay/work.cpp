@@ -9,6 +9,7 @@
 
 #include "base/check.h"
 #include "base/checked.h"
+#include "replay/time_bound.h"
 
 namespace raycell {
 namespace {
@@ -123,6 +124,7 @@ WorkGraph RaySegmentWork(const RayBatch& frame, std::uint32_t cells) {
   }
   BuildSuccessors(w, edges);
   Finish(w);
+  w.shape = ShapeOf(w);
   return w;
 }
 
@@ -194,6 +196,7 @@ WorkGraph RaySegmentWorkBuilder::Finish() {
   for (WorkGraph::CompactUnit& u : c.roots) u.spawned = first_spawned(u.visit);
   for (WorkGraph::Spawned& s : c.spawned) s.unit.spawned = first_spawned(s.unit.visit);
   WorkGraph out = std::move(w_);
+  out.shape = ShapeOf(out);
   w_ = WorkGraph{};
   w_.cells = out.cells;
   visits_ = 0;
@@ -224,6 +227,7 @@ WorkGraph NodeWork(const CellTree& tree, std::uint32_t cells) {
   }
   BuildSuccessors(w, edges);
   Finish(w);
+  w.shape = ShapeOf(w);
   return w;
 }
 

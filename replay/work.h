@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <new>
+#include <optional>
 #include <vector>
 
 #include "graph/cell_tree.h"
@@ -106,6 +107,15 @@ struct WorkGraph {
   struct Totals {
     std::uint64_t samples = 0, segments = 0, rays = 0;
   } totals;
+
+  // What the time bound (replay/time_bound.h) reads of the graph, whatever the configuration:
+  // computed once where the graph is built (ShapeOf), so that the replays of many
+  // configurations on one frame do not walk it again; empty for a graph assembled by hand.
+  struct Shape {
+    std::uint64_t chain_samples = 0;  // the longest path from a root, in samples
+    std::vector<std::uint8_t> used;   // per cell: 1 if some unit is in it
+  };
+  std::optional<Shape> shape;
 
   std::size_t size() const { return compact.units != 0 ? compact.units : cell.size(); }
   std::uint64_t total_samples() const { return totals.samples; }
