@@ -220,8 +220,8 @@ const std::vector<Key<ReplayConfig>>& ConfigKeys() {
        [](std::string_view t, const std::string& what, ReplayConfig& c) {
          c.memory.across_frames = ParseAcrossFrames(Trim(t), what);
        },
-       [](const ReplayConfig& c) { return std::string(ToString(c.memory.across_frames)); },
-       "warm", "the board's memory is not cleared between frames; cold is the paper's comparison"},
+       [](const ReplayConfig& c) { return std::string(ToString(c.memory.across_frames)); }, "warm",
+       "the board's memory is not cleared between frames; cold is the paper's comparison"},
   };
   return keys;
 }
@@ -584,8 +584,7 @@ bool operator!=(const ProcessorConfig& a, const ProcessorConfig& b) { return !(a
 
 bool operator==(const ReplayConfig& a, const ReplayConfig& b) {
   return a.levels == b.levels && a.processors == b.processors && a.memory == b.memory &&
-         a.scheduler == b.scheduler &&
-         a.seed == b.seed && a.granularity == b.granularity;
+         a.scheduler == b.scheduler && a.seed == b.seed && a.granularity == b.granularity;
 }
 bool operator!=(const ReplayConfig& a, const ReplayConfig& b) { return !(a == b); }
 

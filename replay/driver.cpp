@@ -158,8 +158,7 @@ void FinishTotal(std::uint32_t processors, ReplayResult* t) {
 
 FrameWalker::FrameWalker(const TraceReader& reader, std::vector<std::size_t> frame_indices,
                          bool need_segments, bool need_nodes, std::uint32_t sample_every,
-                         std::uint32_t history, std::uint64_t compact_above_visits,
-                         bool warm_up)
+                         std::uint32_t history, std::uint64_t compact_above_visits, bool warm_up)
     : reader_(reader),
       indices_(std::move(frame_indices)),
       need_segments_(need_segments),

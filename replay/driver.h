@@ -40,8 +40,8 @@ struct LoadedFrame {
   // A frame replayed only for the memory state it leaves (FrameWalker's warm_up), not
   // reported.
   bool warm_up = false;
-  std::size_t index = 0;     // into reader.frames()
-  std::int32_t number = 0;   // the frame number
+  std::size_t index = 0;    // into reader.frames()
+  std::int32_t number = 0;  // the frame number
   std::unique_ptr<CellTree> tree;
   std::unique_ptr<CellTree> previous;  // frame index - 1's; null for index 0
   // Frame index - 2's, when a scheduler reads two earlier frames (SchedulerHistory); else null.

@@ -536,7 +536,8 @@ ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>
     return Replay(work, PackedUnits{work.packed.data(), UnitId(work.roots.size())}, footprints,
                   config, scheduler, frame, bound, observer, memory);
   }
-  return Replay(work, ColumnUnits{&work}, footprints, config, scheduler, frame, bound, observer, memory);
+  return Replay(work, ColumnUnits{&work}, footprints, config, scheduler, frame, bound, observer,
+                memory);
 }
 
 }  // namespace raycell

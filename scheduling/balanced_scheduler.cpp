@@ -171,11 +171,10 @@ std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
   // Postpone only while every other processor is working, and only on boards of
   // kPostponeMinProcessors or more, where one waiting processor is a small part of the whole.
   if (options_.postpone && queues.processors >= kPostponeMinProcessors &&
-      queues.working + 1 >= queues.processors &&
-      TooSmall(queues, *c)) {
-    const std::optional<CellId> largest = Best(
-        queues, options_.share && queues.all_queued ? queues.all_queued : queues.queued_rays,
-        [](std::uint32_t) { return true; });
+      queues.working + 1 >= queues.processors && TooSmall(queues, *c)) {
+    const std::optional<CellId> largest =
+        Best(queues, options_.share && queues.all_queued ? queues.all_queued : queues.queued_rays,
+             [](std::uint32_t) { return true; });
     if (largest && !TooSmall(queues, *largest)) {
       reason_ = "largest (plan's batch too small)";
       return largest;  // the plan keeps its place

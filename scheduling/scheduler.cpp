@@ -171,9 +171,10 @@ const std::vector<SchedulerEntry>& SchedulerRegistry() {
       {"steal",
        "cells split over the processors by list scheduling, Max Work on one's own; with none "
        "ready, the largest queue of the processor with the most queued rays (work stealing)",
-       "work stealing", MakeBalanced<false, true, true, false, false, false>, 1, false, true,
-       false, false},
-      {"partition-steal", "the partitioned plan, stealing when a processor's own cells have no work",
+       "work stealing", MakeBalanced<false, true, true, false, false, false>, 1, false, true, false,
+       false},
+      {"partition-steal",
+       "the partitioned plan, stealing when a processor's own cells have no work",
        "partitioned plan with stealing", MakeBalanced<true, true, true, false, false, false>, 1,
        true, true, false, false},
       {"share",

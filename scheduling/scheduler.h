@@ -138,8 +138,8 @@ class ScheduleFollower {
   std::size_t Find(const QueueView& queues) const;
 
   std::vector<CellId> schedule_;
-  std::size_t cursor_ = 0;    // entries before it are used up
-  std::vector<bool> used_;    // per entry: used up (those from cursor_ on, taken out of order)
+  std::size_t cursor_ = 0;  // entries before it are used up
+  std::vector<bool> used_;  // per entry: used up (those from cursor_ on, taken out of order)
   Stats stats_;
   // The last Next: how it chose (0 none, 1 followed, 2 max work) and the entries it skipped.
   std::uint8_t last_how_ = 0;

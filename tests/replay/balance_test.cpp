@@ -16,8 +16,8 @@
 namespace raycell {
 namespace {
 
-const char* const kBalancing[] = {"affinity", "partition", "steal",
-                                  "partition-steal", "share", "balanced"};
+const char* const kBalancing[] = {"affinity",        "partition", "steal",
+                                  "partition-steal", "share",     "balanced"};
 
 std::string Describe(const ReplayResult& r) {
   std::ostringstream s;
@@ -90,7 +90,8 @@ TEST(Balance, OneProcessorFollowsThePlanAsCellTreeBest) {
     const CellTree previous = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 60));
     const std::vector<std::uint64_t> footprints(cells, 50'000);
     ReplayConfig config = DefaultConfig();
-    config.granularity = trial % 2 ? ReplayConfig::Granularity::kRay : ReplayConfig::Granularity::kNode;
+    config.granularity =
+        trial % 2 ? ReplayConfig::Granularity::kRay : ReplayConfig::Granularity::kNode;
     const WorkGraph w = trial % 2 ? RaySegmentWork(rays, cells) : NodeWork(tree, cells);
     const FrameInfo info{std::size_t(trial % 2), &tree, trial % 4 == 0 ? nullptr : &previous,
                          cells};

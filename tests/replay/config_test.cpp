@@ -171,8 +171,9 @@ TEST(LoadConfig, UnknownKeyNamesFileLineColumnAndKey) {
   const std::string l = LoadError(
       "[[level]]\nname = \"cache\"\n\n[[level]]\nname = \"board\"\nbandwith = \"1GB/s\"\n");
   EXPECT_EQ(l.rfind("replay.toml:6:1: unknown key 'bandwith' in [[level]] 'board'", 0), 0u) << l;
-  EXPECT_EQ(LoadError("[memory]\nsize = 1\n").rfind("replay.toml:2:1: unknown key 'size' in [memory]", 0),
-            0u);
+  EXPECT_EQ(
+      LoadError("[memory]\nsize = 1\n").rfind("replay.toml:2:1: unknown key 'size' in [memory]", 0),
+      0u);
   EXPECT_EQ(LoadError("[memory]\nacross_frames = \"tepid\"\n"),
             "replay.toml:2:17: memory.across_frames: unknown memory.across_frames 'tepid' "
             "(expected warm or cold)");

@@ -34,22 +34,8 @@ class DriverTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     path_ = new std::string(testing::TempPath("driver", "trace.rct"));
-    TraceHeader h;
-    h.producer = "raycell test";
-    h.scene = "builtin:test";
-    h.cells = {2, 2, 1};
-    for (std::uint32_t c = 0; c < h.cell_count(); ++c) h.footprints.push_back(5000 * (c + 1));
-    for (int f = 0; f < 5; ++f)
-      h.cameras.push_back({f + 10, {1, 2, 3.0 + f}, {0, 0, 0}, {0, 1, 0}, 40});
-    h.settings.store_t = false;
-    TraceWriter w = TraceWriter::Create(*path_, h, 3);
-    std::mt19937 rng(3);
-    for (int f = 0; f < 5; ++f) {
-      w.BeginFrame(f + 10);
-      w.Append(testing::RandomReplayFrame(rng, h.cell_count(), 60));
-      w.EndFrame();
-    }
-    w.Finish();
+    testing::WriteRandomCapture(*path_, {2, 2, 1}, 5, 10, 3, 60, 4,
+                                [](std::uint32_t c) { return 5000 * (c + 1); });
     reader_ = new TraceReader(TraceReader::Open(*path_));
   }
   static void TearDownTestSuite() {

@@ -5,10 +5,15 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
+#include <functional>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "replay/work.h"
 #include "traces/ray_batch.h"
+#include "traces/trace_writer.h"
 
 namespace raycell::testing {
 
@@ -65,6 +70,36 @@ inline WorkGraph CompactWork(std::mt19937& rng, const RayBatch& rays, std::uint3
     r += n;
   }
   return builder.Finish();
+}
+
+// Writes a capture of `frames` random frames (RandomReplayFrame with `max_rays` and
+// `max_extra_visits`, drawn from `seed`) over `cells`, numbered from `first`, each cell
+// `footprint(c)` bytes, for the scene `scene`; returns the frames' rays.
+inline std::vector<RayBatch> WriteRandomCapture(
+    const std::string& path, std::array<std::uint32_t, 3> cells, int frames, int first,
+    std::uint32_t seed, int max_rays, int max_extra_visits,
+    const std::function<std::uint64_t(std::uint32_t)>& footprint,
+    const std::string& scene = "builtin:test") {
+  TraceHeader h;
+  h.producer = "raycell test";
+  h.scene = scene;
+  h.cells = cells;
+  for (std::uint32_t c = 0; c < h.cell_count(); ++c) h.footprints.push_back(footprint(c));
+  for (int f = 0; f < frames; ++f) {
+    h.cameras.push_back({first + f, {1, 2, 3.0 + f}, {0, 0, 0}, {0, 1, 0}, 40});
+  }
+  h.settings.store_t = false;
+  TraceWriter w = TraceWriter::Create(path, h, 3);
+  std::mt19937 rng(seed);
+  std::vector<RayBatch> out;
+  for (int f = 0; f < frames; ++f) {
+    w.BeginFrame(first + f);
+    out.push_back(RandomReplayFrame(rng, h.cell_count(), max_rays, max_extra_visits));
+    w.Append(out.back());
+    w.EndFrame();
+  }
+  w.Finish();
+  return out;
 }
 
 }  // namespace raycell::testing

@@ -180,7 +180,7 @@ class Board : public Component {
   std::vector<std::vector<UnitId>> queues_;
   std::vector<std::uint64_t> queued_rays_, view_;
   std::vector<std::uint32_t> locked_;  // per cell: the processors working it
-  std::vector<std::uint64_t> open_;  // the view's mask: 0 where locked
+  std::vector<std::uint64_t> open_;    // the view's mask: 0 where locked
   std::vector<ProcessorState> processors_;
   ComponentId id_ = 0;
   std::uint64_t done_ = 0, queued_total_ = 0, peak_queued_ = 0;

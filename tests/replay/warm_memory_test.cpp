@@ -99,25 +99,13 @@ class StaticVolume : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     path_ = new std::string(testing::TempPath("warm", "trace.rct"));
-    TraceHeader h;
-    h.producer = "raycell test";
-    h.scene = "builtin:test";
-    h.cells = {2, 2, 2};
-    for (std::uint32_t c = 0; c < h.cell_count(); ++c) h.footprints.push_back(3000 + 100 * c);
-    for (int f = 0; f < kFrames; ++f) h.cameras.push_back({f, {1, 2, 3.0 + f}, {0, 0, 0}, {0, 1, 0}, 40});
-    h.settings.store_t = false;
-    TraceWriter w = TraceWriter::Create(*path_, h, 3);
-    std::mt19937 rng(11);
+    // Few rays, so that some frames leave cells out that others use.
     used_ = new std::set<std::uint32_t>;
-    for (int f = 0; f < kFrames; ++f) {
-      w.BeginFrame(f);
-      // Few rays, so that some frames leave cells out that others use.
-      const RayBatch rays = testing::RandomReplayFrame(rng, h.cell_count(), 6, 2);
+    for (const RayBatch& rays :
+         testing::WriteRandomCapture(*path_, {2, 2, 2}, kFrames, 0, 11, 6, 2,
+                                     [](std::uint32_t c) { return 3000 + 100 * c; })) {
       for (const CellId c : rays.cells()) used_->insert(c.value());
-      w.Append(rays);
-      w.EndFrame();
     }
-    w.Finish();
     reader_ = new TraceReader(TraceReader::Open(*path_));
   }
   static void TearDownTestSuite() {
@@ -203,21 +191,8 @@ TEST_F(StaticVolume, FrameRangesStartFromTheWholeReplaysMemory) {
 // keeps nothing there, and gives what cold gives.
 TEST(WarmMemory, ASequenceOfVolumesKeepsNothing) {
   const std::string path = testing::TempPath("warm", "sequence.rct");
-  TraceHeader h;
-  h.producer = "raycell test";
-  h.scene = "fluid_%04d.vdb";
-  h.cells = {2, 2, 1};
-  h.footprints.assign(4, 4096);
-  for (int f = 0; f < 3; ++f) h.cameras.push_back({f, {1, 2, 3.0 + f}, {0, 0, 0}, {0, 1, 0}, 40});
-  h.settings.store_t = false;
-  TraceWriter w = TraceWriter::Create(path, h, 3);
-  std::mt19937 rng(5);
-  for (int f = 0; f < 3; ++f) {
-    w.BeginFrame(f);
-    w.Append(testing::RandomReplayFrame(rng, 4, 20));
-    w.EndFrame();
-  }
-  w.Finish();
+  testing::WriteRandomCapture(
+      path, {2, 2, 1}, 3, 0, 5, 20, 4, [](std::uint32_t) { return 4096; }, "fluid_%04d.vdb");
   const TraceReader reader = TraceReader::Open(path);
   ASSERT_TRUE(reader.header().volume_changes());
   ReplayConfig config = DefaultConfig();

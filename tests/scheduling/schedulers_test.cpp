@@ -225,7 +225,7 @@ TEST(ScheduleFollowerTest, EntriesOfBusyCellsAreDeferredNotLost) {
   open[0] = ~std::uint64_t{0};
   Queues q3 = {1, 4, 0};
   EXPECT_EQ(f.Next(view(q3)), A);
-  EXPECT_EQ(f.cursor(), 3u);  // entries 0..2 taken
+  EXPECT_EQ(f.cursor(), 3u);       // entries 0..2 taken
   EXPECT_EQ(f.Next(view(q3)), A);  // the last entry
   EXPECT_EQ(f.stats().ToString(), "followed 4, skipped 0, deferred 2, max work 0");
   // Every entry left deferred: Max Work chooses, the entries stay.
@@ -364,7 +364,7 @@ TEST(MakeSchedulerTest, UnknownNameListsTheValidOnes) {
     EXPECT_STREQ(e.what(),
                  "scheduler: unknown scheduler 'MaxWork' (expected maxwork, roundrobin, random, "
                  "peel, celltree, best, celltree-best, celltree-union, affinity, partition, steal, "
-            "partition-steal, share or balanced)");
+                 "partition-steal, share or balanced)");
   }
   EXPECT_THROW(MakeScheduler("", 0), InputError);
 }
