@@ -215,7 +215,8 @@ const std::vector<Key<ReplayConfig>>& ConfigKeys() {
        "false", "no double buffering, the paper's model"},
       {"memory.across_frames",
        "warm: every level keeps its cells from one frame to the next (a static volume stays on "
-       "the board) | cold: every frame starts with empty levels",
+       "the board; a sequence of volumes keeps nothing) | cold: every frame starts with empty "
+       "levels",
        TomlKind::kString, "a string", 0, 0,
        [](std::string_view t, const std::string& what, ReplayConfig& c) {
          c.memory.across_frames = ParseAcrossFrames(Trim(t), what);
