@@ -183,9 +183,9 @@ const std::vector<SchedulerEntry>& SchedulerRegistry() {
        "Max Work with shared cells", MakeBalanced<false, false, false, false, false, true>, 1,
        false, true, false, false},
       {"balanced",
-       "celltree-best's plan shared by the processors (busy entries deferred); off the plan the "
-       "cached cell, else affinity-weighted Max Work, joining busy cells when no free one is "
-       "ready; while all others work, a batch under 3 fetches' worth of work waits",
+       "the cached cell if it has work, else celltree-best's plan shared by the processors (busy "
+       "entries deferred, then Max Work); no free cell ready: joins a busy one (affinity-"
+       "weighted); on 8+ processors, while all others work, a batch under 3 fetches' worth waits",
        "balanced (plan, affinity, shared cells, postponing)",
        MakeBalanced<true, false, false, true, true, true>, 1, true, true, false, false},
   };
