@@ -11,6 +11,9 @@
 #include <string>
 #include <vector>
 
+#include "replay/config.h"
+#include "replay/driver.h"
+#include "scheduling/scheduler.h"
 #include "study/accuracy.h"
 #include "study/image_error.h"
 #include "study/report.h"
@@ -132,6 +135,62 @@ TEST(Study, EverySchedulerReplaysTheWholeCaptureOfEachGrid) {
       EXPECT_LE(t.bound, *t.lower_bound) << g.cells << " frame " << t.frame;
       EXPECT_LE(*t.lower_bound, *t.best_length) << g.cells << " frame " << t.frame;
       EXPECT_LE(*t.best_length, t.peel_length()) << g.cells << " frame " << t.frame;
+    }
+  }
+}
+
+// The finest grid (the last, 1x2x1) replayed on 1 to 16 processors under Max Work, Cell Tree
+// scheduling and balanced: every row processes the whole capture, stays above its time bound,
+// and equals a replay of its configuration alone (ReplayTrace, the configuration built here).
+TEST(Study, TheFinestGridIsReplayedOnSeveralProcessors) {
+  const StudyResult& s = TinyStudy();
+  ASSERT_EQ(s.grids.size(), 2u);
+  EXPECT_TRUE(s.grids[0].processors.empty());
+  const GridStudy& g = s.grids[1];
+  ASSERT_EQ(g.cells, "1x2x1");
+  const TraceReader reader =
+      TraceReader::Open((std::filesystem::path(s.options.out) / g.capture).string());
+  std::uint64_t rays = 0, visits = 0, samples = 0;
+  std::vector<std::size_t> all;
+  for (const FrameSummary& f : reader.frames()) {
+    rays += f.rays, visits += f.visits, samples += f.samples;
+    all.push_back(all.size());
+  }
+  const std::vector<std::string> names = {"maxwork", "celltree", "balanced"};
+  const std::vector<std::uint32_t> counts = {1, 2, 4, 8, 16};
+  ASSERT_EQ(g.processors.size(), names.size() * counts.size());
+  for (std::size_t i = 0; i < g.processors.size(); ++i) {
+    const ProcessorsReplay& r = g.processors[i];
+    const std::string name = names[i / counts.size()];
+    const std::uint32_t p = counts[i % counts.size()];
+    const std::string what = name + " on " + std::to_string(p);
+    ASSERT_EQ(r.scheduler->name, name) << i;
+    ASSERT_EQ(r.processors, p) << name;
+    const ReplayResult& t = r.total;
+    EXPECT_EQ(t.rays, rays) << what;
+    EXPECT_EQ(t.segments, visits) << what;
+    EXPECT_EQ(t.samples, samples) << what;
+    EXPECT_LE(t.time_bound, t.time) << what;
+    EXPECT_EQ(t.work + t.stall + t.idle, t.time * p) << what;
+    ReplayConfig config = DefaultConfig();
+    config.scheduler = &SchedulerByName(name, "test");
+    config.processors.count = p;
+    EXPECT_EQ(t.work, config.processors.time_per_sample * samples) << what;
+    const ReplayResult alone = ReplayTrace(reader, all, config).total;
+    EXPECT_EQ(t.fetches, alone.fetches) << what;
+    ASSERT_FALSE(t.levels.empty()) << what;
+    EXPECT_EQ(t.fetches, t.levels[0].fetches) << what;
+    EXPECT_EQ(t.levels[0].fetches, alone.levels[0].fetches) << what;
+    EXPECT_EQ(t.time, alone.time) << what;
+    EXPECT_EQ(t.time_bound, alone.time_bound) << what;
+    EXPECT_EQ(t.work, alone.work) << what;
+    EXPECT_EQ(t.stall, alone.stall) << what;
+    EXPECT_EQ(t.idle, alone.idle) << what;
+    EXPECT_EQ(t.utilisation, alone.utilisation) << what;
+    // With one processor the default granularity is per node, as the study's own replays.
+    if (p == 1 && name != "balanced") {
+      EXPECT_EQ(t.fetches, g.replay(name).total.fetches) << what;
+      EXPECT_EQ(t.time, g.replay(name).total.time) << what;
     }
   }
 }
