@@ -14,6 +14,8 @@
 #include "base/parse.h"
 #include "base/progress.h"
 #include "replay/config.h"
+#include "replay/replayer.h"
+#include "traces/format.h"
 #include "traces/record/cell_grid.h"
 #include "traces/record/recorder.h"
 #include "traces/record/scene.h"
@@ -111,6 +113,19 @@ std::vector<FrameAnalysis> AnalyzeTrees(const std::vector<CellTree>& trees,
   for (std::thread& t : threads) t.join();
   progress.Done();
   return out;
+}
+
+// InputError naming `what` (the finest grid's option) when the several processors section's
+// largest board on `cells` cells is beyond the memory model's limit (CheckModelSize), before
+// any work.
+void CheckProcessorsFit(const std::string& what, std::uint64_t cells) {
+  ReplayConfig config = DefaultConfig();
+  config.processors.count = StudyProcessorCounts().back();
+  try {
+    CheckModelSize(config, cells);
+  } catch (const InputError& e) {
+    throw InputError(what + ": too many cells for the several processors section: " + e.what());
+  }
 }
 
 // Replays every frame under each ProcessorsSchedulers() entry on boards of each
@@ -305,12 +320,15 @@ StudyResult RunStudy(const StudyOptions& a) {
     // A sequence's knobs are measured on the volume of its first frame.
     accuracy.scene = a.sequence() ? FrameFile(a.scene, result.frame_numbers.front()) : a.scene;
     const std::vector<std::string> cells = SplitList(a.cells);
+    CheckProcessorsFit("--cells '" + cells.back() + "'",
+                       TraceCellCount(ParseCellDims(cells.back())));
     fs::create_directories(a.out);
     for (std::size_t i = 0; i < cells.size(); ++i) {
       result.grids.push_back(StudyGrid(a, result.frame_numbers, cells[i], i + 1 == cells.size()));
     }
   } else {
     const std::vector<TraceReader> readers = OpenGivenTraces(a);
+    CheckProcessorsFit("--trace '" + a.traces.back() + "'", readers.back().header().cell_count());
     fs::create_directories(a.out);
     result.grids = StudyGivenTraces(a, readers);
     accuracy.scene = readers.front().header().scene;

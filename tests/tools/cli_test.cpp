@@ -467,6 +467,18 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
   const Result r3 = Raycell("study --trace " + capture + " --cells 3x3x3 --out " + again.string());
   EXPECT_EQ(r3.code, 2);
   EXPECT_NE(r3.out.find("--cells excludes --trace"), std::string::npos) << r3.out;
+  // 16 processors on 256x256x200 cells are beyond the memory model's limit: refused before
+  // any recording.
+  const auto huge = Dir() / "study_huge";
+  const Result r4 = Raycell(
+      "study --cells 2x2x2,256x256x200 --res 8x8 --frames 2 --accuracy-frames 0 --quiet --out " +
+      huge.string());
+  EXPECT_EQ(r4.code, 2) << r4.out;
+  EXPECT_NE(r4.out.find("--cells '256x256x200': too many cells for the several processors "
+                        "section: processors.count 16 x 13107200 cells"),
+            std::string::npos)
+      << r4.out;
+  EXPECT_FALSE(std::filesystem::exists(huge));
 }
 
 TEST(Cli, BadInputGetsAClearMessageAndExitCode2) {
