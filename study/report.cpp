@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -67,9 +68,10 @@ void RunPlot(const std::string& cmd) {
   }
 }
 
-void Plot(const std::string& out, const std::vector<std::string>& cells) {
+void Plot(const std::string& out, const std::vector<std::string>& cells, bool processors) {
   std::string cmd =
       Python() + " " + Quote(RAYCELL_SOURCE_DIR "/tools/plot_study.py") + " " + Quote(out);
+  if (processors) cmd += " --processors";
   for (const auto& c : cells) cmd += " " + Quote(c);
   RunPlot(cmd);
   for (const auto& c : cells) {
@@ -77,6 +79,70 @@ void Plot(const std::string& out, const std::vector<std::string>& cells) {
       if (!fs::exists(fs::path(out) / (p + c + ".png"))) throw InputError("plot missing: " + c);
     }
   }
+  if (processors && !fs::exists(fs::path(out) / "processors.png")) {
+    throw InputError("plot missing: processors");
+  }
+}
+
+// Picoseconds as milliseconds, one decimal.
+std::string Ms(SimTime t) { return FormatFixed(double(t.picoseconds()) / 1e9, 1); }
+
+// "12.3% fewer" or "4.5% more" (`less` instead of "fewer" for amounts), of `value` against
+// `base`.
+std::string Change(double value, double base, const char* less) {
+  const double change = base != 0 ? 100.0 * (value - base) / base : 0.0;
+  return FormatFixed(std::abs(change), 1) + "% " + (change <= 0 ? less : "more");
+}
+
+// The rows of `g.processors` with `p` processors, in ProcessorsSchedulers() order.
+std::vector<const ProcessorsReplay*> RowsOf(const GridStudy& g, std::uint32_t p) {
+  std::vector<const ProcessorsReplay*> rows;
+  for (const ProcessorsReplay& r : g.processors) {
+    if (r.processors == p) rows.push_back(&r);
+  }
+  return rows;
+}
+
+// The time bound column: one value where the schedulers' bounds agree (the bound holds for
+// any scheduler; only what warm caches hold at a frame's start could tell them apart), else
+// each scheduler's, in their order.
+std::string BoundCell(const std::vector<const ProcessorsReplay*>& rows, bool* differ) {
+  bool same = true;
+  std::string each;
+  for (const ProcessorsReplay* r : rows) {
+    same = same && r->total.time_bound == rows.front()->total.time_bound;
+    each += (each.empty() ? "" : " / ") + Ms(r->total.time_bound);
+  }
+  *differ = *differ || !same;
+  return same ? Ms(rows.front()->total.time_bound) : each;
+}
+
+// The fastest of `rows` (the first on ties): its time over its bound, and its name.
+std::string BestOverBound(const std::vector<const ProcessorsReplay*>& rows) {
+  const ProcessorsReplay* best = rows.front();
+  for (const ProcessorsReplay* r : rows) best = r->total.time < best->total.time ? r : best;
+  const double bound = double(best->total.time_bound.picoseconds());
+  return FormatFixed(bound > 0 ? double(best->total.time.picoseconds()) / bound : 0.0, 2) + " (`" +
+         best->scheduler->name + "`)";
+}
+
+// "At 8 processors `balanced` fetches ... than Max Work ...", or nothing without those rows.
+std::string BalancedAgainstMaxWork(const GridStudy& g, std::uint32_t p) {
+  const ProcessorsReplay *mw = nullptr, *b = nullptr;
+  for (const ProcessorsReplay& r : g.processors) {
+    if (r.processors != p) continue;
+    if (std::string(r.scheduler->name) == "maxwork") mw = &r;
+    if (std::string(r.scheduler->name) == "balanced") b = &r;
+  }
+  if (!mw || !b) return "";
+  std::ostringstream s;
+  s << "At " << p << " processors `balanced` fetches "
+    << Change(double(b->total.fetches), double(mw->total.fetches), "fewer")
+    << " cells than Max Work (" << b->total.fetches << " against " << mw->total.fetches
+    << ") and takes "
+    << Change(double(b->total.time.picoseconds()), double(mw->total.time.picoseconds()), "less")
+    << " time (" << Ms(b->total.time) << " against " << Ms(mw->total.time) << " ms).\n\n";
+  return s.str();
 }
 
 // Writes `text` to dir/name via a temporary file.
@@ -171,6 +237,68 @@ std::string GridReport(const GridStudy& g) {
   return s.str();
 }
 
+std::string ProcessorsCsv(const GridStudy& g) {
+  std::ostringstream s;
+  s << "scheduler,processors,fetches,time_ps,time_bound_ps,work_ps,stall_ps,idle_ps,"
+       "utilisation\n";
+  for (const ProcessorsReplay& r : g.processors) {
+    const ReplayResult& t = r.total;
+    s << r.scheduler->name << ',' << r.processors << ',' << t.fetches << ',' << t.time.picoseconds()
+      << ',' << t.time_bound.picoseconds() << ',' << t.work.picoseconds() << ','
+      << t.stall.picoseconds() << ',' << t.idle.picoseconds() << ','
+      << FormatFixed(t.utilisation, 4) << '\n';
+  }
+  return s.str();
+}
+
+std::string ProcessorsReport(const GridStudy& g) {
+  if (g.processors.empty()) return "";
+  const std::vector<const SchedulerEntry*> schedulers = ProcessorsSchedulers();
+  std::ostringstream s;
+  s << "## Several processors (" << g.heading << ")\n\n"
+    << "The capture replayed on boards of " << StudyProcessorCounts().front() << " to "
+    << StudyProcessorCounts().back()
+    << " block processors, the default configuration otherwise: memory warm across frames "
+       "(the board's and the caches), a one-cell cache per processor, replayed per Cell Tree "
+       "node with one processor and per ray segment beyond (granularity auto, exact either "
+       "way). Max Work (`maxwork`) and Cell Tree scheduling (`celltree`) against `balanced`, "
+       "the scheduler for several processors (docs/design.md §5 \"Load balancing\"): "
+       "celltree-best's plan shared by the processors, the cached cell first, "
+       "joining busy cells when no free one is ready, and postponing small batches on boards of "
+       "8 processors or more. Fetches into the processors' caches and simulated time are summed "
+       "over the frames; utilisation is the share of the processors' time spent working. The "
+       "time bound holds for any scheduler (the work over the processors, the busiest link's "
+       "least transfers, the longest chain of dependent work; `time_bound_ps` in "
+       "docs/schemas.md): time / bound is how far the fastest of the three is from what no "
+       "scheduler can beat.\n\n"
+    << "| processors |";
+  for (const char* what : {"fetches", "time ms", "utilisation"}) {
+    for (const SchedulerEntry* e : schedulers) s << ' ' << what << ", `" << e->name << "` |";
+  }
+  s << " time bound ms | fastest time / bound |\n|---:|";
+  for (std::size_t i = 0; i < 3 * schedulers.size() + 2; ++i) s << "---:|";
+  s << '\n';
+  bool differ = false;
+  for (const std::uint32_t p : StudyProcessorCounts()) {
+    const std::vector<const ProcessorsReplay*> rows = RowsOf(g, p);
+    if (rows.empty()) continue;
+    s << "| " << p << " |";
+    for (const ProcessorsReplay* r : rows) s << ' ' << r->total.fetches << " |";
+    for (const ProcessorsReplay* r : rows) s << ' ' << Ms(r->total.time) << " |";
+    for (const ProcessorsReplay* r : rows) s << ' ' << FormatFixed(r->total.utilisation, 2) << " |";
+    s << ' ' << BoundCell(rows, &differ) << " | " << BestOverBound(rows) << " |\n";
+  }
+  s << '\n';
+  if (differ) {
+    s << "Where the schedulers' time bounds differ (warm caches holding other cells when a frame "
+         "starts), the column gives each, in the order of the schedulers.\n\n";
+  }
+  s << BalancedAgainstMaxWork(g, 8) << "![time and fetches against processors](processors.png)\n\n"
+    << "`processors.csv`: per scheduler and processor count, fetches, time, time bound, work, "
+       "stall and idle (summed over processors) in picoseconds, and utilisation.\n\n";
+  return s.str();
+}
+
 std::string AccuracyCsv(const std::vector<AccuracyRow>& rows) {
   std::string s = "knob,value,seconds,time_ratio,error,error_kind,fetch_change,default\r\n";
   for (const AccuracyRow& r : rows) {
@@ -218,7 +346,8 @@ std::string StudyReport(const StudyResult& r) {
   s << "# raycell study\n\n" << Scene(r);
   s << "Replays use the default GI-Cube configuration (one block "
     << "processor with a one-cell cache; `raycell replay --print-config`), per Cell Tree "
-    << "node (exact for this configuration). Online schedulers: Max Work, Cell Tree "
+    << "node (exact for this configuration), except in the several processors section. "
+    << "Online schedulers: Max Work, Cell Tree "
     << "scheduling (frame i+1 follows the Peel schedule of frame i's tree; frame 0 runs Max "
     << "Work), and the same with the best schedule found for frame i's tree, or for frames "
     << "i-1 and i together, instead of Peel's. Oracles: each frame's own Peel schedule, and "
@@ -236,6 +365,7 @@ std::string StudyReport(const StudyResult& r) {
     << "the plan the online schedulers make (`raycell replay --scheduler best`), whose budget "
     << "is smaller than the bracket's.\n\n";
   for (const GridStudy& g : r.grids) s << GridReport(g);
+  for (const GridStudy& g : r.grids) s << ProcessorsReport(g);
   s << AccuracyReport(r.accuracy);
   return s.str();
 }
@@ -248,12 +378,17 @@ void PlotAccuracy(const std::string& dir) {
 std::string WriteStudyReport(const StudyResult& r) {
   const std::string& out = r.options.out;
   std::vector<std::string> labels;
+  bool processors = false;
   for (const GridStudy& g : r.grids) {
     labels.push_back(g.cells);
     WriteFile(out, "cell_trees_" + g.cells + ".csv", TreesCsv(g));
     WriteFile(out, "fetches_" + g.cells + ".csv", FetchesCsv(g));
+    if (g.processors.empty()) continue;
+    RAYCELL_CHECK(!processors && "one grid replays several processors");
+    processors = true;
+    WriteFile(out, "processors.csv", ProcessorsCsv(g));
   }
-  Plot(out, labels);
+  Plot(out, labels, processors);
   if (r.accuracy.measured) {
     WriteFile(r.accuracy.options.out, "accuracy.csv", AccuracyCsv(r.accuracy.rows));
     PlotAccuracy(r.accuracy.options.out);

@@ -1,7 +1,8 @@
 // What a study writes into its folder, from its StudyResult: report.md (the tables of every
-// grid and the run time against error table), the CSV behind each table (cell_trees_*.csv,
-// fetches_*.csv, accuracy/accuracy.csv) and the plots drawn from those CSVs by
-// tools/plot_study.py and tools/plot_accuracy.py (python3 with matplotlib). The texts are
+// grid, the several processors table of the finest grid and the run time against error
+// table), the CSV behind each table (cell_trees_*.csv, fetches_*.csv, processors.csv,
+// accuracy/accuracy.csv) and the plots drawn from those CSVs by tools/plot_study.py and
+// tools/plot_accuracy.py (python3 with matplotlib). The texts are
 // functions of the result alone, so tests can check them without running a study.
 #pragma once
 
@@ -19,6 +20,14 @@ std::string TreesCsv(const GridStudy& g);
 std::string FetchesCsv(const GridStudy& g);
 // One grid's section of report.md: its summary table and the bracket of the optimum.
 std::string GridReport(const GridStudy& g);
+// processors.csv, one row per GridStudy::processors entry, in its order: scheduler,
+// processors, then the total's fetches, time_ps, time_bound_ps, work_ps, stall_ps, idle_ps (as
+// docs/schemas.md defines them for a replay) and utilisation (4 decimals, as sweep prints it).
+std::string ProcessorsCsv(const GridStudy& g);
+// report.md's several processors section of the grid: per processor count each scheduler's
+// fetches, time and utilisation, the time bound and the fastest's time over it; empty when
+// the grid has no such replays.
+std::string ProcessorsReport(const GridStudy& g);
 // accuracy.csv, one line per row, as Python's csv.DictWriter writes such rows (CRLF line
 // ends, a field quoted when it holds a comma, floats as Python's repr, True/False).
 std::string AccuracyCsv(const std::vector<AccuracyRow>& rows);

@@ -14,6 +14,8 @@
 #include "base/parse.h"
 #include "base/progress.h"
 #include "replay/config.h"
+#include "replay/replayer.h"
+#include "traces/format.h"
 #include "traces/record/cell_grid.h"
 #include "traces/record/recorder.h"
 #include "traces/record/scene.h"
@@ -84,8 +86,11 @@ std::string Dims(const TraceHeader& h) {
          std::to_string(h.cells[2]);
 }
 
+// The threads the study's parallel work runs on: the machine's, at most 8.
+unsigned StudyThreads() { return std::max(1u, std::min(std::thread::hardware_concurrency(), 8u)); }
+
 // Brackets the optimum of every tree (AnalyzeTree with --bracket), frames in parallel on the
-// machine's threads; each frame's result depends only on its tree, so on no thread count.
+// study's threads; each frame's result depends only on its tree, so on no thread count.
 std::vector<FrameAnalysis> AnalyzeTrees(const std::vector<CellTree>& trees,
                                         const AnalyzeOptions& options, const std::string& label,
                                         bool quiet) {
@@ -103,18 +108,67 @@ std::vector<FrameAnalysis> AnalyzeTrees(const std::vector<CellTree>& trees,
     }
   };
   std::vector<std::thread> threads;
-  const unsigned n = std::max(1u, std::min(std::thread::hardware_concurrency(), 8u));
-  for (unsigned t = 1; t < n; ++t) threads.emplace_back(work);
+  for (unsigned t = 1; t < StudyThreads(); ++t) threads.emplace_back(work);
   work();
   for (std::thread& t : threads) t.join();
   progress.Done();
   return out;
 }
 
+// InputError naming `what` (the finest grid's option) when the several processors section's
+// largest board on `cells` cells is beyond the memory model's limit (CheckModelSize), before
+// any work.
+void CheckProcessorsFit(const std::string& what, std::uint64_t cells) {
+  ReplayConfig config = DefaultConfig();
+  config.processors.count = StudyProcessorCounts().back();
+  try {
+    CheckModelSize(config, cells);
+  } catch (const InputError& e) {
+    throw InputError(what + ": too many cells for the several processors section: " + e.what());
+  }
+}
+
+// Replays every frame under each ProcessorsSchedulers() entry on boards of each
+// StudyProcessorCounts() size, the default configuration otherwise, in one pass over the
+// frames with the configurations on the study's threads (the totals do not depend on them).
+std::vector<ProcessorsReplay> StudyProcessors(const TraceReader& reader, const std::string& label,
+                                              bool quiet) {
+  std::vector<ProcessorsReplay> rows;
+  std::vector<ReplayConfig> configs;
+  for (const SchedulerEntry* s : ProcessorsSchedulers()) {
+    for (const std::uint32_t p : StudyProcessorCounts()) {
+      ReplayConfig config = DefaultConfig();
+      config.scheduler = s;
+      config.processors.count = p;
+      configs.push_back(config);
+      rows.push_back({s, p, {}});
+    }
+  }
+  std::vector<std::size_t> all(reader.frames().size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+  Progress progress(!quiet);
+  ReplayFramesOptions options;
+  options.jobs = StudyThreads();
+  ReplayFrames(reader, all, configs, options,
+               [&](const LoadedFrame& frame, const std::vector<ReplayResult>& results) {
+                 progress.Update(double(frame.position + 1) / double(all.size()),
+                                 label + ": several processors, replayed frame " +
+                                     std::to_string(frame.position + 1) + "/" +
+                                     std::to_string(all.size()));
+                 for (std::size_t k = 0; k < results.size(); ++k) {
+                   Accumulate(results[k], &rows[k].total);
+                 }
+                 return true;
+               });
+  progress.Done();
+  for (ProcessorsReplay& r : rows) FinishTotal(r.processors, &r.total);
+  return rows;
+}
+
 // Replays the capture under each scheduler in one pass over the frames (ReplayFrames: each
 // frame decoded and its tree built once), keeping the trees; then brackets every tree's
-// optimum with the study's budget.
-GridStudy StudyTrace(const TraceReader& reader, GridStudy g, const StudyOptions& a) {
+// optimum with the study's budget. On the finest grid, then replays several processors.
+GridStudy StudyTrace(const TraceReader& reader, GridStudy g, const StudyOptions& a, bool finest) {
   std::vector<std::size_t> all;
   const std::size_t n = reader.frames().size();
   for (std::size_t i = 0; i < n; ++i) all.push_back(i);
@@ -157,18 +211,19 @@ GridStudy StudyTrace(const TraceReader& reader, GridStudy g, const StudyOptions&
   options.bracket_options.overlap = false;
   g.trees = AnalyzeTrees(trees, options, g.cells, a.quiet);
   for (std::size_t i = 0; i < n; ++i) g.trees[i].frame = numbers[i];
+  if (finest) g.processors = StudyProcessors(reader, g.cells, a.quiet);
   return g;
 }
 
-GridStudy StudyGrid(const StudyOptions& a, const std::vector<int>& frames,
-                    const std::string& cells) {
+GridStudy StudyGrid(const StudyOptions& a, const std::vector<int>& frames, const std::string& cells,
+                    bool finest) {
   const TraceReader reader = RecordGrid(a, frames, cells);
   GridStudy g;
   g.cells = cells;
   g.heading = cells + " cells";
   g.capture = "capture_" + cells + ".rct";
   g.images = "images_" + cells + "/";
-  return StudyTrace(reader, std::move(g), a);
+  return StudyTrace(reader, std::move(g), a, finest);
 }
 
 std::string Stem(const std::string& path) { return fs::path(path).stem().string(); }
@@ -191,7 +246,7 @@ std::vector<TraceReader> OpenGivenTraces(const StudyOptions& a) {
   return readers;
 }
 
-// The given traces, each labelled by its file stem.
+// The given traces, each labelled by its file stem; the last is the finest grid.
 std::vector<GridStudy> StudyGivenTraces(const StudyOptions& a,
                                         const std::vector<TraceReader>& readers) {
   std::vector<GridStudy> grids;
@@ -204,7 +259,7 @@ std::vector<GridStudy> StudyGivenTraces(const StudyOptions& a,
     g.cells = Stem(path);
     g.heading = "`" + path + "` (" + Dims(reader.header()) + " cells)";
     g.capture = path;
-    grids.push_back(StudyTrace(reader, std::move(g), a));
+    grids.push_back(StudyTrace(reader, std::move(g), a, i + 1 == readers.size()));
   }
   return grids;
 }
@@ -221,6 +276,19 @@ std::vector<const SchedulerEntry*> StudySchedulers() {
     }
   }
   return out;
+}
+
+std::vector<const SchedulerEntry*> ProcessorsSchedulers() {
+  std::vector<const SchedulerEntry*> out;
+  for (const char* name : {"maxwork", "celltree", "balanced"}) {
+    out.push_back(&SchedulerByName(name, "the study's several processors section"));
+  }
+  return out;
+}
+
+const std::vector<std::uint32_t>& StudyProcessorCounts() {
+  static const std::vector<std::uint32_t> counts = {1, 2, 4, 8, 16};
+  return counts;
 }
 
 const TraceReplay& GridStudy::replay(std::string_view name) const {
@@ -252,12 +320,15 @@ StudyResult RunStudy(const StudyOptions& a) {
     // A sequence's knobs are measured on the volume of its first frame.
     accuracy.scene = a.sequence() ? FrameFile(a.scene, result.frame_numbers.front()) : a.scene;
     const std::vector<std::string> cells = SplitList(a.cells);
+    CheckProcessorsFit("--cells '" + cells.back() + "'",
+                       TraceCellCount(ParseCellDims(cells.back())));
     fs::create_directories(a.out);
-    for (const std::string& c : cells) {
-      result.grids.push_back(StudyGrid(a, result.frame_numbers, c));
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      result.grids.push_back(StudyGrid(a, result.frame_numbers, cells[i], i + 1 == cells.size()));
     }
   } else {
     const std::vector<TraceReader> readers = OpenGivenTraces(a);
+    CheckProcessorsFit("--trace '" + a.traces.back() + "'", readers.back().header().cell_count());
     fs::create_directories(a.out);
     result.grids = StudyGivenTraces(a, readers);
     accuracy.scene = readers.front().header().scene;

@@ -2,9 +2,12 @@
 // replays the capture under every studied scheduler, brackets each frame's optimum, and
 // measures run time against error for the knobs that trade one for the other. RunStudy
 // returns what it found as data; study/report.h turns that into report.md, CSVs and plots,
-// and the command (tools/study_command.cpp) only parses options into StudyOptions.
+// and the command (tools/study_command.cpp) only parses options into StudyOptions. On the
+// finest grid it also replays boards of several processors (docs/design.md §5 "Load
+// balancing").
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -44,6 +47,20 @@ struct SchedulerReplay {
   TraceReplay replay;  // per Cell Tree node, the default configuration otherwise
 };
 
+// The several processors section, on the study's finest grid: Max Work, Cell Tree scheduling
+// and `balanced` (the registry's scheduler for several processors), in the report's order,
+// each on boards of StudyProcessorCounts() block processors.
+std::vector<const SchedulerEntry*> ProcessorsSchedulers();
+const std::vector<std::uint32_t>& StudyProcessorCounts();  // 1, 2, 4, 8, 16
+
+struct ProcessorsReplay {
+  const SchedulerEntry* scheduler = nullptr;
+  std::uint32_t processors = 1;  // processors.count
+  // TraceReplay::total of every frame under the default configuration otherwise (warm memory,
+  // granularity auto: per Cell Tree node with one processor, per ray segment beyond).
+  ReplayResult total;
+};
+
 // The results for one cell grid (recorded) or one given trace.
 struct GridStudy {
   std::string cells;    // the label in file names: "3x3x3", or the given trace's file stem
@@ -52,6 +69,9 @@ struct GridStudy {
   std::string images;   // the frames' images, relative to the study folder; empty for a trace
   std::vector<FrameAnalysis> trees;      // per frame, with the bracket of the optimum
   std::vector<SchedulerReplay> replays;  // one per StudySchedulers() entry, in its order
+  // One per ProcessorsSchedulers() x StudyProcessorCounts() pair, the count varying fastest;
+  // on the study's finest grid (the last one studied) only, empty on the others.
+  std::vector<ProcessorsReplay> processors;
 
   // The replay under the scheduler named `name`; CHECK-fails if it was not studied.
   const TraceReplay& replay(std::string_view name) const;
@@ -65,9 +85,9 @@ struct StudyResult {
 };
 
 // Runs the study: checks the options (InputError naming the option, before any work),
-// records and studies each grid (or each given trace) into options.out, then measures run
-// time against error into options.out/accuracy/. One summary line per capture on stderr,
-// progress bars unless quiet.
+// records and studies each grid (or each given trace) into options.out, replays the last one
+// on several processors, then measures run time against error into options.out/accuracy/. One
+// summary line per capture on stderr, progress bars unless quiet.
 StudyResult RunStudy(const StudyOptions& options);
 
 }  // namespace raycell

@@ -1,9 +1,11 @@
 #!/usr/bin/python3
 """Plots of a `raycell study` folder: fetches per frame per scheduler, the bracket of each
-frame's optimum, and Cell Tree size per frame, one PNG each per cell grid. Reads the CSVs the
-study wrote; exits non-zero (and the study fails) if anything cannot be drawn.
+frame's optimum, and Cell Tree size per frame, one PNG each per cell grid; with --processors,
+processors.png: time and fetches against the processor count (processors.csv). Reads the CSVs
+the study wrote; exits non-zero (and the study fails) if anything cannot be drawn.
 
-Usage: plot_study.py STUDY_DIR CELLS [CELLS ...]     e.g. plot_study.py study 2x2x2 3x3x3
+Usage: plot_study.py STUDY_DIR [--processors] CELLS [CELLS ...]
+       e.g. plot_study.py study --processors 2x2x2 3x3x3
 """
 import csv
 import sys
@@ -83,15 +85,58 @@ def plot_trees(folder, cells):
     plt.close(fig)
 
 
+# The schedulers of processors.csv, as the report names them, and their line styles.
+PROCESSORS_SCHEDULERS = [("maxwork", "Max Work", "o-"), ("celltree", "Cell Tree", "s-"),
+                         ("balanced", "balanced", "D-")]
+
+
+def plot_processors(folder):
+    """Two panels against the processor count (log2 axis): each scheduler's time with the time
+    bound dashed, and each scheduler's fetches."""
+    rows = read(f"{folder}/processors.csv")
+    fig, (time_ax, fetch_ax) = plt.subplots(1, 2, figsize=(11, 4.5))
+    bound = {}
+    for key, label, style in PROCESSORS_SCHEDULERS:
+        mine = [r for r in rows if r["scheduler"] == key]
+        counts = [int(r["processors"]) for r in mine]
+        time_ax.plot(counts, [int(r["time_ps"]) / 1e9 for r in mine], style, label=label,
+                     markersize=4)
+        fetch_ax.plot(counts, [int(r["fetches"]) for r in mine], style, label=label, markersize=4)
+        for r in mine:  # where the schedulers' bounds differ, the least is below every time
+            p = int(r["processors"])
+            bound[p] = min(bound.get(p, float("inf")), int(r["time_bound_ps"]) / 1e9)
+    counts = sorted(bound)
+    time_ax.plot(counts, [bound[p] for p in counts], "k--", label="time bound (any scheduler)")
+    for ax, ylabel, title in [(time_ax, "simulated time (ms), all frames", "Time"),
+                              (fetch_ax, "cell fetches into the caches", "Fetches")]:
+        ax.set_xscale("log", base=2)
+        ax.set_xticks(counts)
+        ax.set_xticklabels([str(p) for p in counts])
+        ax.set_xlabel("block processors")
+        ax.set_ylabel(ylabel)
+        ax.set_title(f"{title} against processors")
+        ax.grid(alpha=0.3, which="both")
+        ax.set_ylim(bottom=0)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(f"{folder}/processors.png", dpi=100)
+    plt.close(fig)
+
+
 def main():
-    if len(sys.argv) < 3:
+    args = sys.argv[1:]
+    processors = "--processors" in args
+    args = [a for a in args if a != "--processors"]
+    if len(args) < 2:
         print(__doc__, file=sys.stderr)
         return 2
-    folder = sys.argv[1]
-    for cells in sys.argv[2:]:
+    folder = args[0]
+    for cells in args[1:]:
         plot_fetches(folder, cells)
         plot_bracket(folder, cells)
         plot_trees(folder, cells)
+    if processors:
+        plot_processors(folder)
     return 0
 
 

@@ -6,11 +6,15 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "replay/config.h"
+#include "replay/driver.h"
+#include "scheduling/scheduler.h"
 #include "study/accuracy.h"
 #include "study/image_error.h"
 #include "study/report.h"
@@ -136,6 +140,62 @@ TEST(Study, EverySchedulerReplaysTheWholeCaptureOfEachGrid) {
   }
 }
 
+// The finest grid (the last, 1x2x1) replayed on 1 to 16 processors under Max Work, Cell Tree
+// scheduling and balanced: every row processes the whole capture, stays above its time bound,
+// and equals a replay of its configuration alone (ReplayTrace, the configuration built here).
+TEST(Study, TheFinestGridIsReplayedOnSeveralProcessors) {
+  const StudyResult& s = TinyStudy();
+  ASSERT_EQ(s.grids.size(), 2u);
+  EXPECT_TRUE(s.grids[0].processors.empty());
+  const GridStudy& g = s.grids[1];
+  ASSERT_EQ(g.cells, "1x2x1");
+  const TraceReader reader =
+      TraceReader::Open((std::filesystem::path(s.options.out) / g.capture).string());
+  std::uint64_t rays = 0, visits = 0, samples = 0;
+  std::vector<std::size_t> all;
+  for (const FrameSummary& f : reader.frames()) {
+    rays += f.rays, visits += f.visits, samples += f.samples;
+    all.push_back(all.size());
+  }
+  const std::vector<std::string> names = {"maxwork", "celltree", "balanced"};
+  const std::vector<std::uint32_t> counts = {1, 2, 4, 8, 16};
+  ASSERT_EQ(g.processors.size(), names.size() * counts.size());
+  for (std::size_t i = 0; i < g.processors.size(); ++i) {
+    const ProcessorsReplay& r = g.processors[i];
+    const std::string name = names[i / counts.size()];
+    const std::uint32_t p = counts[i % counts.size()];
+    const std::string what = name + " on " + std::to_string(p);
+    ASSERT_EQ(r.scheduler->name, name) << i;
+    ASSERT_EQ(r.processors, p) << name;
+    const ReplayResult& t = r.total;
+    EXPECT_EQ(t.rays, rays) << what;
+    EXPECT_EQ(t.segments, visits) << what;
+    EXPECT_EQ(t.samples, samples) << what;
+    EXPECT_LE(t.time_bound, t.time) << what;
+    EXPECT_EQ(t.work + t.stall + t.idle, t.time * p) << what;
+    ReplayConfig config = DefaultConfig();
+    config.scheduler = &SchedulerByName(name, "test");
+    config.processors.count = p;
+    EXPECT_EQ(t.work, config.processors.time_per_sample * samples) << what;
+    const ReplayResult alone = ReplayTrace(reader, all, config).total;
+    EXPECT_EQ(t.fetches, alone.fetches) << what;
+    ASSERT_FALSE(t.levels.empty()) << what;
+    EXPECT_EQ(t.fetches, t.levels[0].fetches) << what;
+    EXPECT_EQ(t.levels[0].fetches, alone.levels[0].fetches) << what;
+    EXPECT_EQ(t.time, alone.time) << what;
+    EXPECT_EQ(t.time_bound, alone.time_bound) << what;
+    EXPECT_EQ(t.work, alone.work) << what;
+    EXPECT_EQ(t.stall, alone.stall) << what;
+    EXPECT_EQ(t.idle, alone.idle) << what;
+    EXPECT_EQ(t.utilisation, alone.utilisation) << what;
+    // With one processor the default granularity is per node, as the study's own replays.
+    if (p == 1 && name != "balanced") {
+      EXPECT_EQ(t.fetches, g.replay(name).total.fetches) << what;
+      EXPECT_EQ(t.time, g.replay(name).total.time) << what;
+    }
+  }
+}
+
 TEST(Study, TheReportTellsWhatTheResultHolds) {
   const StudyResult& s = TinyStudy();
   const std::string report = StudyReport(s);
@@ -143,6 +203,10 @@ TEST(Study, TheReportTellsWhatTheResultHolds) {
             std::string::npos)
       << report;
   for (const GridStudy& g : s.grids) EXPECT_NE(report.find(GridReport(g)), std::string::npos);
+  EXPECT_EQ(ProcessorsReport(s.grids[0]), "");
+  EXPECT_NE(report.find("## Several processors (1x2x1 cells)\n"), std::string::npos) << report;
+  EXPECT_NE(report.find(ProcessorsReport(s.grids[1])), std::string::npos) << report;
+  EXPECT_EQ(report.find("## Several processors (2x2x2 cells)"), std::string::npos) << report;
   EXPECT_NE(report.find(AccuracyTable(s.accuracy.rows)), std::string::npos) << report;
   // The CSV: a header, then each row with the library's knob, value and default.
   const std::string csv = AccuracyCsv(s.accuracy.rows);
@@ -194,6 +258,70 @@ TEST(Study, NothingToCloseWhenPeelMeetsTheLowerBound) {
   EXPECT_NE(met.find(row + " - |"), std::string::npos) << met;
   const std::string open = GridReport(HandMadeGrid(5, 3, 4));
   EXPECT_NE(open.find(row + " 50.0% |"), std::string::npos) << open;
+}
+
+// A grid on several processors whose totals are given: per scheduler and count, fetches and
+// time (ms) as listed, a bound of 96 ms / count, utilisation 0.5; at 16 processors balanced's
+// bound is 5 ms instead of 6 when `differ`.
+GridStudy HandMadeProcessors(bool differ) {
+  GridStudy g;
+  g.heading = "3x3x3 cells";
+  const std::vector<std::pair<const char*, std::vector<std::pair<std::uint64_t, std::uint64_t>>>>
+      rows = {{"maxwork", {{40, 300}, {42, 160}, {44, 90}, {200, 80}, {400, 70}}},
+              {"celltree", {{30, 280}, {33, 150}, {36, 85}, {180, 78}, {380, 69}}},
+              {"balanced", {{28, 270}, {31, 145}, {35, 84}, {50, 60}, {120, 40}}}};
+  for (const auto& [name, values] : rows) {
+    const std::vector<std::uint32_t> counts = {1, 2, 4, 8, 16};
+    for (std::size_t i = 0; i < counts.size(); ++i) {
+      ProcessorsReplay r;
+      r.scheduler = &SchedulerByName(name, "test");
+      r.processors = counts[i];
+      r.total.fetches = values[i].first;
+      r.total.time = SimTime::Milliseconds(values[i].second);
+      r.total.time_bound = SimTime::Picoseconds(96000000000 / counts[i]);
+      if (differ && counts[i] == 16 && std::string(name) == "balanced") {
+        r.total.time_bound = SimTime::Milliseconds(5);
+      }
+      r.total.work = SimTime::Picoseconds(123), r.total.stall = SimTime::Picoseconds(45);
+      r.total.idle = SimTime::Picoseconds(6);
+      r.total.utilisation = 0.5;
+      g.processors.push_back(r);
+    }
+  }
+  return g;
+}
+
+TEST(Study, TheProcessorsSectionPrintsTheBoundOnceAndComparesAtEight) {
+  const std::string same = ProcessorsReport(HandMadeProcessors(false));
+  EXPECT_EQ(same.rfind("## Several processors (3x3x3 cells)\n\n", 0), 0u) << same;
+  // 1 processor: the fastest is balanced, 270 ms over a bound of 96 ms.
+  EXPECT_NE(same.find("| 1 | 40 | 30 | 28 | 300.0 | 280.0 | 270.0 | 0.50 | 0.50 | 0.50 | 96.0 | "
+                      "2.81 (`balanced`) |\n"),
+            std::string::npos)
+      << same;
+  EXPECT_NE(same.find("| 16 | 400 | 380 | 120 | 70.0 | 69.0 | 40.0 | 0.50 | 0.50 | 0.50 | 6.0 | "
+                      "6.67 (`balanced`) |\n"),
+            std::string::npos)
+      << same;
+  // At 8: 50 fetches against 200 is 75% fewer; 60 ms against 80 is 25% less.
+  EXPECT_NE(same.find("At 8 processors `balanced` fetches 75.0% fewer cells than Max Work (50 "
+                      "against 200) and takes 25.0% less time (60.0 against 80.0 ms)."),
+            std::string::npos)
+      << same;
+  EXPECT_NE(same.find("![time and fetches against processors](processors.png)"), std::string::npos);
+  EXPECT_EQ(same.find("bounds differ"), std::string::npos) << same;
+  // Bounds that differ are each printed; the fastest's time is over its own bound (40 / 5).
+  const std::string differ = ProcessorsReport(HandMadeProcessors(true));
+  EXPECT_NE(differ.find("| 6.0 / 6.0 / 5.0 | 8.00 (`balanced`) |\n"), std::string::npos) << differ;
+  EXPECT_NE(differ.find("bounds differ"), std::string::npos) << differ;
+  const std::string csv = ProcessorsCsv(HandMadeProcessors(false));
+  EXPECT_EQ(csv.rfind("scheduler,processors,fetches,time_ps,time_bound_ps,work_ps,stall_ps,"
+                      "idle_ps,utilisation\nmaxwork,1,40,300000000000,96000000000,123,45,6,0.5000\n"
+                      "maxwork,2,42,160000000000,48000000000,123,45,6,0.5000\n",
+                      0),
+            0u)
+      << csv;
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 16) << csv;
 }
 
 TEST(Study, AStillCameraIsSaidSo) {

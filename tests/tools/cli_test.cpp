@@ -284,6 +284,74 @@ std::vector<std::string> CsvRow(const std::string& line) {
   return fields;
 }
 
+// The rows of a CSV file without its comment lines (# ...), each split into fields.
+std::vector<std::vector<std::string>> CsvRows(const std::filesystem::path& file) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream in(raycell::testing::ReadBytes(file.string()));
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("#", 0) != 0) rows.push_back(CsvRow(line));
+  }
+  return rows;
+}
+
+// The samples of every frame of `capture`, as `raycell trace info` totals them.
+std::uint64_t TraceSamples(const std::string& capture) {
+  const Result info = Raycell("trace info " + capture);
+  EXPECT_EQ(info.code, 0) << info.out;
+  std::istringstream in(info.out);
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream words(line);
+    std::vector<std::string> w;
+    for (std::string x; words >> x;) w.push_back(x);
+    // total, primary, reflection, refraction, shadow, rays, visits, samples, bytes, B/visit
+    if (w.size() == 10 && w[0] == "total") return std::stoull(w[7]);
+  }
+  ADD_FAILURE() << "no total line in " << info.out;
+  return 0;
+}
+
+// A study folder's processors.csv against `raycell sweep` of its capture on the same
+// schedulers and processor counts: the same numbers, each time above its bound, and the work
+// of the capture's samples (10 ns each, the default) in every row.
+void ExpectProcessorsAsSweepGivesThem(const std::filesystem::path& study,
+                                      const std::string& capture) {
+  const auto rows = CsvRows(study / "processors.csv");
+  ASSERT_EQ(rows.size(), 16u);  // header + 3 schedulers x 5 counts
+  const std::vector<std::string> header = {"scheduler", "processors",    "fetches",
+                                           "time_ps",   "time_bound_ps", "work_ps",
+                                           "stall_ps",  "idle_ps",       "utilisation"};
+  EXPECT_EQ(rows[0], header);
+  const auto out = study / "processors_sweep.csv";
+  const Result sweep = Raycell("sweep " + capture +
+                               " --vary scheduler=maxwork,celltree,balanced --vary "
+                               "processors.count=1,2,4,8,16 --quiet --out " +
+                               out.string());
+  ASSERT_EQ(sweep.code, 0) << sweep.out;
+  const auto swept = CsvRows(out);
+  ASSERT_EQ(swept.size(), rows.size());
+  std::map<std::string, std::size_t> column;
+  for (std::size_t c = 0; c < swept[0].size(); ++c) column[swept[0][c]] = c;
+  column["processors"] = column.at("processors.count");
+  const std::uint64_t samples = TraceSamples(capture);
+  ASSERT_GT(samples, 0u);
+  const std::vector<std::string> schedulers = {"maxwork", "celltree", "balanced"},
+                                 counts = {"1", "2", "4", "8", "16"};
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    const std::vector<std::string>& row = rows[i];
+    ASSERT_EQ(row.size(), header.size()) << i;
+    EXPECT_EQ(row[0], schedulers[(i - 1) / 5]) << i;
+    EXPECT_EQ(row[1], counts[(i - 1) % 5]) << i;
+    for (std::size_t c = 0; c < header.size(); ++c) {
+      EXPECT_EQ(row[c], swept[i].at(column.at(header[c]))) << header[c] << " in row " << i;
+    }
+    EXPECT_EQ(swept[i].at(column.at("samples")), std::to_string(samples)) << i;
+    EXPECT_GE(std::stoull(row[3]), std::stoull(row[4])) << "time below its bound in row " << i;
+    EXPECT_EQ(std::stoull(row[5]), samples * 10000) << "work in row " << i;
+    EXPECT_GT(std::stoull(row[2]), 0u) << i;
+  }
+  EXPECT_GT(std::filesystem::file_size(study / "processors.png"), 1000u);
+}
+
 TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
   // The interpreter the study runs (tools/study_command.cpp: /usr/bin/python3 where it exists).
   const char* python = std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
@@ -370,6 +438,14 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
   }
   EXPECT_EQ(acc.find("nan"), std::string::npos) << acc;
   EXPECT_EQ(acc.find("inf"), std::string::npos) << acc;
+  // Several processors, on the finest grid (the last of --cells) only.
+  EXPECT_NE(report.find("## Several processors (1x2x1 cells)\n"), std::string::npos) << report;
+  EXPECT_EQ(report.find("## Several processors (2x2x2 cells)"), std::string::npos) << report;
+  EXPECT_NE(report.find("| processors | fetches, `maxwork` |"), std::string::npos) << report;
+  EXPECT_NE(report.find("At 8 processors `balanced` fetches "), std::string::npos) << report;
+  EXPECT_NE(report.find("![time and fetches against processors](processors.png)"),
+            std::string::npos);
+  ExpectProcessorsAsSweepGivesThem(out, (out / "capture_1x2x1.rct").string());
 
   // A given capture is studied without recording, with the same results.
   const auto again = Dir() / "study_again";
@@ -382,9 +458,27 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
             raycell::testing::ReadBytes((out / "cell_trees_2x2x2.csv").string()));
   EXPECT_GT(std::filesystem::file_size(again / "fetches_capture_2x2x2.png"), 1000u);
   EXPECT_FALSE(std::filesystem::exists(again / "images_2x2x2"));
+  // The given trace (the last one) is the finest grid: its 8 cells on several processors.
+  const std::string again_report = raycell::testing::ReadBytes((again / "report.md").string());
+  EXPECT_NE(again_report.find("## Several processors (`" + capture + "` (2x2x2 cells))\n"),
+            std::string::npos)
+      << again_report;
+  ExpectProcessorsAsSweepGivesThem(again, capture);
   const Result r3 = Raycell("study --trace " + capture + " --cells 3x3x3 --out " + again.string());
   EXPECT_EQ(r3.code, 2);
   EXPECT_NE(r3.out.find("--cells excludes --trace"), std::string::npos) << r3.out;
+  // 16 processors on 256x256x200 cells are beyond the memory model's limit: refused before
+  // any recording.
+  const auto huge = Dir() / "study_huge";
+  const Result r4 = Raycell(
+      "study --cells 2x2x2,256x256x200 --res 8x8 --frames 2 --accuracy-frames 0 --quiet --out " +
+      huge.string());
+  EXPECT_EQ(r4.code, 2) << r4.out;
+  EXPECT_NE(r4.out.find("--cells '256x256x200': too many cells for the several processors "
+                        "section: processors.count 16 x 13107200 cells"),
+            std::string::npos)
+      << r4.out;
+  EXPECT_FALSE(std::filesystem::exists(huge));
 }
 
 TEST(Cli, BadInputGetsAClearMessageAndExitCode2) {
