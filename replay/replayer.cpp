@@ -455,14 +455,7 @@ ReplayResult Replay(const WorkGraph& work, Units units,
                     ReplayObserver* observer, MemoryState* memory) {
   static const MemoryState kEmpty;
   const MemoryState& start = memory ? *memory : kEmpty;
-  // The schedulers' estimate of a fetch: the first link's time, in samples.
-  std::vector<double> fetch_samples(footprints.size());
-  const LevelConfig& l0 = config.levels.front();
-  const double tps = double(config.processors.time_per_sample.picoseconds());
-  for (std::size_t c = 0; c < footprints.size(); ++c) {
-    const SimTime t = l0.latency_below + l0.bandwidth_below.TransferTime(footprints[c]);
-    fetch_samples[c] = double(t.picoseconds()) / tps;
-  }
+  const std::vector<double> fetch_samples = FetchSamples(config, footprints);
   FrameInfo info = frame;
   info.fetch_samples = &fetch_samples;
   info.processors = config.processors.count;
@@ -494,6 +487,18 @@ ReplayResult Replay(const WorkGraph& work, Units units,
 }
 
 }  // namespace
+
+std::vector<double> FetchSamples(const ReplayConfig& config,
+                                 const std::vector<std::uint64_t>& footprints) {
+  std::vector<double> samples(footprints.size());
+  const LevelConfig& l0 = config.levels.front();
+  const double tps = double(config.processors.time_per_sample.picoseconds());
+  for (std::size_t c = 0; c < footprints.size(); ++c) {
+    const SimTime t = l0.latency_below + l0.bandwidth_below.TransferTime(footprints[c]);
+    samples[c] = double(t.picoseconds()) / tps;
+  }
+  return samples;
+}
 
 bool BoundHolds(const ReplayConfig& config) {
   const LevelConfig& l0 = config.levels.front();

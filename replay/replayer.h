@@ -66,6 +66,11 @@ ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>
                          std::uint64_t bound, ReplayObserver* observer = nullptr,
                          MemoryState* memory = nullptr);
 
+// Per cell, what the schedulers are told a fetch costs (FrameInfo::fetch_samples): the first
+// link's latency + footprint / bandwidth, in units of one sample's work.
+std::vector<double> FetchSamples(const ReplayConfig& config,
+                                 const std::vector<std::uint64_t>& footprints);
+
 // Whether the maxGen bound holds for `config`: one processor whose cache holds one cell.
 bool BoundHolds(const ReplayConfig& config);
 

@@ -70,6 +70,10 @@ void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
   for (std::uint32_t k = 0; k < p; ++k) followers_[k].Reset(std::move(parts[k]), cells_);
 }
 
+const std::uint64_t* BalancedScheduler::Queued(const QueueView& queues) const {
+  return options_.share && queues.all_queued != nullptr ? queues.all_queued : queues.queued_rays;
+}
+
 QueueView BalancedScheduler::Own(const QueueView& queues) const {
   if (followers_.size() <= 1) return queues;
   own_.assign(queues.queued_rays, queues.queued_rays + queues.cells);
@@ -104,9 +108,7 @@ std::optional<CellId> BalancedScheduler::Choose(const QueueView& queues,
   *follower = nullptr;
   // Affinity: the cell in the processor's cache, when it has work, costs no fetch.
   if (options_.affinity && queues.loaded) {
-    const std::uint64_t* q =
-        options_.share && queues.all_queued != nullptr ? queues.all_queued : queues.queued_rays;
-    if (q[queues.loaded->value()] > 0) return queues.loaded;
+    if (Queued(queues)[queues.loaded->value()] > 0) return queues.loaded;
   }
   const std::uint32_t k =
       followers_.size() > 1 ? std::min<std::uint32_t>(queues.processor, followers_.size() - 1) : 0;
@@ -134,17 +136,13 @@ std::optional<CellId> BalancedScheduler::Choose(const QueueView& queues,
     }
   }
   // Sharing: busy cells' queues count too (the processor joins the cell).
-  const bool share = options_.share && queues.all_queued != nullptr;
-  return Best(queues, share ? queues.all_queued : queues.queued_rays,
-              [](std::uint32_t) { return true; });
+  return Best(queues, Queued(queues), [](std::uint32_t) { return true; });
 }
 
 bool BalancedScheduler::TooSmall(const QueueView& queues, CellId c) const {
   if (fetch_samples_ == nullptr || samples_per_visit_[c.value()] <= 0) return false;
   if (queues.loaded == c) return false;  // in the cache: no fetch
-  const std::uint64_t* q =
-      options_.share && queues.all_queued != nullptr ? queues.all_queued : queues.queued_rays;
-  const double work = double(q[c.value()]) * samples_per_visit_[c.value()];
+  const double work = double(Queued(queues)[c.value()]) * samples_per_visit_[c.value()];
   return work < kPostponeFactor * (*fetch_samples_)[c.value()];
 }
 
@@ -173,8 +171,7 @@ std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
   if (options_.postpone && queues.processors >= kPostponeMinProcessors &&
       queues.working + 1 >= queues.processors && TooSmall(queues, *c)) {
     const std::optional<CellId> largest =
-        Best(queues, options_.share && queues.all_queued ? queues.all_queued : queues.queued_rays,
-             [](std::uint32_t) { return true; });
+        Best(queues, Queued(queues), [](std::uint32_t) { return true; });
     if (largest && !TooSmall(queues, *largest)) {
       reason_ = "largest (plan's batch too small)";
       return largest;  // the plan keeps its place

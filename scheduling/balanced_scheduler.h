@@ -69,6 +69,8 @@ class BalancedScheduler : public Scheduler {
   // The choice for `queues` without the postponing rule, and the follower it came from (null:
   // not a plan entry).
   std::optional<CellId> Choose(const QueueView& queues, ScheduleFollower** follower) const;
+  // The queued rays this scheduler may choose from: every cell's with share, else the view's.
+  const std::uint64_t* Queued(const QueueView& queues) const;
   // `queues` with the cells of other processors masked out (partition), in own_.
   QueueView Own(const QueueView& queues) const;
   // Max Work over the cells with work in view that `take` accepts, weighted by affinity.

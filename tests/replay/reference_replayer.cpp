@@ -230,14 +230,8 @@ ReplayResult ReferenceReplayFrame(const WorkGraph& work,
   const bool min = UsesMin(config);
   const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
   MemoryHierarchy::Requests futures;
-  // A fetch from the board, in samples, for the schedulers that weigh it.
-  std::vector<double> fetch_samples;
-  for (const std::uint64_t f : footprints) {
-    const LevelConfig& l0 = config.levels[0];
-    fetch_samples.push_back(
-        double((l0.latency_below + l0.bandwidth_below.TransferTime(f)).picoseconds()) /
-        double(config.processors.time_per_sample.picoseconds()));
-  }
+  // What the core tells the schedulers a fetch costs (not what this reference checks).
+  const std::vector<double> fetch_samples = FetchSamples(config, footprints);
   FrameInfo info = frame;
   info.fetch_samples = &fetch_samples;
   info.processors = config.processors.count;
