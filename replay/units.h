@@ -14,29 +14,10 @@
 #include <string>
 #include <string_view>
 
+#include "base/units.h"
 #include "engine/time.h"
 
 namespace raycell {
-
-// A number of bytes. Explicit construction only, so a count of cells or records cannot be
-// passed where a size is meant.
-class Bytes {
- public:
-  constexpr Bytes() = default;
-  constexpr explicit Bytes(std::uint64_t count) : count_(count) {}
-
-  constexpr std::uint64_t count() const { return count_; }
-
-  // Shortest exact form: "512B", "1.5GB", "256MiB". ParseBytes(ToString()) == *this.
-  std::string ToString() const;
-
-  friend constexpr bool operator==(Bytes a, Bytes b) { return a.count_ == b.count_; }
-  friend constexpr bool operator!=(Bytes a, Bytes b) { return a.count_ != b.count_; }
-  friend constexpr bool operator<(Bytes a, Bytes b) { return a.count_ < b.count_; }
-
- private:
-  std::uint64_t count_ = 0;
-};
 
 // A transfer rate, held exactly as a whole number of bits per second (so both "10Gb/s" and
 // "1.6GB/s" are exact), or unlimited. Never zero.
@@ -83,10 +64,6 @@ class Bandwidth {
 // "250ps", "10ns", "1.5 us" (also "µs"), "2ms", "0.5s". A number without a unit is an error;
 // zero is allowed; the value must be a whole number of picoseconds that fits SimTime.
 SimTime ParseDuration(std::string_view text, const std::string& what);
-
-// "512B", "4KiB", "64MiB", "1.5GB". A unit is required; zero is allowed; bits are rejected;
-// the value must be a whole number of bytes that fits 64 bits.
-Bytes ParseBytes(std::string_view text, const std::string& what);
 
 // "1.6GB/s", "133MB/s", "800MiB/s", "10Gb/s", "inf", "unlimited". Zero is an error; the value
 // must be a whole number of bits per second that fits 64 bits.
