@@ -1,0 +1,267 @@
+#include "traces/subdivision.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "base/check.h"
+#include "base/random.h"
+
+namespace raycell {
+namespace {
+
+using Grid = std::array<std::uint32_t, 3>;
+
+// A fine grid over a volume of leaf nodes that do not line up with the fine cells: leaves are
+// blocks 1.5 fine cells wide, so most straddle two fine cells and a union of fine cells must
+// count each once. Leaves are allocated densely near one corner and sparsely elsewhere, so
+// footprints are uneven, as in a real volume. Samples: a fixed pseudo-random amount per cell.
+struct LeafModel {
+  Grid grid;
+  std::uint64_t leaf_bytes = 512;
+
+  static constexpr int kPerTwo = 3;  // a leaf is 3/2 fine cells wide
+  std::uint32_t blocks(int a) const { return (2 * grid[a] + kPerTwo - 1) / kPerTwo; }
+  bool Allocated(std::uint32_t bx, std::uint32_t by, std::uint32_t bz) const {
+    SplitMix64 h((std::uint64_t{bx} << 40) ^ (std::uint64_t{by} << 20) ^ bz);
+    const double d = double(bx + by + bz) / double(blocks(0) + blocks(1) + blocks(2));
+    return double(h.Next() % 1000) / 1000.0 < 0.95 - 0.9 * d;
+  }
+  // The leaves a fine cell [x, x+1) overlaps: blocks i with 1.5 i < x + 1 and 1.5 (i + 1) > x.
+  std::vector<std::uint64_t> Leaves(std::uint32_t f) const {
+    const std::uint32_t x = f % grid[0], y = f / grid[0] % grid[1], z = f / (grid[0] * grid[1]);
+    const std::array<std::uint32_t, 3> p{x, y, z};
+    std::array<std::uint32_t, 3> lo{}, hi{};
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = 2 * p[a] / kPerTwo;
+      hi[a] = std::min(blocks(a), (2 * (p[a] + 1) + kPerTwo - 1) / kPerTwo);
+    }
+    std::vector<std::uint64_t> out;
+    for (std::uint32_t bz = lo[2]; bz < hi[2]; ++bz) {
+      for (std::uint32_t by = lo[1]; by < hi[1]; ++by) {
+        for (std::uint32_t bx = lo[0]; bx < hi[0]; ++bx) {
+          if (Allocated(bx, by, bz)) out.push_back(bx + blocks(0) * (by + blocks(1) * bz));
+        }
+      }
+    }
+    return out;
+  }
+  std::uint64_t Union(const std::vector<std::uint32_t>& fine) const {
+    std::set<std::uint64_t> leaves;
+    for (std::uint32_t f : fine) {
+      for (std::uint64_t l : Leaves(f)) leaves.insert(l);
+    }
+    return leaves.size() * leaf_bytes;
+  }
+  FineCells Cells(bool with_samples = true, std::uint64_t seed = 7) const {
+    FineCells c;
+    c.grid = grid;
+    c.union_footprint = [this](const std::vector<std::uint32_t>& f) { return Union(f); };
+    if (with_samples) {
+      SplitMix64 r(seed);
+      for (std::uint32_t i = 0; i < c.count(); ++i) c.samples.push_back(r.Next() % 1000);
+    }
+    return c;
+  }
+};
+
+// The fine cells of a box, computed here from its corners.
+std::vector<std::uint32_t> Inside(const FineBox& b, const Grid& g) {
+  std::vector<std::uint32_t> out;
+  for (std::uint32_t f = 0; f < g[0] * g[1] * g[2]; ++f) {
+    const std::uint32_t x = f % g[0], y = f / g[0] % g[1], z = f / (g[0] * g[1]);
+    if (x >= b.lo[0] && x < b.hi[0] && y >= b.lo[1] && y < b.hi[1] && z >= b.lo[2] && z < b.hi[2]) {
+      out.push_back(f);
+    }
+  }
+  return out;
+}
+
+// Every fine cell lies in exactly one box, every box holds at least one, and coarse_of_fine
+// names the box that holds it.
+void ExpectCoversOnce(const Subdivision& s, const Grid& g, const std::string& spec) {
+  const std::uint32_t n = g[0] * g[1] * g[2];
+  std::vector<int> count(n, 0);
+  ASSERT_EQ(s.coarse_of_fine.size(), n) << spec;
+  for (std::uint32_t c = 0; c < s.cells(); ++c) {
+    const std::vector<std::uint32_t> in = Inside(s.boxes[c], g);
+    EXPECT_FALSE(in.empty()) << spec << " cell " << c;
+    for (std::uint32_t f : in) {
+      ++count[f];
+      EXPECT_EQ(s.coarse_of_fine[f], CellId(c)) << spec << " fine cell " << f;
+    }
+  }
+  for (std::uint32_t f = 0; f < n; ++f) EXPECT_EQ(count[f], 1) << spec << " fine cell " << f;
+}
+
+TEST(SubdivisionSpec, ParsesEveryKindAndPrintsItBack) {
+  for (const char* text : {"3x3x3", "12x1x4", "kd:27:footprint", "kd:8:work", "kd:budget:256KiB",
+                           "octree:1MB", "octree:1500B", "dynamic:27"}) {
+    const SubdivisionSpec s = ParseSubdivisionSpec(text, "--cells");
+    EXPECT_EQ(s.ToString(), text);
+    EXPECT_EQ(ParseSubdivisionSpec(s.ToString(), "--cells"), s);
+  }
+  const SubdivisionSpec kd = ParseSubdivisionSpec(" kd:27:footprint ", "--cells");
+  EXPECT_EQ(kd.kind, SubdivisionSpec::Kind::kKdFootprint);
+  EXPECT_EQ(kd.cells, 27u);
+  EXPECT_EQ(ParseSubdivisionSpec("octree:256KiB", "x").budget, 256u * 1024);
+  EXPECT_EQ(ParseSubdivisionSpec("4x5x6", "x").grid, (Grid{4, 5, 6}));
+}
+
+TEST(SubdivisionSpec, BadSpecsNameWhatIsWrong) {
+  const auto message = [](const char* text) {
+    try {
+      ParseSubdivisionSpec(text, "--cells");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("3x3").find("is not a cell subdivision"), std::string::npos);
+  EXPECT_NE(message("0x3x3").find("out of range"), std::string::npos);
+  EXPECT_NE(message("kd:0:work").find("out of range"), std::string::npos);
+  EXPECT_NE(message("kd:27:voxels").find("'footprint' or 'work'"), std::string::npos);
+  EXPECT_NE(message("kd:x:work").find("not an integer"), std::string::npos);
+  EXPECT_NE(message("octree:0B").find("greater than zero"), std::string::npos);
+  EXPECT_NE(message("octree:12").find("missing unit"), std::string::npos);
+  EXPECT_NE(message("octree:-1MB").find("negative"), std::string::npos);
+  EXPECT_NE(message("sphere:3").find("expected NXxNYxNZ"), std::string::npos);
+  EXPECT_NE(message("dynamic:27:work").find("is not a cell subdivision"), std::string::npos);
+  EXPECT_NE(message("4096x4096x4096").find("more than"), std::string::npos);
+  EXPECT_NE(message("").find("is not a cell subdivision"), std::string::npos);
+  EXPECT_EQ(message("kd:27:work").find("--cells"), std::string::npos);  // valid: no error
+}
+
+TEST(Subdivision, EverySubdivisionCoversEachFineCellExactlyOnce) {
+  for (const Grid g : {Grid{12, 12, 12}, Grid{5, 7, 3}, Grid{1, 1, 1}, Grid{8, 1, 2}}) {
+    const LeafModel m{g};
+    const std::uint64_t whole = m.Union(Inside(FineBox{{0, 0, 0}, g}, g));
+    std::vector<std::string> specs = {"1x1x1", "kd:1:footprint", "dynamic:1", "octree:1B",
+                                      "kd:budget:1B"};
+    if (g == Grid{12, 12, 12})
+      specs.insert(specs.end(), {"3x3x3", "4x4x4", "6x6x6", "2x2x2", "12x12x12", "4x2x6"});
+    const std::uint32_t n = g[0] * g[1] * g[2];
+    for (std::uint32_t k : {2u, 7u, 27u, n}) {
+      if (k > n) continue;
+      for (const char* kind : {"kd:%u:footprint", "kd:%u:work", "dynamic:%u"}) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, kind, k);
+        specs.push_back(buf);
+      }
+    }
+    for (const std::uint64_t budget : {whole / 3 + 1, whole / 20 + 1}) {
+      specs.push_back("octree:" + std::to_string(budget) + "B");
+      specs.push_back("kd:budget:" + std::to_string(budget) + "B");
+    }
+    for (const std::string& text : specs) {
+      const SubdivisionSpec spec = ParseSubdivisionSpec(text, "test");
+      for (const bool samples : {true, false}) {
+        if (!samples && spec.kind == SubdivisionSpec::Kind::kKdWork) continue;
+        const Subdivision s = Subdivide(spec, m.Cells(samples));
+        ExpectCoversOnce(s, g, text);
+        if (spec.cells > 0) {
+          EXPECT_EQ(s.cells(), spec.cells) << text;
+        }
+      }
+    }
+  }
+}
+
+TEST(Subdivision, UniformNumbersItsCellsAsADirectGrid) {
+  const Grid g{12, 12, 12};
+  const Subdivision s = Subdivide(ParseSubdivisionSpec("3x2x4", "test"), LeafModel{g}.Cells());
+  ASSERT_EQ(s.cells(), 24u);
+  for (std::uint32_t f = 0; f < 12 * 12 * 12; ++f) {
+    const std::uint32_t x = f % 12, y = f / 12 % 12, z = f / 144;
+    EXPECT_EQ(s.coarse_of_fine[f], CellId(x / 4 + 3 * (y / 6 + 2 * (z / 3)))) << f;
+  }
+}
+
+TEST(Subdivision, AUniformGridMustAlignWithTheFineOne) {
+  const LeafModel m{Grid{12, 12, 12}};
+  try {
+    Subdivide(ParseSubdivisionSpec("5x3x3", "test"), m.Cells());
+    FAIL() << "5 does not divide 12";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("5 cells along x do not divide the fine grid's 12"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(Subdivide(ParseSubdivisionSpec("kd:9:work", "t"), LeafModel{Grid{2, 2, 2}}.Cells()),
+               InputError);  // more cells than fine cells
+  EXPECT_THROW(
+      Subdivide(ParseSubdivisionSpec("kd:4:work", "t"), LeafModel{Grid{2, 2, 2}}.Cells(false)),
+      InputError);  // no samples to balance
+}
+
+TEST(Subdivision, KdBudgetLeavesNoCellOverItsBudgetThatASplitCouldAvoid) {
+  for (const Grid g : {Grid{12, 12, 12}, Grid{5, 7, 3}}) {
+    const LeafModel m{g};
+    const std::uint64_t whole = m.Union(Inside(FineBox{{0, 0, 0}, g}, g));
+    std::uint64_t largest_fine = 0;
+    for (std::uint32_t f = 0; f < g[0] * g[1] * g[2]; ++f) {
+      largest_fine = std::max(largest_fine, m.Union({f}));
+    }
+    // Budgets from "everything fits" to below the largest fine cell (which no split helps).
+    for (const std::uint64_t budget :
+         {whole, whole / 2, whole / 7, whole / 27, largest_fine, largest_fine / 2}) {
+      const std::string text = "kd:budget:" + std::to_string(budget) + "B";
+      const Subdivision s = Subdivide(ParseSubdivisionSpec(text, "test"), m.Cells());
+      std::size_t over = 0;
+      for (const FineBox& b : s.boxes) {
+        const std::uint64_t fp = m.Union(Inside(b, g));
+        if (fp > budget) {
+          ++over;
+          EXPECT_EQ(b.volume(), 1u)
+              << text << ": a cell of " << b.volume() << " fine cells is over its budget: " << fp;
+        }
+      }
+      if (budget >= largest_fine) {
+        EXPECT_EQ(over, 0u) << text;
+      }
+      if (budget == whole) {
+        EXPECT_EQ(s.cells(), 1u) << text;  // nothing to split
+      }
+    }
+  }
+}
+
+TEST(Subdivision, KdFootprintBalancesBetterThanTheUniformGrid) {
+  // The point of kd:N:footprint: on an uneven volume its largest cell is smaller than the
+  // uniform grid's at the same count.
+  const Grid g{12, 12, 12};
+  const LeafModel m{g};
+  const auto largest = [&](const Subdivision& s) {
+    std::uint64_t l = 0;
+    for (const FineBox& b : s.boxes) l = std::max(l, m.Union(Inside(b, g)));
+    return l;
+  };
+  const std::uint64_t uniform = largest(Subdivide(ParseSubdivisionSpec("3x3x3", "t"), m.Cells()));
+  const std::uint64_t kd =
+      largest(Subdivide(ParseSubdivisionSpec("kd:27:footprint", "t"), m.Cells()));
+  EXPECT_LT(kd, uniform);
+}
+
+TEST(Subdivision, DynamicIsDeterministicAndFollowsTheSamples) {
+  const Grid g{12, 12, 12};
+  const LeafModel m{g};
+  const SubdivisionSpec spec = ParseSubdivisionSpec("dynamic:27", "t");
+  const Subdivision a = Subdivide(spec, m.Cells(true, 11));
+  const Subdivision b = Subdivide(spec, m.Cells(true, 11));
+  EXPECT_EQ(a.boxes, b.boxes);
+  EXPECT_EQ(a.coarse_of_fine, b.coarse_of_fine);
+  // Frame 0 (no samples yet) splits by footprint, as kd:27:footprint does; later frames by
+  // the previous frame's samples, as kd:27:work does.
+  EXPECT_EQ(Subdivide(spec, m.Cells(false)).boxes,
+            Subdivide(ParseSubdivisionSpec("kd:27:footprint", "t"), m.Cells(false)).boxes);
+  EXPECT_EQ(a.boxes, Subdivide(ParseSubdivisionSpec("kd:27:work", "t"), m.Cells(true, 11)).boxes);
+  EXPECT_NE(a.boxes, Subdivide(spec, m.Cells(true, 12)).boxes);  // other samples, other cells
+}
+
+}  // namespace
+}  // namespace raycell

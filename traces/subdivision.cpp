@@ -1,0 +1,272 @@
+#include "traces/subdivision.h"
+
+#include <algorithm>
+
+#include "base/check.h"
+#include "base/parse.h"
+#include "base/units.h"
+
+namespace raycell {
+namespace {
+
+std::uint32_t ParseCount(std::string_view text, const std::string& what, const char* of) {
+  return std::uint32_t(ParseUint(text, what + ": " + of, 1, kMaxSubdivisionCells));
+}
+
+std::uint64_t ParseBudget(std::string_view text, const std::string& what) {
+  const std::uint64_t b = ParseBytes(text, what + ": byte budget").count();
+  if (b == 0)
+    throw InputError(what + ": byte budget must be greater than zero: '" + std::string(text) + "'");
+  return b;
+}
+
+// The fine cells of a box, in increasing order.
+std::vector<std::uint32_t> FineCellsOf(const FineBox& b, const std::array<std::uint32_t, 3>& g) {
+  std::vector<std::uint32_t> out;
+  out.reserve(b.volume());
+  for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z) {
+    for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y) {
+      for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x) out.push_back(x + g[0] * (y + g[1] * z));
+    }
+  }
+  return out;
+}
+
+// What a k-d split balances.
+class Weigher {
+ public:
+  Weigher(const FineCells& fine, bool by_work) : fine_(fine), by_work_(by_work) {}
+  std::uint64_t operator()(const FineBox& b) const {
+    const std::vector<std::uint32_t> cells = FineCellsOf(b, fine_.grid);
+    if (!by_work_) return fine_.union_footprint(cells);
+    std::uint64_t sum = 0;
+    for (std::uint32_t c : cells) sum += fine_.samples[c];
+    return sum;
+  }
+
+ private:
+  const FineCells& fine_;
+  bool by_work_;
+};
+
+// Splits `b` (more than one fine cell) at the fine boundary whose larger half weighs least;
+// ties: axis x before y before z, then the lowest boundary.
+std::pair<FineBox, FineBox> BestSplit(const FineBox& b, const Weigher& weigh) {
+  bool found = false;
+  std::uint64_t best = 0;
+  std::pair<FineBox, FineBox> out;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (std::uint32_t at = b.lo[axis] + 1; at < b.hi[axis]; ++at) {
+      FineBox l = b, r = b;
+      l.hi[axis] = at;
+      r.lo[axis] = at;
+      const std::uint64_t larger = std::max(weigh(l), weigh(r));
+      if (!found || larger < best) found = true, best = larger, out = {l, r};
+    }
+  }
+  RAYCELL_CHECK(found);
+  return out;
+}
+
+// A k-d tree: splits the heaviest splittable box (the first on ties) while `more(boxes,
+// weights)` asks for another cell and one is splittable.
+template <typename More>
+std::vector<FineBox> KdTree(const FineBox& whole, const Weigher& weigh, More more) {
+  std::vector<FineBox> boxes{whole};
+  std::vector<std::uint64_t> weights{weigh(whole)};
+  while (more(boxes, weights)) {
+    std::size_t pick = boxes.size();
+    for (std::size_t i = 0; i < boxes.size(); ++i) {
+      if (boxes[i].volume() < 2) continue;
+      if (pick == boxes.size() || weights[i] > weights[pick]) pick = i;
+    }
+    if (pick == boxes.size()) break;  // every box is one fine cell
+    const auto [l, r] = BestSplit(boxes[pick], weigh);
+    boxes[pick] = l;
+    weights[pick] = weigh(l);
+    boxes.push_back(r);
+    weights.push_back(weigh(r));
+  }
+  return boxes;
+}
+
+void Octree(const FineBox& b, const Weigher& weigh, std::uint64_t budget,
+            std::vector<FineBox>* out) {
+  if (b.volume() < 2 || weigh(b) <= budget) {
+    out->push_back(b);
+    return;
+  }
+  // Halves along every axis longer than one fine cell (the lower half the smaller).
+  std::array<std::vector<std::pair<std::uint32_t, std::uint32_t>>, 3> halves;
+  for (int a = 0; a < 3; ++a) {
+    if (b.hi[a] - b.lo[a] < 2) {
+      halves[a] = {{b.lo[a], b.hi[a]}};
+    } else {
+      const std::uint32_t mid = b.lo[a] + (b.hi[a] - b.lo[a]) / 2;
+      halves[a] = {{b.lo[a], mid}, {mid, b.hi[a]}};
+    }
+  }
+  for (const auto& z : halves[2]) {
+    for (const auto& y : halves[1]) {
+      for (const auto& x : halves[0]) {
+        Octree(FineBox{{x.first, y.first, z.first}, {x.second, y.second, z.second}}, weigh, budget,
+               out);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+std::uint64_t FineBox::volume() const {
+  std::uint64_t v = 1;
+  for (int a = 0; a < 3; ++a) v *= hi[a] > lo[a] ? hi[a] - lo[a] : 0;
+  return v;
+}
+
+std::string SubdivisionSpec::ToString() const {
+  switch (kind) {
+    case Kind::kUniform:
+      return std::to_string(grid[0]) + "x" + std::to_string(grid[1]) + "x" +
+             std::to_string(grid[2]);
+    case Kind::kKdFootprint:
+      return "kd:" + std::to_string(cells) + ":footprint";
+    case Kind::kKdWork:
+      return "kd:" + std::to_string(cells) + ":work";
+    case Kind::kKdBudget:
+      return "kd:budget:" + Bytes(budget).ToString();
+    case Kind::kOctree:
+      return "octree:" + Bytes(budget).ToString();
+    case Kind::kDynamic:
+      return "dynamic:" + std::to_string(cells);
+  }
+  RAYCELL_CHECK(false);
+  return {};
+}
+
+SubdivisionSpec ParseSubdivisionSpec(std::string_view text, const std::string& what) {
+  const std::string t(Trim(text));
+  const std::vector<std::string> parts = Split(t, ':');
+  const std::string expected =
+      " (expected NXxNYxNZ, kd:N:footprint, kd:N:work, kd:budget:BYTES, octree:BYTES or "
+      "dynamic:N)";
+  SubdivisionSpec s;
+  if (parts.size() == 1) {
+    const std::vector<std::string> dims = Split(t, 'x');
+    if (dims.size() != 3) {
+      throw InputError(what + ": '" + t + "' is not a cell subdivision" + expected);
+    }
+    s.kind = SubdivisionSpec::Kind::kUniform;
+    std::uint64_t n = 1;
+    for (int a = 0; a < 3; ++a) {
+      s.grid[a] = ParseCount(dims[a], what, "cells per axis");
+      n *= s.grid[a];
+    }
+    if (n > kMaxSubdivisionCells) {
+      throw InputError(what + ": '" + t + "' has " + std::to_string(n) + " cells, more than " +
+                       std::to_string(kMaxSubdivisionCells));
+    }
+    return s;
+  }
+  const std::string& kind = parts[0];
+  if (kind == "kd" && parts.size() == 3 && parts[1] == "budget") {
+    s.kind = SubdivisionSpec::Kind::kKdBudget;
+    s.budget = ParseBudget(parts[2], what);
+  } else if (kind == "kd" && parts.size() == 3) {
+    s.cells = ParseCount(parts[1], what, "kd cell count");
+    if (parts[2] == "footprint") {
+      s.kind = SubdivisionSpec::Kind::kKdFootprint;
+    } else if (parts[2] == "work") {
+      s.kind = SubdivisionSpec::Kind::kKdWork;
+    } else {
+      throw InputError(what + ": kd balances 'footprint' or 'work', not '" + parts[2] + "'");
+    }
+  } else if (kind == "octree" && parts.size() == 2) {
+    s.kind = SubdivisionSpec::Kind::kOctree;
+    s.budget = ParseBudget(parts[1], what);
+  } else if (kind == "dynamic" && parts.size() == 2) {
+    s.kind = SubdivisionSpec::Kind::kDynamic;
+    s.cells = ParseCount(parts[1], what, "dynamic cell count");
+  } else {
+    throw InputError(what + ": '" + t + "' is not a cell subdivision" + expected);
+  }
+  return s;
+}
+
+Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
+  using Kind = SubdivisionSpec::Kind;
+  const std::uint32_t n = fine.count();
+  RAYCELL_CHECK(n > 0);
+  const std::string what = "cell subdivision '" + spec.ToString() + "'";
+  const FineBox whole{{0, 0, 0}, fine.grid};
+  const bool dynamic_work = spec.kind == Kind::kDynamic && !fine.samples.empty();
+  const bool by_work = spec.kind == Kind::kKdWork || dynamic_work;
+  if (by_work && fine.samples.size() != n) {
+    throw InputError(what + ": needs the samples of each of the " + std::to_string(n) +
+                     " fine cells");
+  }
+  if (!by_work && spec.kind != Kind::kUniform) RAYCELL_CHECK(fine.union_footprint != nullptr);
+  const Weigher weigh(fine, by_work);
+  Subdivision out;
+  switch (spec.kind) {
+    case Kind::kUniform: {
+      for (int a = 0; a < 3; ++a) {
+        if (fine.grid[a] % spec.grid[a] != 0) {
+          throw InputError(what + ": its " + std::to_string(spec.grid[a]) + " cells along " +
+                           "xyz"[a] + " do not divide the fine grid's " +
+                           std::to_string(fine.grid[a]) +
+                           " (a cell boundary must be a fine-cell boundary)");
+        }
+      }
+      for (std::uint32_t z = 0; z < spec.grid[2]; ++z) {
+        for (std::uint32_t y = 0; y < spec.grid[1]; ++y) {
+          for (std::uint32_t x = 0; x < spec.grid[0]; ++x) {
+            const std::array<std::uint32_t, 3> i{x, y, z};
+            FineBox b;
+            for (int a = 0; a < 3; ++a) {
+              const std::uint32_t step = fine.grid[a] / spec.grid[a];
+              b.lo[a] = i[a] * step;
+              b.hi[a] = (i[a] + 1) * step;
+            }
+            out.boxes.push_back(b);
+          }
+        }
+      }
+      break;
+    }
+    case Kind::kKdFootprint:
+    case Kind::kKdWork:
+    case Kind::kDynamic:
+      if (spec.cells > n) {
+        throw InputError(what + ": " + std::to_string(spec.cells) + " cells from " +
+                         std::to_string(n) + " fine cells");
+      }
+      out.boxes = KdTree(whole, weigh,
+                         [&](const auto& boxes, const auto&) { return boxes.size() < spec.cells; });
+      break;
+    case Kind::kKdBudget:
+      out.boxes = KdTree(whole, weigh, [&](const auto& boxes, const auto& weights) {
+        for (std::size_t i = 0; i < boxes.size(); ++i) {
+          if (boxes[i].volume() > 1 && weights[i] > spec.budget) return true;
+        }
+        return false;
+      });
+      break;
+    case Kind::kOctree:
+      Octree(whole, weigh, spec.budget, &out.boxes);
+      break;
+  }
+  std::sort(out.boxes.begin(), out.boxes.end(), [](const FineBox& a, const FineBox& b) {
+    return std::array{a.lo[2], a.lo[1], a.lo[0]} < std::array{b.lo[2], b.lo[1], b.lo[0]};
+  });
+  out.coarse_of_fine.assign(n, kNoCell);
+  for (std::uint32_t c = 0; c < out.cells(); ++c) {
+    for (std::uint32_t f : FineCellsOf(out.boxes[c], fine.grid)) {
+      RAYCELL_CHECK(out.coarse_of_fine[f] == kNoCell);
+      out.coarse_of_fine[f] = CellId(c);
+    }
+  }
+  return out;
+}
+
+}  // namespace raycell

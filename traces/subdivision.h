@@ -1,0 +1,96 @@
+// Cells of any shape from one fine capture (issue 23; docs/design.md §1 "Subdivisions"): a
+// subdivision groups the cells of a fine uniform grid into coarse cells, each a box of whole
+// fine cells, so that a capture recorded once on a fine grid can be replayed and analysed on
+// any coarser subdivision whose boundaries are fine-cell boundaries.
+//
+// A subdivision is computed from what the fine capture knows of each fine cell: the footprint
+// of any union of fine cells (each leaf node counted once, so it is not the sum of the fine
+// footprints) and the work (samples) done in each. The SPEC texts, each parsed by
+// ParseSubdivisionSpec and printed back by ToString:
+//   NXxNYxNZ            uniform: every axis of the fine grid split evenly (NX must divide the
+//                       fine grid's x count, and so on);
+//   kd:N:footprint      a k-d tree of N cells, splitting the cell of largest footprint at the
+//                       fine boundary that makes the larger half smallest (footprints as equal
+//                       as possible);
+//   kd:N:work           the same balancing samples (work) instead of footprints;
+//   kd:budget:BYTES     a k-d tree split until every cell's footprint is at most BYTES, or is
+//                       one fine cell ("cell size set to memory size");
+//   octree:BYTES        an octree: a box over BYTES splits in halves along every axis longer
+//                       than one fine cell, until each is at most BYTES or one fine cell;
+//   dynamic:N           kd:N:work on the previous frame's samples, recomputed per frame (frame 0:
+//                       kd:N:footprint).
+// Splits are deterministic (ties: the lowest cell, axis x before y before z, the lowest
+// boundary), so the same fine data gives the same subdivision on every machine.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "traces/cell_id.h"
+
+namespace raycell {
+
+struct SubdivisionSpec {
+  enum class Kind { kUniform, kKdFootprint, kKdWork, kKdBudget, kOctree, kDynamic };
+  Kind kind = Kind::kUniform;
+  std::array<std::uint32_t, 3> grid{1, 1, 1};  // kUniform
+  std::uint32_t cells = 0;                     // kd:N:footprint, kd:N:work, dynamic:N
+  std::uint64_t budget = 0;                    // kd:budget:BYTES, octree:BYTES (bytes, > 0)
+
+  // The canonical SPEC ("3x3x3", "kd:27:footprint", "octree:256KiB"); parses back equal.
+  std::string ToString() const;
+  friend bool operator==(const SubdivisionSpec& a, const SubdivisionSpec& b) {
+    return a.kind == b.kind && a.grid == b.grid && a.cells == b.cells && a.budget == b.budget;
+  }
+};
+
+// Most coarse cells a SPEC may ask for: the trace format's limit (traces/format.h).
+inline constexpr std::uint32_t kMaxSubdivisionCells = 1u << 24;
+
+// Parses a SPEC (above). InputError "WHAT: ..." naming what is wrong: an unknown kind, a
+// missing or malformed count, a zero count or budget, a count over kMaxSubdivisionCells.
+SubdivisionSpec ParseSubdivisionSpec(std::string_view text, const std::string& what);
+
+// What a subdivision is computed from: the fine grid, and per fine cell (numbered x + nx*(y +
+// ny*z)) what the capture knows.
+struct FineCells {
+  std::array<std::uint32_t, 3> grid{1, 1, 1};
+  // The bytes a processor loads for the union of these fine cells, each leaf once. Called
+  // with the fine cells of one box, in increasing order.
+  std::function<std::uint64_t(const std::vector<std::uint32_t>&)> union_footprint;
+  // Work per fine cell (samples): kd:N:work's weights, and dynamic's (the previous frame's;
+  // empty for frame 0, which then splits by footprint).
+  std::vector<std::uint64_t> samples;
+
+  std::uint32_t count() const { return grid[0] * grid[1] * grid[2]; }
+};
+
+// A box of fine cells: [lo, hi) on each axis.
+struct FineBox {
+  std::array<std::uint32_t, 3> lo{}, hi{};
+  std::uint64_t volume() const;
+  friend bool operator==(const FineBox& a, const FineBox& b) {
+    return a.lo == b.lo && a.hi == b.hi;
+  }
+};
+
+struct Subdivision {
+  // Per coarse cell, its box, ordered by the box's lowest corner (z, then y, then x), so that
+  // a uniform subdivision numbers its cells as a grid recorded directly (x + nx*(y + ny*z)).
+  std::vector<FineBox> boxes;
+  // Per fine cell, the coarse cell holding it.
+  std::vector<CellId> coarse_of_fine;
+
+  std::uint32_t cells() const { return std::uint32_t(boxes.size()); }
+};
+
+// The subdivision `spec` gives on `fine`. InputError when it cannot be made: a uniform grid
+// whose counts do not divide the fine grid's, more kd cells than fine cells, kd:N:work or
+// dynamic beyond frame 0 without samples.
+Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine);
+
+}  // namespace raycell
