@@ -318,6 +318,15 @@ void AddMerge(CLI::App* cmd, const std::shared_ptr<AnalyzeArgs>& args) {
                    "file to write (through FILE.tmp): what `raycell analyze TRACE` with the "
                    "parts' options prints for the union of their frames")
       ->required();
+  merge->footer(
+      "Every part must name the same trace (by content), format and options; their frame\n"
+      "ranges must neither overlap nor leave a gap. Otherwise the merge says which parts or\n"
+      "frames are wrong, exits with 2 and writes nothing. The parts may come in any order.\n\n"
+      "Example:\n"
+      "  raycell analyze capture.rct --format csv --frames 0..14 --part p0\n"
+      "  raycell analyze capture.rct --format csv --frames 15..29 --part p1\n"
+      "  raycell analyze merge p1 p0 --out analysis.csv   # = raycell analyze capture.rct "
+      "--format csv");
   merge->callback([args] { MergeAnalyzeParts(args->merge_parts, args->merge_out); });
 }
 

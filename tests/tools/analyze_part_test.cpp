@@ -4,6 +4,7 @@
 // "Sharded analysis").
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -126,6 +127,20 @@ TEST(AnalyzePart, MergeRefusesOverlapsGapsAndPartsOfAnotherAnalysis) {
   const std::string msg = Merge({a, cut}, (Dir() / "cut.csv").string(), &code);
   EXPECT_EQ(code, 2);
   EXPECT_NE(msg.find("incomplete"), std::string::npos) << msg;
+}
+
+// --frames selects the same frames of a trace and of its JSON Lines.
+TEST(AnalyzePart, FramesOfPathsAreThoseOfTheTrace) {
+  const std::string& trace = Capture();
+  const std::string jsonl = (Dir() / "six.jsonl").string();
+  ASSERT_EQ(Raycell("trace cat " + trace + " > " + jsonl).code, 0);
+  const Result a = Raycell("analyze " + trace + " --quiet --format csv --frames 2..3", false);
+  const Result b = Raycell("analyze --paths " + jsonl + " --format csv --frames 2..3", false);
+  ASSERT_EQ(a.code, 0) << a.out;
+  EXPECT_EQ(a.out, b.out);
+  EXPECT_EQ(std::count(a.out.begin(), a.out.end(), '\n'), 3);  // the header, frames 2 and 3
+  EXPECT_EQ(a.out.find("\n1,"), std::string::npos);
+  EXPECT_NE(a.out.find("\n3,"), std::string::npos);
 }
 
 TEST(AnalyzePart, BadFramesAndPartOptionsAreRefused) {
