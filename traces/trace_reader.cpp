@@ -291,6 +291,24 @@ CameraKey ToCamera(schema::Camera::Reader c) {
   return k;
 }
 
+CameraPathInfo ToPath(schema::CameraPath::Reader r) {
+  if (r.getKeys().size() > kTraceMaxFrames) {
+    throw BadData("camera path with " + Str(r.getKeys().size()) + " key frames exceeds the " +
+                  "trace format's limit of " + Str(kTraceMaxFrames) + " (kTraceMaxFrames)");
+  }
+  CameraPathInfo p;
+  p.kind = ToStd(r.getKind());
+  p.first_frame = r.getFirstFrame();
+  p.frame_count = r.getFrameCount();
+  p.eye = ToVec3(r.getEye());
+  p.target = ToVec3(r.getTarget());
+  p.up = ToVec3(r.getUp());
+  p.fov_deg = r.getFovDeg();
+  p.orbit_degrees = r.getOrbitDegrees();
+  for (auto k : r.getKeys()) p.keys.push_back(ToCamera(k));
+  return p;
+}
+
 // The header's fields as read, checked against the format's limits (footprints not yet:
 // version 2 stores them in the records after the header).
 TraceHeader ToHeader(schema::Header::Reader r) {
@@ -318,6 +336,7 @@ TraceHeader ToHeader(schema::Header::Reader r) {
   h.footprint_mode = ToStd(r.getFootprintMode());
   for (auto c : r.getCameras()) h.cameras.push_back(ToCamera(c));
   h.settings = ToSettings(r.getSettings());
+  if (h.format_version >= 3) h.path = ToPath(r.getPath());
   const std::string problem = TraceHeaderProblem(h);
   if (!problem.empty()) throw BadData(problem);
   const auto footprints = r.getFootprints();

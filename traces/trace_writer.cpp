@@ -340,6 +340,18 @@ void FillCameras(capnp::List<schema::Camera>::Builder out, const std::vector<Cam
   }
 }
 
+void FillPath(schema::CameraPath::Builder out, const CameraPathInfo& p) {
+  out.setKind(p.kind);
+  out.setFirstFrame(p.first_frame);
+  out.setFrameCount(p.frame_count);
+  FillVec3(out.initEye(), p.eye);
+  FillVec3(out.initTarget(), p.target);
+  FillVec3(out.initUp(), p.up);
+  out.setFovDeg(p.fov_deg);
+  out.setOrbitDegrees(p.orbit_degrees);
+  FillCameras(out.initKeys(static_cast<unsigned>(p.keys.size())), p.keys);
+}
+
 // The header message; the footprints follow in footprints records.
 void FillHeader(schema::Header::Builder out, const TraceHeader& h) {
   out.setFormatVersion(kTraceFormatVersion);
@@ -354,6 +366,7 @@ void FillHeader(schema::Header::Builder out, const TraceHeader& h) {
   out.setFootprintMode(h.footprint_mode);
   FillCameras(out.initCameras(static_cast<unsigned>(h.cameras.size())), h.cameras);
   FillSettings(out.initSettings(), h.settings);
+  FillPath(out.initPath(), h.path);
 }
 
 // Footprints of cells [first, end) as runs of equal values, into a footprints record.
