@@ -48,7 +48,8 @@ void AddRecordCommand(CLI::App& app) {
       "Ctrl-C stops the capture; the finished frames stay readable in OUT.tmp.\n\n"
       "Examples:\n"
       "  raycell record --scene ../shared/data/mj_smoke.vdb --cells 3x3x3 --orbit 30:360\n"
-      "  raycell record --orbit 30:360 --frames 10..19 --out part2.rct   # frames 10..19\n"
+      "  raycell record --orbit 30:360 --frames 10..19 --out part2.rct   # join the parts\n"
+      "                                              # with `raycell trace concat`\n"
       "  raycell record --scene 'fluid_data_%04d.vdb' --frames 150..155 --out fluid.rct\n"
       "  raycell record --material cloud:absorb=0.01:scatter=0.05 --light point:0,3,0");
   cmd->add_option("--scene", o.scene.source,
