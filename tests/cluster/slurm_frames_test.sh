@@ -7,8 +7,7 @@
 #
 # On a private single-node cluster (tests/cluster/cluster.sh), with the built-in scene at
 # 32x32, 2x2x2 cells, an 8-frame orbit:
-#  1. a 4-task recording: OUTDIR/capture.rct equals the one-shot recording (skipped, saying so,
-#     when this raycell has no `trace concat`);
+#  1. a 4-task recording: OUTDIR/capture.rct equals the one-shot recording;
 #  2. a 4-task `analyze --bracket --effort quick --format csv` of that capture: analysis.csv
 #     equals the one-shot analysis; the wall times of both arrays and both one-shot runs are
 #     printed (BENCHMARKS.md "Frame ranges on Slurm");
@@ -48,19 +47,13 @@ t0=$(now)
 record_oneshot=$(seconds "$t0" "$(now)")
 
 # ---- 1. the recording
-trace=oneshot.rct
-# (`trace concat --help` prints trace's help when there is no concat: look in its list.)
-if "$raycell" trace --help 2>/dev/null | grep -qE '^ +concat( |$)'; then
-  run_array submit_record.sh -n 4 rec -- "${record[@]}"
-  got=$(state "$array")
-  [[ $got == "0=COMPLETED 1=COMPLETED 2=COMPLETED 3=COMPLETED" ]] || fail "record array tasks: got '$got'"
-  [[ $(state "$join") == "-=COMPLETED" ]] || fail "record join job: got '$(state "$join")'"
-  cmp oneshot.rct rec/capture.rct || fail "rec/capture.rct (4 tasks on Slurm) differs from the one-shot recording"
-  echo "$(elapsed): record, 8 frames: 4 tasks and the join ${took} s wall; one-shot ${record_oneshot} s"
-  trace=rec/capture.rct
-else
-  echo "SKIPPED (record part): $raycell has no \`raycell trace concat\` (issue 25's recording by frame ranges); the analysis below runs on the one-shot recording"
-fi
+run_array submit_record.sh -n 4 rec -- "${record[@]}"
+got=$(state "$array")
+[[ $got == "0=COMPLETED 1=COMPLETED 2=COMPLETED 3=COMPLETED" ]] || fail "record array tasks: got '$got'"
+[[ $(state "$join") == "-=COMPLETED" ]] || fail "record join job: got '$(state "$join")'"
+cmp oneshot.rct rec/capture.rct || fail "rec/capture.rct (4 tasks on Slurm) differs from the one-shot recording"
+echo "$(elapsed): record, 8 frames: 4 tasks and the join ${took} s wall; one-shot ${record_oneshot} s"
+trace=rec/capture.rct
 
 # ---- 2. the analysis
 analyze=(--bracket --effort quick)
