@@ -15,8 +15,8 @@
 #     tasks 0, 1, 3 succeed, 2 fails, the merge job is cancelled and no analysis.json appears;
 #     the same command again runs task 2 alone, then the merge, and analysis.json equals the
 #     one-shot run;
-#  4. the same OUTDIR with other arguments, or an OUTDIR holding another kind of job, is
-#     refused before anything is queued.
+#  4. the same OUTDIR with other arguments, an OUTDIR holding another kind of job, and invalid
+#     analyze or record arguments are refused before anything is queued.
 # Every wait is bounded; every process of the cluster is stopped on exit. Needs root,
 # slurm-wlm and munge (exit 77 without them, unless RAYCELL_REQUIRE_SLURM=1).
 set -euo pipefail
@@ -100,6 +100,12 @@ if msg=$("${submit[@]}" -n 4 "$trace" bad -- --effort fast 2>&1); then
 fi
 grep -q "the analysis is invalid" <<<"$msg" || fail "unexpected refusal message: $msg"
 [[ ! -e bad ]] || fail "an invalid analysis left its OUTDIR"
+if msg=$(env "$marker" "$src/tools/slurm/submit_record.sh" --raycell "$raycell" --parsable -n 4 \
+  badrec -- --orbit 8:90 --res 32x3x 2>&1); then
+  fail "an invalid recording was submitted"
+fi
+grep -q "the record arguments are invalid" <<<"$msg" || fail "unexpected refusal message: $msg"
+[[ ! -e badrec ]] || fail "an invalid recording left its OUTDIR"
 [[ -z $(squeue -h 2>/dev/null) ]] || fail "a refused submission queued jobs: $(squeue -h)"
 
 echo "$(elapsed): PASS: record and analyze as 4-task Slurm arrays, joined byte-identical to one run"

@@ -40,8 +40,10 @@ Paths among them (--scene, --images, ...) are read from the directory you submit
 one machine: jobs start in it. Images, unless --no-images, go to the --images folder as one
 recording writes them (each task writes its own frames' files).
 
-The binary must have `raycell trace concat` (checked here); the record arguments are checked by
-the tasks: a bad one fails every task, and the join job is then cancelled.
+The binary must have `raycell trace concat`. Before queueing anything the record arguments are
+checked on this machine as far as they parse (a range past the orbit's end reads every option
+and value, then is refused before anything is rendered); the scene itself is first read by
+the tasks: a missing file fails every task, and the join job is then cancelled.
 
 Resubmitting: run the same command again. Parts that exist are kept (each is written through
 a temporary name, so a part that exists is complete); the others run, then the join. OUTDIR
@@ -79,6 +81,17 @@ find_raycell
 # (`trace concat --help` would print trace's help and succeed: look in the list instead.)
 "$raycell" trace --help 2>/dev/null | grep -qE '^ +concat( |$)' ||
   die "$raycell has no \`raycell trace concat\`, which joins the parts; build a raycell that has it"
+
+# The options must parse before N tasks are queued: a range just past the orbit's end reads
+# every option and value, then is refused before anything is rendered (and says so).
+check=$(mktemp -d)
+trap 'rm -rf "$check"' EXIT
+probe="$frames..$frames"
+if msg=$("$raycell" record --quiet --frames "$probe" --out "$check/probe.rct" "${record_args[@]}" 2>&1 >/dev/null) ||
+  [[ $msg != *"--frames $probe: not frames of --orbit"* ]]; then
+  echo "$msg" >&2
+  die "the record arguments are invalid (the message above is raycell's); nothing was submitted"
+fi
 
 record=$(
   printf 'cwd=%q\ntasks=%s\nframes=0..%s\nargs=' "$PWD" "$count" "$((frames - 1))"
