@@ -117,8 +117,9 @@ void AddRecordCommand(CLI::App& app) {
   cmd->add_option("--orbit", args->orbit,
                   "camera path: FRAMES:DEGREES turns DEGREES about the up axis over frames "
                   "0..FRAMES-1 and records them, or the range --frames A..B of them (e.g. "
-                  "30:360 --frames 10..19); DEGREES alone turns them over the frames "
-                  "recorded (--frames A..B: frame A at 0 degrees)");
+                  "30:360 --frames 10..19); DEGREES alone turns DEGREES over the frames "
+                  "recorded (with --frames A..B: frame A at 0 degrees, so captures of two "
+                  "ranges are not parts of one path)");
   cmd->add_option("--keyframes", o.camera.keyframes_file,
                   "camera path from a file of lines 'frame ex ey ez tx ty tz fov', "
                   "interpolated linearly")
