@@ -1,4 +1,5 @@
 // raycell analyze: each frame's Cell Tree: size, maxGen bound, Peel, the exact optimum.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -13,10 +14,13 @@
 #include "base/check.h"
 #include "base/file.h"
 #include "base/format.h"
+#include "base/parse.h"
 #include "base/progress.h"
 #include "graph/frame_tree.h"
 #include "graph/links.h"
+#include "tools/analyze_part.h"
 #include "tools/commands.h"
+#include "tools/frames.h"
 #include "traces/jsonl.h"
 #include "traces/trace_reader.h"
 
@@ -24,10 +28,13 @@ namespace raycell {
 namespace {
 
 struct AnalyzeArgs {
-  std::string trace, paths, format = "table", dot, effort = "default";
+  std::string trace, paths, format = "table", dot, effort = "default", frames, part;
   std::optional<int> frame;
+  unsigned jobs = 0;  // the search's threads; 0: the hardware's
   bool all = false, quiet = false, timing = false;
   AnalyzeOptions options;
+  std::vector<std::string> merge_parts;
+  std::string merge_out;
 };
 
 std::string Schedule(const std::vector<CellId>& s, const char* sep) {
@@ -111,33 +118,51 @@ void PrintRow(const FrameAnalysis& a, bool timing, bool bracket, std::ostream& o
   out << "\n";
 }
 
-// Results only, unless --timing: then the output depends on the machine too.
+void CheckFormat(const std::string& format) {
+  if (format != "table" && format != "json" && format != "csv") {
+    throw InputError("--format '" + format + "': expected table, json or csv");
+  }
+}
+
+// Results only, unless --timing: then the output depends on the machine too. To stdout, or
+// to a --part file.
 class Printer {
  public:
-  Printer(const std::string& format, bool timing, bool bracket)
-      : format_(format), timing_(timing), bracket_(bracket) {
-    if (format != "table" && format != "json" && format != "csv") {
-      throw InputError("--format '" + format + "': expected table, json or csv");
-    }
-    if (format_ == "table") PrintTableHeader(timing_, bracket_, std::cout);
-    if (format_ == "csv") PrintCsvHeader(timing_, std::cout);
+  Printer(const std::string& format, bool timing, bool bracket, std::ostream& out)
+      : format_(format), timing_(timing), bracket_(bracket), out_(out) {
+    CheckFormat(format);
+    if (format_ == "table") PrintTableHeader(timing_, bracket_, out_);
+    if (format_ == "csv") PrintCsvHeader(timing_, out_);
   }
   void Print(const FrameAnalysis& a) {
-    if (format_ == "json") PrintJson(a, timing_, std::cout);
-    if (format_ == "csv") PrintCsv(a, timing_, std::cout);
+    if (format_ == "json") PrintJson(a, timing_, out_);
+    if (format_ == "csv") PrintCsv(a, timing_, out_);
     if (format_ == "table") {
-      PrintRow(a, timing_, bracket_, std::cout);
+      PrintRow(a, timing_, bracket_, out_);
+      // The merge of parts (tools/analyze_part.cpp) knows this line by its start.
       if (!a.optimum && a.optimum_status != "not computed") {
-        std::cout << "         optimum " << a.optimum_status << "\n";
+        out_ << "         optimum " << a.optimum_status << "\n";
       }
     }
-    std::cout.flush();
+    out_.flush();
   }
 
  private:
   std::string format_;
   bool timing_, bracket_;
+  std::ostream& out_;
 };
+
+// The options that change what analyze prints, in one canonical form: parts to merge must
+// agree on it (--jobs, --quiet and --dot change nothing printed).
+std::string OutputOptions(const AnalyzeArgs& a) {
+  const AnalyzeOptions& o = a.options;
+  std::string s = std::string(o.exact ? "--exact " : "") + (o.bracket ? "--bracket " : "") +
+                  "--effort " + a.effort + " --max-states " + std::to_string(o.max_states) +
+                  " --max-seconds " + FormatReal(o.max_seconds) + " --max-nodes " +
+                  std::to_string(o.max_nodes);
+  return s + (a.timing ? " --timing" : "");
+}
 
 // The tree as Graphviz DOT, with the cache-saving links of its Peel schedule, written to a
 // temporary name and renamed when complete.
@@ -158,11 +183,17 @@ void AnalyzePaths(const AnalyzeArgs& a, Printer& printer) {
   if (!in) throw InputError(a.paths + ": cannot open");
   JsonlReader reader(in, a.paths);
   JsonlFrame frame;
+  const std::vector<int> frames_wanted =
+      a.frames.empty() ? std::vector<int>{} : ParseFrameRange(a.frames);
   std::optional<std::pair<CellTree, FrameAnalysis>> dot;
   std::size_t analysed = 0;
   for (auto t0 = std::chrono::steady_clock::now(); reader.Next(frame);
        t0 = std::chrono::steady_clock::now()) {
     if (a.frame && frame.frame != *a.frame) continue;
+    if (!a.frames.empty() &&
+        (frame.frame < frames_wanted.front() || frame.frame > frames_wanted.back())) {
+      continue;
+    }
     if (!a.dot.empty() && analysed > 0) {
       throw InputError("--dot writes one frame's tree, and " + a.paths +
                        " has several: choose one with --frame N");
@@ -181,10 +212,14 @@ void AnalyzePaths(const AnalyzeArgs& a, Printer& printer) {
   if (a.frame && analysed == 0) {
     throw InputError(a.paths + ": no frame " + std::to_string(*a.frame));
   }
+  if (!a.frames.empty() && analysed == 0) {
+    throw InputError(a.paths + ": no frame in --frames " + a.frames);
+  }
   if (dot) WriteDotFile(a.dot, dot->first, dot->second);
 }
 
 std::vector<std::size_t> SelectFrames(const TraceReader& r, const AnalyzeArgs& a) {
+  if (!a.frames.empty()) return SelectFrameRange(r, a.frames);
   std::vector<std::size_t> out;
   for (std::size_t i = 0; i < r.frames().size(); ++i) {
     if (!a.frame || r.frames()[i].frame == *a.frame) out.push_back(i);
@@ -195,7 +230,30 @@ std::vector<std::size_t> SelectFrames(const TraceReader& r, const AnalyzeArgs& a
   return out;
 }
 
-void AnalyzeTrace(AnalyzeArgs a, Printer& printer) {
+// The first line of a --part file: the trace by content, the frames asked for (all: the
+// trace's first to last), the options.
+std::string PartLine(const TraceReader& r, const AnalyzeArgs& a) {
+  AnalyzePartInfo info;
+  info.format = a.format;
+  info.options = OutputOptions(a);
+  info.trace = a.trace;
+  info.trace_hash = TraceFingerprint(r);
+  if (!a.frames.empty()) {
+    const std::vector<int> range = ParseFrameRange(a.frames);
+    info.first = range.front(), info.last = range.back();
+  } else if (a.frame) {
+    info.first = info.last = *a.frame;
+  } else {
+    if (r.frames().empty()) throw InputError(r.path() + ": no frames to analyse");
+    const auto [lo, hi] = std::minmax_element(
+        r.frames().begin(), r.frames().end(),
+        [](const FrameSummary& x, const FrameSummary& y) { return x.frame < y.frame; });
+    info.first = lo->frame, info.last = hi->frame;
+  }
+  return AnalyzePartLine(info);
+}
+
+void AnalyzeTrace(AnalyzeArgs a, std::ostream& out) {
   const TraceReader r = TraceReader::Open(a.trace);
   // The lower bound takes blocks of neighbouring cells from the trace's cell grid.
   a.options.bracket_options.lower.grid = r.header().cells;
@@ -204,6 +262,8 @@ void AnalyzeTrace(AnalyzeArgs a, Printer& printer) {
   if (!a.dot.empty() && frames.size() != 1) {
     throw InputError("--dot writes one frame's tree: choose it with --frame N");
   }
+  if (!a.part.empty()) out << PartLine(r, a);
+  Printer printer(a.format, a.timing, a.options.bracket, out);
   Progress progress(!a.quiet);
   for (std::size_t k = 0; k < frames.size(); ++k) {
     progress.Update(double(k) / frames.size(),
@@ -225,10 +285,49 @@ void Run(const AnalyzeArgs& a) {
     throw InputError("give either a TRACE file or --paths FILE.jsonl");
   }
   if (a.frame && a.all) throw InputError("--frame and --all exclude each other");
+  if (!a.frames.empty() && (a.frame || a.all)) {
+    throw InputError(std::string("--frames and ") + (a.frame ? "--frame" : "--all") +
+                     " exclude each other");
+  }
+  if (!a.frames.empty()) ParseFrameRange(a.frames);  // malformed: before any work
+  if (!a.part.empty() && !a.paths.empty()) {
+    throw InputError("--part needs a TRACE: parts of --paths files are not supported");
+  }
+  CheckFormat(a.format);
   AnalyzeArgs args = a;
   args.options.bracket_options = BracketEffort(a.effort);
-  Printer printer(args.format, args.timing, args.options.bracket);
-  args.paths.empty() ? AnalyzeTrace(args, printer) : AnalyzePaths(args, printer);
+  args.options.bracket_options.best.threads = a.jobs;
+  if (!args.paths.empty()) {
+    Printer printer(args.format, args.timing, args.options.bracket, std::cout);
+    return AnalyzePaths(args, printer);
+  }
+  if (args.part.empty()) return AnalyzeTrace(args, std::cout);
+  WriteFileAtomically(
+      args.part, [&](std::ostream& out) { AnalyzeTrace(args, out); }, "--part " + args.part);
+}
+
+void AddMerge(CLI::App* cmd, const std::shared_ptr<AnalyzeArgs>& args) {
+  CLI::App* merge = cmd->add_subcommand(
+      "merge",
+      "Join the parts of a sharded analysis (`raycell analyze TRACE --frames A..B --part FILE`) "
+      "into the output of one run over all their frames.");
+  merge->add_option("PARTS", args->merge_parts, "the part files, each frame in exactly one")
+      ->required();
+  merge
+      ->add_option("--out", args->merge_out,
+                   "file to write (through FILE.tmp): what `raycell analyze TRACE` with the "
+                   "parts' options prints for the union of their frames")
+      ->required();
+  merge->footer(
+      "Every part must name the same trace (by content), format and options; their frame\n"
+      "ranges must neither overlap nor leave a gap. Otherwise the merge says which parts or\n"
+      "frames are wrong, exits with 2 and writes nothing. The parts may come in any order.\n\n"
+      "Example:\n"
+      "  raycell analyze capture.rct --format csv --frames 0..14 --part p0\n"
+      "  raycell analyze capture.rct --format csv --frames 15..29 --part p1\n"
+      "  raycell analyze merge p1 p0 --out analysis.csv   # = raycell analyze capture.rct "
+      "--format csv");
+  merge->callback([args] { MergeAnalyzeParts(args->merge_parts, args->merge_out); });
 }
 
 }  // namespace
@@ -260,19 +359,37 @@ void AddAnalyzeCommand(CLI::App& app) {
       "file is frame 0). Every frame is analysed (--frame N picks one). docs/jsonl.md has\n"
       "the details and the order in which rays are renumbered.\n"
       "Without --timing the output depends only on the input and the options, byte for\n"
-      "byte, except where --max-seconds stops a search (its status says so); --max-states\n"
-      "limits the search the same way on every machine.\n\n"
+      "byte, whatever --jobs, except where --max-seconds stops a search (its status says\n"
+      "so); --max-states limits the search the same way on every machine.\n\n"
+      "Sharding: frames are analysed one by one, so a run over frames A..B prints exactly\n"
+      "the lines of those frames in a run over the whole trace. --frames A..B --part FILE\n"
+      "writes them to FILE (through FILE.tmp) after a first line naming the trace (by its\n"
+      "content: the frames' checksums), the format, the options that change the output and\n"
+      "the frames A..B; `raycell analyze merge PART... --out FILE` checks that the parts\n"
+      "come from one trace with one format and the same options, and that their ranges\n"
+      "neither overlap nor leave a gap (exit 2 otherwise, naming the frames), then writes\n"
+      "what one run over the union of the ranges prints, byte for byte: the CSV or table\n"
+      "header once, the frames in order (parts may be given in any order).\n"
+      "tools/slurm/submit_analyze.sh runs the parts as a Slurm job array.\n\n"
       "Examples:\n"
       "  raycell analyze capture.rct\n"
       "  raycell analyze capture.rct --frame 3 --exact --format json\n"
       "  raycell analyze capture.rct --bracket --format csv > bracket.csv\n"
+      "  raycell analyze capture.rct --bracket --format csv --frames 0..14 --part p0\n"
+      "  raycell analyze capture.rct --bracket --format csv --frames 15..29 --part p1\n"
+      "  raycell analyze merge p0 p1 --out bracket.csv   # the same bytes as above\n"
       "  raycell trace cat capture.rct --frame 0 > rays.jsonl && raycell analyze --paths "
       "rays.jsonl\n"
       "  echo '{\"id\":0,\"parent\":null,\"spawn\":null,\"cells\":[0,1]}' > p.jsonl && "
       "raycell analyze --paths p.jsonl");
   cmd->add_option("TRACE", args->trace, "trace file written by `raycell record`");
   cmd->add_option("--frame", args->frame, "analyse only this frame number (of TRACE or --paths)");
+  cmd->add_option("--frames", args->frames,
+                  "analyse only the frames numbered A..B (inclusive; also A-B or A)");
   cmd->add_flag("--all", args->all, "analyse every frame (the default)");
+  cmd->add_option("--part", args->part,
+                  "write the output to this file as a part for `raycell analyze merge` (below), "
+                  "instead of stdout");
   cmd->add_option("--paths", args->paths,
                   "ray paths as JSON Lines (the format of `raycell trace cat`, from any tool; "
                   "see below) instead of a trace");
@@ -300,9 +417,17 @@ void AddAnalyzeCommand(CLI::App& app) {
                   "write the frame's Cell Tree as Graphviz DOT (one colour per cell; dashed "
                   "edges: the cache-saving links of the Peel schedule). Render with "
                   "`dot -Tsvg FILE > tree.svg` (Debian package graphviz)");
+  cmd->add_option("--jobs", args->jobs,
+                  "threads of --bracket's schedule search (default: the hardware's); the output "
+                  "is the same for any number");
   cmd->add_flag("--timing", args->timing, "also print the time each frame took");
   cmd->add_flag("--quiet", args->quiet, "no progress bar");
-  cmd->callback([args] { Run(*args); });
+  cmd->require_subcommand(0, 1);
+  AddMerge(cmd, args);
+  cmd->callback([cmd, args] {
+    if (cmd->got_subcommand("merge")) return;
+    Run(*args);
+  });
 }
 
 }  // namespace raycell

@@ -48,6 +48,8 @@ void AddRecordCommand(CLI::App& app) {
       "Ctrl-C stops the capture; the finished frames stay readable in OUT.tmp.\n\n"
       "Examples:\n"
       "  raycell record --scene ../shared/data/mj_smoke.vdb --cells 3x3x3 --orbit 30:360\n"
+      "  raycell record --orbit 30:360 --frames 10..19 --out part2.rct   # join the parts\n"
+      "                                              # with `raycell trace concat`\n"
       "  raycell record --scene 'fluid_data_%04d.vdb' --frames 150..155 --out fluid.rct\n"
       "  raycell record --material cloud:absorb=0.01:scatter=0.05 --light point:0,3,0");
   cmd->add_option("--scene", o.scene.source,
@@ -60,8 +62,11 @@ void AddRecordCommand(CLI::App& app) {
   cmd->add_flag("--all-grids", o.scene.all_grids,
                 "render every float grid of the file (fog volumes add up)");
   cmd->add_option("--frames", args->frames,
-                  "frame numbers A..B (inclusive), default 0; at most " +
-                      std::to_string(kMaxCaptureFrames) + " frames");
+                  "frame numbers A..B (inclusive), default 0 (or every frame of --orbit "
+                  "FRAMES:DEGREES); at most " +
+                      std::to_string(kMaxCaptureFrames) +
+                      " frames. With a camera path, frames A..B of it: each frame gets the "
+                      "camera a capture of the whole path gives it");
   cmd->add_option("--cells", args->cells,
                   "cell grid NXxNYxNZ splitting the scene box; at most " +
                       std::to_string(kMaxCaptureCells) + " cells")
@@ -110,8 +115,11 @@ void AddRecordCommand(CLI::App& app) {
                   "horizontal one: equal for square images)")
       ->capture_default_str();
   cmd->add_option("--orbit", args->orbit,
-                  "camera path: DEGREES turned about the up axis over the frames, or "
-                  "FRAMES:DEGREES to also record frames 0..FRAMES-1 (e.g. 30:360)");
+                  "camera path: FRAMES:DEGREES turns DEGREES about the up axis over frames "
+                  "0..FRAMES-1 and records them, or the range --frames A..B of them (e.g. "
+                  "30:360 --frames 10..19); DEGREES alone turns DEGREES over the frames "
+                  "recorded (with --frames A..B: frame A at 0 degrees, so captures of two "
+                  "ranges are not parts of one path)");
   cmd->add_option("--keyframes", o.camera.keyframes_file,
                   "camera path from a file of lines 'frame ex ey ez tx ty tz fov', "
                   "interpolated linearly")

@@ -15,6 +15,7 @@
 #include "tools/commands.h"
 #include "traces/jsonl.h"
 #include "traces/record/cell_grid.h"
+#include "traces/trace_concat.h"
 #include "traces/trace_import.h"
 #include "traces/trace_inspect.h"
 #include "traces/trace_reader.h"
@@ -197,6 +198,42 @@ void AddImport(CLI::App& trace) {
   c->callback([args] { RunImport(*args); });
 }
 
+struct ConcatArgs {
+  std::vector<std::string> inputs;
+  std::string out;
+};
+
+void RunConcat(const ConcatArgs& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const ConcatSummary s = ConcatTraces(a.inputs, a.out);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::cerr << "joined " << s.inputs << " trace(s): frames " << s.first_frame << ".."
+            << s.last_frame << " (" << s.frames << " frames, " << s.bytes << " bytes) -> " << a.out
+            << " in " << std::fixed << std::setprecision(3) << secs << " s\n";
+}
+
+void AddConcat(CLI::App& trace) {
+  auto args = std::make_shared<ConcatArgs>();
+  CLI::App* c = trace.add_subcommand(
+      "concat", "Join captures of consecutive frame ranges of one camera path into one trace.");
+  c->footer(
+      "The inputs, in any order, must be complete captures of one scene with the same\n"
+      "settings, cell grid, footprints and camera path (format version 3 or later), whose\n"
+      "frame ranges follow each other without overlap or gap once sorted: e.g. made by\n"
+      "`raycell record --orbit 30:360 --frames A..B` on several machines. The output is the\n"
+      "trace one `record` of the whole range writes, byte for byte. Each frame is copied as\n"
+      "stored after checking its zstd checksum and totals (not its rays: `trace verify`\n"
+      "does); only the header and index are written anew. Anything else (overlap, gap, a\n"
+      "difference, a damaged or incomplete input) exits 2 naming it, and writes nothing.\n\n"
+      "Example:\n"
+      "  raycell record --orbit 8:90 --frames 0..3 --no-images --out a.rct\n"
+      "  raycell record --orbit 8:90 --frames 4..7 --no-images --out b.rct\n"
+      "  raycell trace concat b.rct a.rct --out all.rct   # = record --orbit 8:90");
+  c->add_option("TRACES", args->inputs, "captures to join, in any order")->required();
+  c->add_option("--out", args->out, "trace file to write")->required();
+  c->callback([args] { RunConcat(*args); });
+}
+
 }  // namespace
 
 void AddTraceCommand(CLI::App& app) {
@@ -242,6 +279,7 @@ void AddTraceCommand(CLI::App& app) {
   c->callback([cat] { RunCat(*cat); });
 
   AddImport(*trace);
+  AddConcat(*trace);
 }
 
 }  // namespace raycell

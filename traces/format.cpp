@@ -36,13 +36,18 @@ std::string TraceHeaderProblem(const TraceHeader& h) {
     return std::to_string(h.cameras.size()) + " cameras (frames) exceed the trace format's " +
            "limit of " + std::to_string(kTraceMaxFrames) + " (kTraceMaxFrames)";
   }
+  if (h.path.keys.size() > kTraceMaxFrames) {
+    return "a camera path of " + std::to_string(h.path.keys.size()) + " key frames exceeds the " +
+           "trace format's limit of " + std::to_string(kTraceMaxFrames) + " (kTraceMaxFrames)";
+  }
   if (h.grids.size() > kTraceMaxGrids) {
     return std::to_string(h.grids.size()) + " grids exceed the trace format's limit of " +
            std::to_string(kTraceMaxGrids) + " (kTraceMaxGrids)";
   }
   for (const auto& [text, field] :
        {std::pair{&h.producer, "the producer"}, std::pair{&h.scene, "the scene"},
-        std::pair{&h.footprint_mode, "the footprint mode"}}) {
+        std::pair{&h.footprint_mode, "the footprint mode"},
+        std::pair{&h.path.kind, "the camera path's kind"}}) {
     if (!(problem = TextProblem(*text, field)).empty()) return problem;
   }
   for (const GridInfo& g : h.grids) {

@@ -18,8 +18,9 @@ struct TraceHeader;
 
 // The format version this code writes (Header.formatVersion); it reads 1..this. Version 2
 // moved the footprints out of the header message into `footprints` records (so that grids
-// of millions of cells fit); see trace.capnp.
-inline constexpr std::uint32_t kTraceFormatVersion = 2;
+// of millions of cells fit); version 3 added the camera path (Header.path) that the cameras
+// are a range of; see trace.capnp.
+inline constexpr std::uint32_t kTraceFormatVersion = 3;
 // Magic of the skippable zstd frame that holds the index.
 inline constexpr std::uint32_t kTraceIndexMagic = 0x184D2A5B;
 // Last 8 bytes of a complete trace file.

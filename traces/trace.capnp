@@ -1,4 +1,4 @@
-# raycell trace file schema, format version 2 (docs/design.md §3 "The trace"). The format's
+# raycell trace file schema, format version 3 (docs/design.md §3 "The trace"). The format's
 # constants and limits are in traces/format.h.
 #
 # A trace file (".rct") is a sequence of zstd frames:
@@ -87,9 +87,11 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("raycell::schema");
 
-const formatVersion :UInt32 = 2;
+const formatVersion :UInt32 = 3;
 # The format version this schema describes; Header.formatVersion of files written with it.
-# Version 1 differs only in where the footprints are (Header.footprints).
+# Version 2 differs only in having no Header.path (the camera path is not recorded; readers
+# take it as unknown, kind ""); version 1 also in where the footprints are
+# (Header.footprints).
 
 # Every message of the file has this root, so one `capnp decode` reads the whole file.
 struct Record {
@@ -187,9 +189,42 @@ struct Header {
   footprintMode @10 :Text;
   # How footprints were computed: "sparse" (allocated leaves) or "dense" (all voxels).
   cameras @11 :List(Camera);
-  # The camera of every frame, in frame order.
+  # The camera of every frame the capture holds, in frame order: frames
+  # cameras[0].frame..cameras[last].frame, consecutive, a range of `path`.
   settings @12 :Settings;
   # Renderer settings of the capture.
+  path @13 :CameraPath;
+  # The whole camera path the cameras are a range of (version 3; absent before).
+}
+
+# How the camera of every frame is made (version 3). A capture of frames A..B of a path holds
+# the cameras a capture of the whole path has for those frames, and the same path; so
+# captures of consecutive ranges of one path join (`raycell trace concat`) into the capture
+# of their union.
+struct CameraPath {
+  kind @0 :Text;
+  # "still": the camera (eye, target, up, fovDeg) of every frame. "orbit": frame f's eye is
+  # `eye` turned by orbitDegrees * (f - firstFrame) / frameCount degrees about `up` through
+  # `target`, for the path's frames firstFrame..firstFrame+frameCount-1. "keyframes": frame
+  # f's eye, target and fov interpolated linearly between the two `keys` around f (the first
+  # or last key's outside them), up `up`. Empty: not recorded (imported traces).
+  firstFrame @1 :Int32;
+  # Orbit: the path's first frame. Otherwise 0.
+  frameCount @2 :UInt32;
+  # Orbit: the path's number of frames (>= 1). Otherwise 0: the path has every frame.
+  eye @3 :Vec3;
+  # Still and orbit: the eye (of frame firstFrame, for an orbit), world space.
+  target @4 :Vec3;
+  # Still and orbit: the point looked at, world space.
+  up @5 :Vec3;
+  # Up vector of every frame (normalised for an orbit), world space.
+  fovDeg @6 :Float64;
+  # Still and orbit: vertical field of view, degrees.
+  orbitDegrees @7 :Float64;
+  # Orbit: degrees turned over the path's frameCount frames (frame firstFrame+frameCount
+  # would be turned by all of them).
+  keys @8 :List(Camera);
+  # Keyframes: the key frames in increasing frame order (their `up` is the path's `up`).
 }
 
 # Footprints of consecutive cells (version 2): the records after the header cover cells

@@ -39,6 +39,35 @@ struct CameraKey {
   }
 };
 
+// How the camera of every frame of a capture is made (docs/design.md §3 "The trace"): the
+// whole camera path, of which a capture holds a range of frames (its cameras). Two captures
+// with equal paths and settings hold frames of one animation; `raycell trace concat` joins
+// them.
+struct CameraPathInfo {
+  // "still": one camera (eye, target, up, fov) for every frame. "orbit": frame f's eye is
+  // `eye` turned by orbit_degrees * (f - first_frame) / frame_count about `up` through
+  // `target`, for the path's frames first_frame..first_frame + frame_count - 1. "keyframes":
+  // interpolated linearly between `keys` (their frame, eye, target and fov; `up` for all),
+  // clamped to the first and last key. Empty: not recorded (files before format version 3,
+  // imported traces).
+  std::string kind;
+  std::int32_t first_frame = 0;
+  std::uint32_t frame_count = 0;  // orbit: the path's frames; otherwise 0 (every frame)
+  Vec3d eye, target, up{0, 1, 0};
+  double fov_deg = 0;
+  double orbit_degrees = 0;
+  std::vector<CameraKey> keys;  // keyframes only
+  bool operator==(const CameraPathInfo& o) const {
+    return kind == o.kind && first_frame == o.first_frame && frame_count == o.frame_count &&
+           eye == o.eye && target == o.target && up == o.up && fov_deg == o.fov_deg &&
+           orbit_degrees == o.orbit_degrees && keys == o.keys;
+  }
+  bool operator!=(const CameraPathInfo& o) const { return !(*this == o); }
+  // One line, e.g. "orbit of 90 degrees over frames 0..7 (eye 0,1.2,4 target 0,0,0 up
+  // 0,1,0 fov 40)"; "not recorded" when kind is empty.
+  std::string ToString() const;
+};
+
 struct RenderSettings {
   std::uint32_t width = 256, height = 256, spp = 1;
   std::uint32_t max_depth = 3;
@@ -65,7 +94,8 @@ struct TraceHeader {
   std::array<std::uint32_t, 3> cells{2, 2, 2};
   std::vector<std::uint64_t> footprints;  // bytes per cell, cell = x + nx*(y + ny*z)
   std::string footprint_mode = "sparse";
-  std::vector<CameraKey> cameras;  // one per frame, in frame order
+  std::vector<CameraKey> cameras;  // one per frame the capture holds, in frame order
+  CameraPathInfo path;             // the whole camera path; cameras are a range of it
   RenderSettings settings;
   std::uint32_t cell_count() const { return cells[0] * cells[1] * cells[2]; }
   // Whether the volume changes from frame to frame: a sequence of files, one per frame (the
@@ -77,7 +107,7 @@ struct TraceHeader {
     return format_version == o.format_version && producer == o.producer && scene == o.scene &&
            grids == o.grids && box_min == o.box_min && box_max == o.box_max && cells == o.cells &&
            footprints == o.footprints && footprint_mode == o.footprint_mode &&
-           cameras == o.cameras && settings == o.settings;
+           cameras == o.cameras && path == o.path && settings == o.settings;
   }
 };
 

@@ -56,7 +56,12 @@ void PrintHeader(const TraceReader& reader, const std::string& path, std::ostrea
       << "cell grid:      " << h.cells[0] << "x" << h.cells[1] << "x" << h.cells[2] << " = "
       << h.cell_count() << " cells\n";
   PrintFootprints(h, out);
-  out << "cameras:        " << h.cameras.size() << "\n";
+  out << "cameras:        " << h.cameras.size();
+  if (!h.cameras.empty()) {
+    out << " (frames " << h.cameras.front().frame << ".." << h.cameras.back().frame << ")";
+  }
+  out << "\n"
+      << "path:           " << h.path.ToString() << "\n";
   PrintSettings(h.settings, out);
   if (!reader.warning().empty()) out << "warning:        " << reader.warning() << "\n";
 }

@@ -10,7 +10,8 @@
 
 namespace raycell {
 
-// Header (format version, producer, scene, grids, box, cell grid, footprints, settings),
+// Header (format version, producer, scene, grids, box, cell grid, footprints, the frames'
+// range and the camera path it is a range of, settings),
 // then one table row per frame: rays by kind, visits, samples, compressed bytes and bytes
 // per visit, and totals with the compression ratio against a naive uncompressed encoding
 // of 24 bytes per ray and 16 per visit (stated in the output).

@@ -6,6 +6,7 @@
 #include <kj/exception.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#define ZSTD_STATIC_LINKING_ONLY  // ZSTD_getFrameHeader
 #include <zstd.h>
 
 #include <algorithm>
@@ -92,6 +93,9 @@ class FileIn {
       n -= static_cast<std::size_t>(got);
     }
   }
+
+  // The bytes held in memory, moved out (the object reads nothing after).
+  std::string TakeMemory() { return std::move(memory_); }
 
   std::uint32_t U32At(std::uint64_t offset) const {
     unsigned char b[4];
@@ -291,6 +295,24 @@ CameraKey ToCamera(schema::Camera::Reader c) {
   return k;
 }
 
+CameraPathInfo ToPath(schema::CameraPath::Reader r) {
+  if (r.getKeys().size() > kTraceMaxFrames) {
+    throw BadData("camera path with " + Str(r.getKeys().size()) + " key frames exceeds the " +
+                  "trace format's limit of " + Str(kTraceMaxFrames) + " (kTraceMaxFrames)");
+  }
+  CameraPathInfo p;
+  p.kind = ToStd(r.getKind());
+  p.first_frame = r.getFirstFrame();
+  p.frame_count = r.getFrameCount();
+  p.eye = ToVec3(r.getEye());
+  p.target = ToVec3(r.getTarget());
+  p.up = ToVec3(r.getUp());
+  p.fov_deg = r.getFovDeg();
+  p.orbit_degrees = r.getOrbitDegrees();
+  for (auto k : r.getKeys()) p.keys.push_back(ToCamera(k));
+  return p;
+}
+
 // The header's fields as read, checked against the format's limits (footprints not yet:
 // version 2 stores them in the records after the header).
 TraceHeader ToHeader(schema::Header::Reader r) {
@@ -318,6 +340,7 @@ TraceHeader ToHeader(schema::Header::Reader r) {
   h.footprint_mode = ToStd(r.getFootprintMode());
   for (auto c : r.getCameras()) h.cameras.push_back(ToCamera(c));
   h.settings = ToSettings(r.getSettings());
+  if (h.format_version >= 3) h.path = ToPath(r.getPath());
   const std::string problem = TraceHeaderProblem(h);
   if (!problem.empty()) throw BadData(problem);
   const auto footprints = r.getFootprints();
@@ -827,6 +850,37 @@ std::vector<FrameSummary> ReadIndex(const FileIn& file, const TraceHeader& heade
   return ToSummaries(message.getRoot<schema::Index>(), header, header_length, where.frame_offset);
 }
 
+// Checks the stored zstd frame of `slot` (see TraceReader::ReadEncodedFrame) without decoding
+// its rays.
+void CheckEncodedFrame(const FileIn& file, const FrameSlot& slot) {
+  ZstdFrameReader in(file, slot.offset, slot.end);
+  ZSTD_frameHeader zh;
+  char head[ZSTD_FRAMEHEADERSIZE_MAX];
+  const std::size_t head_bytes =
+      static_cast<std::size_t>(std::min<std::uint64_t>(sizeof head, slot.end - slot.offset));
+  file.ReadAt(slot.offset, head, head_bytes);
+  if (ZSTD_getFrameHeader(&zh, head, head_bytes) != 0 || !zh.checksumFlag) {
+    throw BadData("the zstd frame has no content checksum");
+  }
+  kj::Array<capnp::word> words;
+  bool ended = false;
+  while (ReadMessage(in, words)) {
+    if (ended) throw BadData("data after the frameEnd record");
+    capnp::FlatArrayMessageReader message(words, MessageOptions());
+    const auto record = message.getRoot<schema::Record>();
+    if (record.which() == schema::Record::BATCH) continue;
+    if (record.which() != schema::Record::FRAME_END) throw BadData("unexpected record in a frame");
+    FrameSummary stored = ToSummary(record.getFrameEnd());
+    CheckSummary(*slot.expected, stored, "the index");
+    ended = true;
+  }
+  if (!ended) throw BadData("the zstd frame ends without a frameEnd record");
+  if (in.consumed() != slot.end - slot.offset) {
+    throw BadData("the zstd frame is " + Str(in.consumed()) + " bytes, the index says " +
+                  Str(slot.end - slot.offset));
+  }
+}
+
 }  // namespace
 
 // ---- TraceReader -------------------------------------------------------------------------
@@ -936,6 +990,20 @@ RayBatch TraceReader::LoadFrame(std::size_t frame_index) const {
   all.Reserve(std::min(s.rays, kMaxReserve), std::min(s.visits, kMaxReserve));
   ForEachBatch(frame_index, [&](const RayBatch& b) { all.AppendRebased(b); });
   return all;
+}
+
+std::string TraceReader::ReadEncodedFrame(std::size_t frame_index) const {
+  const FrameSummary& s = impl_->Frame(frame_index);
+  const FrameSlot slot{frame_index, s.offset, s.offset + s.length, &s};
+  return Guarded(
+      impl_->path, [&] { return FrameLabel(slot, s.frame); },
+      [&] {
+        std::string bytes(s.length, '\0');
+        impl_->file.ReadAt(s.offset, bytes.data(), bytes.size());
+        FileIn frame(std::move(bytes));  // checked in memory: the file is read once
+        CheckEncodedFrame(frame, {frame_index, 0, s.length, &s});
+        return frame.TakeMemory();
+      });
 }
 
 }  // namespace raycell

@@ -340,6 +340,18 @@ void FillCameras(capnp::List<schema::Camera>::Builder out, const std::vector<Cam
   }
 }
 
+void FillPath(schema::CameraPath::Builder out, const CameraPathInfo& p) {
+  out.setKind(p.kind);
+  out.setFirstFrame(p.first_frame);
+  out.setFrameCount(p.frame_count);
+  FillVec3(out.initEye(), p.eye);
+  FillVec3(out.initTarget(), p.target);
+  FillVec3(out.initUp(), p.up);
+  out.setFovDeg(p.fov_deg);
+  out.setOrbitDegrees(p.orbit_degrees);
+  FillCameras(out.initKeys(static_cast<unsigned>(p.keys.size())), p.keys);
+}
+
 // The header message; the footprints follow in footprints records.
 void FillHeader(schema::Header::Builder out, const TraceHeader& h) {
   out.setFormatVersion(kTraceFormatVersion);
@@ -354,6 +366,7 @@ void FillHeader(schema::Header::Builder out, const TraceHeader& h) {
   out.setFootprintMode(h.footprint_mode);
   FillCameras(out.initCameras(static_cast<unsigned>(h.cameras.size())), h.cameras);
   FillSettings(out.initSettings(), h.settings);
+  FillPath(out.initPath(), h.path);
 }
 
 // Footprints of cells [first, end) as runs of equal values, into a footprints record.
@@ -477,7 +490,7 @@ struct TraceWriter::Impl {
     WriteFootprints();
     sink.EndFrame();
     header_length = file.bytes();
-    file.Publish();  // the .tmp appears now, holding the complete header
+    if (!options.name_at_finish) file.Publish();  // the .tmp appears now, with the header
   }
 
   // The footprints as records of at most options.footprint_runs_per_record runs.
@@ -568,13 +581,21 @@ TraceWriter TraceWriter::Create(const std::string& path, const TraceHeader& head
   return Create(path, h, TraceWriterOptions{});
 }
 
+namespace {
+
+void CheckFrameLimit(const std::string& path, std::size_t frames, std::size_t max_frames) {
+  if (frames >= max_frames) {
+    throw InputError(path + ": more than " + std::to_string(max_frames) +
+                     " frames, the trace format's limit (kTraceMaxFrames)");
+  }
+}
+
+}  // namespace
+
 void TraceWriter::BeginFrame(std::int32_t frame) {
   Impl& w = *impl_;
   RAYCELL_CHECK(!w.in_frame && !w.finished);
-  if (w.frames.size() >= w.options.max_frames) {
-    throw InputError(w.path + ": more than " + std::to_string(w.options.max_frames) +
-                     " frames, the trace format's limit (kTraceMaxFrames)");
-  }
+  CheckFrameLimit(w.path, w.frames.size(), w.options.max_frames);
   w.in_frame = true;
   w.frame = FrameAccumulator(frame, w.header.settings.store_t);
   w.frame_offset = w.file.bytes();
@@ -605,11 +626,26 @@ FrameSummary TraceWriter::EndFrame() {
   return summary;
 }
 
+FrameSummary TraceWriter::AppendEncodedFrame(const FrameSummary& summary,
+                                             const std::string& encoded) {
+  Impl& w = *impl_;
+  RAYCELL_CHECK(!w.in_frame && !w.finished);
+  RAYCELL_CHECK(!encoded.empty());
+  CheckFrameLimit(w.path, w.frames.size(), w.options.max_frames);
+  FrameSummary s = summary;
+  s.offset = w.file.bytes();
+  s.length = encoded.size();
+  w.file.Write(encoded.data(), encoded.size());
+  w.frames.push_back(s);
+  return s;
+}
+
 void TraceWriter::Finish() {
   Impl& w = *impl_;
   RAYCELL_CHECK(!w.in_frame && !w.finished);
   const std::vector<unsigned char> index = IndexFrame(w.header_length, w.frames);
   w.file.Write(index.data(), index.size());
+  if (w.options.name_at_finish) w.file.Publish();
   w.file.SyncAndClose();
   RenameFile(w.path + ".tmp", w.path);
   w.finished = true;

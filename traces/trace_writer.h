@@ -31,6 +31,10 @@ struct TraceWriterOptions {
   std::size_t footprint_runs_per_record = kTraceFootprintRunsPerRecord;
   // Most frames in the file (at most kTraceMaxFrames; lower only to test the limit).
   std::size_t max_frames = kTraceMaxFrames;
+  // false (a capture): `path.tmp` appears once the header is written and keeps every ended
+  // frame if the writer is dropped. true (`trace concat`): the file has no name until
+  // Finish(), so a writer dropped before it leaves nothing.
+  bool name_at_finish = false;
 };
 
 class TraceWriter {
@@ -62,6 +66,12 @@ class TraceWriter {
   // Writes the frame's last batch and its frameEnd record, completes its zstd frame and
   // hands it to the OS. Returns its summary (with offset and length in the file).
   FrameSummary EndFrame();
+  // Appends a frame already encoded: `encoded` is the complete zstd frame of frame
+  // `summary.frame` as another trace stored it, and `summary` its totals and checksum (its
+  // offset and length are ignored). The bytes are written as they are, so the caller checks
+  // them first (TraceReader::ReadEncodedFrame). Returns the summary with offset and length
+  // in this file. InputError as BeginFrame.
+  FrameSummary AppendEncodedFrame(const FrameSummary& summary, const std::string& encoded);
   // Writes the index, fsyncs, closes and renames the .tmp file to `path`.
   void Finish();
 

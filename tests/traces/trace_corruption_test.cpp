@@ -581,6 +581,10 @@ TEST_F(InvalidHeaderTest, CraftedGoodHeadersRead) {
             (std::vector<std::uint64_t>{1, 1, 1, 2, 2, 2, 2, 2}));
   EXPECT_EQ(Open(HeaderMessage(1, {2, 1, 1}, {5, 6})), "");
   EXPECT_EQ(TraceReader::Open(path_).header().footprints, (std::vector<std::uint64_t>{5, 6}));
+  // Versions 1 and 2 have no camera path: it reads as not recorded. Version 3 reads it.
+  EXPECT_EQ(TraceReader::Open(path_).header().path.kind, "");
+  EXPECT_EQ(Open(HeaderMessage(3, {2, 1, 1}) + FootprintsMessage(0, {5}, {1})), "");
+  EXPECT_EQ(TraceReader::Open(path_).header().path.kind, "");  // a version 3 header without one
 }
 
 TEST_F(InvalidHeaderTest, FootprintRecordsMustCoverTheCellsOnce) {
@@ -618,12 +622,12 @@ TEST_F(InvalidHeaderTest, VersionsAndLimitsAreChecked) {
   ExpectRejected(HeaderMessage(1, {2, 1, 1}, {5, 6}) + FootprintsMessage(0, {5}, {1}),
                  "more than one message in the header frame");
   ExpectRejected(HeaderMessage(1, {2, 1, 1}, {5}), "1 footprints for 2 cells");
-  ExpectRejected(HeaderMessage(3, {2, 1, 1}),
-                 "format version 3 is not supported (this reader "
-                 "reads 1..2)");
+  ExpectRejected(HeaderMessage(4, {2, 1, 1}),
+                 "format version 4 is not supported (this reader "
+                 "reads 1..3)");
   ExpectRejected(HeaderMessage(0, {2, 1, 1}),
                  "format version 0 is not supported (this reader "
-                 "reads 1..2)");
+                 "reads 1..3)");
   // A grid beyond the limit is refused before anything is allocated for its cells.
   ExpectRejected(HeaderMessage(2, {4096, 4096, 4096}) + FootprintsMessage(0, {5}, {0}),
                  "cell grid 4096x4096x4096 = 68719476736 cells exceeds the trace format's limit "

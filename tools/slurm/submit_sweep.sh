@@ -48,69 +48,20 @@ Example:
 EOF
 }
 
-die() {
-  echo "submit_sweep.sh: error: $*" >&2
-  exit 2
-}
+prog=submit_sweep.sh join_word=merge
+# shellcheck source=tools/slurm/lib.sh
+source "$here/lib.sh"
 
-# "0 1 2 5 7 8" -> "0-2,5,7-8": the --array list of the shards to run (at least one).
-ranges() {
-  local out="" start=$1 prev=$1 i
-  shift
-  for i in "$@" ""; do
-    if [[ -n $i && $i -eq $((prev + 1)) ]]; then
-      prev=$i
-      continue
-    fi
-    out+="${out:+,}$start"
-    if ((prev != start)); then out+="-$prev"; fi
-    start=$i prev=$i
-  done
-  echo "$out"
-}
-
-shards=4 cpus=1 max_running="" raycell=${RAYCELL:-} parsable=0
-sbatch_opts=() positional=()
-while (($#)); do
-  case $1 in
-    -h | --help) usage; exit 0 ;;
-    -n | --shards) (($# >= 2)) || die "$1 needs a value"; shards=$2; shift 2 ;;
-    -c | --cpus-per-task) (($# >= 2)) || die "$1 needs a value"; cpus=$2; shift 2 ;;
-    --max-running) (($# >= 2)) || die "$1 needs a value"; max_running=$2; shift 2 ;;
-    --raycell) (($# >= 2)) || die "$1 needs a value"; raycell=$2; shift 2 ;;
-    --sbatch) (($# >= 2)) || die "$1 needs a value"; sbatch_opts+=("$2"); shift 2 ;;
-    --parsable) parsable=1; shift ;;
-    --) shift; break ;;
-    -*) die "unknown option '$1' (sweep arguments go after --; see --help)" ;;
-    *) positional+=("$1"); shift ;;
-  esac
-done
-sweep_args=("$@")
-
+parse_options --shards "$@"
+shards=$count sweep_args=("${tool_args[@]}")
 ((${#positional[@]} == 2)) || die "give TRACE and OUTDIR, then -- and the sweep arguments (see --help)"
 trace=${positional[0]} outdir=${positional[1]}
-[[ $shards =~ ^[1-9][0-9]*$ ]] || die "--shards must be a positive integer, got '$shards'"
-[[ $cpus =~ ^[1-9][0-9]*$ ]] || die "--cpus-per-task must be a positive integer, got '$cpus'"
-[[ -z $max_running || $max_running =~ ^[1-9][0-9]*$ ]] ||
-  die "--max-running must be a positive integer, got '$max_running'"
 [[ -f $trace ]] || die "TRACE '$trace' is not a file"
+refuse_args --shard --out
 for a in "${sweep_args[@]}"; do
-  case $a in
-    --shard | --shard=* | --out | --out=*) die "'$a' is set by the tasks; leave it out of the sweep arguments" ;;
-    merge) die "'merge' is not a sweep argument: the merge job runs it" ;;
-  esac
+  [[ $a != merge ]] || die "'merge' is not a sweep argument: the merge job runs it"
 done
-
-if [[ -z $raycell ]]; then
-  if [[ -x $here/../../build/tools/raycell ]]; then
-    raycell=$here/../../build/tools/raycell
-  else
-    raycell=$(command -v raycell) || die "no raycell binary: build it, or give --raycell PATH"
-  fi
-fi
-[[ -x $raycell ]] || die "--raycell '$raycell' is not an executable"
-raycell=$(realpath "$raycell")
-command -v sbatch >/dev/null || die "sbatch not found: run this on a Slurm login node"
+find_raycell
 
 # The sweep must be valid before N tasks are queued: a shard index past the last combination
 # (there are at most 10^7) runs nothing but still opens the trace and checks every --vary
@@ -123,19 +74,12 @@ if ! "$raycell" sweep "$trace" --shard 9999999/10000000 --out "$check/check.csv"
   die "the sweep is invalid (the message above is raycell's); nothing was submitted"
 fi
 
-mkdir -p "$outdir/shards" "$outdir/logs"
-outdir=$(cd "$outdir" && pwd)
 record=$(
   printf 'cwd=%q\nshards=%s\ntrace=%q\nargs=' "$PWD" "$shards" "$trace"
   printf '%q ' "${sweep_args[@]}"
   echo
 )
-if [[ -f $outdir/sweep.args ]]; then
-  [[ $(cat "$outdir/sweep.args") == "$record" ]] ||
-    die "$outdir holds another sweep ($outdir/sweep.args differs from this one); use another OUTDIR or delete it"
-else
-  echo "$record" >"$outdir/sweep.args"
-fi
+claim_outdir sweep "$record" shards
 
 # The first line of a sweep file names the sweep exactly (replay/sweep.h): trace, config and
 # its hash, varies, frames, shard. Shard files left by an earlier run must name this sweep, so
@@ -155,29 +99,6 @@ for ((i = 0; i < shards; i++)); do
   [[ -f $f ]] || todo+=("$i")
 done
 
-array_job="-" dependency=()
-if ((${#todo[@]})); then
-  spec=$(ranges "${todo[@]}")${max_running:+%$max_running}
-  out=$(sbatch --parsable --array="$spec" --cpus-per-task="$cpus" \
-    --output="$outdir/logs/shard_%a.log" --open-mode=append "${sbatch_opts[@]}" \
-    "$here/sweep.sbatch" "$raycell" "$shards" "$outdir" "$trace" "${sweep_args[@]}") ||
-    die "sbatch refused the array job (its message is above)"
-  array_job=${out%%;*}
-  dependency=(--dependency="afterok:$array_job" --kill-on-invalid-dep=yes)
-fi
-out=$(sbatch --parsable "${dependency[@]}" --output="$outdir/logs/merge.log" --open-mode=append \
-  "${sbatch_opts[@]}" "$here/merge.sbatch" "$raycell" "$shards" "$outdir") ||
-  die "sbatch refused the merge job (its message is above); the array job $array_job is queued: scancel it or rerun this command"
-merge_job=${out%%;*}
-
-if ((parsable)); then
-  echo "$array_job $merge_job"
-elif ((${#todo[@]})); then
-  echo "Submitted array job $array_job: shard(s) $spec of $shards; $((shards - ${#todo[@]})) already done."
-  echo "Submitted merge job $merge_job, after every shard succeeds."
-  echo "Result: $outdir/sweep.csv   (logs: $outdir/logs/, status: squeue -j $array_job,$merge_job)"
-  echo "If a task fails, the merge job is cancelled: see its log, then run this command again."
-else
-  echo "All $shards shards are done; submitted merge job $merge_job."
-  echo "Result: $outdir/sweep.csv   (log: $outdir/logs/merge.log)"
-fi
+task_cmd=("$here/sweep.sbatch" "$raycell" "$shards" "$outdir" "$trace" "${sweep_args[@]}")
+join_cmd=("$here/merge.sbatch" "$raycell" "$shards" "$outdir")
+submit_jobs shard "$outdir/sweep.csv" "shard_%a.log" merge.log

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <fstream>
 #include <sstream>
+#include <tuple>
+#include <utility>
 
 #include "base/check.h"
 
@@ -146,14 +148,10 @@ void CheckCamera(const CameraPathSpec& spec, const CameraKey& key) {
   }
 }
 
-std::vector<CameraKey> MakeCameraPath(const CameraPathSpec& spec, const std::vector<int>& frames,
-                                      Vec3d lo, Vec3d hi) {
-  if (!spec.keyframes_file.empty()) {
-    const auto keys = ReadKeyframes(spec.keyframes_file);
-    std::vector<CameraKey> path;
-    for (int f : frames) path.push_back(Interpolate(keys, f, spec.up));
-    return path;
-  }
+namespace {
+
+// The eye of the first frame and the target, when the options leave them to the scene box.
+std::pair<Vec3d, Vec3d> FrameTheBox(const CameraPathSpec& spec, Vec3d lo, Vec3d hi) {
   const Vec3d center = (lo + hi) * 0.5;
   const Vec3d target = IsFinite(spec.target) ? spec.target : center;
   Vec3d eye = spec.eye;
@@ -166,14 +164,75 @@ std::vector<CameraKey> MakeCameraPath(const CameraPathSpec& spec, const std::vec
                        ": too small to frame the scene box from a finite distance; give --eye");
     }
   }
-  const Vec3d up = Normalize(spec.up);
-  std::vector<CameraKey> path;
-  for (std::size_t i = 0; i < frames.size(); ++i) {
-    const double angle = spec.orbit_degrees * kPi / 180.0 * double(i) / double(frames.size());
-    const Vec3d e = target + RotateAbout(eye - target, up, angle);
-    path.push_back(CameraKey{frames[i], e, target, up, spec.fov_deg});
+  return {eye, target};
+}
+
+std::string Range(std::int64_t first, std::int64_t last) {
+  return std::to_string(first) + ".." + std::to_string(last);
+}
+
+}  // namespace
+
+void CheckOrbitFrames(const CameraPathSpec& spec, const std::vector<int>& frames) {
+  if (spec.orbit_frames <= 0 || frames.empty()) return;
+  const std::int64_t first = spec.orbit_first, last = first + spec.orbit_frames - 1;
+  if (frames.front() < first || frames.back() > last) {
+    throw InputError("--frames " + Range(frames.front(), frames.back()) + ": not frames of " +
+                     "--orbit " + std::to_string(spec.orbit_frames) + ":" +
+                     Num(spec.orbit_degrees) + ", whose frames are " + Range(first, last));
   }
+}
+
+CameraPathInfo MakeCameraPathInfo(const CameraPathSpec& spec, const std::vector<int>& frames,
+                                  Vec3d lo, Vec3d hi) {
+  RAYCELL_CHECK(!frames.empty());
+  CameraPathInfo path;
+  if (!spec.keyframes_file.empty()) {
+    path.kind = "keyframes";
+    path.up = spec.up;
+    for (const Keyframe& k : ReadKeyframes(spec.keyframes_file)) {
+      path.keys.push_back(CameraKey{k.frame, k.eye, k.target, spec.up, k.fov});
+    }
+    return path;
+  }
+  std::tie(path.eye, path.target) = FrameTheBox(spec, lo, hi);
+  path.up = Normalize(spec.up);
+  path.fov_deg = spec.fov_deg;
+  if (spec.orbit_degrees == 0 && spec.orbit_frames == 0) {
+    path.kind = "still";
+    return path;
+  }
+  path.kind = "orbit";
+  path.orbit_degrees = spec.orbit_degrees;
+  path.first_frame = spec.orbit_frames > 0 ? spec.orbit_first : frames.front();
+  path.frame_count =
+      static_cast<std::uint32_t>(spec.orbit_frames > 0 ? spec.orbit_frames : frames.size());
+  CheckOrbitFrames(spec, frames);
   return path;
+}
+
+CameraKey CameraOf(const CameraPathInfo& path, int frame) {
+  if (path.kind == "keyframes") {
+    std::vector<Keyframe> keys;
+    for (const CameraKey& k : path.keys) keys.push_back({k.frame, k.eye, k.target, k.fov_deg});
+    return Interpolate(keys, frame, path.up);
+  }
+  RAYCELL_CHECK(path.kind == "still" || path.kind == "orbit");
+  // A still camera turns by 0 degrees: its eye is computed as an orbit's first frame's.
+  const bool orbit = path.kind == "orbit";
+  const std::int64_t index = orbit ? std::int64_t{frame} - path.first_frame : 0;
+  const double count = orbit ? double(path.frame_count) : 1.0;
+  const double angle = path.orbit_degrees * kPi / 180.0 * double(index) / count;
+  const Vec3d e = path.target + RotateAbout(path.eye - path.target, path.up, angle);
+  return CameraKey{frame, e, path.target, path.up, path.fov_deg};
+}
+
+std::vector<CameraKey> MakeCameraPath(const CameraPathSpec& spec, const std::vector<int>& frames,
+                                      Vec3d lo, Vec3d hi) {
+  const CameraPathInfo path = MakeCameraPathInfo(spec, frames, lo, hi);
+  std::vector<CameraKey> cameras;
+  for (int f : frames) cameras.push_back(CameraOf(path, f));
+  return cameras;
 }
 
 }  // namespace raycell

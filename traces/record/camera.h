@@ -28,7 +28,12 @@ struct CameraPathSpec {
   // Where the first frame looks from and at; unset (NaN) eye/target frame the scene box.
   Vec3d eye{NAN, NAN, NAN}, target{NAN, NAN, NAN}, up{0, 1, 0};
   double fov_deg = 40;
-  double orbit_degrees = 0;    // total orbit about the up axis through target over the frames
+  double orbit_degrees = 0;  // total orbit about the up axis through target over the frames
+  // The orbit's frames orbit_first..orbit_first + orbit_frames - 1 (--orbit FRAMES:DEGREES:
+  // 0..FRAMES-1), of which a capture records a range; 0 frames: the frames recorded
+  // (--orbit DEGREES). No orbit (orbit_degrees 0 and orbit_frames 0): a still camera.
+  int orbit_first = 0;
+  int orbit_frames = 0;
   std::string keyframes_file;  // if set: lines "frame ex ey ez tx ty tz fov", interpolated
 };
 
@@ -41,8 +46,19 @@ void ValidateCameraSpec(const CameraPathSpec& spec);
 // and the frame.
 void CheckCamera(const CameraPathSpec& spec, const CameraKey& key);
 
-// One CameraKey per frame number in `frames`, for a scene box [lo, hi]. InputError when the
-// default framing would put the eye at infinity (a field of view too small for the box).
+// Checks that consecutive `frames` are frames of spec's orbit, when it has its own frames
+// (--orbit FRAMES:DEGREES): InputError naming both ranges if not.
+void CheckOrbitFrames(const CameraPathSpec& spec, const std::vector<int>& frames);
+// The whole camera path `spec` describes, for a capture of `frames` (consecutive frame
+// numbers) of a scene box [lo, hi] (docs/design.md §3 "The trace"): a still camera, an orbit
+// over spec's orbit frames (or over `frames` when it has none) or the key frames of the file.
+// InputError when the default framing would put the eye at infinity (a field of view too
+// small for the box), or when `frames` are not all frames of the orbit.
+CameraPathInfo MakeCameraPathInfo(const CameraPathSpec& spec, const std::vector<int>& frames,
+                                  Vec3d box_lo, Vec3d box_hi);
+// The camera of frame `frame` of `path`: the same for a capture of any range of the path.
+CameraKey CameraOf(const CameraPathInfo& path, int frame);
+// One CameraKey per frame number in `frames`: CameraOf(MakeCameraPathInfo(...), frame).
 std::vector<CameraKey> MakeCameraPath(const CameraPathSpec& spec, const std::vector<int>& frames,
                                       Vec3d box_lo, Vec3d box_hi);
 

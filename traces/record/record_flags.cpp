@@ -23,7 +23,8 @@ Vec3d ParseVec(const std::string& text, const std::string& option) {
   return {v[0], v[1], v[2]};
 }
 
-// "--orbit D" turns by D degrees over the frames; "--orbit N:D" also records frames 0..N-1.
+// "--orbit D" turns by D degrees over the frames recorded; "--orbit N:D" over frames 0..N-1,
+// and records them all unless --frames A..B picks a range of them (docs/design.md §3).
 void ApplyOrbit(const RecordFlags& a, RecordOptions& o) {
   if (a.orbit.empty()) return;
   const auto colon = a.orbit.find(':');
@@ -34,10 +35,11 @@ void ApplyOrbit(const RecordFlags& a, RecordOptions& o) {
     throw InputError("--orbit '" + a.orbit + "': expected DEGREES or FRAMES:DEGREES");
   }
   if (colon != std::string::npos) {
-    if (!a.frames.empty()) throw InputError("--orbit FRAMES:DEGREES and --frames both set frames");
     const auto n = ParseInt(std::string_view(a.orbit).substr(0, colon),
                             "--orbit '" + a.orbit + "' frames", 1, 1000000);
-    o.frames = ParseFrameRange("0.." + std::to_string(n - 1));
+    o.camera.orbit_first = 0;
+    o.camera.orbit_frames = static_cast<int>(n);
+    if (a.frames.empty()) o.frames = ParseFrameRange("0.." + std::to_string(n - 1));
   }
 }
 

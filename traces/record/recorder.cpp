@@ -108,6 +108,11 @@ void ValidateRecordOptions(const RecordOptions& o) {
                      " frames exceeds the trace format's limit of " +
                      std::to_string(kMaxCaptureFrames) + " frames a capture");
   }
+  for (std::size_t i = 1; i < o.frames.size(); ++i) {
+    if (std::int64_t{o.frames[i]} != std::int64_t{o.frames[i - 1]} + 1) {
+      throw InputError("--frames: frame numbers must be consecutive (a range A..B)");
+    }
+  }
   if (o.threads < 0 || o.threads > kMaxThreads) {
     throw InputError("--threads " + std::to_string(o.threads) + ": must be in 0.." +
                      std::to_string(kMaxThreads) + " (0: all cores)");
@@ -119,6 +124,7 @@ void ValidateRecordOptions(const RecordOptions& o) {
     throw InputError("--grid and --all-grids: give one or the other");
   }
   ValidateCameraSpec(o.camera);
+  CheckOrbitFrames(o.camera, o.frames);
 }
 
 RecordSummary Record(const RecordOptions& o, std::ostream& log) {
@@ -136,7 +142,8 @@ RecordSummary Record(const RecordOptions& o, std::ostream& log) {
   header.settings = o.settings;
   ScanScene(o, scene.get(), &header);
   const CellGrid cells = CellGrid::Create(header.box_min, header.box_max, o.cells);
-  header.cameras = MakeCameraPath(o.camera, o.frames, header.box_min, header.box_max);
+  header.path = MakeCameraPathInfo(o.camera, o.frames, header.box_min, header.box_max);
+  for (int frame : o.frames) header.cameras.push_back(CameraOf(header.path, frame));
   for (const CameraKey& key : header.cameras) CheckCamera(o.camera, key);
 
   TraceWriter writer = TraceWriter::Create(o.out, header);
