@@ -28,4 +28,19 @@ class Hash64 {
   std::uint64_t h_ = kSeed;
 };
 
+// Hash64::AddBytes over bytes that come in pieces: Add(a), Add(b) then Finish() equals a
+// Hash64 given AddBytes(a followed by b) then Finish(). The trace writer hashes each frame's
+// bytes as it writes them this way (IndexEntry.storedHash in traces/trace.capnp).
+class StreamHash64 {
+ public:
+  void Add(const void* data, std::size_t size);
+  std::uint64_t Finish() const;
+
+ private:
+  Hash64 h_;
+  std::uint64_t pending_ = 0;  // the bytes of an unfinished word, little-endian
+  unsigned pending_bytes_ = 0;
+  std::uint64_t size_ = 0;
+};
+
 }  // namespace raycell

@@ -336,4 +336,8 @@ struct IndexEntry {
   # As FrameEnd.raysByKind.
   checksum @7 :UInt64;
   # As FrameEnd.checksum.
+  storedHash @8 :UInt64;
+  # hash64 of the frame's zstd frame as stored (its `length` bytes from `offset`; "Checksums"
+  # above), so a copy of the frame can be checked without decoding it (`raycell trace
+  # concat`). 0: not recorded (files written before it was; a reader then decodes the frame).
 }

@@ -118,6 +118,8 @@ struct FrameSummary {
   std::array<std::uint64_t, 4> rays_by_kind{};  // indexed by RayKind
   std::uint64_t checksum = 0;                   // of the frame's rays, see trace.capnp
   std::uint64_t offset = 0, length = 0;         // byte range of the frame's zstd frame
+  // hash64 of those stored bytes (IndexEntry.storedHash); 0: not recorded.
+  std::uint64_t stored_hash = 0;
   bool operator==(const FrameSummary& o) const {
     return frame == o.frame && rays == o.rays && visits == o.visits && samples == o.samples &&
            rays_by_kind == o.rays_by_kind && checksum == o.checksum;

@@ -60,10 +60,12 @@ class TraceReader {
   // The whole frame as one batch (first_id 0), returned only when fully verified.
   RayBatch LoadFrame(std::size_t frame_index) const;
   // The frame's zstd frame as stored, for copying it into another trace without decoding its
-  // rays (`raycell trace concat`). Checked first, at the speed of decompression: exactly one
-  // zstd frame, of the index's length, with a content checksum that holds, holding Records
-  // that are batches followed by one frameEnd equal to the index's summary. (The rays are
-  // not decoded: ForEachBatch checks them.) InputError naming the file and frame if not.
+  // rays (`raycell trace concat`). Checked first: where the index has the stored bytes' hash
+  // (IndexEntry.storedHash), against it, at the speed of reading; else at the speed of
+  // decompression: exactly one zstd frame, of the index's length, with a content checksum that
+  // holds, holding Records that are batches followed by one frameEnd equal to the index's
+  // summary. (The rays are not decoded: ForEachBatch checks them.) InputError naming the file
+  // and frame if not.
   std::string ReadEncodedFrame(std::size_t frame_index) const;
 
  private:

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "base/check.h"
+#include "base/hash.h"
 #include "base/file.h"
 #include "traces/columns.h"
 #include "traces/trace.capnp.h"
@@ -76,10 +77,20 @@ class FileOut {
       const ssize_t n = ::write(fd_, p, size);
       if (n < 0 && errno == EINTR) continue;
       if (n <= 0) throw InputError(path_ + ": write failed: " + ErrnoText());
+      if (hashing_) hash_.Add(p, static_cast<std::size_t>(n));
       p += n;
       size -= static_cast<std::size_t>(n);
       bytes_ += static_cast<std::uint64_t>(n);
     }
+  }
+  // Hashes what is written from now until TakeHash (a frame's stored bytes).
+  void StartHash() {
+    hash_ = StreamHash64();
+    hashing_ = true;
+  }
+  std::uint64_t TakeHash() {
+    hashing_ = false;
+    return hash_.Finish();
   }
   void SyncAndClose() {
     if (::fsync(fd_) != 0) throw InputError(path_ + ": fsync failed: " + ErrnoText());
@@ -106,6 +117,8 @@ class FileOut {
   int fd_ = -1;
   bool published_ = false;
   std::uint64_t bytes_ = 0;
+  StreamHash64 hash_;
+  bool hashing_ = false;
 };
 
 // Compresses what Cap'n Proto writes into zstd frames of `out`, one frame per EndFrame().
@@ -419,6 +432,7 @@ void FillIndex(schema::Index::Builder out, std::uint64_t header_length,
     entries[i].setSamples(s.samples);
     FillKindCounts(entries[i].initRaysByKind(kRayKindCount), s);
     entries[i].setChecksum(s.checksum);
+    entries[i].setStoredHash(s.stored_hash);
   }
 }
 
@@ -599,6 +613,7 @@ void TraceWriter::BeginFrame(std::int32_t frame) {
   w.in_frame = true;
   w.frame = FrameAccumulator(frame, w.header.settings.store_t);
   w.frame_offset = w.file.bytes();
+  w.file.StartHash();
   w.pending.Clear();
   w.pending.set_first_id(0);
 }
@@ -621,6 +636,7 @@ FrameSummary TraceWriter::EndFrame() {
   w.sink.EndFrame();
   summary.offset = w.frame_offset;
   summary.length = w.file.bytes() - w.frame_offset;
+  summary.stored_hash = w.file.TakeHash();
   w.frames.push_back(summary);
   w.in_frame = false;
   return summary;
@@ -635,7 +651,9 @@ FrameSummary TraceWriter::AppendEncodedFrame(const FrameSummary& summary,
   FrameSummary s = summary;
   s.offset = w.file.bytes();
   s.length = encoded.size();
+  w.file.StartHash();
   w.file.Write(encoded.data(), encoded.size());
+  s.stored_hash = w.file.TakeHash();
   w.frames.push_back(s);
   return s;
 }

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <stdexcept>
+#include <string>
 
 #include "base/file.h"
 #include "base/format.h"
@@ -158,6 +159,29 @@ TEST(Hash, ValuesAreStable) {
   Hash64 word;
   word.Add(42);
   EXPECT_EQ(word.Finish(), 0x8dc5fc419cd24e33ull);
+}
+
+// StreamHash64 over bytes given in any pieces equals AddBytes over all of them at once.
+TEST(Hash, StreamHashOfPiecesEqualsAddBytesOfTheWhole) {
+  std::string bytes;
+  for (int i = 0; i < 61; ++i) bytes += char(i * 37 + 11);
+  for (std::size_t n = 0; n <= bytes.size(); ++n) {
+    Hash64 whole;
+    whole.AddBytes(bytes.data(), n);
+    for (std::size_t cut1 = 0; cut1 <= n; cut1 += 3) {
+      for (std::size_t cut2 = cut1; cut2 <= n; cut2 += 5) {
+        StreamHash64 s;
+        s.Add(bytes.data(), cut1);
+        s.Add(bytes.data() + cut1, cut2 - cut1);
+        s.Add(bytes.data() + cut2, n - cut2);
+        ASSERT_EQ(s.Finish(), whole.Finish()) << n << " bytes cut at " << cut1 << ", " << cut2;
+      }
+    }
+  }
+  StreamHash64 r;
+  r.Add("ray", 3);
+  r.Add("cell", 4);
+  EXPECT_EQ(r.Finish(), 0xefa509afd368aa40ull);  // AddBytes("raycell") above
 }
 
 }  // namespace
