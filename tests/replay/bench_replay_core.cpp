@@ -65,6 +65,8 @@ std::vector<Case> Cases() {
   add("celltree, 2 processors, 2 cells", "celltree", 2, "2 cells", false);
   add("maxwork, 4 processors, 4 cells, prefetch", "maxwork", 4, "4 cells", true);
   add("random, 8 processors, 2 cells", "random", 8, "2 cells", false);
+  // Case 0 on eight processors: the core's cost of parallelism with the same scheduler.
+  add("celltree, 8 processors, 1 cell", "celltree", 8, "1 cell", false);
   return cases;
 }
 
