@@ -75,6 +75,10 @@ class RayBatch {
   void AddVisit(CellId cell, std::uint32_t samples, float t_enter, float t_exit);
   // Adds `samples` to the last visit of the last ray (which must have one).
   void AddSamplesToLastVisit(std::uint32_t samples) { samples_.back() += samples; }
+  // Sets the t_exit of the last visit of the last ray (which must have one), if t is stored.
+  void SetLastExit(float t_exit) {
+    if (store_t_) t_exit_.back() = t_exit;
+  }
   // Removes the last ray and its visits.
   void PopRay();
   // Appends all rays of `other`, offsetting parent ids that point inside `other` so they
