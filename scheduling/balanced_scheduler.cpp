@@ -165,9 +165,9 @@ std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
   std::optional<CellId> c = Choose(queues, &follower);
   RAYCELL_CHECK(c.has_value());
   reason_ = follower ? follower->Reason() : "max work";
-  // Postpone only while every other processor is working: at most one waits by choice.
-  // Postpone only while every other processor is working, and only on boards of
-  // kPostponeMinProcessors or more, where one waiting processor is a small part of the whole.
+  // Postpone only while every other processor is working (at most one waits by choice), and
+  // only on boards of kPostponeMinProcessors or more, where one waiting processor is a small
+  // part of the whole.
   if (options_.postpone && queues.processors >= kPostponeMinProcessors &&
       queues.working + 1 >= queues.processors && TooSmall(queues, *c)) {
     const std::optional<CellId> largest =
