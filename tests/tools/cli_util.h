@@ -7,6 +7,8 @@
 #include <array>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 namespace raycell::testing {
@@ -29,12 +31,34 @@ inline Result Raycell(const std::string& args, bool with_stderr = true) {
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
 }
 
+struct SplitResult {
+  int code;
+  std::string out, err;
+};
+
+// Runs `raycell ARGS` through the shell with stdout and stderr apart (stderr through the file
+// stderr.txt of CliDir(name)).
+inline SplitResult RaycellSplit(const std::string& args, const std::string& name);
+
 // A folder for one test's files, unique per process: TEMP/raycell_NAME_PID.
 inline std::filesystem::path CliDir(const std::string& name) {
   const auto d =
       std::filesystem::temp_directory_path() / ("raycell_" + name + "_" + std::to_string(getpid()));
   std::filesystem::create_directories(d);
   return d;
+}
+
+inline SplitResult RaycellSplit(const std::string& args, const std::string& name) {
+  const std::string err_file = (CliDir(name) / "stderr.txt").string();
+  const std::string cmd = std::string(RAYCELL_BINARY) + " " + args + " 2>'" + err_file + "'";
+  FILE* p = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buf;
+  for (std::size_t n; (n = fread(buf.data(), 1, buf.size(), p)) > 0;) out.append(buf.data(), n);
+  const int status = pclose(p);
+  std::ifstream err(err_file, std::ios::binary);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out,
+          std::string(std::istreambuf_iterator<char>(err), {})};
 }
 
 }  // namespace raycell::testing

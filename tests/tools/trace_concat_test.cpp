@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
-#include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -13,26 +12,15 @@
 #include <vector>
 
 #include "tests/test_util.h"
+#include "tests/tools/cli_util.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {
 namespace {
 
-struct Result {
-  int code;
-  std::string out, err;
-};
+using Result = testing::SplitResult;
 
-Result Raycell(const std::string& args) {
-  const std::string err_file = testing::TempPath("trace_concat", "stderr.txt");
-  const std::string cmd = std::string(RAYCELL_BINARY) + " " + args + " 2>'" + err_file + "'";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf;
-  for (std::size_t n; (n = fread(buf.data(), 1, buf.size(), p)) > 0;) out.append(buf.data(), n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out, testing::ReadBytes(err_file)};
-}
+Result Raycell(const std::string& args) { return testing::RaycellSplit(args, "trace_concat"); }
 
 bool Contains(const std::string& text, const std::string& what) {
   return text.find(what) != std::string::npos;
