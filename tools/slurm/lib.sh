@@ -31,6 +31,20 @@ ranges() {
   echo "$out"
 }
 
+# common_options_help JOB: the options every submit script takes after -n and -c, for its
+# --help; JOB names the join job in --parsable's output.
+common_options_help() {
+  cat <<EOF
+  --max-running K        at most K tasks at once (sbatch --array=...%K)
+  --raycell PATH         the raycell binary, on a filesystem every node sees (default:
+                         \$RAYCELL, else build/tools/raycell of this checkout, else PATH)
+  --sbatch OPTION        an extra sbatch option for both jobs, e.g. --sbatch --partition=cpu
+                         --sbatch --time=2:00:00 (repeatable; SBATCH_* variables work too)
+  --parsable             print only "ARRAYJOB $1" (ARRAYJOB is "-" when no task ran)
+  -h, --help             this text
+EOF
+}
+
 # parse_options COUNT_OPTION "$@": the options every submit script takes. COUNT_OPTION is the
 # long name of -n (--shards, --tasks). Sets count, cpus, max_running, raycell, sbatch_opts,
 # parsable, positional (before --) and tool_args (after --).

@@ -25,13 +25,9 @@ analysing one range of the trace's frames, and a dependent job that merges them
 Options:
   -n, --tasks N          array tasks, one frame range each (default 4; at most one per frame)
   -c, --cpus-per-task C  CPUs per task, given to analyze as --jobs C (default 1)
-  --max-running K        at most K tasks at once (sbatch --array=...%K)
-  --raycell PATH         the raycell binary, on a filesystem every node sees (default:
-                         $RAYCELL, else build/tools/raycell of this checkout, else PATH)
-  --sbatch OPTION        an extra sbatch option for both jobs, e.g. --sbatch --partition=cpu
-                         --sbatch --time=2:00:00 (repeatable; SBATCH_* variables work too)
-  --parsable             print only "ARRAYJOB MERGEJOB" (ARRAYJOB is "-" when no task ran)
-  -h, --help             this text
+USAGE
+  common_options_help MERGEJOB
+  cat <<'USAGE'
 
 ANALYZE ARGS are those of `raycell analyze` (--bracket, --effort, --exact, --format, ...)
 except --frames, --frame, --all, --part, --paths and --dot, which the tasks set or which

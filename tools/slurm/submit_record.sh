@@ -27,13 +27,9 @@ The result appears in OUTDIR when the join job ends:
 Options:
   -n, --tasks N          array tasks, one frame range each (default 4; at most one per frame)
   -c, --cpus-per-task C  CPUs per task, given to record as --threads C (default 1)
-  --max-running K        at most K tasks at once (sbatch --array=...%K)
-  --raycell PATH         the raycell binary, on a filesystem every node sees (default:
-                         $RAYCELL, else build/tools/raycell of this checkout, else PATH)
-  --sbatch OPTION        an extra sbatch option for both jobs, e.g. --sbatch --partition=cpu
-                         --sbatch --time=2:00:00 (repeatable; SBATCH_* variables work too)
-  --parsable             print only "ARRAYJOB JOINJOB" (ARRAYJOB is "-" when no task ran)
-  -h, --help             this text
+USAGE
+  common_options_help JOINJOB
+  cat <<'USAGE'
 
 RECORD ARGS are those of `raycell record` except --frames and --out, which the tasks set.
 Paths among them (--scene, --images, ...) are read from the directory you submit from, as on

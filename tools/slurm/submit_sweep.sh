@@ -22,13 +22,9 @@ dependent merge job. The result appears in OUTDIR/sweep.csv when the merge job e
 Options:
   -n, --shards N         array tasks, one shard each (default 4)
   -c, --cpus-per-task C  CPUs per task, given to the shard as --jobs C (default 1)
-  --max-running K        at most K tasks at once (sbatch --array=...%K)
-  --raycell PATH         the raycell binary, on a filesystem every node sees (default:
-                         $RAYCELL, else build/tools/raycell of this checkout, else PATH)
-  --sbatch OPTION        an extra sbatch option for both jobs, e.g. --sbatch --partition=cpu
-                         --sbatch --time=2:00:00 (repeatable; SBATCH_* variables work too)
-  --parsable             print only "ARRAYJOB MERGEJOB" (ARRAYJOB is "-" when no task ran)
-  -h, --help             this text
+EOF
+  common_options_help MERGEJOB
+  cat <<'EOF'
 
 SWEEP ARGS are those of `raycell sweep` except --shard and --out, which the tasks set
 (--vary, --config, --frames, --jobs, ...). Paths among them, and TRACE, are read from the
