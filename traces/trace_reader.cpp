@@ -19,8 +19,8 @@
 #include <utility>
 
 #include "base/check.h"
-#include "base/hash.h"
 #include "base/format.h"
+#include "base/hash.h"
 #include "traces/columns.h"
 #include "traces/format.h"
 #include "traces/frame_checksum.h"

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "base/check.h"
-#include "base/hash.h"
 #include "base/file.h"
+#include "base/hash.h"
 #include "traces/columns.h"
 #include "traces/trace.capnp.h"
 
