@@ -78,6 +78,10 @@ bool TryParseUint(std::string_view text, std::uint64_t* out) {
   return !text.empty() && text.front() != '-' && r.ec == std::errc() && r.ptr == end;
 }
 
+std::string FormatFrameRange(std::int64_t first, std::int64_t last) {
+  return std::to_string(first) + ".." + std::to_string(last);
+}
+
 std::vector<int> ParseFrameRange(const std::string& text, const std::string& what) {
   std::size_t sep = text.find("..");
   std::size_t skip = 2;

@@ -35,5 +35,7 @@ bool TryParseUint(std::string_view text, std::uint64_t* out);
 // Frame numbers "A..B", "A-B" (B >= 0) or "A", inclusive, in order; at most 10^6 frames.
 // InputError naming `what` when malformed, inverted or too long.
 std::vector<int> ParseFrameRange(const std::string& text, const std::string& what = "--frames");
+// Frames first..last as ParseFrameRange reads them back: "A..B".
+std::string FormatFrameRange(std::int64_t first, std::int64_t last);
 
 }  // namespace raycell

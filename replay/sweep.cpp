@@ -471,10 +471,6 @@ struct Piece {
   std::size_t row;
 };
 
-std::string FramesText(int first, int last) {
-  return std::to_string(first) + ".." + std::to_string(last);
-}
-
 // Rows per combination, from every file, checked against the files' shards.
 std::vector<std::vector<Piece>> Gather(const std::vector<ShardFile>& files, std::size_t n) {
   std::vector<std::vector<Piece>> pieces(n);
@@ -511,17 +507,17 @@ void CheckTiling(std::size_t index, std::vector<Piece>& p, bool ranges, int firs
     const ShardFile& f = *piece.file;
     if (f.first < next) {
       throw InputError(what + ": frames " +
-                       FramesText(f.first, int(std::min<long long>(f.last, next - 1))) +
+                       FormatFrameRange(f.first, int(std::min<long long>(f.last, next - 1))) +
                        " are in " + f.path + " and another shard (overlapping frames)");
     }
     if (f.first > next) {
-      throw InputError(what + ": frames " + FramesText(int(next), f.first - 1) +
+      throw InputError(what + ": frames " + FormatFrameRange(int(next), f.first - 1) +
                        " are in none of the shards (missing frames)");
     }
     next = (long long)f.last + 1;
   }
   if (next <= last) {
-    throw InputError(what + ": frames " + FramesText(int(next), last) +
+    throw InputError(what + ": frames " + FormatFrameRange(int(next), last) +
                      " are in none of the shards (missing frames)");
   }
 }
@@ -721,7 +717,7 @@ void MergeSweepShards(const std::string& out, const std::vector<std::string>& sh
   std::vector<std::vector<Piece>> pieces = Gather(files, n);
   for (std::size_t i = 0; i < n; ++i) CheckTiling(i, pieces[i], ranges, first, last);
   std::string text = files.front().head + kFramesPart +
-                     JsonQuote(ranges ? FramesText(first, last) : files.front().frames) +
+                     JsonQuote(ranges ? FormatFrameRange(first, last) : files.front().frames) +
                      kCombinationsPart + std::to_string(n) + kShardPart + JsonQuote("all") + "\n" +
                      files.front().header + "\n";
   for (std::size_t i = 0; i < n; ++i) text += MergedRow(pieces[i]) + "\n";

@@ -25,10 +25,6 @@ struct Part {
   std::vector<std::string> lines;  // the rows (and the table's continuation lines)
 };
 
-std::string FramesText(long long first, long long last) {
-  return std::to_string(first) + ".." + std::to_string(last);
-}
-
 // Reads the first line of a part back, left to right.
 class LineReader {
  public:
@@ -143,7 +139,7 @@ Part ReadPart(const std::string& path) {
     if (*f < p.info.first || *f > p.info.last) {
       throw InputError(path + ": line " + std::to_string(body + k + 1) + ": frame " +
                        std::to_string(*f) + " is outside the part's frames " +
-                       FramesText(p.info.first, p.info.last));
+                       FormatFrameRange(p.info.first, p.info.last));
     }
     if (*f <= previous) {
       throw InputError(path + ": line " + std::to_string(body + k + 1) + ": frame " +
@@ -191,7 +187,7 @@ std::uint64_t TraceFingerprint(const TraceReader& reader) {
 
 std::string AnalyzePartLine(const AnalyzePartInfo& info) {
   return std::string(kPartStart) + " format=" + info.format +
-         " frames=" + FramesText(info.first, info.last) +
+         " frames=" + FormatFrameRange(info.first, info.last) +
          " trace_hash=" + FormatHex64(info.trace_hash) + " options=\"" + info.options +
          "\" trace=" + JsonQuote(info.trace) + "\n";
 }
@@ -207,15 +203,16 @@ void MergeAnalyzeParts(const std::vector<std::string>& paths, const std::string&
   for (std::size_t i = 1; i < parts.size(); ++i) {
     const Part &a = parts[i - 1], &b = parts[i];
     if (b.info.first <= a.info.last) {
-      throw InputError("frames " + FramesText(b.info.first, std::min(a.info.last, b.info.last)) +
+      throw InputError("frames " +
+                       FormatFrameRange(b.info.first, std::min(a.info.last, b.info.last)) +
                        " are in both " + a.path + " and " + b.path +
                        " (overlapping parts: each frame must be in one part)");
     }
     if (b.info.first > (long long)a.info.last + 1) {
-      throw InputError("frames " + FramesText((long long)a.info.last + 1, b.info.first - 1) +
+      throw InputError("frames " + FormatFrameRange((long long)a.info.last + 1, b.info.first - 1) +
                        " are in none of the parts (a gap between " + a.path + " and " + b.path +
                        "): analyse them with --frames " +
-                       FramesText((long long)a.info.last + 1, b.info.first - 1) +
+                       FormatFrameRange((long long)a.info.last + 1, b.info.first - 1) +
                        " --part FILE and merge that part too");
     }
   }

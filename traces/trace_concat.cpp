@@ -6,22 +6,15 @@
 
 #include "base/check.h"
 #include "base/format.h"
+#include "base/parse.h"
 #include "traces/trace_reader.h"
 #include "traces/trace_writer.h"
 
 namespace raycell {
 namespace {
 
-std::string Vec(const Vec3d& v) {
-  return FormatReal(v.x) + "," + FormatReal(v.y) + "," + FormatReal(v.z);
-}
-
 std::string Grid(const std::array<std::uint32_t, 3>& c) {
   return std::to_string(c[0]) + "x" + std::to_string(c[1]) + "x" + std::to_string(c[2]);
-}
-
-std::string Range(std::int64_t first, std::int64_t last) {
-  return std::to_string(first) + ".." + std::to_string(last);
 }
 
 // One input: its reader and the frames it holds.
@@ -29,7 +22,7 @@ struct Part {
   TraceReader reader;
   std::int32_t first = 0, last = 0;
   std::string name() const { return reader.path(); }
-  std::string range() const { return Range(first, last); }
+  std::string range() const { return FormatFrameRange(first, last); }
 };
 
 // Opens `path` and checks it is a complete capture of a recorded camera path whose frames
@@ -58,7 +51,7 @@ Part OpenPart(const std::string& path) {
     if (i >= frames.size() || frames[i].frame != h.cameras[i].frame) {
       throw InputError(path + ": holds " + std::to_string(frames.size()) +
                        " frame(s), not the frames of its cameras " +
-                       Range(h.cameras.front().frame, h.cameras.back().frame) +
+                       FormatFrameRange(h.cameras.front().frame, h.cameras.back().frame) +
                        " (an incomplete capture)");
     }
   }
@@ -110,8 +103,8 @@ std::string HeaderDifference(const TraceHeader& a, const TraceHeader& b) {
   if (a.scene != b.scene) return "scene: '" + a.scene + "' vs '" + b.scene + "'";
   if (a.grids != b.grids) return "grids (names, roles, sources, voxel sizes or leaf counts)";
   if (!(a.box_min == b.box_min) || !(a.box_max == b.box_max)) {
-    return "scene box: " + Vec(a.box_min) + " - " + Vec(a.box_max) + " vs " + Vec(b.box_min) +
-           " - " + Vec(b.box_max);
+    return "scene box: " + FormatVec3(a.box_min) + " - " + FormatVec3(a.box_max) + " vs " +
+           FormatVec3(b.box_min) + " - " + FormatVec3(b.box_max);
   }
   if (a.cells != b.cells) return "cell grid (--cells): " + Grid(a.cells) + " vs " + Grid(b.cells);
   if (a.footprint_mode != b.footprint_mode) {
@@ -156,11 +149,11 @@ void CheckJoinable(std::vector<Part>& parts) {
         a.name() + " holds frames " + a.range() + " and " + b.name() + " frames " + b.range();
     if (b.first <= a.last) {
       throw InputError("overlapping frame ranges: " + both + " (frames " +
-                       Range(b.first, std::min(a.last, b.last)) + " are in both)");
+                       FormatFrameRange(b.first, std::min(a.last, b.last)) + " are in both)");
     }
     if (std::int64_t{b.first} > std::int64_t{a.last} + 1) {
       throw InputError("frame ranges with a gap: " + both + " (frames " +
-                       Range(std::int64_t{a.last} + 1, std::int64_t{b.first} - 1) +
+                       FormatFrameRange(std::int64_t{a.last} + 1, std::int64_t{b.first} - 1) +
                        " are in neither)");
     }
   }

@@ -3,17 +3,14 @@
 #include "base/format.h"
 
 namespace raycell {
-namespace {
 
-std::string Csv(const Vec3d& v) {
+std::string FormatVec3(const Vec3d& v) {
   return FormatReal(v.x) + "," + FormatReal(v.y) + "," + FormatReal(v.z);
 }
 
-}  // namespace
-
 std::string CameraPathInfo::ToString() const {
-  const std::string view = "eye " + Csv(eye) + " target " + Csv(target) + " up " + Csv(up) +
-                           " fov " + FormatReal(fov_deg);
+  const std::string view = "eye " + FormatVec3(eye) + " target " + FormatVec3(target) + " up " +
+                           FormatVec3(up) + " fov " + FormatReal(fov_deg);
   if (kind == "orbit") {
     return "orbit of " + FormatReal(orbit_degrees) + " degrees over frames " +
            std::to_string(first_frame) + ".." +
@@ -23,10 +20,10 @@ std::string CameraPathInfo::ToString() const {
   if (kind == "keyframes") {
     std::string s = "keyframes";
     for (const CameraKey& k : keys) {
-      s += " [" + std::to_string(k.frame) + ": eye " + Csv(k.eye) + " target " + Csv(k.target) +
-           " fov " + FormatReal(k.fov_deg) + "]";
+      s += " [" + std::to_string(k.frame) + ": eye " + FormatVec3(k.eye) + " target " +
+           FormatVec3(k.target) + " fov " + FormatReal(k.fov_deg) + "]";
     }
-    return s + " (up " + Csv(up) + ")";
+    return s + " (up " + FormatVec3(up) + ")";
   }
   if (kind.empty()) return "not recorded";
   return "'" + kind + "'";

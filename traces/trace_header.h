@@ -17,6 +17,9 @@ struct Vec3d {
   bool operator==(const Vec3d& o) const { return x == o.x && y == o.y && z == o.z; }
 };
 
+// "x,y,z", each the shortest text that reads back the same double (FormatReal).
+std::string FormatVec3(const Vec3d& v);
+
 struct GridInfo {
   std::string name;    // grid name in the .vdb file ("density", "surface", ...)
   std::string role;    // "fog" or "surface"

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "base/check.h"
+#include "base/parse.h"
 
 namespace raycell {
 namespace {
@@ -167,19 +168,16 @@ std::pair<Vec3d, Vec3d> FrameTheBox(const CameraPathSpec& spec, Vec3d lo, Vec3d 
   return {eye, target};
 }
 
-std::string Range(std::int64_t first, std::int64_t last) {
-  return std::to_string(first) + ".." + std::to_string(last);
-}
-
 }  // namespace
 
 void CheckOrbitFrames(const CameraPathSpec& spec, const std::vector<int>& frames) {
   if (spec.orbit_frames <= 0 || frames.empty()) return;
   const std::int64_t first = spec.orbit_first, last = first + spec.orbit_frames - 1;
   if (frames.front() < first || frames.back() > last) {
-    throw InputError("--frames " + Range(frames.front(), frames.back()) + ": not frames of " +
-                     "--orbit " + std::to_string(spec.orbit_frames) + ":" +
-                     Num(spec.orbit_degrees) + ", whose frames are " + Range(first, last));
+    throw InputError("--frames " + FormatFrameRange(frames.front(), frames.back()) +
+                     ": not frames of " + "--orbit " + std::to_string(spec.orbit_frames) + ":" +
+                     Num(spec.orbit_degrees) + ", whose frames are " +
+                     FormatFrameRange(first, last));
   }
 }
 
