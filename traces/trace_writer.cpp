@@ -651,9 +651,13 @@ FrameSummary TraceWriter::AppendEncodedFrame(const FrameSummary& summary,
   FrameSummary s = summary;
   s.offset = w.file.bytes();
   s.length = encoded.size();
-  w.file.StartHash();
-  w.file.Write(encoded.data(), encoded.size());
-  s.stored_hash = w.file.TakeHash();
+  if (s.stored_hash != 0) {  // the bytes' hash, which the caller checked them against
+    w.file.Write(encoded.data(), encoded.size());
+  } else {
+    w.file.StartHash();
+    w.file.Write(encoded.data(), encoded.size());
+    s.stored_hash = w.file.TakeHash();
+  }
   w.frames.push_back(s);
   return s;
 }

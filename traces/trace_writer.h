@@ -68,9 +68,10 @@ class TraceWriter {
   FrameSummary EndFrame();
   // Appends a frame already encoded: `encoded` is the complete zstd frame of frame
   // `summary.frame` as another trace stored it, and `summary` its totals and checksum (its
-  // offset and length are ignored). The bytes are written as they are, so the caller checks
-  // them first (TraceReader::ReadEncodedFrame). Returns the summary with offset and length
-  // in this file. InputError as BeginFrame.
+  // offset and length are ignored) and, when not 0, the hash of `encoded` (stored_hash), kept
+  // as it is; else the bytes are hashed as they are written. The bytes are written as they
+  // are, so the caller checks them first (TraceReader::ReadEncodedFrame, against that hash).
+  // Returns the summary with offset and length in this file. InputError as BeginFrame.
   FrameSummary AppendEncodedFrame(const FrameSummary& summary, const std::string& encoded);
   // Writes the index, fsyncs, closes and renames the .tmp file to `path`.
   void Finish();
