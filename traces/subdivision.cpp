@@ -49,23 +49,32 @@ class Weigher {
   bool by_work_;
 };
 
+// A box split in two, and the weight of each half.
+struct BoxSplit {
+  FineBox lower, upper;
+  std::uint64_t lower_weight = 0, upper_weight = 0;
+};
+
 // Splits `b` (more than one fine cell) at the fine boundary whose larger half weighs least;
 // ties: axis x before y before z, then the lowest boundary.
-std::pair<FineBox, FineBox> BestSplit(const FineBox& b, const Weigher& weigh) {
+BoxSplit BestSplit(const FineBox& b, const Weigher& weigh) {
   bool found = false;
-  std::uint64_t best = 0;
-  std::pair<FineBox, FineBox> out;
+  BoxSplit best;
   for (int axis = 0; axis < 3; ++axis) {
     for (std::uint32_t at = b.lo[axis] + 1; at < b.hi[axis]; ++at) {
-      FineBox l = b, r = b;
-      l.hi[axis] = at;
-      r.lo[axis] = at;
-      const std::uint64_t larger = std::max(weigh(l), weigh(r));
-      if (!found || larger < best) found = true, best = larger, out = {l, r};
+      BoxSplit s{b, b};
+      s.lower.hi[axis] = at;
+      s.upper.lo[axis] = at;
+      s.lower_weight = weigh(s.lower);
+      s.upper_weight = weigh(s.upper);
+      if (!found || std::max(s.lower_weight, s.upper_weight) <
+                        std::max(best.lower_weight, best.upper_weight)) {
+        found = true, best = s;
+      }
     }
   }
   RAYCELL_CHECK(found);
-  return out;
+  return best;
 }
 
 // A k-d tree: splits the heaviest splittable box (the first on ties) while `more(boxes,
@@ -81,11 +90,11 @@ std::vector<FineBox> KdTree(const FineBox& whole, const Weigher& weigh, More mor
       if (pick == boxes.size() || weights[i] > weights[pick]) pick = i;
     }
     if (pick == boxes.size()) break;  // every box is one fine cell
-    const auto [l, r] = BestSplit(boxes[pick], weigh);
-    boxes[pick] = l;
-    weights[pick] = weigh(l);
-    boxes.push_back(r);
-    weights.push_back(weigh(r));
+    const BoxSplit split = BestSplit(boxes[pick], weigh);
+    boxes[pick] = split.lower;
+    weights[pick] = split.lower_weight;
+    boxes.push_back(split.upper);
+    weights.push_back(split.upper_weight);
   }
   return boxes;
 }
