@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # `raycell trace concat` against `cat` of the same files: records the built-in scene's orbit
 # FRAMES:360 at RES in PARTS consecutive ranges (--frames A..B), then REPS times, alternating,
-# joins them with `trace concat` (which checks each frame's zstd checksum and fsyncs its
-# output), `cat`s them into one file, `cat`s them then fsyncs (coreutils `sync FILE`), checks
-# them with `zstd -t` (decompression and content checksums: what concat's check costs), and
+# joins them with `trace concat` (which checks each frame against the hash of its bytes in the
+# index and fsyncs its output), `cat`s them into one file, `cat`s them then fsyncs (coreutils
+# `sync FILE`), checks them with `zstd -t` (decompression and content checksums: what
+# concat's check cost before the index kept that hash, and still costs for older captures), and
 # joins two 1-frame 8x8 captures (what the raycell process costs whatever the input: loading
 # its libraries, the header), all reading from the page cache. Prints the median wall time
 # and MB/s (input bytes / time) of each, the ratios, and the load; checks the join verifies
