@@ -120,7 +120,11 @@ CellGrid CellGrid::Create(const Vec3d& lo, const Vec3d& hi, std::array<std::uint
 
 double CellGrid::Plane(int axis, std::uint32_t k) const {
   RAYCELL_CHECK_LE(k, dims_[axis]);
-  return k == dims_[axis] ? hi_a_[axis] : lo_a_[axis] + k * size_[axis];
+  // (k / n) first: the fraction of a plane shared by two nested grids (k / n == j / m) is the
+  // same double, so their planes are the same numbers and a grid's cells are unions of a
+  // finer one's, exactly (docs/design.md §1 "Subdivisions").
+  return k == dims_[axis] ? hi_a_[axis]
+                          : lo_a_[axis] + (hi_a_[axis] - lo_a_[axis]) * (double(k) / dims_[axis]);
 }
 
 std::uint32_t CellGrid::AxisCell(int axis, double c) const {

@@ -83,7 +83,8 @@ class CellGrid {
   // Nominal cell size (hi-lo)/n along each axis.
   const std::array<double, 3>& cell_size() const { return size_; }
 
-  // Position of plane k (0 <= k <= n) on `axis`: strictly increasing in k, lo at 0, hi at n.
+  // Position of plane k (0 <= k <= n) on `axis`: strictly increasing in k, lo at 0, hi at n,
+  // lo + (hi - lo) * (k / n) otherwise, so that nested grids share their planes exactly.
   double Plane(int axis, std::uint32_t k) const;
   // The index along `axis` of the cell holding coordinate c: plane(i) <= c < plane(i+1),
   // clamped to [0, n-1] for coordinates outside the box. c must not be NaN.

@@ -14,6 +14,7 @@
 
 #include "base/check.h"
 #include "base/parse.h"
+#include "traces/record/cell_grid.h"
 #include "traces/record/scene_vdb.h"
 #include "traces/record/vec3.h"
 
@@ -328,42 +329,37 @@ void ComputeBox(Scene::Impl& s) {
   s.hi = box.max();
 }
 
-// Inclusive cell index range on one axis for the world interval [a, b].
-std::pair<int, int> CellRange(double a, double b, double lo, double hi, std::uint32_t n) {
-  const double size = (hi - lo) / n;
-  auto idx = [&](double x) {
-    return int(std::clamp(std::floor((x - lo) / size), 0.0, double(n - 1)));
-  };
-  return {idx(a), idx(b)};
-}
-
+// Calls fn(cell) for every cell of `grid` that the world box b overlaps (closed on both
+// sides). The cell of a coordinate is CellGrid::AxisCell's, exact against the grid's planes,
+// so a leaf overlaps a coarse cell exactly when it overlaps one of the finer cells it is a
+// union of (docs/design.md §1 "Subdivisions").
 template <typename Fn>
-void ForCellsOverlapping(const openvdb::BBoxd& b, Vec3d lo, Vec3d hi,
-                         std::array<std::uint32_t, 3> dims, Fn&& fn) {
+void ForCellsOverlapping(const openvdb::BBoxd& b, const CellGrid& grid, Fn&& fn) {
+  const Vec3d lo = grid.lo(), hi = grid.hi();
   if (b.max().x() < lo.x || b.min().x() > hi.x || b.max().y() < lo.y || b.min().y() > hi.y ||
       b.max().z() < lo.z || b.min().z() > hi.z) {
     return;
   }
-  const auto [x0, x1] = CellRange(b.min().x(), b.max().x(), lo.x, hi.x, dims[0]);
-  const auto [y0, y1] = CellRange(b.min().y(), b.max().y(), lo.y, hi.y, dims[1]);
-  const auto [z0, z1] = CellRange(b.min().z(), b.max().z(), lo.z, hi.z, dims[2]);
-  for (int z = z0; z <= z1; ++z)
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) fn(std::uint32_t(x + dims[0] * (y + dims[1] * z)));
+  const std::uint32_t x0 = grid.AxisCell(0, b.min().x()), x1 = grid.AxisCell(0, b.max().x());
+  const std::uint32_t y0 = grid.AxisCell(1, b.min().y()), y1 = grid.AxisCell(1, b.max().y());
+  const std::uint32_t z0 = grid.AxisCell(2, b.min().z()), z1 = grid.AxisCell(2, b.max().z());
+  for (std::uint32_t z = z0; z <= z1; ++z)
+    for (std::uint32_t y = y0; y <= y1; ++y)
+      for (std::uint32_t x = x0; x <= x1; ++x) fn(grid.CellIndex({x, y, z}).value());
 }
 
 // Sparse footprint: every allocated leaf (and active tile) whose sampling region overlaps a
 // cell costs that cell the leaf's bytes. The region is the node's index box [origin,
 // origin + dim], where VolumeRayIntersector's spans put samples, padded by half a voxel
 // against rounding.
-void AddSparse(const openvdb::FloatGrid& grid, Vec3d lo, Vec3d hi,
-               std::array<std::uint32_t, 3> dims, std::vector<std::uint64_t>& fp) {
+void AddSparse(const openvdb::FloatGrid& grid, const CellGrid& cells,
+               std::vector<std::uint64_t>& fp) {
   const openvdb::Vec3d pad(0.5);
   for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf) {
     const openvdb::Vec3d o = leaf->origin().asVec3d();
     const auto box = WorldBox(grid, o - pad, o + openvdb::Vec3d(leaf->DIM) + pad);
     const std::uint64_t bytes = leaf->memUsage();
-    ForCellsOverlapping(box, lo, hi, dims, [&](std::uint32_t c) { fp[c] += bytes; });
+    ForCellsOverlapping(box, cells, [&](std::uint32_t c) { fp[c] += bytes; });
   }
   for (auto it = grid.cbeginValueOn(); it; ++it) {
     if (!it.isTileValue()) continue;
@@ -371,20 +367,18 @@ void AddSparse(const openvdb::FloatGrid& grid, Vec3d lo, Vec3d hi,
     it.getBoundingBox(cb);
     const auto box =
         WorldBox(grid, cb.min().asVec3d() - pad, cb.max().asVec3d() + openvdb::Vec3d(1) + pad);
-    ForCellsOverlapping(box, lo, hi, dims, [&](std::uint32_t c) { fp[c] += sizeof(float); });
+    ForCellsOverlapping(box, cells, [&](std::uint32_t c) { fp[c] += sizeof(float); });
   }
 }
 
 // Dense footprint: voxels of the grid's active box inside the cell, 4 bytes each.
-void AddDense(const openvdb::FloatGrid& grid, Vec3d lo, Vec3d hi, std::array<std::uint32_t, 3> dims,
+void AddDense(const openvdb::FloatGrid& grid, const CellGrid& cells,
               std::vector<std::uint64_t>& fp) {
   const openvdb::BBoxd active = PaddedActiveBox(grid);
   const double voxel = grid.voxelSize()[0];
-  const Vec3d size{(hi.x - lo.x) / dims[0], (hi.y - lo.y) / dims[1], (hi.z - lo.z) / dims[2]};
-  ForCellsOverlapping(active, lo, hi, dims, [&](std::uint32_t c) {
-    const std::uint32_t x = c % dims[0], y = (c / dims[0]) % dims[1], z = c / (dims[0] * dims[1]);
-    const double cl[3] = {lo.x + x * size.x, lo.y + y * size.y, lo.z + z * size.z};
-    const double ch[3] = {cl[0] + size.x, cl[1] + size.y, cl[2] + size.z};
+  ForCellsOverlapping(active, cells, [&](std::uint32_t c) {
+    const Box3d b = cells.CellBounds(CellId(c));
+    const double cl[3] = {b.lo.x, b.lo.y, b.lo.z}, ch[3] = {b.hi.x, b.hi.y, b.hi.z};
     double voxels = 1;
     for (int a = 0; a < 3; ++a) {
       const double ov = std::min(ch[a], active.max()[a]) - std::max(cl[a], active.min()[a]);
@@ -481,9 +475,10 @@ std::vector<std::uint64_t> Scene::Footprints(Vec3d lo, Vec3d hi, std::array<std:
   if (mode != "sparse" && mode != "dense") {
     throw InputError("--footprint '" + mode + "': expected sparse or dense");
   }
-  std::vector<std::uint64_t> fp(std::size_t(dims[0]) * dims[1] * dims[2], 0);
+  const CellGrid cells = CellGrid::Create(lo, hi, dims);
+  std::vector<std::uint64_t> fp(cells.cell_count(), 0);
   auto add = [&](const openvdb::FloatGrid& g) {
-    mode == "sparse" ? AddSparse(g, lo, hi, dims, fp) : AddDense(g, lo, hi, dims, fp);
+    mode == "sparse" ? AddSparse(g, cells, fp) : AddDense(g, cells, fp);
   };
   for (const auto& f : impl_->fogs) add(*f.grid);
   for (const auto& f : impl_->surfaces) add(*f.grid);
