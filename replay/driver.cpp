@@ -293,12 +293,13 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
     return distinct[d].granularity == ReplayConfig::Granularity::kRay;
   });
   // Per distinct configuration with warm memory, what its levels hold between frames.
-  // A volume that changes every frame keeps nothing: warm is cold there.
+  // A volume that changes every frame keeps nothing: warm is cold there; so do cells that
+  // are other boxes every frame (a dynamic subdivision).
   std::vector<std::unique_ptr<MemoryState>> memory(distinct.size());
   std::vector<std::size_t> warm;  // order's entries with warm memory
   for (std::size_t d : order) {
     if (distinct[d].memory.across_frames != MemoryConfig::AcrossFrames::kWarm) continue;
-    if (reader.header().volume_changes()) continue;
+    if (reader.header().volume_changes() || reader.header().cells_change()) continue;
     memory[d] = std::make_unique<MemoryState>();
     warm.push_back(d);
   }

@@ -127,6 +127,11 @@ void AddRecordCommand(CLI::App& app) {
   cmd->add_option("--footprint", o.scene.footprint_mode,
                   "cell footprint: sparse (allocated leaves) or dense (voxels)")
       ->capture_default_str();
+  cmd->add_flag("--regroupable", o.regroupable,
+                "a fine capture that any coarser subdivision can be made of (`raycell trace "
+                "regroup`, or --cells SPEC of analyze, replay, sweep): rays also visit the "
+                "empty cells they cross, and the trace holds each cell's leaves; e.g. "
+                "--cells 12x12x12 --regroupable");
   cmd->add_option("--out", o.out, "trace file to write")->capture_default_str();
   cmd->add_option("--images", o.images_dir, "folder for frame_NNNN.png")->capture_default_str();
   cmd->add_option("--image-encoding", args->image_encoding,

@@ -19,19 +19,22 @@
 #include "traces/trace_import.h"
 #include "traces/trace_inspect.h"
 #include "traces/trace_reader.h"
+#include "traces/trace_regroup.h"
 
 namespace raycell {
 namespace {
 
 struct TraceArgs {
-  std::string file;
+  std::string file, cells;
   bool cameras = false;
   std::optional<int> frame;
   std::string format = "jsonl";
 };
 
-TraceReader OpenWithWarning(const std::string& file) {
-  TraceReader r = TraceReader::Open(file);
+// The trace as analyses see it (a regroupable capture regrouped into `cells`, or its own
+// grid), or as stored.
+TraceReader OpenWithWarning(const std::string& file, const std::string& cells, bool stored) {
+  TraceReader r = stored ? TraceReader::OpenStored(file) : TraceReader::Open(file, cells);
   if (!r.warning().empty()) std::cerr << "raycell: warning: " << r.warning() << "\n";
   return r;
 }
@@ -48,7 +51,7 @@ std::size_t FrameIndex(const TraceReader& r, int frame) {
 
 void RunCat(const TraceArgs& a) {
   if (a.format != "jsonl") throw InputError("--format '" + a.format + "': only jsonl is supported");
-  const TraceReader r = OpenWithWarning(a.file);
+  const TraceReader r = OpenWithWarning(a.file, a.cells, false);
   std::optional<std::size_t> index;
   if (a.frame) index = FrameIndex(r, *a.frame);
   std::ios::sync_with_stdio(false);
@@ -92,7 +95,7 @@ std::string Unreadable(const TraceReader& r) {
 // frame. (The other commands warn and use the intact frames.)
 void RunVerify(const TraceArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
-  const TraceReader r = TraceReader::Open(a.file);
+  const TraceReader r = TraceReader::OpenStored(a.file);
   std::vector<std::string> damage;
   if (!r.warning().empty()) damage.push_back(Unreadable(r));
   std::uint64_t rays = 0, visits = 0;
@@ -198,6 +201,52 @@ void AddImport(CLI::App& trace) {
   c->callback([args] { RunImport(*args); });
 }
 
+struct RegroupArgs {
+  std::string input, cells, out;
+};
+
+void RunRegroup(const RegroupArgs& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const RegroupSummary s = RegroupTrace(a.input, a.cells, a.out);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::cerr << "regrouped " << s.frames << " frame(s) into " << s.cells
+            << " cells: " << s.fine_visits << " stored visits -> " << s.visits << " visits of "
+            << s.rays << " rays (" << s.bytes << " bytes) -> " << a.out << " in " << std::fixed
+            << std::setprecision(3) << secs << " s\n";
+}
+
+void AddRegroup(CLI::App& trace) {
+  auto args = std::make_shared<RegroupArgs>();
+  CLI::App* c = trace.add_subcommand(
+      "regroup", "Make a capture on any coarser subdivision from one fine regroupable capture.");
+  c->footer(
+      "The input is a fine capture recorded with `raycell record --regroupable` (its rays\n"
+      "also visit the empty cells they cross, and it holds each cell's leaves). Each visit's\n"
+      "cell becomes the cell of the subdivision holding it; consecutive visits in one cell\n"
+      "merge (samples added), visits to empty cells and rays left with none are dropped, and a\n"
+      "cell's footprint is the bytes of its leaves, each once. The output is the trace a\n"
+      "capture on those cells would be, with the subdivision in its header. analyze, replay,\n"
+      "sweep and `trace cat` take the same SPEC as --cells on the fine capture, writing no "
+      "file.\n\n"
+      "SPEC (cells are boxes of whole fine cells; docs/design.md §1 \"Subdivisions\"):\n"
+      "  NXxNYxNZ          uniform; each count divides the fine grid's\n"
+      "  kd:N:footprint    k-d tree of N cells, footprints as equal as possible\n"
+      "  kd:N:work         k-d tree of N cells, samples (over all frames) as equal as possible\n"
+      "  kd:budget:BYTES   k-d tree until every cell fits BYTES (e.g. 256KiB) or is one fine cell\n"
+      "  octree:BYTES      octree: halve every axis while a cell is over BYTES\n"
+      "  dynamic:N         kd:N:work on the previous frame's samples, per frame (frame 0 by\n"
+      "                    footprint); memory keeps nothing between frames\n\n"
+      "Examples:\n"
+      "  raycell record --cells 12x12x12 --regroupable --no-images --out fine.rct\n"
+      "  raycell trace regroup fine.rct --cells 3x3x3 --out c3.rct   # = record --cells 3x3x3\n"
+      "  raycell trace regroup fine.rct --cells kd:27:footprint --out kd.rct\n"
+      "  raycell analyze fine.rct --cells octree:256KiB");
+  c->add_option("CAPTURE", args->input, "a capture recorded with --regroupable")->required();
+  c->add_option("--cells", args->cells, "the subdivision's SPEC")->required();
+  c->add_option("--out", args->out, "trace file to write")->required();
+  c->callback([args] { RunRegroup(*args); });
+}
+
 struct ConcatArgs {
   std::vector<std::string> inputs;
   std::string out;
@@ -250,7 +299,7 @@ void AddTraceCommand(CLI::App& app) {
               "also print each frame's camera as 'camera FRAME eye X,Y,Z target X,Y,Z fov F' "
               "(e.g. to render the same views with vdb_render -translate/-lookat/-fov)");
   i->callback([info] {
-    const TraceReader r = OpenWithWarning(info->file);
+    const TraceReader r = OpenWithWarning(info->file, "", true);
     PrintInfo(r, info->file, std::cout);
     if (info->cameras) PrintCameras(r.header(), std::cout);
   });
@@ -276,11 +325,15 @@ void AddTraceCommand(CLI::App& app) {
       "analyze --paths` and `raycell trace import` read this format (docs/jsonl.md).");
   c->add_option("FILE", cat->file, "trace file")->required();
   c->add_option("--frame", cat->frame, "frame number to write (default: all)");
+  c->add_option("--cells", cat->cells,
+                "a regroupable capture's rays in this subdivision (SPEC as `trace regroup`); "
+                "default: its own grid");
   c->add_option("--format", cat->format, "output format")->capture_default_str();
   c->callback([cat] { RunCat(*cat); });
 
   AddImport(*trace);
   AddConcat(*trace);
+  AddRegroup(*trace);
 }
 
 }  // namespace raycell

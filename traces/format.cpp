@@ -47,13 +47,24 @@ std::string TraceHeaderProblem(const TraceHeader& h) {
   for (const auto& [text, field] :
        {std::pair{&h.producer, "the producer"}, std::pair{&h.scene, "the scene"},
         std::pair{&h.footprint_mode, "the footprint mode"},
-        std::pair{&h.path.kind, "the camera path's kind"}}) {
+        std::pair{&h.path.kind, "the camera path's kind"},
+        std::pair{&h.subdivision.spec, "the subdivision's SPEC"}}) {
     if (!(problem = TextProblem(*text, field)).empty()) return problem;
   }
   for (const GridInfo& g : h.grids) {
     for (const std::string* text : {&g.name, &g.role, &g.source}) {
       if (!(problem = TextProblem(*text, "a grid's name, role or source")).empty()) return problem;
     }
+  }
+  if (h.leaves.bytes.size() > kTraceMaxLeaves || h.leaves.leaves.size() > kTraceMaxLeafRefs) {
+    return std::to_string(h.leaves.bytes.size()) + " leaves and " +
+           std::to_string(h.leaves.leaves.size()) + " (cell, leaf) pairs exceed the trace " +
+           "format's limits of " + std::to_string(kTraceMaxLeaves) + " and " +
+           std::to_string(kTraceMaxLeafRefs) + " (kTraceMaxLeaves, kTraceMaxLeafRefs)";
+  }
+  if (h.subdivision.boxes.size() > kTraceMaxBoxes) {
+    return "a subdivision of " + std::to_string(h.subdivision.boxes.size()) + " boxes exceeds " +
+           "the trace format's limit of " + std::to_string(kTraceMaxBoxes) + " (kTraceMaxBoxes)";
   }
   return "";
 }

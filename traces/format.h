@@ -19,8 +19,9 @@ struct TraceHeader;
 // The format version this code writes (Header.formatVersion); it reads 1..this. Version 2
 // moved the footprints out of the header message into `footprints` records (so that grids
 // of millions of cells fit); version 3 added the camera path (Header.path) that the cameras
-// are a range of; see trace.capnp.
-inline constexpr std::uint32_t kTraceFormatVersion = 3;
+// are a range of; version 4 the regroupable capture (Header.regroupable, its leaves) and the
+// subdivision of a regrouped trace (Header.subdivision); see trace.capnp.
+inline constexpr std::uint32_t kTraceFormatVersion = 4;
 // Magic of the skippable zstd frame that holds the index.
 inline constexpr std::uint32_t kTraceIndexMagic = 0x184D2A5B;
 // Last 8 bytes of a complete trace file.
@@ -47,6 +48,15 @@ inline constexpr std::size_t kTraceMaxRayVisits = std::size_t{1} << 20;
 inline constexpr std::uint64_t kTraceMaxCells = std::uint64_t{1} << 24;
 // Runs of equal footprints per `footprints` record (at most 18 MiB per message).
 inline constexpr std::size_t kTraceFootprintRunsPerRecord = std::size_t{1} << 20;
+// A regroupable capture's leaves: at most 2^26 leaves and 2^27 (cell, leaf) pairs (512 MiB
+// in memory), in cellLeaves records of at most 2^20 cells and 2^22 pairs each.
+inline constexpr std::uint64_t kTraceMaxLeaves = std::uint64_t{1} << 26;
+inline constexpr std::uint64_t kTraceMaxLeafRefs = std::uint64_t{1} << 27;
+inline constexpr std::size_t kTraceLeafCellsPerRecord = std::size_t{1} << 20;
+inline constexpr std::size_t kTraceLeafRefsPerRecord = std::size_t{1} << 22;
+// Most boxes of a regrouped trace's subdivision (cells, times frames for a dynamic one), so
+// that the header message stays below 64 MiB.
+inline constexpr std::size_t kTraceMaxBoxes = std::size_t{1} << 20;
 // Most frames in a file: cameras in the header and entries in the index (each message then
 // stays below 30 MiB).
 inline constexpr std::size_t kTraceMaxFrames = std::size_t{1} << 18;

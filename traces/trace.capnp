@@ -1,4 +1,4 @@
-# raycell trace file schema, format version 3 (docs/design.md §3 "The trace"). The format's
+# raycell trace file schema, format version 4 (docs/design.md §3 "The trace"). The format's
 # constants and limits are in traces/format.h.
 #
 # A trace file (".rct") is a sequence of zstd frames:
@@ -87,8 +87,10 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("raycell::schema");
 
-const formatVersion :UInt32 = 3;
+const formatVersion :UInt32 = 4;
 # The format version this schema describes; Header.formatVersion of files written with it.
+# Version 3 differs only in having no Header.regroupable, leafCount and subdivision (read as
+# false, 0 and the uniform grid) and no leafBytes or cellLeaves records.
 # Version 2 differs only in having no Header.path (the camera path is not recorded; readers
 # take it as unknown, kind ""); version 1 also in where the footprints are
 # (Header.footprints).
@@ -104,6 +106,11 @@ struct Record {
     # Last message of each frame's zstd frame.
     footprints @3 :Footprints;
     # Cell footprints, after the header in its zstd frame (version 2).
+    leafBytes @4 :Footprints;
+    # A regroupable capture's leaves (version 4), after the footprints: the bytes of leaves
+    # firstCell.. (here a leaf number), as runs; they cover leaves 0..Header.leafCount-1.
+    cellLeaves @5 :CellLeaves;
+    # A regroupable capture's leaves per cell (version 4), after the leafBytes records.
   }
 }
 
@@ -195,6 +202,60 @@ struct Header {
   # Renderer settings of the capture.
   path @13 :CameraPath;
   # The whole camera path the cameras are a range of (version 3; absent before).
+  regroupable @14 :Bool;
+  # Version 4: a fine capture (`raycell record --regroupable`) that any coarser subdivision
+  # can be made of (docs/design.md §1 "Subdivisions"). Its rays also visit the empty cells
+  # (footprint 0) they cross, with 0 samples, from where they enter the box (a primary ray
+  # that meets no non-empty cell is kept when it crosses the box) to where they end, or to the
+  # box exit when they run past their last non-empty cell. The leafBytes and cellLeaves
+  # records give each cell's leaves; footprints are sparse.
+  leafCount @15 :UInt64;
+  # Regroupable: the number of leaves (allocated leaf nodes and active tiles overlapping a
+  # cell). Otherwise 0.
+  subdivision @16 :Subdivision;
+  # Version 4: the cells' shapes when the trace was regrouped from a fine capture; spec ""
+  # (and absent before version 4): the uniform grid cellsX x cellsY x cellsZ of the box.
+}
+
+# The cells of a trace regrouped from a fine capture (version 4): each cell a box of the
+# fine grid's cells. A subdivision that is not uniform has cellsX = the cell count and
+# cellsY = cellsZ = 1; cells are numbered by the lowest corner of their box (z, then y, then
+# x), so a uniform one numbers them as a grid captured directly.
+struct Subdivision {
+  spec @0 :Text;
+  # The SPEC it was made by (traces/subdivision.h): "3x3x3", "kd:27:footprint",
+  # "kd:budget:256KiB", "octree:256KiB", "dynamic:27". "": the cells are the captured grid.
+  fineX @1 :UInt32;
+  # Cells of the fine grid along x.
+  fineY @2 :UInt32;
+  # Cells of the fine grid along y.
+  fineZ @3 :UInt32;
+  # Cells of the fine grid along z.
+  boxes @4 :List(FineBox);
+  # Per cell, its box. "dynamic:N": per frame of the file, in frame order, N boxes each
+  # (frame f's cell c is boxes[f * N + c]). The boxes of a frame tile the fine grid.
+}
+
+# A box of fine cells [lo, hi) on each axis.
+struct FineBox {
+  loX @0 :UInt32;
+  loY @1 :UInt32;
+  loZ @2 :UInt32;
+  hiX @3 :UInt32;
+  hiY @4 :UInt32;
+  hiZ @5 :UInt32;
+}
+
+# A regroupable capture's leaves of consecutive cells (version 4): the records cover cells
+# 0..nx*ny*nz-1 in order, each continuing where the previous one ended.
+struct CellLeaves {
+  firstCell @0 :UInt64;
+  # The record's first cell.
+  counts @1 :Column;
+  # Per cell from firstCell: the number of leaves it overlaps.
+  leaves @2 :Column;
+  # Per cell, its leaves in increasing number: the first's number, then for each later one
+  # its number minus the previous one's minus 1.
 }
 
 # How the camera of every frame is made (version 3). A capture of frames A..B of a path holds

@@ -28,7 +28,7 @@ struct Part {
 // Opens `path` and checks it is a complete capture of a recorded camera path whose frames
 // are its cameras' (a range of consecutive frames).
 Part OpenPart(const std::string& path) {
-  Part p{TraceReader::Open(path)};
+  Part p{TraceReader::OpenStored(path)};
   const TraceReader& r = p.reader;
   if (!r.warning().empty()) {
     throw InputError(path + ": damaged or incomplete, not joined: " + r.warning());
@@ -115,6 +115,18 @@ std::string HeaderDifference(const TraceHeader& a, const TraceHeader& b) {
     while (a.footprints[c] == b.footprints[c]) ++c;
     return "footprints: cell " + std::to_string(c) + " has " + std::to_string(a.footprints[c]) +
            " vs " + std::to_string(b.footprints[c]) + " bytes";
+  }
+  if (a.regroupable != b.regroupable) {
+    return std::string("regroupable (--regroupable): ") + (a.regroupable ? "yes" : "no") + " vs " +
+           (b.regroupable ? "yes" : "no");
+  }
+  if (!(a.leaves == b.leaves)) return "the leaves of a regroupable capture";
+  if (a.cells_change() || b.cells_change()) {
+    return "subdivision: a dynamic one has boxes per frame of each input (join the fine "
+           "captures, then regroup the joined one)";
+  }
+  if (!(a.subdivision == b.subdivision)) {
+    return "subdivision: '" + a.subdivision.spec + "' vs '" + b.subdivision.spec + "'";
   }
   std::string settings = SettingsDifference(a.settings, b.settings);
   if (!settings.empty()) return settings;

@@ -1,11 +1,26 @@
 #include "traces/trace_header.h"
 
+#include <algorithm>
+
 #include "base/format.h"
 
 namespace raycell {
 
 std::string FormatVec3(const Vec3d& v) {
   return FormatReal(v.x) + "," + FormatReal(v.y) + "," + FormatReal(v.z);
+}
+
+std::uint64_t CellLeaves::UnionBytes(const std::vector<std::uint32_t>& cells) const {
+  std::vector<std::uint32_t> all;
+  for (std::uint32_t c : cells) {
+    all.insert(all.end(), leaves.begin() + std::ptrdiff_t(begin[c]),
+               leaves.begin() + std::ptrdiff_t(begin[c + 1]));
+  }
+  std::sort(all.begin(), all.end());
+  all.erase(std::unique(all.begin(), all.end()), all.end());
+  std::uint64_t sum = 0;
+  for (std::uint32_t l : all) sum += bytes[l];
+  return sum;
 }
 
 std::string CameraPathInfo::ToString() const {

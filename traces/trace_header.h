@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "traces/format.h"
+#include "traces/subdivision.h"
 
 namespace raycell {
 
@@ -88,6 +89,36 @@ struct RenderSettings {
   }
 };
 
+// A regroupable capture's leaves (`record --regroupable`; docs/design.md §1 "Subdivisions"):
+// the scene's allocated leaf nodes and active tiles that overlap a cell, the bytes of each,
+// and per cell the ones it overlaps, so that the footprint of any union of cells counts each
+// leaf once. Sparse footprints only: a cell's footprint is the bytes of its leaves.
+struct CellLeaves {
+  std::vector<std::uint64_t> bytes;   // per leaf
+  std::vector<std::uint64_t> begin;   // cell c's leaves are leaves[begin[c]..begin[c + 1])
+  std::vector<std::uint32_t> leaves;  // leaf numbers, increasing within each cell
+  bool empty() const { return begin.empty(); }
+  // The bytes of the leaves of any of `cells` (fine cell numbers), each leaf once.
+  std::uint64_t UnionBytes(const std::vector<std::uint32_t>& cells) const;
+  bool operator==(const CellLeaves& o) const {
+    return bytes == o.bytes && begin == o.begin && leaves == o.leaves;
+  }
+};
+
+// What the cells of a trace are made of when they are not the uniform grid it was captured
+// on: a subdivision of a fine capture (`trace regroup`, or `--cells SPEC` on a fine capture).
+struct SubdivisionInfo {
+  std::string spec;  // the SPEC (traces/subdivision.h); empty: the uniform grid `cells`
+  std::array<std::uint32_t, 3> fine{0, 0, 0};  // the fine grid the boxes are made of
+  // Per cell its box of fine cells; `dynamic:N`: per frame the file holds, in frame order,
+  // cell_count() boxes each (each frame has its own subdivision).
+  std::vector<FineBox> boxes;
+  bool empty() const { return spec.empty(); }
+  bool operator==(const SubdivisionInfo& o) const {
+    return spec == o.spec && fine == o.fine && boxes == o.boxes;
+  }
+};
+
 struct TraceHeader {
   std::uint32_t format_version = kTraceFormatVersion;
   std::string producer;  // "raycell 0.1.0"
@@ -100,17 +131,28 @@ struct TraceHeader {
   std::vector<CameraKey> cameras;  // one per frame the capture holds, in frame order
   CameraPathInfo path;             // the whole camera path; cameras are a range of it
   RenderSettings settings;
+  // A fine capture that any coarser subdivision can be made of (`record --regroupable`,
+  // format version 4): its rays also visit the empty cells they cross (samples 0), and
+  // `leaves` holds each cell's leaves. Readers show it as the captured grid unless asked for
+  // another subdivision (TraceReader::Open).
+  bool regroupable = false;
+  CellLeaves leaves;            // regroupable only
+  SubdivisionInfo subdivision;  // the cells' shapes when not the uniform grid `cells`
   std::uint32_t cell_count() const { return cells[0] * cells[1] * cells[2]; }
   // Whether the volume changes from frame to frame: a sequence of files, one per frame (the
   // recorder's --scene pattern with '%'). The trace keeps one footprint per cell, the largest
   // over the frames, not which cells changed: warm memory keeps nothing between the frames of
   // such a capture (docs/design.md §2 "Memory").
   bool volume_changes() const { return scene.find('%') != std::string::npos; }
+  // Whether a cell is a different box from one frame to the next (a dynamic subdivision):
+  // memory, like a changing volume's, keeps nothing between frames.
+  bool cells_change() const { return subdivision.spec.rfind("dynamic:", 0) == 0; }
   bool operator==(const TraceHeader& o) const {
     return format_version == o.format_version && producer == o.producer && scene == o.scene &&
            grids == o.grids && box_min == o.box_min && box_max == o.box_max && cells == o.cells &&
            footprints == o.footprints && footprint_mode == o.footprint_mode &&
-           cameras == o.cameras && path == o.path && settings == o.settings;
+           cameras == o.cameras && path == o.path && settings == o.settings &&
+           regroupable == o.regroupable && leaves == o.leaves && subdivision == o.subdivision;
   }
 };
 

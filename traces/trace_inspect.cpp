@@ -55,6 +55,15 @@ void PrintHeader(const TraceReader& reader, const std::string& path, std::ostrea
   out << "box:            " << Vec(h.box_min) << " - " << Vec(h.box_max) << "\n"
       << "cell grid:      " << h.cells[0] << "x" << h.cells[1] << "x" << h.cells[2] << " = "
       << h.cell_count() << " cells\n";
+  if (!h.subdivision.empty()) {
+    const auto& f = h.subdivision.fine;
+    out << "subdivision:    " << h.subdivision.spec << " of a fine grid " << f[0] << "x" << f[1]
+        << "x" << f[2] << (h.cells_change() ? " (boxes per frame)" : "") << "\n";
+  }
+  if (h.regroupable) {
+    out << "regroupable:    yes (" << h.leaves.bytes.size() << " leaves, " << h.leaves.leaves.size()
+        << " cell-leaf pairs; rays also visit empty cells)\n";
+  }
   PrintFootprints(h, out);
   out << "cameras:        " << h.cameras.size();
   if (!h.cameras.empty()) {

@@ -24,6 +24,8 @@
 #include "traces/columns.h"
 #include "traces/format.h"
 #include "traces/frame_checksum.h"
+#include "traces/regroup.h"
+#include "traces/subdivision.h"
 #include "traces/trace.capnp.h"
 
 namespace raycell {
@@ -314,9 +316,64 @@ CameraPathInfo ToPath(schema::CameraPath::Reader r) {
   return p;
 }
 
+// The subdivision of a regrouped trace, checked: a SPEC that parses, a fine grid, and per
+// frame boxes that tile it, as many as the cells.
+SubdivisionInfo ToSubdivision(schema::Subdivision::Reader r, const TraceHeader& h) {
+  SubdivisionInfo s;
+  s.spec = ToStd(r.getSpec());
+  if (s.spec.empty()) throw BadData("a subdivision without a SPEC");
+  if (s.spec.size() > kTraceMaxTextBytes) throw BadData("a subdivision SPEC over the text limit");
+  SubdivisionSpec spec;
+  try {
+    spec = ParseSubdivisionSpec(s.spec, "subdivision");
+  } catch (const InputError& e) {
+    throw BadData(e.what());
+  }
+  s.fine = {r.getFineX(), r.getFineY(), r.getFineZ()};
+  const std::string grid = TraceCellGridProblem(s.fine);
+  if (!grid.empty()) throw BadData("the subdivision's fine grid: " + grid);
+  if (r.getBoxes().size() > kTraceMaxBoxes) {
+    throw BadData("a subdivision of " + Str(r.getBoxes().size()) + " boxes exceeds the " +
+                  "limit of " + Str(kTraceMaxBoxes) + " (kTraceMaxBoxes)");
+  }
+  const std::uint64_t cells = TraceCellCount(h.cells);
+  const bool dynamic = spec.kind == SubdivisionSpec::Kind::kDynamic;
+  const std::uint64_t frames = dynamic ? h.cameras.size() : 1;
+  if (r.getBoxes().size() != cells * frames) {
+    throw BadData("a subdivision of " + Str(r.getBoxes().size()) + " boxes for " + Str(cells) +
+                  " cells" + (dynamic ? " and " + Str(frames) + " frames" : std::string()));
+  }
+  if (spec.kind != SubdivisionSpec::Kind::kUniform && (h.cells[1] != 1 || h.cells[2] != 1)) {
+    throw BadData("a subdivision '" + s.spec + "' of a cell grid that is not NX1x1");
+  }
+  std::vector<std::uint8_t> covered;
+  for (std::uint64_t i = 0; i < r.getBoxes().size(); ++i) {
+    if (i % cells == 0) covered.assign(TraceCellCount(s.fine), 0);
+    const auto b = r.getBoxes()[unsigned(i)];
+    FineBox box{{b.getLoX(), b.getLoY(), b.getLoZ()}, {b.getHiX(), b.getHiY(), b.getHiZ()}};
+    for (int a = 0; a < 3; ++a) {
+      if (!(box.lo[a] < box.hi[a] && box.hi[a] <= s.fine[a])) {
+        throw BadData("subdivision box " + Str(i) + " is empty or outside the fine grid");
+      }
+    }
+    for (std::uint32_t z = box.lo[2]; z < box.hi[2]; ++z)
+      for (std::uint32_t y = box.lo[1]; y < box.hi[1]; ++y)
+        for (std::uint32_t x = box.lo[0]; x < box.hi[0]; ++x) {
+          if (covered[x + s.fine[0] * (y + std::uint64_t{s.fine[1]} * z)]++) {
+            throw BadData("subdivision box " + Str(i) + " overlaps another");
+          }
+        }
+    if (i % cells == cells - 1 && std::count(covered.begin(), covered.end(), 0) != 0) {
+      throw BadData("the subdivision's boxes leave fine cells uncovered");
+    }
+    s.boxes.push_back(box);
+  }
+  return s;
+}
+
 // The header's fields as read, checked against the format's limits (footprints not yet:
 // version 2 stores them in the records after the header).
-TraceHeader ToHeader(schema::Header::Reader r) {
+TraceHeader ToHeader(schema::Header::Reader r, std::uint64_t* leaf_count) {
   TraceHeader h;
   h.format_version = r.getFormatVersion();
   if (h.format_version < 1 || h.format_version > kTraceFormatVersion) {
@@ -342,6 +399,17 @@ TraceHeader ToHeader(schema::Header::Reader r) {
   for (auto c : r.getCameras()) h.cameras.push_back(ToCamera(c));
   h.settings = ToSettings(r.getSettings());
   if (h.format_version >= 3) h.path = ToPath(r.getPath());
+  if (h.format_version >= 4) {
+    h.regroupable = r.getRegroupable();
+    if (r.getLeafCount() > kTraceMaxLeaves) {
+      throw BadData(Str(r.getLeafCount()) + " leaves exceed the trace format's limit of " +
+                    Str(kTraceMaxLeaves) + " (kTraceMaxLeaves)");
+    }
+    if (!h.regroupable && r.getLeafCount() != 0)
+      throw BadData("leaves in a capture not regroupable");
+    *leaf_count = r.getLeafCount();
+    if (r.hasSubdivision()) h.subdivision = ToSubdivision(r.getSubdivision(), h);
+  }
   const std::string problem = TraceHeaderProblem(h);
   if (!problem.empty()) throw BadData(problem);
   const auto footprints = r.getFootprints();
@@ -377,30 +445,95 @@ void AppendFootprints(schema::Footprints::Reader r, std::uint64_t cells,
   runs.Finish();
 }
 
+// Appends the leaves per cell of one `cellLeaves` record to `out` (cells < `cells`, leaf
+// numbers < `leaf_count`, increasing within a cell).
+void AppendCellLeaves(schema::CellLeaves::Reader r, std::uint64_t cells, std::uint64_t leaf_count,
+                      CellLeaves& out) {
+  const std::uint64_t first = out.begin.size() - 1;
+  if (r.getFirstCell() != first) {
+    throw BadData("cellLeaves record starts at cell " + Str(r.getFirstCell()) + ", expected " +
+                  Str(first));
+  }
+  ColumnReader counts(r.getCounts(), "leaf counts"), leaves(r.getLeaves(), "cell leaves");
+  if (counts.AtEnd()) throw BadData("cellLeaves record without cells");
+  while (!counts.AtEnd()) {
+    if (out.begin.size() - 1 == cells)
+      throw BadData("leaves for more than " + Str(cells) + " cells");
+    const std::uint64_t n = counts.Next();
+    if (n > leaf_count || out.leaves.size() + n > kTraceMaxLeafRefs) {
+      throw BadData("more (cell, leaf) pairs than the trace format's limit or the leaves");
+    }
+    std::uint64_t leaf = 0;
+    for (std::uint64_t i = 0; i < n; ++i) {
+      const std::uint64_t d = leaves.Next();
+      leaf = i == 0 ? d : leaf + 1 + std::min<std::uint64_t>(d, leaf_count);
+      if (leaf >= leaf_count)
+        throw BadData("a cell's leaf number beyond the " + Str(leaf_count) + " leaves");
+      out.leaves.push_back(std::uint32_t(leaf));
+    }
+    out.begin.push_back(out.leaves.size());
+  }
+  counts.Finish();
+  leaves.Finish();
+}
+
 // Decodes the header frame at offset 0; returns the header and sets `length`.
 TraceHeader ReadHeader(const FileIn& file, std::uint64_t& length) {
   ZstdFrameReader in(file, 0, file.size());
   kj::Array<capnp::word> words;
   if (!ReadMessage(in, words)) throw BadData("empty header frame");
   TraceHeader header;
+  std::uint64_t leaf_count = 0;
   {
     capnp::FlatArrayMessageReader message(words, MessageOptions());
     const auto record = message.getRoot<schema::Record>();
     if (record.which() != schema::Record::HEADER) throw BadData("first record is not a header");
-    header = ToHeader(record.getHeader());
+    header = ToHeader(record.getHeader(), &leaf_count);
   }
   const std::uint64_t cells = TraceCellCount(header.cells);
+  if (header.regroupable) header.leaves.begin.push_back(0);
+  // Records in order: footprints, then (regroupable) leafBytes, then cellLeaves.
   while (ReadMessage(in, words)) {
     if (header.format_version < 2) throw BadData("more than one message in the header frame");
     capnp::FlatArrayMessageReader message(words, MessageOptions());
     const auto record = message.getRoot<schema::Record>();
-    if (record.which() != schema::Record::FOOTPRINTS) {
+    const bool footprints_done = header.footprints.size() == cells;
+    const bool leaves_done = header.leaves.bytes.size() == leaf_count;
+    const bool cell_leaves_started = header.leaves.begin.size() > 1;
+    if (record.which() == schema::Record::FOOTPRINTS && header.leaves.bytes.empty() &&
+        !cell_leaves_started) {
+      AppendFootprints(record.getFootprints(), cells, header.footprints);
+    } else if (!header.regroupable) {
       throw BadData("a record other than footprints after the header");
+    } else if (record.which() == schema::Record::LEAF_BYTES && footprints_done &&
+               !cell_leaves_started) {
+      AppendFootprints(record.getLeafBytes(), leaf_count, header.leaves.bytes);
+    } else if (record.which() == schema::Record::CELL_LEAVES && footprints_done && leaves_done) {
+      AppendCellLeaves(record.getCellLeaves(), cells, leaf_count, header.leaves);
+    } else {
+      throw BadData("a record out of place after the header (expected footprints, then a " +
+                    std::string("regroupable capture's leafBytes and cellLeaves records)"));
     }
-    AppendFootprints(record.getFootprints(), cells, header.footprints);
   }
   if (header.footprints.size() != cells) {
     throw BadData(Str(header.footprints.size()) + " footprints for " + Str(cells) + " cells");
+  }
+  if (header.regroupable) {
+    if (header.leaves.bytes.size() != leaf_count || header.leaves.begin.size() != cells + 1) {
+      throw BadData("a regroupable capture's leaves are incomplete");
+    }
+    if (header.footprint_mode != "sparse")
+      throw BadData("a regroupable capture's footprints are not sparse");
+    for (std::uint64_t c = 0; c < cells; ++c) {
+      std::uint64_t sum = 0;
+      for (std::uint64_t i = header.leaves.begin[c]; i < header.leaves.begin[c + 1]; ++i) {
+        sum += header.leaves.bytes[header.leaves.leaves[i]];
+      }
+      if (sum != header.footprints[c]) {
+        throw BadData("cell " + Str(c) + "'s leaves hold " + Str(sum) + " bytes, its footprint " +
+                      Str(header.footprints[c]));
+      }
+    }
   }
   length = in.consumed();
   return header;
@@ -944,6 +1077,125 @@ struct TraceReader::Impl {
     return found;
   }
 
+  // ---- A regroupable capture's view (TraceReader::Open) --------------------------------
+  // header and frames above stay the stored ones; the view's are these.
+  bool view = false;
+  TraceHeader view_header;
+  std::vector<FrameSummary> view_frames;
+  // Per fine cell, its cell in the view (kNoCell: an empty one); one map for every frame, or
+  // one per frame (a dynamic subdivision).
+  std::vector<std::vector<CellId>> maps;
+
+  void ForEachStored(std::size_t i, const BatchFn& fn) const {
+    const FrameSummary& s = Frame(i);
+    ReadFrame(file, path, header, {i, s.offset, s.offset + s.length, &s}, &fn);
+  }
+  const std::vector<CellId>& MapOf(std::size_t i) const { return maps[maps.size() == 1 ? 0 : i]; }
+  // The batch regrouped; an InputError names the file and frame.
+  RayBatch RegroupIn(RayRegrouper& regrouper, const RayBatch& b, std::int32_t frame) const {
+    try {
+      return regrouper.Regroup(b);
+    } catch (const InputError& e) {
+      throw InputError(path + ": frame " + std::to_string(frame) + ": cannot regroup: " + e.what());
+    }
+  }
+
+  // The map of a subdivision (null: the fine grid itself) whose cells have `footprints`.
+  static std::vector<CellId> Map(const Subdivision* sub, const std::vector<std::uint64_t>& fp,
+                                 std::size_t fine_cells) {
+    std::vector<CellId> m(fine_cells);
+    for (std::size_t f = 0; f < fine_cells; ++f) {
+      const CellId c = sub ? sub->coarse_of_fine[f] : CellId(std::uint32_t(f));
+      m[f] = fp[c.value()] == 0 ? kNoCell : c;
+    }
+    return m;
+  }
+
+  // Samples per fine cell of frame i, or of every frame (i = npos).
+  std::vector<std::uint64_t> FineSamples(std::size_t i) const {
+    std::vector<std::uint64_t> samples(header.cell_count(), 0);
+    auto add = [&](const RayBatch& b) {
+      for (std::size_t v = 0; v < b.visit_count(); ++v) {
+        samples[b.cells()[v].value()] += b.samples()[v];
+      }
+    };
+    if (i != std::size_t(-1)) {
+      ForEachStored(i, add);
+    } else {
+      for (std::size_t f = 0; f < frames.size(); ++f) ForEachStored(f, add);
+    }
+    return samples;
+  }
+
+  void MakeView(const std::string& cells) {
+    const TraceHeader& h = header;
+    view = true;
+    view_header = h;
+    view_header.regroupable = false;
+    view_header.leaves = {};
+    const std::size_t fine_cells = h.cell_count();
+    if (cells.empty()) {  // the captured grid: only the visits to empty cells dropped
+      maps.push_back(Map(nullptr, h.footprints, fine_cells));
+    } else {
+      const std::string what = "--cells '" + cells + "'";
+      const SubdivisionSpec spec = ParseSubdivisionSpec(cells, what);
+      FineCells fine;
+      fine.grid = h.cells;
+      fine.union_footprint = [&h](const std::vector<std::uint32_t>& c) {
+        return h.leaves.UnionBytes(c);
+      };
+      const bool dynamic = spec.kind == SubdivisionSpec::Kind::kDynamic;
+      if (spec.kind == SubdivisionSpec::Kind::kKdWork) fine.samples = FineSamples(std::size_t(-1));
+      view_header.subdivision.spec = spec.ToString();
+      view_header.subdivision.fine = h.cells;
+      view_header.footprints.clear();
+      const std::size_t subdivisions = dynamic ? frames.size() : 1;
+      if (dynamic && std::uint64_t{spec.cells} * subdivisions > kTraceMaxBoxes) {
+        throw InputError(what + ": " + Str(spec.cells) + " cells in each of " + Str(subdivisions) +
+                         " frames exceed the trace format's limit of " + Str(kTraceMaxBoxes) +
+                         " boxes (kTraceMaxBoxes)");
+      }
+      for (std::size_t i = 0; i < std::max<std::size_t>(subdivisions, 1); ++i) {
+        if (dynamic && i > 0) fine.samples = FineSamples(i - 1);
+        const Subdivision sub = Subdivide(spec, fine);
+        std::vector<std::uint64_t> fp(sub.cells());
+        std::vector<std::uint32_t> members;
+        for (std::uint32_t c = 0; c < sub.cells(); ++c) {
+          const FineBox& b = sub.boxes[c];
+          members.clear();
+          for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
+            for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y)
+              for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x)
+                members.push_back(x + h.cells[0] * (y + h.cells[1] * z));
+          fp[c] = h.leaves.UnionBytes(members);
+        }
+        maps.push_back(Map(&sub, fp, fine_cells));
+        view_header.subdivision.boxes.insert(view_header.subdivision.boxes.end(), sub.boxes.begin(),
+                                             sub.boxes.end());
+        if (view_header.footprints.empty()) view_header.footprints.assign(fp.size(), 0);
+        for (std::size_t c = 0; c < fp.size(); ++c) {  // a dynamic one: the largest
+          view_header.footprints[c] = std::max(view_header.footprints[c], fp[c]);
+        }
+        view_header.cells = spec.kind == SubdivisionSpec::Kind::kUniform
+                                ? spec.grid
+                                : std::array<std::uint32_t, 3>{sub.cells(), 1, 1};
+      }
+    }
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      RayRegrouper regrouper(MapOf(i));
+      FrameAccumulator sum(frames[i].frame, h.settings.store_t);
+      ForEachStored(i, [&](const RayBatch& b) {
+        const RayBatch out = RegroupIn(regrouper, b, frames[i].frame);
+        for (std::size_t r = 0; r < out.size(); ++r) sum.AddRay(out.ray(r));
+      });
+      FrameSummary s = sum.Summary();
+      s.offset = frames[i].offset;
+      s.length = frames[i].length;
+      s.stored_hash = frames[i].stored_hash;
+      view_frames.push_back(s);
+    }
+  }
+
   const FrameSummary& Frame(std::size_t i) const {
     if (i >= frames.size()) {
       throw InputError(path + ": no frame #" + Str(i) + " (the file has " + Str(frames.size()) +
@@ -958,7 +1210,20 @@ TraceReader::TraceReader(TraceReader&&) noexcept = default;
 TraceReader& TraceReader::operator=(TraceReader&&) noexcept = default;
 TraceReader::~TraceReader() = default;
 
-TraceReader TraceReader::Open(const std::string& path) {
+TraceReader TraceReader::Open(const std::string& path, const std::string& cells) {
+  auto impl = std::make_unique<Impl>(path);
+  impl->ReadHeaderFrame();
+  impl->ReadFrameList();
+  if (!cells.empty() && !impl->header.regroupable) {
+    throw InputError("--cells '" + cells + "': " + path + " is not a regroupable capture " +
+                     "(record it with `raycell record --regroupable` on a fine grid, e.g. " +
+                     "--cells 12x12x12 --regroupable)");
+  }
+  if (impl->header.regroupable) impl->MakeView(cells);
+  return TraceReader(std::move(impl));
+}
+
+TraceReader TraceReader::OpenStored(const std::string& path) {
   auto impl = std::make_unique<Impl>(path);
   impl->ReadHeaderFrame();
   impl->ReadFrameList();
@@ -973,28 +1238,43 @@ TraceReader TraceReader::OpenBytes(std::string bytes, const std::string& name) {
 }
 
 const std::string& TraceReader::path() const { return impl_->path; }
-const TraceHeader& TraceReader::header() const { return impl_->header; }
-const std::vector<FrameSummary>& TraceReader::frames() const { return impl_->frames; }
+const TraceHeader& TraceReader::header() const {
+  return impl_->view ? impl_->view_header : impl_->header;
+}
+const std::vector<FrameSummary>& TraceReader::frames() const {
+  return impl_->view ? impl_->view_frames : impl_->frames;
+}
+bool TraceReader::regrouped() const { return impl_->view; }
 const std::string& TraceReader::warning() const { return impl_->warning; }
 std::uint64_t TraceReader::file_size() const { return impl_->file.size(); }
 std::uint64_t TraceReader::readable_end() const { return impl_->readable_end; }
 
 void TraceReader::ForEachBatch(std::size_t frame_index, const BatchFn& fn) const {
-  const FrameSummary& s = impl_->Frame(frame_index);
-  ReadFrame(impl_->file, impl_->path, impl_->header,
-            {frame_index, s.offset, s.offset + s.length, &s}, &fn);
+  if (!impl_->view) {
+    impl_->ForEachStored(frame_index, fn);
+    return;
+  }
+  RayRegrouper regrouper(impl_->MapOf(frame_index));
+  impl_->ForEachStored(frame_index, [&](const RayBatch& b) {
+    const RayBatch out = impl_->RegroupIn(regrouper, b, impl_->frames[frame_index].frame);
+    if (!out.empty()) fn(out);
+  });
 }
 
 RayBatch TraceReader::LoadFrame(std::size_t frame_index) const {
   const FrameSummary& s = impl_->Frame(frame_index);
   constexpr std::uint64_t kMaxReserve = std::uint64_t{1} << 24;
-  RayBatch all(impl_->header.settings.store_t);
+  RayBatch all(header().settings.store_t);
   all.Reserve(std::min(s.rays, kMaxReserve), std::min(s.visits, kMaxReserve));
   ForEachBatch(frame_index, [&](const RayBatch& b) { all.AppendRebased(b); });
   return all;
 }
 
 std::string TraceReader::ReadEncodedFrame(std::size_t frame_index) const {
+  if (impl_->view) {
+    throw InputError(impl_->path + ": a regroupable capture opened regrouped has no stored " +
+                     "bytes of its regrouped frames (TraceReader::OpenStored)");
+  }
   const FrameSummary& s = impl_->Frame(frame_index);
   const FrameSlot slot{frame_index, s.offset, s.offset + s.length, &s};
   return Guarded(

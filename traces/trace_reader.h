@@ -32,7 +32,19 @@ namespace raycell {
 class TraceReader {
  public:
   // Throws InputError when the file cannot be opened or its header is unreadable.
-  static TraceReader Open(const std::string& path);
+  //
+  // A regroupable capture (`raycell record --regroupable`; docs/design.md §1 "Subdivisions")
+  // is shown regrouped: into the subdivision `cells` names (a SPEC, traces/subdivision.h), or,
+  // with `cells` empty, into its own grid (its visits to empty cells dropped), as a capture
+  // recorded on those cells would be. header() and frames() are then the regrouped trace's
+  // (its cells, footprints and subdivision; frame totals and checksums of the regrouped rays:
+  // Open reads every frame once to make them, and once more for kd:N:work's weights), and
+  // ForEachBatch and LoadFrame regroup as they read. InputError for a `cells` given with a
+  // trace that is not regroupable, a bad SPEC, or a subdivision the fine grid cannot make.
+  static TraceReader Open(const std::string& path, const std::string& cells = "");
+  // The trace as stored, a regroupable capture with its visits to empty cells (for `trace
+  // regroup` and `trace concat`).
+  static TraceReader OpenStored(const std::string& path);
   // The same for a trace held in memory; `name` stands for the path in messages.
   static TraceReader OpenBytes(std::string bytes, const std::string& name);
 
@@ -41,6 +53,8 @@ class TraceReader {
   ~TraceReader();
 
   const std::string& path() const;
+  // Whether a regroupable capture is shown regrouped (Open), not as stored.
+  bool regrouped() const;
   const TraceHeader& header() const;
   // Summaries of the readable frames in file order, with their offset and length.
   const std::vector<FrameSummary>& frames() const;
@@ -65,7 +79,7 @@ class TraceReader {
   // decompression: exactly one zstd frame, of the index's length, with a content checksum that
   // holds, holding Records that are batches followed by one frameEnd equal to the index's
   // summary. (The rays are not decoded: ForEachBatch checks them.) InputError naming the file
-  // and frame if not.
+  // and frame if not, or when the trace is shown regrouped.
   std::string ReadEncodedFrame(std::size_t frame_index) const;
 
  private:

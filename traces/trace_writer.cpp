@@ -380,6 +380,22 @@ void FillHeader(schema::Header::Builder out, const TraceHeader& h) {
   FillCameras(out.initCameras(static_cast<unsigned>(h.cameras.size())), h.cameras);
   FillSettings(out.initSettings(), h.settings);
   FillPath(out.initPath(), h.path);
+  out.setRegroupable(h.regroupable);
+  out.setLeafCount(h.leaves.bytes.size());
+  if (!h.subdivision.empty()) {
+    auto sub = out.initSubdivision();
+    sub.setSpec(h.subdivision.spec);
+    sub.setFineX(h.subdivision.fine[0]);
+    sub.setFineY(h.subdivision.fine[1]);
+    sub.setFineZ(h.subdivision.fine[2]);
+    auto boxes = sub.initBoxes(static_cast<unsigned>(h.subdivision.boxes.size()));
+    for (unsigned i = 0; i < boxes.size(); ++i) {
+      const FineBox& b = h.subdivision.boxes[i];
+      auto o = boxes[i];
+      o.setLoX(b.lo[0]), o.setLoY(b.lo[1]), o.setLoZ(b.lo[2]);
+      o.setHiX(b.hi[0]), o.setHiY(b.hi[1]), o.setHiZ(b.hi[2]);
+    }
+  }
 }
 
 // Footprints of cells [first, end) as runs of equal values, into a footprints record.
@@ -501,25 +517,58 @@ struct TraceWriter::Impl {
     capnp::MallocMessageBuilder message;
     FillHeader(message.initRoot<schema::Record>().initHeader(), header);
     WriteRecord(message);
-    WriteFootprints();
+    WriteRuns(header.footprints, /*leaves=*/false);
+    if (header.regroupable) {
+      WriteRuns(header.leaves.bytes, /*leaves=*/true);
+      WriteCellLeaves();
+    }
     sink.EndFrame();
     header_length = file.bytes();
     if (!options.name_at_finish) file.Publish();  // the .tmp appears now, with the header
   }
 
-  // The footprints as records of at most options.footprint_runs_per_record runs.
-  void WriteFootprints() {
-    const std::vector<std::uint64_t>& f = header.footprints;
+  // The footprints (or a regroupable capture's leaf bytes) as records of at most
+  // options.footprint_runs_per_record runs.
+  void WriteRuns(const std::vector<std::uint64_t>& f, bool leaves) {
     FootprintRecord record(0);
     for (std::size_t begin = 0, end; begin < f.size(); begin = end) {
       for (end = begin + 1; end < f.size() && f[end] == f[begin];) ++end;
       record.Add(f[begin], end - begin);
       if (record.runs() == options.footprint_runs_per_record || end == f.size()) {
         capnp::MallocMessageBuilder message;
-        record.Fill(message.initRoot<schema::Record>().initFootprints());
+        auto root = message.initRoot<schema::Record>();
+        record.Fill(leaves ? root.initLeafBytes() : root.initFootprints());
         WriteRecord(message);
         record = FootprintRecord(end);
       }
+    }
+  }
+
+  // A regroupable capture's leaves per cell, in records of at most kTraceLeafCellsPerRecord
+  // cells and kTraceLeafRefsPerRecord leaves.
+  void WriteCellLeaves() {
+    const CellLeaves& l = header.leaves;
+    const std::size_t cells = l.begin.size() - 1;
+    for (std::size_t first = 0; first < cells;) {
+      std::size_t end = first;
+      while (end < cells && end - first < kTraceLeafCellsPerRecord &&
+             (end == first || l.begin[end + 1] - l.begin[first] <= kTraceLeafRefsPerRecord)) {
+        ++end;
+      }
+      ColumnBuilder counts, leaves;
+      for (std::size_t c = first; c < end; ++c) {
+        counts.Add(l.begin[c + 1] - l.begin[c]);
+        for (std::uint64_t i = l.begin[c]; i < l.begin[c + 1]; ++i) {
+          leaves.Add(i == l.begin[c] ? l.leaves[i] : l.leaves[i] - l.leaves[i - 1] - 1);
+        }
+      }
+      capnp::MallocMessageBuilder message;
+      auto out = message.initRoot<schema::Record>().initCellLeaves();
+      out.setFirstCell(first);
+      counts.Fill(out.initCounts());
+      leaves.Fill(out.initLeaves());
+      WriteRecord(message);
+      first = end;
     }
   }
 

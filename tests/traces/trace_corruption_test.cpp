@@ -622,12 +622,12 @@ TEST_F(InvalidHeaderTest, VersionsAndLimitsAreChecked) {
   ExpectRejected(HeaderMessage(1, {2, 1, 1}, {5, 6}) + FootprintsMessage(0, {5}, {1}),
                  "more than one message in the header frame");
   ExpectRejected(HeaderMessage(1, {2, 1, 1}, {5}), "1 footprints for 2 cells");
-  ExpectRejected(HeaderMessage(4, {2, 1, 1}),
-                 "format version 4 is not supported (this reader "
-                 "reads 1..3)");
+  ExpectRejected(HeaderMessage(5, {2, 1, 1}),
+                 "format version 5 is not supported (this reader "
+                 "reads 1..4)");
   ExpectRejected(HeaderMessage(0, {2, 1, 1}),
                  "format version 0 is not supported (this reader "
-                 "reads 1..3)");
+                 "reads 1..4)");
   // A grid beyond the limit is refused before anything is allocated for its cells.
   ExpectRejected(HeaderMessage(2, {4096, 4096, 4096}) + FootprintsMessage(0, {5}, {0}),
                  "cell grid 4096x4096x4096 = 68719476736 cells exceeds the trace format's limit "

@@ -383,7 +383,7 @@ TEST(TraceIoTest, ZstdAndCapnpDecodeTheWholeFile) {
   const std::string text = ReadBytes(out);
   // --short prints one message per line.
   EXPECT_EQ(CountOccurrences(text, "\n"), 2 + batches + frames.size()) << text.substr(0, 300);
-  EXPECT_EQ(text.rfind("(header = (formatVersion = 3, producer = \"raycell test\"", 0), 0u);
+  EXPECT_EQ(text.rfind("(header = (formatVersion = 4, producer = \"raycell test\"", 0), 0u);
   // The 27 footprints 7, 1007, 2007, ... in one record of 27 runs of one cell.
   EXPECT_EQ(CountOccurrences(text, "\n(footprints = (firstCell = 0, values = (narrow = [7, 255, "),
             1u);
@@ -452,7 +452,7 @@ TEST(TraceIoTest, PrintInfoShowsHeaderFramesAndTotals) {
   std::ostringstream out;
   PrintInfo(reader, "info.rct", out);
   const std::string text = out.str();
-  for (const char* want : {"format version: 3", "producer:       raycell test", "builtin:smoke",
+  for (const char* want : {"format version: 4", "producer:       raycell test", "builtin:smoke",
                            "density (fog, builtin", "3x3x3 = 27 cells", "sparse", "320x200",
                            "shadow", "refraction", "total", "naive uncompressed", "ratio:"}) {
     EXPECT_NE(text.find(want), std::string::npos) << want << "\n" << text;

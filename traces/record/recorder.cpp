@@ -123,6 +123,16 @@ void ValidateRecordOptions(const RecordOptions& o) {
   if (o.scene.all_grids && !o.scene.grids.empty()) {
     throw InputError("--grid and --all-grids: give one or the other");
   }
+  if (o.regroupable && o.scene.footprint_mode != "sparse") {
+    throw InputError(
+        "--regroupable needs sparse footprints (--footprint sparse): a union of "
+        "cells counts each leaf once, and dense footprints have no leaves");
+  }
+  if (o.regroupable && IsSequencePattern(o.scene.source)) {
+    throw InputError(
+        "--regroupable: a sequence's leaves change from frame to frame; record "
+        "one volume (a .vdb file or the built-in scene)");
+  }
   ValidateCameraSpec(o.camera);
   CheckOrbitFrames(o.camera, o.frames);
 }
@@ -141,6 +151,10 @@ RecordSummary Record(const RecordOptions& o, std::ostream& log) {
   header.footprint_mode = o.scene.footprint_mode;
   header.settings = o.settings;
   ScanScene(o, scene.get(), &header);
+  if (o.regroupable) {
+    header.regroupable = true;
+    header.leaves = scene->Leaves(header.box_min, header.box_max, o.cells);
+  }
   const CellGrid cells = CellGrid::Create(header.box_min, header.box_max, o.cells);
   header.path = MakeCameraPathInfo(o.camera, o.frames, header.box_min, header.box_max);
   for (int frame : o.frames) header.cameras.push_back(CameraOf(header.path, frame));
@@ -168,6 +182,7 @@ RecordSummary Record(const RecordOptions& o, std::ostream& log) {
     job.scene = scene.get();
     job.cells = &cells;
     job.footprints = seq ? &frame_footprints : &header.footprints;
+    job.all_cells = o.regroupable;
     job.camera = header.cameras[i];
     job.settings = o.settings;
     job.threads = o.threads;

@@ -41,6 +41,10 @@ struct RecordOptions {
   CameraPathSpec camera;
   std::string out = "capture.rct";
   std::string images_dir;  // empty: no images
+  // A fine capture that any coarser subdivision can be made of (TraceHeader::regroupable):
+  // rays also visit the empty cells they cross, and the header holds each cell's leaves.
+  // Sparse footprints of one volume (not a sequence).
+  bool regroupable = false;
   PngEncoding image_encoding = PngEncoding::kSrgb;
   int threads = 0;       // 0: all cores
   bool progress = true;  // a bar on stderr, when stderr is a terminal

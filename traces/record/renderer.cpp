@@ -2,11 +2,11 @@
 // scene.cpp).
 //
 // Every ray is first cut into its visits: the non-empty cells its chord through the scene
-// box crosses (CellDDA). All work is then confined to [first visit, last visit]: empty space
-// costs nothing, twice over (empty cells are never marched, and inside non-empty cells
-// VolumeRayIntersector skips to allocated leaves). Each volume sample is counted in the
-// visit holding it. A ray's visits end where it ends: early termination, a surface hit, or
-// the box exit.
+// box crosses (CellDDA). A ray that meets no non-empty cell is not traced; the others are
+// searched over their whole chord through the box, whatever the cells (see Path), and
+// empty space costs nothing (VolumeRayIntersector skips to allocated leaves, which lie in
+// non-empty cells). Each volume sample is counted in the visit holding it. A ray's visits end where
+// it ends: early termination, a surface hit, or the box exit.
 //
 // Fog volumes are integrated front to back exactly as OpenVDB's vdb_render does (same step
 // positions, transmittance, cutoff and shadow-ray gain), every lit sample casting one shadow
@@ -82,26 +82,44 @@ Vec<Real> ExpOf(const Vec<Real>& v) {
 }
 
 // The visits of one ray while it is traced: the non-empty cells of its chord, with samples.
+// Work is searched for over the whole chord through the scene box, [chord_lo, chord_hi],
+// which no cell grid changes (OpenVDB's intersectors skip the empty space, so the empty
+// cells cost nothing): the samples are then the same whatever the cells, and a capture
+// regrouped from a finer grid agrees with one recorded on the coarse cells. A sample or spawn
+// in a gap between the visits (an empty cell, where only a sample at the
+// edge of a leaf's region can fall) goes to the visit before it. A regroupable capture
+// (`all`) also keeps the empty cells of the chord, and gives such a sample or spawn the empty
+// cell holding it: regrouping applies the same rule in the cells it makes
+// (traces/regroup.h), so a capture on those cells is reproduced.
 class Path {
  public:
-  void Build(const CellGrid& grid, const std::vector<bool>& nonempty, const Vec3d& o,
+  void Build(const CellGrid& grid, const std::vector<bool>& nonempty, bool all, const Vec3d& o,
              const Vec3d& d, double tmax, std::optional<CellId> start) {
     cells_.clear(), t0_.clear(), t1_.clear(), samples_.clear();
     cursor_ = 0;
+    all_ = all;
+    any_full_ = false;
     CellDDA dda(grid, o, d, 0.0, tmax, start);
+    bool first_segment = true;
     for (CellSegment s; dda.Next(&s);) {
-      if (!nonempty[s.cell.value()]) continue;
+      if (first_segment) chord_lo_ = s.t0, first_segment = false;
+      chord_hi_ = s.t1;
+      const bool full = nonempty[s.cell.value()];
+      if (!full && !all) continue;
+      any_full_ |= full;
       cells_.push_back(s.cell), t0_.push_back(s.t0), t1_.push_back(s.t1);
       samples_.push_back(0);
     }
   }
-  bool empty() const { return cells_.empty(); }
+  bool empty() const { return !any_full_; }  // no non-empty cell: nothing to trace
   std::size_t size() const { return cells_.size(); }
-  double t_lo() const { return t0_.front(); }
-  double t_hi() const { return t1_.back(); }
+  // Where the ray enters the scene box (or starts) and leaves it (or ends); only when
+  // !empty().
+  double chord_lo() const { return chord_lo_; }
+  double chord_hi() const { return chord_hi_; }
   CellId cell(std::size_t i) const { return cells_[i]; }
-  // Index of the visit holding t (t inside [t_lo, t_hi]; a t in a gap between visits, which
-  // only rounding produces, goes to the visit before it).
+  // Index of the visit holding t (t inside [t_lo, t_hi]; a t in a gap between visits goes to
+  // the visit before it).
   std::uint32_t VisitAt(double t) const {
     auto it = std::upper_bound(t0_.begin(), t0_.end(), t);
     return it == t0_.begin() ? 0 : std::uint32_t(it - t0_.begin() - 1);
@@ -113,8 +131,11 @@ class Path {
     return std::uint32_t(cursor_);
   }
   void AddSamples(double t, std::uint32_t n) { samples_[VisitAt(t)] += n; }
-  // The ray ends at t_end: later visits are dropped, the last one ends at t_end.
-  void Truncate(double t_end) {
+  // The ray ends at t_end: later visits are dropped, the last one ends at t_end. A ray that
+  // ran past its last non-empty cell (`ran_out`) keeps, in a regroupable capture, the empty
+  // cells after it up to the box exit.
+  void Truncate(double t_end, bool ran_out) {
+    if (all_ && ran_out) return;
     const std::size_t keep = VisitAt(t_end) + 1;
     cells_.resize(keep), t0_.resize(keep), t1_.resize(keep), samples_.resize(keep);
     t1_.back() = std::max(t0_.back(), std::min(t1_.back(), t_end));
@@ -128,6 +149,9 @@ class Path {
   std::vector<double> t0_, t1_;
   std::vector<std::uint32_t> samples_;
   std::size_t cursor_ = 0;
+  bool any_full_ = false;  // a non-empty cell among the visits
+  double chord_lo_ = 0, chord_hi_ = 0;
+  bool all_ = false;
 };
 
 // The rays of one pixel in the order they are started (parents before children), each with
@@ -339,31 +363,37 @@ class FrameTracer {
            std::uint32_t depth, std::optional<CellId> start, std::uint64_t* missed) const {
     const int slot = c.rec.Open(kind, parent, spawn);
     Path& path = c.paths[depth];
-    path.Build(*job_.cells, nonempty_, ToVec(o), ToVec(d), CellDDA::kInfinity, start);
-    if (path.empty()) {  // only a primary ray can miss every non-empty cell
-      c.rec.DropLast();
-      if (missed) ++*missed;
+    path.Build(*job_.cells, nonempty_, job_.all_cells, ToVec(o), ToVec(d), CellDDA::kInfinity,
+               start);
+    if (path.empty()) {       // only a primary ray can miss every non-empty cell
+      if (path.size() > 0) {  // a regroupable capture keeps it: it crosses empty cells
+        c.rec.Close(slot, path);
+      } else {
+        c.rec.DropLast();
+        if (missed) ++*missed;
+      }
       return BackgroundOf(d);
     }
-    const std::optional<Hit<Real>> hit = FindSurface(c, depth, o, d, path.t_lo(), path.t_hi());
-    const double t_fog_end = hit ? double(hit->t) : path.t_hi();
+    const std::optional<Hit<Real>> hit =
+        FindSurface(c, depth, o, d, path.chord_lo(), path.chord_hi());
+    const double t_fog_end = hit ? double(hit->t) : path.chord_hi();
     V3 lumi(Real(0)), trans(Real(1));
     std::optional<Real> t_term =
-        MarchFog(c, slot, depth, o, d, path.t_lo(), t_fog_end, &lumi, &trans);
+        MarchFog(c, slot, depth, o, d, path.chord_lo(), t_fog_end, &lumi, &trans);
     if (!t_term) {
       lumi += trans * (hit ? Shade(c, slot, depth, o, d, *hit) : BackgroundOf(d));
     }
-    Finish(c, slot, depth, t_term ? double(*t_term) : t_fog_end);
+    Finish(c, slot, depth, t_term ? double(*t_term) : t_fog_end, !t_term && !hit);
     return lumi;
   }
 
   // Attributes the surface search's samples up to t_end, cuts the path there, records it.
-  void Finish(Ctx& c, int slot, std::uint32_t depth, double t_end) const {
+  void Finish(Ctx& c, int slot, std::uint32_t depth, double t_end, bool ran_out) const {
     Path& path = c.paths[depth];
     for (Real t : c.surface_samples[depth]) {
       if (t <= t_end) path.AddSamples(t, 1);
     }
-    path.Truncate(t_end);
+    path.Truncate(t_end, ran_out);
     c.rec.Close(slot, path);
   }
 
@@ -513,13 +543,15 @@ class FrameTracer {
     }
     const int slot = c.rec.Open(RayKind::kShadow, parent, spawn);
     Path& path = c.paths[depth];
-    path.Build(*job_.cells, nonempty_, ToVec(pos), ToVec(dir), tmax, start);
-    const std::optional<Hit<Real>> hit = FindSurface(c, depth, pos, dir, path.t_lo(), path.t_hi());
-    const double t_stop = hit ? double(hit->t) : path.t_hi();
+    path.Build(*job_.cells, nonempty_, job_.all_cells, ToVec(pos), ToVec(dir), tmax, start);
+    const std::optional<Hit<Real>> hit =
+        FindSurface(c, depth, pos, dir, path.chord_lo(), path.chord_hi());
+    const double t_stop = hit ? double(hit->t) : path.chord_hi();
     V3 trans(Real(1));
-    std::optional<Real> t_term = Attenuate(c, slot, depth, pos, dir, path.t_lo(), t_stop, &trans);
+    std::optional<Real> t_term =
+        Attenuate(c, slot, depth, pos, dir, path.chord_lo(), t_stop, &trans);
     if (hit && !t_term) trans *= surface_mats_[hit->surface].transparency;
-    Finish(c, slot, depth, t_term ? double(*t_term) : t_stop);
+    Finish(c, slot, depth, t_term ? double(*t_term) : t_stop, !t_term && !hit);
     return trans;
   }
 

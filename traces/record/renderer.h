@@ -41,6 +41,9 @@ struct RenderJob {
   // This frame's footprints, one per cell (0 = empty, never visited); not copied, so they
   // must outlive the call.
   const std::vector<std::uint64_t>* footprints = nullptr;
+  // A regroupable capture (TraceHeader::regroupable): rays also visit the empty cells they
+  // cross, with no samples, and a primary ray crossing only empty cells is recorded.
+  bool all_cells = false;
   CameraKey camera;
   RenderSettings settings;
   int threads = 0;  // 0: all cores

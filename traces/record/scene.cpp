@@ -348,27 +348,34 @@ void ForCellsOverlapping(const openvdb::BBoxd& b, const CellGrid& grid, Fn&& fn)
       for (std::uint32_t x = x0; x <= x1; ++x) fn(grid.CellIndex({x, y, z}).value());
 }
 
+// Calls fn(bytes, box) for every allocated leaf and active tile of the grid, with its sampling
+// region (below).
+template <typename Fn>
+void ForEachLeaf(const openvdb::FloatGrid& grid, Fn&& fn) {
+  const openvdb::Vec3d pad(0.5);
+  for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf) {
+    const openvdb::Vec3d o = leaf->origin().asVec3d();
+    fn(std::uint64_t(leaf->memUsage()),
+       WorldBox(grid, o - pad, o + openvdb::Vec3d(leaf->DIM) + pad));
+  }
+  for (auto it = grid.cbeginValueOn(); it; ++it) {
+    if (!it.isTileValue()) continue;
+    openvdb::CoordBBox cb;
+    it.getBoundingBox(cb);
+    fn(std::uint64_t(sizeof(float)),
+       WorldBox(grid, cb.min().asVec3d() - pad, cb.max().asVec3d() + openvdb::Vec3d(1) + pad));
+  }
+}
+
 // Sparse footprint: every allocated leaf (and active tile) whose sampling region overlaps a
 // cell costs that cell the leaf's bytes. The region is the node's index box [origin,
 // origin + dim], where VolumeRayIntersector's spans put samples, padded by half a voxel
 // against rounding.
 void AddSparse(const openvdb::FloatGrid& grid, const CellGrid& cells,
                std::vector<std::uint64_t>& fp) {
-  const openvdb::Vec3d pad(0.5);
-  for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf) {
-    const openvdb::Vec3d o = leaf->origin().asVec3d();
-    const auto box = WorldBox(grid, o - pad, o + openvdb::Vec3d(leaf->DIM) + pad);
-    const std::uint64_t bytes = leaf->memUsage();
+  ForEachLeaf(grid, [&](std::uint64_t bytes, const openvdb::BBoxd& box) {
     ForCellsOverlapping(box, cells, [&](std::uint32_t c) { fp[c] += bytes; });
-  }
-  for (auto it = grid.cbeginValueOn(); it; ++it) {
-    if (!it.isTileValue()) continue;
-    openvdb::CoordBBox cb;
-    it.getBoundingBox(cb);
-    const auto box =
-        WorldBox(grid, cb.min().asVec3d() - pad, cb.max().asVec3d() + openvdb::Vec3d(1) + pad);
-    ForCellsOverlapping(box, cells, [&](std::uint32_t c) { fp[c] += sizeof(float); });
-  }
+  });
 }
 
 // Dense footprint: voxels of the grid's active box inside the cell, 4 bytes each.
@@ -483,6 +490,30 @@ std::vector<std::uint64_t> Scene::Footprints(Vec3d lo, Vec3d hi, std::array<std:
   for (const auto& f : impl_->fogs) add(*f.grid);
   for (const auto& f : impl_->surfaces) add(*f.grid);
   return fp;
+}
+
+CellLeaves Scene::Leaves(Vec3d lo, Vec3d hi, std::array<std::uint32_t, 3> dims) const {
+  const CellGrid cells = CellGrid::Create(lo, hi, dims);
+  CellLeaves out;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;  // (cell, leaf)
+  auto add = [&](const openvdb::FloatGrid& g) {
+    ForEachLeaf(g, [&](std::uint64_t bytes, const openvdb::BBoxd& box) {
+      const std::size_t before = pairs.size();
+      const auto leaf = std::uint32_t(out.bytes.size());
+      ForCellsOverlapping(box, cells, [&](std::uint32_t c) { pairs.emplace_back(c, leaf); });
+      if (pairs.size() > before) out.bytes.push_back(bytes);
+    });
+  };
+  for (const auto& f : impl_->fogs) add(*f.grid);
+  for (const auto& f : impl_->surfaces) add(*f.grid);
+  // Counting sort by cell; leaves stay in increasing order within a cell.
+  out.begin.assign(std::size_t{cells.cell_count()} + 1, 0);
+  for (const auto& [c, l] : pairs) ++out.begin[c + 1];
+  for (std::size_t c = 0; c < cells.cell_count(); ++c) out.begin[c + 1] += out.begin[c];
+  out.leaves.resize(pairs.size());
+  std::vector<std::uint64_t> next(out.begin.begin(), out.begin.end() - 1);
+  for (const auto& [c, l] : pairs) out.leaves[next[c]++] = l;
+  return out;
 }
 
 }  // namespace raycell

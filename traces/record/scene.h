@@ -82,6 +82,11 @@ class Scene {
   // Bytes per cell of the grid [lo, hi] split in dims; 0 marks an empty cell.
   std::vector<std::uint64_t> Footprints(Vec3d lo, Vec3d hi, std::array<std::uint32_t, 3> dims,
                                         const std::string& mode) const;
+  // The leaves (allocated leaf nodes and active tiles of every grid) that overlap each cell
+  // of the same grid, as the sparse footprints count them, so that the footprints are their
+  // bytes: a regroupable capture's TraceHeader::leaves. Leaves overlapping no cell are left
+  // out; the others are numbered in the order of the grids, leaves before tiles.
+  CellLeaves Leaves(Vec3d lo, Vec3d hi, std::array<std::uint32_t, 3> dims) const;
   const Impl& impl() const { return *impl_; }
 
  private:
