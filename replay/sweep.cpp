@@ -655,6 +655,7 @@ std::string SweepComment(const SweepSpec& spec) {
   std::string s = kCommentStart;
   s += "schema=" + JsonQuote("raycell-sweep/1") + " ";
   s += "trace=" + JsonQuote(spec.trace);
+  if (!spec.cells.empty()) s += " cells=" + JsonQuote(spec.cells);
   s += " config=" + JsonQuote(spec.config.empty() ? "defaults" : spec.config);
   s += " config_hash=" + ConfigHash(spec.base);
   for (const Vary& v : spec.varies) s += " vary=" + JsonQuote(v.ToString());

@@ -96,6 +96,7 @@ void ValidateVaries(const ReplayConfig& base, const std::vector<Vary>& varies);
 
 struct SweepSpec {
   std::string trace;   // path as given (named in the comment line)
+  std::string cells;   // --cells SPEC of a regroupable capture as given; empty: its own grid
   std::string config;  // path as given; empty: the defaults
   ReplayConfig base;   // the loaded configuration
   std::vector<Vary> varies;

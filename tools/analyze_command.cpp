@@ -28,7 +28,7 @@ namespace raycell {
 namespace {
 
 struct AnalyzeArgs {
-  std::string trace, paths, format = "table", dot, effort = "default", frames, part;
+  std::string trace, paths, format = "table", dot, effort = "default", frames, part, cells;
   std::optional<int> frame;
   unsigned jobs = 0;  // the search's threads; 0: the hardware's
   bool all = false, quiet = false, timing = false;
@@ -254,7 +254,7 @@ std::string PartLine(const TraceReader& r, const AnalyzeArgs& a) {
 }
 
 void AnalyzeTrace(AnalyzeArgs a, std::ostream& out) {
-  const TraceReader r = TraceReader::Open(a.trace);
+  const TraceReader r = TraceReader::Open(a.trace, a.cells);
   // The lower bound takes blocks of neighbouring cells from the trace's cell grid.
   a.options.bracket_options.lower.grid = r.header().cells;
   if (!r.warning().empty()) std::cerr << "raycell: warning: " << r.warning() << "\n";
@@ -383,6 +383,10 @@ void AddAnalyzeCommand(CLI::App& app) {
       "  echo '{\"id\":0,\"parent\":null,\"spawn\":null,\"cells\":[0,1]}' > p.jsonl && "
       "raycell analyze --paths p.jsonl");
   cmd->add_option("TRACE", args->trace, "trace file written by `raycell record`");
+  cmd->add_option("--cells", args->cells,
+                  "a regroupable capture (`record --regroupable`) regrouped into this subdivision: "
+                  "NXxNYxNZ, kd:N:footprint, kd:N:work, kd:budget:BYTES, octree:BYTES, "
+                  "dynamic:N (see `raycell trace regroup --help`); default: its own grid");
   cmd->add_option("--frame", args->frame, "analyse only this frame number (of TRACE or --paths)");
   cmd->add_option("--frames", args->frames,
                   "analyse only the frames numbered A..B (inclusive; also A-B or A)");

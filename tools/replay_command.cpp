@@ -24,7 +24,7 @@ namespace raycell {
 namespace {
 
 struct ReplayArgs {
-  std::string trace, config, scheduler, granularity, frames, format = "table", out, timeline;
+  std::string trace, config, scheduler, granularity, frames, format = "table", out, timeline, cells;
   std::vector<std::string> sets;
   std::uint32_t sample = 1;
   std::uint64_t timeline_limit = kTimelineLimitBytes;  // hidden option, for the tests
@@ -138,7 +138,7 @@ void Run(const ReplayArgs& a) {
     throw InputError("--format '" + a.format + "': expected table, json or csv");
   }
   if (a.sample < 1) throw InputError("--sample: must be at least 1");
-  const TraceReader reader = TraceReader::Open(a.trace);
+  const TraceReader reader = TraceReader::Open(a.trace, a.cells);
   CheckModelSize(config, reader.header().cell_count());
   if (!reader.warning().empty()) std::cerr << "raycell: warning: " << reader.warning() << "\n";
   Progress progress(!a.quiet);
@@ -216,6 +216,10 @@ void AddReplayCommand(CLI::App& app) {
       "  raycell replay capture.rct --timeline timeline.json --frames 0..1   # ui.perfetto.dev\n"
       "  raycell replay --print-config > gicube.toml");
   cmd->add_option("TRACE", args->trace, "trace file written by `raycell record`");
+  cmd->add_option("--cells", args->cells,
+                  "a regroupable capture (`record --regroupable`) regrouped into this subdivision: "
+                  "NXxNYxNZ, kd:N:footprint, kd:N:work, kd:budget:BYTES, octree:BYTES, "
+                  "dynamic:N (see `raycell trace regroup --help`); default: its own grid");
   cmd->add_option("--config", args->config, "TOML configuration (unknown keys are errors)");
   cmd->add_option("--scheduler", args->scheduler,
                   SchedulerNameList(", ") + " (see Schedulers below)");

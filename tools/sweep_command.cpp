@@ -17,7 +17,7 @@ namespace raycell {
 namespace {
 
 struct SweepArgs {
-  std::string trace, config, frames, shard, out;
+  std::string trace, config, frames, shard, out, cells;
   std::vector<std::string> varies;
   unsigned jobs = std::max(1u, std::thread::hardware_concurrency());
   bool quiet = false;
@@ -28,6 +28,7 @@ struct SweepArgs {
 SweepSpec MakeSpec(const SweepArgs& a) {
   SweepSpec spec;
   spec.trace = a.trace;
+  spec.cells = a.cells;
   spec.config = a.config;
   spec.base = a.config.empty() ? DefaultConfig() : LoadConfig(a.config);
   for (const std::string& v : a.varies) spec.varies.push_back(Vary::Parse(v));
@@ -42,7 +43,7 @@ void Run(const SweepArgs& a) {
   if (a.out.empty()) throw InputError("give --out FILE.csv");
   if (a.jobs < 1) throw InputError("--jobs must be at least 1");
   SweepSpec spec = MakeSpec(a);
-  const TraceReader reader = TraceReader::Open(a.trace);
+  const TraceReader reader = TraceReader::Open(a.trace, a.cells);
   if (!reader.warning().empty()) std::cerr << "raycell: warning: " << reader.warning() << "\n";
   spec.frame_indices = SelectFrameRange(reader, a.frames);
   Progress progress(!a.quiet);
@@ -122,6 +123,10 @@ void AddSweepCommand(CLI::App& app) {
   cmd->footer(kFooter);
   cmd->require_subcommand(0, 1);
   cmd->add_option("TRACE", args->trace, "trace file written by `raycell record`");
+  cmd->add_option("--cells", args->cells,
+                  "a regroupable capture (`record --regroupable`) regrouped into this subdivision: "
+                  "NXxNYxNZ, kd:N:footprint, kd:N:work, kd:budget:BYTES, octree:BYTES, "
+                  "dynamic:N (see `raycell trace regroup --help`); default: its own grid");
   cmd->add_option("--config", args->config, "TOML configuration (default: the GI-Cube defaults)");
   cmd->add_option("--vary", args->varies,
                   "KEY=V1,V2,... a configuration key and its values (repeatable), e.g. "

@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include "tests/test_util.h"
@@ -144,6 +145,51 @@ TEST_F(TraceCommandTest, ReadingCommandsWarnAndUseTheIntactFrames) {
     EXPECT_EQ(Lines(r.out, "       1 "), 1u) << command << ": " << r.out;
     EXPECT_EQ(Lines(r.out, "       2 "), 0u) << command << ": " << r.out;
   }
+}
+
+// A regroupable capture regrouped into a subdivision by `trace regroup` and by --cells SPEC of
+// the commands that read it: the same replay, analysis and sweep rows either way; bad uses
+// exit 2 naming what is wrong, and leave nothing written.
+TEST(TraceRegroupCommand, CellsSpecOfTheReadingCommandsEqualsTheRegroupedFile) {
+  const std::string dir = testing::TempDir("trace_regroup").string();
+  const std::string fine = dir + "/fine.rct", c3 = dir + "/c3.rct", plain = dir + "/plain.rct";
+  Result r = Raycell(
+      "record --res 24x24 --orbit 2:10 --cells 6x6x6 --regroupable --no-images "
+      "--quiet --out " +
+      fine);
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = Raycell("trace regroup " + fine + " --cells 3x3x3 --out " + c3);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(Contains(r.err, "into 27 cells")) << r.err;
+  for (const std::string command : {"replay --format json", "analyze --format json"}) {
+    const Result file = Raycell(command + " " + c3);
+    const Result view = Raycell(command + " " + fine + " --cells 3x3x3");
+    ASSERT_EQ(file.code, 0) << file.err;
+    ASSERT_EQ(view.code, 0) << view.err;
+    EXPECT_EQ(file.out, view.out) << command;
+  }
+  const std::string vary = " --vary scheduler=maxwork,celltree --quiet --out ";
+  ASSERT_EQ(Raycell("sweep " + c3 + vary + dir + "/a.csv").code, 0);
+  ASSERT_EQ(Raycell("sweep " + fine + " --cells 3x3x3" + vary + dir + "/b.csv").code, 0);
+  const std::string a = testing::ReadBytes(dir + "/a.csv"), b = testing::ReadBytes(dir + "/b.csv");
+  EXPECT_EQ(a.substr(a.find('\n')), b.substr(b.find('\n')));  // the rows, past the comments
+  EXPECT_TRUE(Contains(b.substr(0, b.find('\n')), "cells=\"3x3x3\""));
+
+  ASSERT_EQ(Raycell("record --res 8x8 --no-images --quiet --out " + plain).code, 0);
+  r = Raycell("analyze " + plain + " --cells 2x2x2");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(Contains(r.err, "is not a regroupable capture")) << r.err;
+  r = Raycell("replay " + fine + " --cells kd:0:work");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(Contains(r.err, "--cells 'kd:0:work'")) << r.err;
+  r = Raycell("trace regroup " + fine + " --cells 4x4x4 --out " + dir + "/x.rct");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(Contains(r.err, "4x4x4")) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/x.rct"));
+  r = Raycell("record --regroupable --footprint dense --out " + dir + "/x.rct");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_TRUE(Contains(r.err, "--regroupable needs sparse footprints")) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/x.rct"));
 }
 
 }  // namespace
