@@ -1245,6 +1245,11 @@ const std::vector<FrameSummary>& TraceReader::frames() const {
   return impl_->view ? impl_->view_frames : impl_->frames;
 }
 bool TraceReader::regrouped() const { return impl_->view; }
+const std::vector<CellId>& TraceReader::CellMap(std::size_t frame_index) const {
+  RAYCELL_CHECK(impl_->view);
+  impl_->Frame(frame_index);
+  return impl_->MapOf(frame_index);
+}
 const std::string& TraceReader::warning() const { return impl_->warning; }
 std::uint64_t TraceReader::file_size() const { return impl_->file.size(); }
 std::uint64_t TraceReader::readable_end() const { return impl_->readable_end; }

@@ -55,6 +55,9 @@ class TraceReader {
   const std::string& path() const;
   // Whether a regroupable capture is shown regrouped (Open), not as stored.
   bool regrouped() const;
+  // When regrouped: per stored cell, its cell in the view (kNoCell: an empty one) in frame
+  // `frame_index` (RayRegrouper's map).
+  const std::vector<CellId>& CellMap(std::size_t frame_index) const;
   const TraceHeader& header() const;
   // Summaries of the readable frames in file order, with their offset and length.
   const std::vector<FrameSummary>& frames() const;
