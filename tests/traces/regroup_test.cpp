@@ -189,5 +189,54 @@ TEST(RayRegrouper, BatchesOfOneFrameMayCutARayTree) {
   EXPECT_EQ(joined, want);
 }
 
+// Coarse cells that are empty (kNoCell): their visits are dropped, their samples and the rays
+// spawned there go to the merged visit before (or the first), a spawned ray that no longer
+// starts in its spawn visit's cell gets a zero-length visit there first, and a primary ray
+// left with nothing is dropped, the ids closing up (worked by hand below).
+TEST(RayRegrouper, DropsEmptyCellsAsACaptureOnTheCoarseCellsWould) {
+  // Fine cells 0-5: 0, 1 -> coarse 0; 2, 3 -> empty; 4, 5 -> coarse 1.
+  const std::vector<CellId> map = {CellId(0), CellId(0), kNoCell, kNoCell, CellId(1), CellId(1)};
+  RayBatch fine(true);
+  fine.BeginRay(RayKind::kPrimary, kNoParent, 0, 1, 1);  // ray 0: empty 2, 3 only: dropped
+  fine.AddVisit(CellId(2), 0, 0.f, 1.f);
+  fine.AddVisit(CellId(3), 0, 1.f, 2.f);
+  fine.BeginRay(RayKind::kPrimary, kNoParent, 0, 2, 1);  // ray 1 -> new id 0
+  fine.AddVisit(CellId(2), 2, 0.f, 1.f);  // leading empty: its 2 samples go to visit 0
+  fine.AddVisit(CellId(0), 5, 1.f, 2.f);
+  fine.AddVisit(CellId(1), 1, 2.f, 3.f);
+  fine.AddVisit(CellId(3), 4, 3.f, 4.f);  // empty between: its 4 samples go to visit 0
+  fine.AddVisit(CellId(4), 7, 4.f, 5.f);
+  fine.BeginRay(RayKind::kShadow, 1, 3, 2, 1);      // ray 2 -> id 1, spawned in fine cell 3
+  fine.AddVisit(CellId(3), 1, 0.f, .5f);            // (dropped: spawn goes to coarse visit 0)
+  fine.AddVisit(CellId(5), 2, .5f, 1.f);            // starts in coarse 1, not 0: a zero-length 0
+  fine.BeginRay(RayKind::kReflection, 1, 4, 2, 1);  // ray 3 -> id 2, spawned in fine 4
+  fine.AddVisit(CellId(4), 3, 0.f, 1.f);
+  RayRegrouper g(map);
+  const RayBatch out = g.Regroup(fine);
+  RayBatch want(true);
+  want.BeginRay(RayKind::kPrimary, kNoParent, 0, 2, 1);
+  want.AddVisit(CellId(0), 2 + 5 + 1 + 4, 1.f, 3.f);
+  want.AddVisit(CellId(1), 7, 4.f, 5.f);
+  want.BeginRay(RayKind::kShadow, 0, 0, 2, 1);
+  want.AddVisit(CellId(0), 1, 0.f, 0.f);  // the dropped visit's sample: before the next one
+  want.AddVisit(CellId(1), 2, .5f, 1.f);
+  want.BeginRay(RayKind::kReflection, 0, 1, 2, 1);
+  want.AddVisit(CellId(1), 3, 0.f, 1.f);
+  EXPECT_EQ(out, want);
+  EXPECT_EQ(out.first_id(), 0u);
+  // The next batch of the frame continues the closed-up ids.
+  RayBatch next(true);
+  next.set_first_id(4);
+  next.BeginRay(RayKind::kPrimary, kNoParent, 0, 3, 1);
+  next.AddVisit(CellId(5), 1, 0.f, 1.f);
+  EXPECT_EQ(g.Regroup(next).first_id(), 3u);
+  // A primary ray with samples in empty cells only cannot come from a capture.
+  RayRegrouper h(map);
+  RayBatch bad(true);
+  bad.BeginRay(RayKind::kPrimary, kNoParent, 0, 0, 0);
+  bad.AddVisit(CellId(2), 1, 0.f, 1.f);
+  EXPECT_THROW(h.Regroup(bad), InputError);
+}
+
 }  // namespace
 }  // namespace raycell
