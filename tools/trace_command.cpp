@@ -295,11 +295,15 @@ void AddTraceCommand(CLI::App& app) {
       "info", "Header, frames, rays by kind, visits, samples, bytes per visit and compression.");
   i->add_option("FILE", info->file, "trace file (.rct; an interrupted capture's .tmp reads too)")
       ->required();
+  i->add_option("--cells", info->cells,
+                "a regroupable capture regrouped into this subdivision (SPEC as `trace "
+                "regroup`): its cells, footprints and totals; default: the file as stored");
   i->add_flag("--cameras", info->cameras,
               "also print each frame's camera as 'camera FRAME eye X,Y,Z target X,Y,Z fov F' "
               "(e.g. to render the same views with vdb_render -translate/-lookat/-fov)");
   i->callback([info] {
-    const TraceReader r = OpenWithWarning(info->file, "", true);
+    // As stored, unless asked for a regroupable capture's subdivision.
+    const TraceReader r = OpenWithWarning(info->file, info->cells, info->cells.empty());
     PrintInfo(r, info->file, std::cout);
     if (info->cameras) PrintCameras(r.header(), std::cout);
   });

@@ -1,9 +1,12 @@
 #include "traces/trace_inspect.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <iomanip>
 #include <sstream>
 #include <vector>
+
+#include "base/format.h"
 
 namespace raycell {
 namespace {
@@ -35,6 +38,15 @@ void PrintFootprints(const TraceHeader& h, std::ostream& out) {
     out << " " << h.footprints[i];
   }
   out << (h.footprints.size() > kMaxFootprintsShown ? " ...\n" : "\n");
+  std::vector<std::uint64_t> full;
+  for (std::uint64_t f : h.footprints) {
+    if (f != 0) full.push_back(f);
+  }
+  if (full.empty()) return;
+  std::sort(full.begin(), full.end());
+  out << "footprint spread: " << full.size() << " non-empty cells, min " << full.front()
+      << ", median " << full[(full.size() - 1) / 2] << ", max " << full.back() << " bytes, max/min "
+      << FormatFixed(double(full.back()) / double(full.front()), 2) << "\n";
 }
 
 void PrintSettings(const RenderSettings& s, std::ostream& out) {
