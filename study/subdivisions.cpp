@@ -1,0 +1,113 @@
+#include "study/subdivisions.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <iostream>
+#include <numeric>
+#include <sstream>
+
+#include "base/check.h"
+#include "base/format.h"
+#include "replay/config.h"
+#include "replay/driver.h"
+#include "replay/replayer.h"
+#include "traces/record/record_flags.h"
+#include "traces/record/recorder.h"
+#include "traces/record/scene.h"
+#include "traces/trace_reader.h"
+
+namespace raycell {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The non-empty cells' footprints, sorted.
+std::vector<std::uint64_t> NonEmpty(const std::vector<std::uint64_t>& footprints) {
+  std::vector<std::uint64_t> f;
+  for (std::uint64_t b : footprints) {
+    if (b != 0) f.push_back(b);
+  }
+  std::sort(f.begin(), f.end());
+  return f;
+}
+
+std::uint64_t Median(const std::vector<std::uint64_t>& sorted) {
+  RAYCELL_CHECK(!sorted.empty());
+  return sorted[(sorted.size() - 1) / 2];
+}
+
+}  // namespace
+
+std::vector<std::string> SubdivisionSpecs(std::uint64_t cache_bytes) {
+  const std::string budget = std::to_string(cache_bytes) + "B";
+  return {"3x3x3",     "kd:27:footprint", "kd:27:work", "kd:budget:" + budget, "octree:" + budget,
+          "dynamic:27"};
+}
+
+SubdivisionStudy MeasureSubdivisions(const SubdivisionOptions& o) {
+  SubdivisionStudy study;
+  study.options = o;
+  if (o.frames <= 0) return study;
+  try {
+    SceneSpec spec;
+    spec.source = o.scene;
+    Scene::Load(spec, 0);  // a given trace's scene may live elsewhere
+  } catch (const InputError& e) {
+    study.not_measured = "the scene `" + o.scene + "` cannot be loaded here (" + e.what() + ")";
+    return study;
+  }
+  if (!o.quiet) {
+    std::cerr << "measuring subdivisions: " << o.frames << " frame(s) of `" << o.scene << "` at "
+              << o.res << ", one capture on " << o.fine << " cells regrouped, in " << o.out
+              << "/\n";
+  }
+  fs::create_directories(o.out);
+  const std::string fine = (fs::path(o.out) / "fine.rct").string();
+  RecordFlags flags;
+  flags.opt.scene.source = o.scene;
+  flags.res = o.res;
+  flags.orbit = std::to_string(o.frames) + ":" + FormatReal(3.75 * o.frames);
+  flags.cells = o.fine;
+  flags.opt.regroupable = true;
+  flags.opt.out = fine;
+  flags.no_images = true;
+  flags.quiet = true;
+  std::ostringstream log;  // one line per frame, not shown
+  RecordOptions record = ToRecordOptions(flags);
+  record.images_dir.clear();
+  record.progress = false;
+  Record(record, log);
+
+  study.cache_bytes = Median(NonEmpty(TraceReader::Open(fine, "3x3x3").header().footprints));
+  for (const std::string& spec : SubdivisionSpecs(study.cache_bytes)) {
+    const TraceReader reader = TraceReader::Open(fine, spec);
+    const std::vector<std::uint64_t> f = NonEmpty(reader.header().footprints);
+    std::vector<std::size_t> frames(reader.frames().size());
+    std::iota(frames.begin(), frames.end(), std::size_t{0});
+    for (const char* scheduler : {"maxwork", "celltree"}) {
+      ReplayConfig config = DefaultConfig();
+      ApplyOverride(config, "scheduler", scheduler, "the subdivision section");
+      ApplyOverride(config, "level.cache.capacity", std::to_string(study.cache_bytes) + "B",
+                    "the subdivision section");
+      ValidateConfig(config, "the subdivision section's configuration");
+      CheckModelSize(config, reader.header().cell_count());
+      const ReplayResult t = ReplayTrace(reader, frames, config, {}, 1).total;
+      SubdivisionRow row;
+      row.spec = spec;
+      row.scheduler = scheduler;
+      row.cells = std::uint32_t(f.size());
+      row.footprint_min = f.front(), row.footprint_median = Median(f), row.footprint_max = f.back();
+      row.fetches = t.fetches;
+      RAYCELL_CHECK_LE(2u, t.levels.size());
+      row.cache_bytes = t.levels[0].bytes;
+      row.board_bytes = t.levels[1].bytes;
+      row.stall_ps = t.stall.picoseconds();
+      row.time_ps = t.time.picoseconds();
+      study.rows.push_back(row);
+    }
+  }
+  study.measured = true;
+  return study;
+}
+
+}  // namespace raycell
