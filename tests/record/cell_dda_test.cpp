@@ -332,11 +332,20 @@ TEST(CellDDATest, ForcedStartCellFarFromTheStartPoint) {
             (std::vector<CellSegment>{{CellId(0), 0, 0}}));
   EXPECT_EQ(Trace(g, {0.1, 0.1, 0.1}, {-1, 0, 0}, 0, 0.05, CellId(2)),
             (std::vector<CellSegment>{{CellId(2), 0, 0}, {CellId(0), 0, 0.05}}));
-  // Within 1e-3 of a cell of the forced cell is rounding: the forced cell holds the ray.
-  EXPECT_EQ(Trace(g, {p1 - 1e-4, 0.1, 0.1}, d, 0, kInf, CellId(1)),
-            (std::vector<CellSegment>{{CellId(1), 0, p2 - (p1 - 1e-4)},
-                                      {CellId(2), p2 - (p1 - 1e-4), 1 - (p1 - 1e-4)}}));
-  EXPECT_EQ(TraceCells(g, {p1 - 1e-3, 0.1, 0.1}, d, 0, kInf, CellId(1)), (Cells{1, 0, 1, 2}));
+  // Within 1e-6 of the box of the forced cell is rounding: the forced cell holds the ray.
+  EXPECT_EQ(Trace(g, {p1 - 1e-7, 0.1, 0.1}, d, 0, kInf, CellId(1)),
+            (std::vector<CellSegment>{{CellId(1), 0, p2 - (p1 - 1e-7)},
+                                      {CellId(2), p2 - (p1 - 1e-7), 1 - (p1 - 1e-7)}}));
+  EXPECT_EQ(TraceCells(g, {p1 - 1e-5, 0.1, 0.1}, d, 0, kInf, CellId(1)), (Cells{1, 0, 1, 2}));
+  // A fraction of the box, not of a cell: the same on a grid of 3 or 300 cells an axis.
+  const auto fine = UnitGrid(300);
+  EXPECT_EQ(TraceCells(fine, {p1 - 1e-5, 0.1, 0.1}, d, 0, kInf, CellId(100 + 300 * (30 + 300 * 30)))
+                .size(),
+            202u);  // the forced cell, the one behind it, then cells 100..299
+  // Far out on one axis, within the margin on another: the ray goes on from the cell holding
+  // the start point but for the second axis, where it keeps the forced cell's index (cell 3 =
+  // (0, 1, 0), not 0 = (0, 0, 0)).
+  EXPECT_EQ(TraceCells(g, {p1 - 0.1, p1 - 1e-7, 0.1}, d, 0, kInf, CellId(4)), (Cells{4, 3, 4, 5}));
 }
 
 TEST(CellDDATest, InvalidRays) {

@@ -19,6 +19,10 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kTolUlps = 16 * DBL_EPSILON;
 // Crossings taken together never move the ray by more than this fraction of a cell.
 constexpr double kTolCellFraction = 1e-3;
+// A forced start point this close to its cell on an axis, as a fraction of the box's extent
+// there, is in it (rounding). A fraction of the box, not of a cell, so that grids nested in one
+// box decide alike (docs/design.md §1 "Subdivisions").
+constexpr double kStartTolBoxFraction = 1e-6;
 // A cell must be at least this fraction of the largest coordinate magnitude on its axis.
 constexpr double kMinCellRelative = 0x1p-40;
 
@@ -205,6 +209,7 @@ void CellDDA::InitAxes(const Vec3d& origin, const Vec3d& dir) {
         std::max(std::abs(grid_.Plane(a, 0)), std::abs(grid_.Plane(a, grid_.dim(a))));
     u_[a] = step_[a] == 0 ? 0 : kTolUlps * (mag + std::abs(o_[a])) / abs_d_[a];
     cap_[a] = kTolCellFraction * grid_.cell_size()[a];
+    start_cap_[a] = kStartTolBoxFraction * (grid_.Plane(a, grid_.dim(a)) - grid_.Plane(a, 0));
   }
 }
 
@@ -243,8 +248,16 @@ void CellDDA::InitForced(CellId start, double tmin, double tmax) {
     throw InputError("ray with forced start cell " + std::to_string(start.value()) +
                      ": tmin must be finite, not " + Num(tmin));
   const auto xyz = grid_.CellCoords(start);
-  if (StartsOutside(xyz, tmin)) {
+  std::array<bool, 3> out{};
+  if (StartsOutside(xyz, tmin, &out)) {
     InitFree(tmin, tmax);
+    if (!done_ && t_ == tmin) {
+      // The start point's cell, but on the axes where it is within the margin of the given
+      // cell's slab: the given cell's index there.
+      for (int a = 0; a < 3; ++a) {
+        if (!out[a]) idx_[a] = xyz[a], t_next_[a] = NextCrossing(a);
+      }
+    }
     if (!done_ && Cell() == start) {  // the ray enters the box in the given cell
       t_ = tmin;
     } else {
@@ -268,18 +281,21 @@ void CellDDA::InitForced(CellId start, double tmin, double tmax) {
   }
 }
 
-bool CellDDA::StartsOutside(const std::array<std::uint32_t, 3>& xyz, double tmin) const {
+bool CellDDA::StartsOutside(const std::array<std::uint32_t, 3>& xyz, double tmin,
+                            std::array<bool, 3>* out) const {
+  bool any = false;
   for (int a = 0; a < 3; ++a) {
     if (step_[a] == 0) {
-      if (grid_.Plane(a, xyz[a]) - o_[a] > cap_[a] || o_[a] - grid_.Plane(a, xyz[a] + 1) > cap_[a])
-        return true;
-      continue;
+      (*out)[a] = grid_.Plane(a, xyz[a]) - o_[a] > start_cap_[a] ||
+                  o_[a] - grid_.Plane(a, xyz[a] + 1) > start_cap_[a];
+    } else {
+      // Past the cell's exit plane is fine: the ray leaves the cell at once (Advance).
+      const double t_in = CrossingT(a, step_[a] > 0 ? xyz[a] : xyz[a] + 1);
+      (*out)[a] = (t_in - tmin) * abs_d_[a] > start_cap_[a];
     }
-    // Past the cell's exit plane is fine: the ray leaves the cell at once (Advance).
-    const double t_in = CrossingT(a, step_[a] > 0 ? xyz[a] : xyz[a] + 1);
-    if ((t_in - tmin) * abs_d_[a] > cap_[a]) return true;
+    any |= (*out)[a];
   }
-  return false;
+  return any;
 }
 
 double CellDDA::CrossingT(int axis, std::uint32_t plane) const {

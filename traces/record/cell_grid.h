@@ -32,12 +32,14 @@
 //    ray leaves that cell (clamped to [tmin, min(tmax, box exit)]). It is the one segment
 //    that may have zero length: when the start point lies on the face the ray leaves by,
 //    or when the ray leaves the box right away. A start point outside the given cell by at
-//    most 1e-3 of a cell on each axis (rounding) counts as inside it. A start point farther
-//    out (a ray spawned half a voxel off a surface, in cells smaller than that) is reached
-//    at once: the first segment is the given cell with zero length, and the ray goes on
-//    from the cell holding its start point as if it had no start cell. When that cell is
-//    the given one again the two are one segment; when the ray only enters the box later,
-//    the given cell's segment lasts until it does.
+//    most 1e-6 of the box's extent on each axis (rounding; a fraction of the box, not of a
+//    cell, so that nested grids decide alike) counts as inside it. A start point farther
+//    out (a ray spawned half a voxel off a surface) is reached at once: the first segment
+//    is the given cell with zero length, and the ray goes on from the cell holding its
+//    start point as if it had no start cell, but on the axes where the point is within that
+//    margin, where it keeps the given cell's index. When that cell is the given one again
+//    the two are one segment; when the ray only enters the box later, the given cell's
+//    segment lasts until it does.
 #pragma once
 
 #include <array>
@@ -146,9 +148,10 @@ class CellDDA {
   void InitFree(double tmin, double tmax);
   void InitForced(CellId start, double tmin, double tmax);
   // True when the point at parameter tmin lies outside the cell `xyz` by more than
-  // kTolCellFraction of a cell on some axis: before the cell's entry plane on an axis the
-  // ray moves along, or off its slab on an axis the ray is parallel to.
-  bool StartsOutside(const std::array<std::uint32_t, 3>& xyz, double tmin) const;
+  // start_cap_ on some axis: before the cell's entry plane on an axis the ray moves along,
+  // or off its slab on an axis the ray is parallel to; `out` says on which axes.
+  bool StartsOutside(const std::array<std::uint32_t, 3>& xyz, double tmin,
+                     std::array<bool, 3>* out) const;
   // Parameter range [entry, exit] of the slab of `axis`; empty (entry > exit) when the ray
   // is parallel to it and outside.
   void Slab(int axis, double* entry, double* exit) const;
@@ -170,6 +173,8 @@ class CellDDA {
   // Rounding uncertainty of a crossing parameter on each axis, and the largest distance
   // along the axis by which taking crossings together may move the ray.
   std::array<double, 3> u_{}, cap_{};
+  // How far a forced start point may lie outside its cell on each axis and count as in it.
+  std::array<double, 3> start_cap_{};
   std::array<std::int64_t, 3> idx_{};
   std::array<int, 3> step_{};
   double t_ = 0, t_end_ = 0, t_u_ = 0, end_u_ = 0;  // current and last parameter, uncertainties
