@@ -95,6 +95,19 @@ TEST(Study, MeasuresEveryKnobTheLibraryDeclares) {
   EXPECT_EQ(all.error, 0.0);
   EXPECT_EQ(all.fetch_change, 0.0);
   EXPECT_EQ(RowOf(a.rows, "replay granularity", "ray").time_ratio, 1.0);
+  // Max depth: measured against max depth 5, record's default (3, `raycell record --help`)
+  // marked; depth 0 drops the mirror's and the glass's rays, so its images differ.
+  const AccuracyRow& deepest = RowOf(a.rows, "max depth", "5");
+  EXPECT_EQ(deepest.error_kind, "image RMSE vs max depth 5");
+  EXPECT_EQ(deepest.error, 0.0);
+  EXPECT_EQ(deepest.time_ratio, 1.0);
+  EXPECT_EQ(deepest.fetch_change, 0.0);
+  for (const char* depth : {"0", "1", "2", "3", "4"}) {
+    const AccuracyRow& r = RowOf(a.rows, "max depth", depth);
+    EXPECT_EQ(r.is_default, std::string(depth) == "3") << depth;
+    EXPECT_EQ(r.error_kind, "image RMSE vs max depth 5") << depth;
+  }
+  EXPECT_GT(RowOf(a.rows, "max depth", "0").error, 0.0);
   // The captures measured are where the study says.
   for (const AccuracyKnob& k : knobs) {
     if (k.folder.empty()) continue;
