@@ -66,10 +66,11 @@ void AddStudyCommand(CLI::App& app) {
   cmd->add_option("--threads", args->threads, "rendering threads, 0 = all cores")
       ->capture_default_str();
   cmd->add_option("--accuracy-frames", args->accuracy_frames,
-                  "frames of the run time against error capture; 0 skips that section")
+                  "frames of the run time against error captures (the depth section's too); 0 "
+                  "skips both sections")
       ->capture_default_str();
   cmd->add_option("--accuracy-res", args->accuracy_res,
-                  "image size of the run time against error capture")
+                  "image size of the run time against error captures (the depth section's too)")
       ->capture_default_str();
   cmd->add_option("--effort", args->effort,
                   "budget of the bracket of each frame's optimum: quick (the study's), default "
