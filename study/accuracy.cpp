@@ -70,6 +70,16 @@ std::vector<AccuracyKnob> MakeKnobs() {
   AccuracyKnob single = Renderer("precision", "single");  // step 1, as the default
   single.precision = "single";
   knobs.push_back(single);
+  for (std::uint32_t depth = 0; depth <= kDeepestMaxDepth; ++depth) {
+    AccuracyKnob k;
+    k.part = AccuracyPart::kDepth;
+    k.knob = "max depth";
+    k.value = std::to_string(depth);
+    k.max_depth = depth;
+    k.is_default = depth == RenderSettings{}.max_depth;
+    k.folder = "max-depth-" + k.value;
+    knobs.push_back(k);
+  }
   for (const char* granularity : {"ray", "node"}) {
     AccuracyKnob k = Replay(AccuracyPart::kGranularity, "replay granularity", granularity);
     k.granularity = granularity;
@@ -103,15 +113,12 @@ double RecordKnob(const AccuracyOptions& o, const AccuracyKnob& k) {
   if (k.shadow_step) flags.opt.settings.shadow_step = *k.shadow_step;
   if (k.cutoff) flags.opt.settings.cutoff = *k.cutoff;
   if (!k.precision.empty()) flags.precision = k.precision;
+  if (k.max_depth) flags.opt.settings.max_depth = *k.max_depth;
   const RecordOptions options = ToRecordOptions(flags);
   std::ostringstream log;  // one line per frame, not shown
   const Clock::time_point start = Clock::now();
   Record(options, log);
   return SecondsSince(start);
-}
-
-std::string Trace(const AccuracyOptions& o, const AccuracyKnob& k) {
-  return (fs::path(o.out) / k.folder / "c.rct").string();
 }
 
 std::vector<Rgb8Image> Frames(const AccuracyOptions& o, const AccuracyKnob& k) {
@@ -182,6 +189,31 @@ double AbsChange(std::uint64_t value, std::uint64_t reference, const std::string
   return std::abs(Change(value, reference, what));
 }
 
+// The max depth knob of kDeepestMaxDepth, the max depth rows' reference.
+const AccuracyKnob& Deepest() {
+  for (const AccuracyKnob& k : AccuracyKnobs()) {
+    if (k.max_depth == kDeepestMaxDepth) return k;
+  }
+  RAYCELL_CHECK(false);
+  return AccuracyKnobs().front();
+}
+
+// A capture measured against a reference capture: its seconds, frames and Cell Tree
+// scheduling's fetches.
+struct Captured {
+  double seconds = 0;
+  std::vector<Rgb8Image> frames;
+  std::uint64_t fetches = 0;
+};
+
+Captured Capture(const AccuracyOptions& o, const AccuracyKnob& k) {
+  Captured c;
+  c.seconds = RecordKnob(o, k);
+  c.frames = Frames(o, k);
+  c.fetches = ReplayKnob(KnobTrace(o, k), "ray", 1).fetches;
+  return c;
+}
+
 const AccuracyKnob& Find(AccuracyPart part, bool is_default) {
   for (const AccuracyKnob& k : AccuracyKnobs()) {
     if (k.part == part && k.is_default == is_default) return k;
@@ -195,6 +227,14 @@ AccuracyRow Row(const AccuracyKnob& k, double seconds, double time_ratio, double
   return {k.knob, k.value, seconds, time_ratio, error, error_kind, fetch_change, k.is_default};
 }
 
+// A renderer or max depth row: capture `c` against the reference capture `base` (`what`:
+// "step 0.25", "max depth 5").
+AccuracyRow CaptureRow(const AccuracyKnob& k, const Captured& c, const Captured& base,
+                       const std::string& what) {
+  return Row(k, c.seconds, c.seconds / base.seconds, ImageRmse(c.frames, base.frames),
+             "image RMSE vs " + what, Change(c.fetches, base.fetches, what + "'s fetches"));
+}
+
 // A replay row: replay `r` against the replay `base` it is measured from (`what`: "per ray
 // segment", "without sampling").
 AccuracyRow ReplayRow(const AccuracyKnob& k, const Replayed& r, const Replayed& base,
@@ -205,6 +245,10 @@ AccuracyRow ReplayRow(const AccuracyKnob& k, const Replayed& r, const Replayed& 
 }
 
 }  // namespace
+
+std::string KnobTrace(const AccuracyOptions& o, const AccuracyKnob& k) {
+  return (fs::path(o.out) / k.folder / "c.rct").string();
+}
 
 const std::vector<AccuracyKnob>& AccuracyKnobs() {
   static const std::vector<AccuracyKnob> knobs = MakeKnobs();
@@ -230,24 +274,26 @@ AccuracyStudy MeasureAccuracy(const AccuracyOptions& o) {
   fs::create_directories(o.out);
   const AccuracyKnob& reference = AccuracyKnobs().front();
   RAYCELL_CHECK(reference.part == AccuracyPart::kReference);
-  const double reference_seconds = RecordKnob(o, reference);
-  const std::vector<Rgb8Image> reference_frames = Frames(o, reference);
-  const std::uint64_t reference_fetches = ReplayKnob(Trace(o, reference), "ray", 1).fetches;
-  study.rows.push_back(Row(reference, reference_seconds, 1.0, 0.0, "reference", 0.0));
+  const Captured finest = Capture(o, reference);
+  study.rows.push_back(Row(reference, finest.seconds, 1.0, 0.0, "reference", 0.0));
+  // The max depth rows' reference, captured when the first of them is measured.
+  Captured deepest;
+  const std::string deepest_name = "max depth " + std::to_string(kDeepestMaxDepth);
   // The replay rows replay the capture at the renderer's default settings.
-  const std::string trace = Trace(o, Find(AccuracyPart::kRenderer, true));
+  const std::string trace = KnobTrace(o, Find(AccuracyPart::kRenderer, true));
   Replayed per_segment, unsampled;
   for (const AccuracyKnob& k : AccuracyKnobs()) {
     switch (k.part) {
       case AccuracyPart::kReference:
         break;
-      case AccuracyPart::kRenderer: {
-        const double seconds = RecordKnob(o, k);
-        const std::uint64_t fetches = ReplayKnob(Trace(o, k), "ray", 1).fetches;
-        study.rows.push_back(Row(k, seconds, seconds / reference_seconds,
-                                 ImageRmse(Frames(o, k), reference_frames),
-                                 "image RMSE vs step 0.25",
-                                 Change(fetches, reference_fetches, "the reference's fetches")));
+      case AccuracyPart::kRenderer:
+        study.rows.push_back(CaptureRow(k, Capture(o, k), finest, "step 0.25"));
+        break;
+      case AccuracyPart::kDepth: {
+        if (deepest.frames.empty()) deepest = Capture(o, Deepest());
+        const bool is_deepest = k.max_depth == kDeepestMaxDepth;
+        study.rows.push_back(
+            CaptureRow(k, is_deepest ? deepest : Capture(o, k), deepest, deepest_name));
         break;
       }
       case AccuracyPart::kGranularity: {

@@ -27,6 +27,13 @@ std::string Percent(double part, double whole) {
   return FormatFixed(whole != 0 ? 100.0 * part / whole : 0.0, 1) + "%";
 }
 
+// "+1.2%" or "-4.8%": part / whole with its sign.
+std::string SignedPercent(double part, double whole) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%+.1f%%", whole != 0 ? 100.0 * part / whole : 0.0);
+  return text;
+}
+
 // The first sentence of report.md: what was recorded, or that captures were given.
 std::string Scene(const StudyResult& r) {
   const StudyOptions& a = r.options;
@@ -68,10 +75,12 @@ void RunPlot(const std::string& cmd) {
   }
 }
 
-void Plot(const std::string& out, const std::vector<std::string>& cells, bool processors) {
+void Plot(const std::string& out, const std::vector<std::string>& cells, bool processors,
+          bool depth) {
   std::string cmd =
       Python() + " " + Quote(RAYCELL_SOURCE_DIR "/tools/plot_study.py") + " " + Quote(out);
   if (processors) cmd += " --processors";
+  if (depth) cmd += " --depth";
   for (const auto& c : cells) cmd += " " + Quote(c);
   RunPlot(cmd);
   for (const auto& c : cells) {
@@ -82,6 +91,7 @@ void Plot(const std::string& out, const std::vector<std::string>& cells, bool pr
   if (processors && !fs::exists(fs::path(out) / "processors.png")) {
     throw InputError("plot missing: processors");
   }
+  if (depth && !fs::exists(fs::path(out) / "depth.png")) throw InputError("plot missing: depth");
 }
 
 // Picoseconds as milliseconds, one decimal.
@@ -333,10 +343,62 @@ std::string AccuracyReport(const AccuracyStudy& a) {
     << "same scene at " << a.options.res << " in 3x3x3 cells (`study/accuracy.h`; "
     << "times are ratios to the most accurate setting measured in the same run). Renderer "
     << "rows: image RMSE against a capture with a four times finer step, and the change in "
-    << "Cell Tree scheduling's fetches. Replay rows: error in simulated time and fetches "
-    << "against per-ray-segment replay without sampling.\n\n"
+    << "Cell Tree scheduling's fetches. Max depth rows: the same against max depth "
+    << kDeepestMaxDepth << " at the default step (record's default max depth marked). Replay "
+    << "rows: error in simulated time and fetches against per-ray-segment replay without "
+    << "sampling.\n\n"
     << AccuracyTable(a.rows) << "\n![run time against error](accuracy/accuracy.png)\n\n"
     << "CSV: `accuracy/accuracy.csv`.\n";
+  return s.str();
+}
+
+std::string DepthCsv(const DepthStudy& d) {
+  std::ostringstream s;
+  s << "max_depth,default,rays,primary_rays,reflection_rays,refraction_rays,shadow_rays,nodes,"
+       "fetches_maxwork,fetches_celltree,time_maxwork_ps,time_celltree_ps,rmse\n";
+  for (const DepthRow& r : d.rows) {
+    s << r.max_depth << ',' << (r.is_default ? 1 : 0) << ',' << r.rays;
+    for (const std::uint64_t n : r.rays_by_kind) s << ',' << n;
+    s << ',' << r.nodes << ',' << r.fetches_maxwork << ',' << r.fetches_celltree << ','
+      << r.time_maxwork.picoseconds() << ',' << r.time_celltree.picoseconds() << ','
+      << FormatPythonFloat(r.rmse) << '\n';
+  }
+  return s.str();
+}
+
+std::string DepthReport(const DepthStudy& d) {
+  if (!d.measured && d.not_measured.empty()) return "";
+  const std::string heading = "## Limited depth recursion\n\n";
+  if (!d.measured) return heading + "Not measured: " + d.not_measured + ".\n";
+  std::ostringstream s;
+  s << heading << "The renderer's maximum depth of reflection and refraction rays (`raycell "
+    << "record --max-depth`; shadow rays are cast at every depth) from 0 to "
+    << d.rows.back().max_depth << ", on the run time against error section's max depth "
+    << "captures (" << d.options.frames << " frame(s) of the same scene at " << d.options.res
+    << " in 3x3x3 cells, the default step; no capture made again; `study/depth.h`). Summed "
+    << "over the frames: rays, Cell Tree nodes, and the fetches (one-cell cache) and simulated "
+    << "time of Max Work (`maxwork`) and Cell Tree scheduling (`celltree`), replayed per Cell "
+    << "Tree node with the default configuration (exact with one processor); image RMSE against "
+    << "max depth " << d.rows.back().max_depth << ".\n\n"
+    << "| max depth | rays | spawned: reflection / refraction / shadow | Cell Tree nodes | rays "
+       "per node | fetches, Max Work | fetches, Cell Tree | Cell Tree against Max Work | time "
+       "ms, Max Work | time ms, Cell Tree | image RMSE vs max depth "
+    << d.rows.back().max_depth << " | default |\n|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    << "---:|---:|---|\n";
+  for (const DepthRow& r : d.rows) {
+    const double mw = double(r.fetches_maxwork), ct = double(r.fetches_celltree);
+    s << "| " << r.max_depth << " | " << r.rays << " | " << r.rays_by_kind[1] << " / "
+      << r.rays_by_kind[2] << " / " << r.rays_by_kind[3] << " | " << r.nodes << " | "
+      << FormatFixed(r.nodes ? double(r.rays) / double(r.nodes) : 0.0, 1) << " | "
+      << r.fetches_maxwork << " | " << r.fetches_celltree << " | " << SignedPercent(ct - mw, mw)
+      << " | " << FormatFixed(double(r.time_maxwork.picoseconds()) / 1e9, 2) << " | "
+      << FormatFixed(double(r.time_celltree.picoseconds()) / 1e9, 2) << " | "
+      << FormatFixed(r.rmse, 4) << " | " << (r.is_default ? "yes" : "") << " |\n";
+  }
+  s << "\n![rays, fetches, time and error against max depth](depth.png)\n\n"
+    << "`depth.csv`: per max depth, rays by kind, Cell Tree nodes, each scheduler's fetches and "
+       "simulated time in picoseconds, and the image RMSE; the captures in `accuracy/max-depth-N/`."
+    << "\n";
   return s.str();
 }
 
@@ -366,7 +428,8 @@ std::string StudyReport(const StudyResult& r) {
     << "is smaller than the bracket's.\n\n";
   for (const GridStudy& g : r.grids) s << GridReport(g);
   for (const GridStudy& g : r.grids) s << ProcessorsReport(g);
-  s << AccuracyReport(r.accuracy);
+  const std::string accuracy = AccuracyReport(r.accuracy);
+  s << accuracy << (accuracy.empty() ? "" : "\n") << DepthReport(r.depth);
   return s.str();
 }
 
@@ -388,7 +451,8 @@ std::string WriteStudyReport(const StudyResult& r) {
     processors = true;
     WriteFile(out, "processors.csv", ProcessorsCsv(g));
   }
-  Plot(out, labels, processors);
+  if (r.depth.measured) WriteFile(out, "depth.csv", DepthCsv(r.depth));
+  Plot(out, labels, processors, r.depth.measured);
   if (r.accuracy.measured) {
     WriteFile(r.accuracy.options.out, "accuracy.csv", AccuracyCsv(r.accuracy.rows));
     PlotAccuracy(r.accuracy.options.out);

@@ -1,8 +1,8 @@
 // What a study writes into its folder, from its StudyResult: report.md (the tables of every
-// grid, the several processors table of the finest grid and the run time against error
-// table), the CSV behind each table (cell_trees_*.csv, fetches_*.csv, processors.csv,
-// accuracy/accuracy.csv) and the plots drawn from those CSVs by tools/plot_study.py and
-// tools/plot_accuracy.py (python3 with matplotlib). The texts are
+// grid, the several processors table of the finest grid, the run time against error table and
+// the depth table), the CSV behind each table (cell_trees_*.csv, fetches_*.csv, processors.csv,
+// accuracy/accuracy.csv, depth.csv) and the plots drawn from those CSVs by tools/plot_study.py
+// and tools/plot_accuracy.py (python3 with matplotlib). The texts are
 // functions of the result alone, so tests can check them without running a study.
 #pragma once
 
@@ -37,6 +37,15 @@ std::string AccuracyTable(const std::vector<AccuracyRow>& rows);
 // report.md's run time against error section: the table, or why it was not measured; empty
 // when it was not asked for.
 std::string AccuracyReport(const AccuracyStudy& a);
+// depth.csv, one row per DepthStudy row, in its order: max_depth, default (1 for record's
+// default max depth, else 0), rays, primary_rays, reflection_rays, refraction_rays,
+// shadow_rays, nodes (Cell Tree nodes), fetches_maxwork, fetches_celltree, time_maxwork_ps,
+// time_celltree_ps (summed over the frames), rmse (image RMSE against max depth 5, as Python's
+// repr prints the float).
+std::string DepthCsv(const DepthStudy& d);
+// report.md's depth section: the table, or why it was not measured; empty when the result has
+// neither (a DepthStudy never measured).
+std::string DepthReport(const DepthStudy& d);
 // report.md.
 std::string StudyReport(const StudyResult& r);
 

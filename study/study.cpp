@@ -335,6 +335,7 @@ StudyResult RunStudy(const StudyOptions& a) {
   }
   result.accuracy.options = accuracy;
   if (a.accuracy_frames > 0) result.accuracy = MeasureAccuracy(accuracy);
+  result.depth = MeasureDepth(result.accuracy);
   return result;
 }
 

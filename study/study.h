@@ -4,7 +4,8 @@
 // returns what it found as data; study/report.h turns that into report.md, CSVs and plots,
 // and the command (tools/study_command.cpp) only parses options into StudyOptions. On the
 // finest grid it also replays boards of several processors (docs/design.md §5 "Load
-// balancing").
+// balancing"); from the run time against error section's max depth captures it makes the
+// depth section (study/depth.h).
 #pragma once
 
 #include <cstdint>
@@ -16,6 +17,7 @@
 #include "replay/driver.h"
 #include "scheduling/scheduler.h"
 #include "study/accuracy.h"
+#include "study/depth.h"
 
 namespace raycell {
 
@@ -82,12 +84,14 @@ struct StudyResult {
   std::vector<int> frame_numbers;  // what options.frames says; empty for given traces
   std::vector<GridStudy> grids;    // in the order of --cells, or of the given traces
   AccuracyStudy accuracy;
+  DepthStudy depth;  // from accuracy's captures: not measured when accuracy was not
 };
 
 // Runs the study: checks the options (InputError naming the option, before any work),
 // records and studies each grid (or each given trace) into options.out, replays the last one
-// on several processors, then measures run time against error into options.out/accuracy/. One
-// summary line per capture on stderr, progress bars unless quiet.
+// on several processors, then measures run time against error into options.out/accuracy/ and
+// the depth section from its captures. One summary line per capture on stderr, progress bars
+// unless quiet.
 StudyResult RunStudy(const StudyOptions& options);
 
 }  // namespace raycell

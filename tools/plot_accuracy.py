@@ -1,8 +1,9 @@
 #!/usr/bin/python3
 """The plot of a study's run time against error: DIR/accuracy.png from DIR/accuracy.csv (as
 `raycell study` writes them into STUDY/accuracy/), one panel per kind of error: the renderer's
-image RMSE and the replay's error in simulated time, each against the run time as a ratio to
-the most accurate setting. Exits non-zero (and the study fails) if it cannot be drawn.
+image RMSE against its finest step, the image RMSE of the max depth rows against the deepest,
+and the replay's error in simulated time, each against the run time as a ratio to the most
+accurate setting. Exits non-zero (and the study fails) if it cannot be drawn.
 
 Usage: plot_accuracy.py DIR     e.g. plot_accuracy.py study/accuracy
 """
@@ -27,13 +28,18 @@ def main():
         return 2
     folder = sys.argv[1]
     rows = read(os.path.join(folder, "accuracy.csv"))
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    deepest = max((int(r["value"]) for r in rows if r["knob"] == "max depth"), default=5)
+    fig, axes = plt.subplots(1, 3, figsize=(16, 4))
     for ax, part, ylabel in ((axes[0], "renderer", "image RMSE against step 0.25"),
-                             (axes[1], "replay", "relative error in simulated time")):
+                             (axes[1], "max depth", f"image RMSE against max depth {deepest}"),
+                             (axes[2], "replay", "relative error in simulated time")):
         for knob in sorted({r["knob"] for r in rows if r["knob"].startswith(part)}):
-            pts = sorted((float(r["time_ratio"]), float(r["error"]), r["value"]) for r in rows
-                         if r["knob"] == knob)
-            ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", label=knob[len(part) + 1:])
+            pts = [(float(r["time_ratio"]), float(r["error"]), r["value"]) for r in rows
+                   if r["knob"] == knob]
+            # In the order of the setting: a depth's time is noisy, its error is not.
+            pts.sort(key=(lambda p: int(p[2])) if part == "max depth" else (lambda p: p[0]))
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-",
+                    label=knob[len(part) + 1:] or knob)
             for p in pts:
                 ax.annotate(p[2], (p[0], p[1]), fontsize=7, xytext=(3, 3),
                             textcoords="offset points")

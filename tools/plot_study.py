@@ -1,11 +1,13 @@
 #!/usr/bin/python3
 """Plots of a `raycell study` folder: fetches per frame per scheduler, the bracket of each
 frame's optimum, and Cell Tree size per frame, one PNG each per cell grid; with --processors,
-processors.png: time and fetches against the processor count (processors.csv). Reads the CSVs
-the study wrote; exits non-zero (and the study fails) if anything cannot be drawn.
+processors.png: time and fetches against the processor count (processors.csv); with --depth,
+depth.png: rays, Cell Tree nodes, fetches, simulated time and image RMSE against the maximum
+depth (depth.csv). Reads the CSVs the study wrote; exits non-zero (and the study fails) if
+anything cannot be drawn.
 
-Usage: plot_study.py STUDY_DIR [--processors] CELLS [CELLS ...]
-       e.g. plot_study.py study --processors 2x2x2 3x3x3
+Usage: plot_study.py STUDY_DIR [--processors] [--depth] CELLS [CELLS ...]
+       e.g. plot_study.py study --processors --depth 2x2x2 3x3x3
 """
 import csv
 import sys
@@ -123,10 +125,52 @@ def plot_processors(folder):
     plt.close(fig)
 
 
+def plot_depth(folder):
+    """Four panels against the maximum depth: rays (all, and spawned) and Cell Tree nodes on a
+    log axis; each scheduler's fetches; each scheduler's simulated time; the image RMSE against
+    the deepest setting. Record's default depth is marked on each."""
+    rows = read(f"{folder}/depth.csv")
+    depths = [int(r["max_depth"]) for r in rows]
+    default = [int(r["max_depth"]) for r in rows if r["default"] == "1"]
+    fig, axes = plt.subplots(1, 4, figsize=(16, 4))
+    size_ax, fetch_ax, time_ax, error_ax = axes
+    size_ax.plot(depths, [int(r["rays"]) for r in rows], "o-", label="rays", markersize=4)
+    size_ax.plot(depths, [int(r["rays"]) - int(r["primary_rays"]) for r in rows], "^-",
+                 label="spawned rays", markersize=4)
+    size_ax.plot(depths, [int(r["nodes"]) for r in rows], "s-", label="Cell Tree nodes",
+                 markersize=4)
+    size_ax.set_yscale("log")
+    for key, label, style in PROCESSORS_SCHEDULERS[:2]:
+        fetch_ax.plot(depths, [int(r[f"fetches_{key}"]) for r in rows], style, label=label,
+                      markersize=4)
+        time_ax.plot(depths, [int(r[f"time_{key}_ps"]) / 1e9 for r in rows], style, label=label,
+                     markersize=4)
+    error_ax.plot(depths, [float(r["rmse"]) for r in rows], "o-", color="tab:red",
+                  label=f"against max depth {depths[-1]}", markersize=4)
+    for ax, ylabel, title in [(size_ax, "count, all frames", "Rays and Cell Tree nodes"),
+                              (fetch_ax, "cell fetches (one-cell cache)", "Fetches"),
+                              (time_ax, "simulated time (ms), all frames", "Time"),
+                              (error_ax, "image RMSE", "Image error")]:
+        for d in default:
+            ax.axvline(d, color="grey", linestyle=":", label="record's default")
+        ax.set_xticks(depths)
+        ax.set_xlabel("max depth (reflection, refraction)")
+        ax.set_ylabel(ylabel)
+        ax.set_title(f"{title} against max depth")
+        ax.grid(alpha=0.3, which="both")
+        if ax is not size_ax:
+            ax.set_ylim(bottom=0)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(f"{folder}/depth.png", dpi=100)
+    plt.close(fig)
+
+
 def main():
     args = sys.argv[1:]
     processors = "--processors" in args
-    args = [a for a in args if a != "--processors"]
+    depth = "--depth" in args
+    args = [a for a in args if a not in ("--processors", "--depth")]
     if len(args) < 2:
         print(__doc__, file=sys.stderr)
         return 2
@@ -137,6 +181,8 @@ def main():
         plot_trees(folder, cells)
     if processors:
         plot_processors(folder)
+    if depth:
+        plot_depth(folder)
     return 0
 
 

@@ -25,9 +25,12 @@ void AddStudyCommand(CLI::App& app) {
       "On the finest grid (the last of --cells, or the last --trace) it replays Max Work,\n"
       "Cell Tree scheduling and balanced on 1, 2, 4, 8 and 16 block processors: time,\n"
       "fetches and the time's lower bound in OUT/processors.csv and processors.png.\n"
-      "Then measures run time against error for the renderer's step, cutoff and precision\n"
-      "and the replay's granularity and sampling on a short capture of the same scene\n"
-      "(study/accuracy.h; --accuracy-frames 0 skips it).\n"
+      "Then measures run time against error for the renderer's step, cutoff, precision and\n"
+      "max depth and the replay's granularity and sampling on short captures of the same\n"
+      "scene (study/accuracy.h; --accuracy-frames 0 skips it), and from its captures of max\n"
+      "depth 0..5 the depth section: rays, Cell Tree nodes, fetches and simulated time under\n"
+      "Max Work and Cell Tree scheduling, image RMSE against max depth 5 (OUT/depth.csv,\n"
+      "depth.png; absent, saying why, when run time against error is skipped).\n"
       "With no options: the built-in scene, 24 frames over 90 degrees, 2x2x2 and 3x3x3\n"
       "cells, 256x256; about two minutes on 2 cores.\n"
       "--frames N records frames 0..N-1 of one volume; --frames A..B records frames A to B,\n"
@@ -63,10 +66,11 @@ void AddStudyCommand(CLI::App& app) {
   cmd->add_option("--threads", args->threads, "rendering threads, 0 = all cores")
       ->capture_default_str();
   cmd->add_option("--accuracy-frames", args->accuracy_frames,
-                  "frames of the run time against error capture; 0 skips that section")
+                  "frames of the run time against error captures (the depth section's too); 0 "
+                  "skips both sections")
       ->capture_default_str();
   cmd->add_option("--accuracy-res", args->accuracy_res,
-                  "image size of the run time against error capture")
+                  "image size of the run time against error captures (the depth section's too)")
       ->capture_default_str();
   cmd->add_option("--effort", args->effort,
                   "budget of the bracket of each frame's optimum: quick (the study's), default "

@@ -7,18 +7,22 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <string>
 #include <vector>
 
+#include "graph/frame_tree.h"
 #include "replay/config.h"
 #include "replay/driver.h"
 #include "scheduling/scheduler.h"
 #include "study/accuracy.h"
+#include "study/depth.h"
 #include "study/image_error.h"
 #include "study/report.h"
 #include "tests/test_util.h"
+#include "traces/record/image.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {
@@ -37,14 +41,15 @@ class RemoveStudyDir : public ::testing::Environment {
 const auto* const kRemoveStudyDir = ::testing::AddGlobalTestEnvironment(new RemoveStudyDir);
 
 // One study for the tests below: the built-in scene, 3 frames at 24x24 in 2x2x2 and 1x2x1
-// cells, run time against error on 1 frame at 16x16.
+// cells, run time against error on 2 frames at 16x16 (Cell Tree scheduling follows frame 0's
+// tree in frame 1).
 const StudyResult& TinyStudy() {
   static const StudyResult result = [] {
     StudyOptions o;
     o.res = "24x24";
     o.frames = "3";
     o.cells = "2x2x2,1x2x1";
-    o.accuracy_frames = 1;
+    o.accuracy_frames = 2;
     o.accuracy_res = "16x16";
     o.quiet = true;
     o.out = (StudyDir() / "study").string();
@@ -95,12 +100,171 @@ TEST(Study, MeasuresEveryKnobTheLibraryDeclares) {
   EXPECT_EQ(all.error, 0.0);
   EXPECT_EQ(all.fetch_change, 0.0);
   EXPECT_EQ(RowOf(a.rows, "replay granularity", "ray").time_ratio, 1.0);
+  // Max depth: measured against max depth 5, record's default (3, `raycell record --help`)
+  // marked; depth 0 drops the mirror's and the glass's rays, so its images differ.
+  const AccuracyRow& deepest = RowOf(a.rows, "max depth", "5");
+  EXPECT_EQ(deepest.error_kind, "image RMSE vs max depth 5");
+  EXPECT_EQ(deepest.error, 0.0);
+  EXPECT_EQ(deepest.time_ratio, 1.0);
+  EXPECT_EQ(deepest.fetch_change, 0.0);
+  for (const char* depth : {"0", "1", "2", "3", "4"}) {
+    const AccuracyRow& r = RowOf(a.rows, "max depth", depth);
+    EXPECT_EQ(r.is_default, std::string(depth) == "3") << depth;
+    EXPECT_EQ(r.error_kind, "image RMSE vs max depth 5") << depth;
+  }
+  EXPECT_GT(RowOf(a.rows, "max depth", "0").error, 0.0);
   // The captures measured are where the study says.
   for (const AccuracyKnob& k : knobs) {
     if (k.folder.empty()) continue;
     EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(a.options.out) / k.folder / "c.rct"))
         << k.folder;
   }
+}
+
+// The rays of every frame of a capture by kind, counted from its decoded batches (not from the
+// index's summaries, which the depth section reads).
+std::array<std::uint64_t, kRayKindCount> DecodedRaysByKind(const TraceReader& reader) {
+  std::array<std::uint64_t, kRayKindCount> kinds{};
+  for (std::size_t f = 0; f < reader.frames().size(); ++f) {
+    reader.ForEachBatch(f, [&](const RayBatch& b) {
+      for (const RayKind k : b.kinds()) ++kinds[static_cast<int>(k)];
+    });
+  }
+  return kinds;
+}
+
+// The depth section of the tiny study: one row per max depth 0..5, each read from the run
+// time against error section's capture of that depth, and checked here against that capture
+// decoded, its trees built and replayed per ray segment independently of the section.
+TEST(Study, TheDepthSectionMeasuresTheMaxDepthCaptures) {
+  const StudyResult& s = TinyStudy();
+  const DepthStudy& d = s.depth;
+  ASSERT_TRUE(d.measured) << d.not_measured;
+  ASSERT_EQ(d.rows.size(), 6u);
+  const std::vector<std::size_t> all = {0, 1};  // the accuracy section's two frames
+  for (std::uint32_t depth = 0; depth < 6; ++depth) {
+    const DepthRow& r = d.rows[depth];
+    const std::string what = "max depth " + std::to_string(depth);
+    ASSERT_EQ(r.max_depth, depth);
+    EXPECT_EQ(r.is_default, depth == 3) << what;
+    const TraceReader reader = TraceReader::Open((std::filesystem::path(s.accuracy.options.out) /
+                                                  ("max-depth-" + std::to_string(depth)) / "c.rct")
+                                                     .string());
+    ASSERT_EQ(reader.frames().size(), 2u) << what;
+    EXPECT_EQ(reader.header().settings.max_depth, depth) << what;
+    const std::array<std::uint64_t, kRayKindCount> kinds = DecodedRaysByKind(reader);
+    EXPECT_EQ(r.rays_by_kind, kinds) << what;
+    EXPECT_EQ(r.rays, kinds[0] + kinds[1] + kinds[2] + kinds[3]) << what;
+    EXPECT_EQ(r.nodes,
+              BuildFrameTree(reader, 0).node_count() + BuildFrameTree(reader, 1).node_count())
+        << what;
+    for (const char* name : {"maxwork", "celltree"}) {
+      ReplayConfig config = DefaultConfig();
+      config.scheduler = &SchedulerByName(name, "test");
+      config.granularity = ReplayConfig::Granularity::kRay;
+      const ReplayResult alone = ReplayTrace(reader, all, config).total;
+      const bool mw = std::string(name) == "maxwork";
+      EXPECT_EQ(mw ? r.fetches_maxwork : r.fetches_celltree, alone.fetches) << what << " " << name;
+      EXPECT_EQ(mw ? r.time_maxwork : r.time_celltree, alone.time) << what << " " << name;
+    }
+    // The image error is the run time against error row's, and what the images give.
+    EXPECT_EQ(r.rmse, RowOf(s.accuracy.rows, "max depth", std::to_string(depth)).error) << what;
+    const auto frames = [&](std::uint32_t dep) {
+      std::vector<Rgb8Image> images;
+      for (const char* name : {"frame_0000.png", "frame_0001.png"}) {
+        images.push_back(ReadPng8((std::filesystem::path(s.accuracy.options.out) /
+                                   ("max-depth-" + std::to_string(dep)) / name)
+                                      .string()));
+      }
+      return images;
+    };
+    EXPECT_EQ(r.rmse, ImageRmse(frames(depth), frames(5))) << what;
+  }
+  // Max depth 0: no reflection or refraction ray, but shadow rays (cast at every depth); the
+  // built-in scene's mirror and glass spawn rays at depth 1, and its images differ from depth 5.
+  EXPECT_EQ(d.rows[0].rays_by_kind[1] + d.rows[0].rays_by_kind[2], 0u);
+  EXPECT_GT(d.rows[0].rays_by_kind[3], 0u);
+  EXPECT_GT(d.rows[1].rays_by_kind[1] + d.rows[1].rays_by_kind[2], 0u);
+  EXPECT_GT(d.rows[0].rmse, 0.0);
+  EXPECT_EQ(d.rows[5].rmse, 0.0);
+  // A deeper limit only adds rays: the primary rays are the same, nothing decreases.
+  for (std::size_t i = 1; i < d.rows.size(); ++i) {
+    EXPECT_EQ(d.rows[i].rays_by_kind[0], d.rows[0].rays_by_kind[0]) << i;
+    EXPECT_GE(d.rows[i].rays, d.rows[i - 1].rays) << i;
+    EXPECT_GE(d.rows[i].spawned(), d.rows[i - 1].spawned()) << i;
+    EXPECT_GE(d.rows[i].nodes, d.rows[i - 1].nodes) << i;
+  }
+  EXPECT_GT(d.rows[5].rays, d.rows[0].rays);
+  EXPECT_GT(d.rows[5].nodes, d.rows[0].nodes);
+  // Frame 1 follows frame 0's Peel schedule instead of Max Work's choices: at depth 5 the two
+  // differ here (which tells the schedulers' columns apart).
+  EXPECT_NE(d.rows[5].fetches_maxwork, d.rows[5].fetches_celltree);
+  // The max depth rows' fetch change is Cell Tree scheduling's against max depth 5.
+  for (const DepthRow& r : d.rows) {
+    const double change = (double(r.fetches_celltree) - double(d.rows[5].fetches_celltree)) /
+                          double(d.rows[5].fetches_celltree);
+    EXPECT_EQ(RowOf(s.accuracy.rows, "max depth", std::to_string(r.max_depth)).fetch_change, change)
+        << r.max_depth;
+  }
+  const std::string report = StudyReport(s);
+  EXPECT_NE(report.find(DepthReport(d)), std::string::npos) << report;
+  EXPECT_EQ(DepthReport(d).rfind("## Limited depth recursion\n\n", 0), 0u) << DepthReport(d);
+}
+
+// Without the run time against error section there are no max depth captures: the section
+// says why instead of making its own.
+TEST(Study, TheDepthSectionSaysWhyItIsAbsent) {
+  AccuracyStudy skipped;  // --accuracy-frames 0
+  skipped.options.frames = 0;
+  const DepthStudy d = MeasureDepth(skipped);
+  EXPECT_FALSE(d.measured);
+  EXPECT_TRUE(d.rows.empty());
+  EXPECT_EQ(DepthReport(d),
+            "## Limited depth recursion\n\nNot measured: it reads the run time against error "
+            "section's captures, which `--accuracy-frames 0` skipped.\n");
+  AccuracyStudy elsewhere;
+  elsewhere.not_measured = "the scene `x.vdb` cannot be loaded here (no such file)";
+  EXPECT_EQ(DepthReport(MeasureDepth(elsewhere)),
+            "## Limited depth recursion\n\nNot measured: the scene `x.vdb` cannot be loaded here "
+            "(no such file).\n");
+  StudyResult r;
+  r.accuracy = skipped;
+  r.depth = d;
+  EXPECT_NE(StudyReport(r).find("## Limited depth recursion\n\nNot measured: "), std::string::npos);
+  EXPECT_EQ(DepthReport(DepthStudy{}), "");  // a result never measured: no section
+}
+
+// depth.csv and the table on rows given here, the values worked by hand.
+TEST(Study, DepthCsvAndTableHoldTheRows) {
+  DepthStudy d;
+  d.measured = true;
+  d.options.frames = 2, d.options.res = "64x64";
+  DepthRow a;
+  a.max_depth = 0, a.rays_by_kind = {100, 0, 0, 50}, a.rays = 150, a.nodes = 10;
+  a.fetches_maxwork = 40, a.fetches_celltree = 30;
+  a.time_maxwork = SimTime::Picoseconds(2500000000), a.time_celltree = SimTime::Picoseconds(7);
+  a.rmse = 0.1;
+  DepthRow b = a;
+  b.max_depth = 3, b.is_default = true, b.rays_by_kind = {100, 20, 10, 70}, b.rays = 200;
+  b.fetches_celltree = 41, b.rmse = 0.0;
+  d.rows = {a, b};
+  EXPECT_EQ(DepthCsv(d),
+            "max_depth,default,rays,primary_rays,reflection_rays,refraction_rays,shadow_rays,nodes,"
+            "fetches_maxwork,fetches_celltree,time_maxwork_ps,time_celltree_ps,rmse\n"
+            "0,0,150,100,0,0,50,10,40,30,2500000000,7,0.1\n"
+            "3,1,200,100,20,10,70,10,40,41,2500000000,7,0.0\n");
+  const std::string report = DepthReport(d);
+  // 150 rays over 10 nodes; 30 fetches against 40 is 25% fewer, 41 is 2.5% more; 2.5 ms.
+  EXPECT_NE(report.find("| 0 | 150 | 0 / 0 / 50 | 10 | 15.0 | 40 | 30 | -25.0% | 2.50 | 0.00 | "
+                        "0.1000 |  |\n"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(report.find("| 3 | 200 | 20 / 10 / 70 | 10 | 20.0 | 40 | 41 | +2.5% | 2.50 | 0.00 | "
+                        "0.0000 | yes |\n"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(report.find("(2 frame(s) of the same scene at 64x64 in 3x3x3 cells"), std::string::npos)
+      << report;
 }
 
 TEST(Study, EverySchedulerReplaysTheWholeCaptureOfEachGrid) {

@@ -438,6 +438,28 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
   }
   EXPECT_EQ(acc.find("nan"), std::string::npos) << acc;
   EXPECT_EQ(acc.find("inf"), std::string::npos) << acc;
+  // The depth section, from the max depth captures: depth.csv (max depth 0..5, record's default
+  // 3 marked) and depth.png.
+  EXPECT_NE(report.find("## Limited depth recursion\n\nThe renderer's maximum depth"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(report.find("![rays, fetches, time and error against max depth](depth.png)"),
+            std::string::npos);
+  EXPECT_GT(std::filesystem::file_size(out / "depth.png"), 1000u);
+  std::istringstream depth(raycell::testing::ReadBytes((out / "depth.csv").string()));
+  std::getline(depth, row);
+  EXPECT_EQ(row,
+            "max_depth,default,rays,primary_rays,reflection_rays,refraction_rays,shadow_rays,"
+            "nodes,fetches_maxwork,fetches_celltree,time_maxwork_ps,time_celltree_ps,rmse");
+  int depths = 0;
+  while (std::getline(depth, row)) {
+    const std::vector<std::string> v = CsvRow(row);
+    ASSERT_EQ(v.size(), 13u) << row;
+    EXPECT_EQ(v[0], std::to_string(depths)) << row;
+    EXPECT_EQ(v[1], depths == 3 ? "1" : "0") << row;
+    ++depths;
+  }
+  EXPECT_EQ(depths, 6);
   // Several processors, on the finest grid (the last of --cells) only.
   EXPECT_NE(report.find("## Several processors (1x2x1 cells)\n"), std::string::npos) << report;
   EXPECT_EQ(report.find("## Several processors (2x2x2 cells)"), std::string::npos) << report;
@@ -464,6 +486,14 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
             std::string::npos)
       << again_report;
   ExpectProcessorsAsSweepGivesThem(again, capture);
+  // No run time against error: no depth section, and the report says why.
+  EXPECT_NE(again_report.find("## Limited depth recursion\n\nNot measured: it reads the run time "
+                              "against error section's captures, which `--accuracy-frames 0` "
+                              "skipped.\n"),
+            std::string::npos)
+      << again_report;
+  EXPECT_FALSE(std::filesystem::exists(again / "depth.csv"));
+  EXPECT_FALSE(std::filesystem::exists(again / "depth.png"));
   const Result r3 = Raycell("study --trace " + capture + " --cells 3x3x3 --out " + again.string());
   EXPECT_EQ(r3.code, 2);
   EXPECT_NE(r3.out.find("--cells excludes --trace"), std::string::npos) << r3.out;
