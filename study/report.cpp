@@ -76,11 +76,12 @@ void RunPlot(const std::string& cmd) {
 }
 
 void Plot(const std::string& out, const std::vector<std::string>& cells, bool processors,
-          bool depth) {
+          bool depth, bool subdivisions) {
   std::string cmd =
       Python() + " " + Quote(RAYCELL_SOURCE_DIR "/tools/plot_study.py") + " " + Quote(out);
   if (processors) cmd += " --processors";
   if (depth) cmd += " --depth";
+  if (subdivisions) cmd += " --subdivisions";
   for (const auto& c : cells) cmd += " " + Quote(c);
   RunPlot(cmd);
   for (const auto& c : cells) {
@@ -92,6 +93,9 @@ void Plot(const std::string& out, const std::vector<std::string>& cells, bool pr
     throw InputError("plot missing: processors");
   }
   if (depth && !fs::exists(fs::path(out) / "depth.png")) throw InputError("plot missing: depth");
+  if (subdivisions && !fs::exists(fs::path(out) / "subdivisions.png")) {
+    throw InputError("plot missing: subdivisions");
+  }
 }
 
 // Picoseconds as milliseconds, one decimal.
@@ -402,6 +406,65 @@ std::string DepthReport(const DepthStudy& d) {
   return s.str();
 }
 
+std::string SubdivisionsCsv(const SubdivisionStudy& d) {
+  std::ostringstream s;
+  s << "spec,scheduler,cells,footprint_min,footprint_median,footprint_max,fetches,cache_bytes,"
+       "board_bytes,stall_ps,time_ps\n";
+  for (const SubdivisionRow& r : d.rows) {
+    s << r.spec << ',' << r.scheduler << ',' << r.cells << ',' << r.footprint_min << ','
+      << r.footprint_median << ',' << r.footprint_max << ',' << r.fetches << ',' << r.cache_bytes
+      << ',' << r.board_bytes << ',' << r.stall_ps << ',' << r.time_ps << '\n';
+  }
+  return s.str();
+}
+
+std::string SubdivisionsReport(const SubdivisionStudy& d) {
+  if (!d.measured && d.not_measured.empty()) return "";
+  const std::string heading = "## Subdivisions\n\n";
+  if (!d.measured) return heading + "Not measured: " + d.not_measured + ".\n";
+  const SubdivisionOptions& o = d.options;
+  std::ostringstream s;
+  s << heading << "Cells of several shapes from one capture (issue 23): `" << o.scene
+    << "` recorded once on " << o.fine << " cells with `--regroupable` (" << o.frames
+    << " frames of an orbit, 3.75 degrees a frame, " << o.res << "; `" << o.out
+    << "/fine.rct`), replayed regrouped into each SPEC (`raycell replay fine.rct --cells "
+       "SPEC`; docs/design.md §1 \"Subdivisions\") under Max Work and Cell Tree scheduling, "
+       "with the on-chip cache sized in bytes to the median footprint of the uniform 3x3x3 grid, "
+    << d.cache_bytes
+    << " bytes, so that the cells' shapes make the difference; the default configuration "
+       "otherwise. Cache bytes cross the board->cache link, board bytes PCI; changes are "
+       "against 3x3x3 under the same scheduler. Footprints: of the non-empty cells (dynamic: "
+       "each cell's largest over the frames).\n\n"
+    << "| SPEC | scheduler | cells | footprints KiB, min / median / max | fetches | cache bytes "
+       "| board bytes | stall ms |\n|---|---|---:|---:|---:|---:|---:|---:|\n";
+  const auto kib = [](std::uint64_t b) { return FormatFixed(double(b) / 1024, 0); };
+  const auto ms = [](std::uint64_t ps) { return FormatFixed(double(ps) / 1e9, 1); };
+  for (const SubdivisionRow& r : d.rows) {
+    const SubdivisionRow* base = nullptr;
+    for (const SubdivisionRow& b : d.rows) {
+      if (b.spec == d.rows.front().spec && b.scheduler == r.scheduler) base = &b;
+    }
+    const bool is_base = base == &r || base == nullptr;
+    const auto change = [&](double v, double b, const char* less) {
+      return is_base ? std::string() : " (" + Change(v, b, less) + ")";
+    };
+    s << "| " << r.spec << " | " << r.scheduler << " | " << r.cells << " | " << kib(r.footprint_min)
+      << " / " << kib(r.footprint_median) << " / " << kib(r.footprint_max) << " | " << r.fetches
+      << change(double(r.fetches), base ? double(base->fetches) : 0, "fewer") << " | "
+      << FormatFixed(double(r.cache_bytes) / 1e6, 1) << " MB"
+      << change(double(r.cache_bytes), base ? double(base->cache_bytes) : 0, "less") << " | "
+      << FormatFixed(double(r.board_bytes) / 1e6, 2) << " MB"
+      << change(double(r.board_bytes), base ? double(base->board_bytes) : 0, "less") << " | "
+      << ms(r.stall_ps) << change(double(r.stall_ps), base ? double(base->stall_ps) : 0, "less")
+      << " |\n";
+  }
+  s << "\n![bytes moved and fetch stall per subdivision](subdivisions.png)\n\n"
+    << "`subdivisions.csv`: per SPEC and scheduler, the non-empty cells, their footprints' "
+       "min, median and max, fetches, bytes into the cache and into the board, stall and "
+       "simulated time in picoseconds.\n";
+  return s.str();
+}
+
 std::string StudyReport(const StudyResult& r) {
   const StudyOptions& a = r.options;
   std::ostringstream s;
@@ -429,7 +492,9 @@ std::string StudyReport(const StudyResult& r) {
   for (const GridStudy& g : r.grids) s << GridReport(g);
   for (const GridStudy& g : r.grids) s << ProcessorsReport(g);
   const std::string accuracy = AccuracyReport(r.accuracy);
-  s << accuracy << (accuracy.empty() ? "" : "\n") << DepthReport(r.depth);
+  const std::string depth = DepthReport(r.depth);
+  s << accuracy << (accuracy.empty() ? "" : "\n") << depth << (depth.empty() ? "" : "\n")
+    << SubdivisionsReport(r.subdivisions);
   return s.str();
 }
 
@@ -452,7 +517,10 @@ std::string WriteStudyReport(const StudyResult& r) {
     WriteFile(out, "processors.csv", ProcessorsCsv(g));
   }
   if (r.depth.measured) WriteFile(out, "depth.csv", DepthCsv(r.depth));
-  Plot(out, labels, processors, r.depth.measured);
+  if (r.subdivisions.measured) {
+    WriteFile(out, "subdivisions.csv", SubdivisionsCsv(r.subdivisions));
+  }
+  Plot(out, labels, processors, r.depth.measured, r.subdivisions.measured);
   if (r.accuracy.measured) {
     WriteFile(r.accuracy.options.out, "accuracy.csv", AccuracyCsv(r.accuracy.rows));
     PlotAccuracy(r.accuracy.options.out);

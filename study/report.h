@@ -1,9 +1,10 @@
 // What a study writes into its folder, from its StudyResult: report.md (the tables of every
 // grid, the several processors table of the finest grid, the run time against error table and
-// the depth table), the CSV behind each table (cell_trees_*.csv, fetches_*.csv, processors.csv,
-// accuracy/accuracy.csv, depth.csv) and the plots drawn from those CSVs by tools/plot_study.py
-// and tools/plot_accuracy.py (python3 with matplotlib). The texts are
-// functions of the result alone, so tests can check them without running a study.
+// the depth and subdivision tables), the CSV behind each table (cell_trees_*.csv,
+// fetches_*.csv, processors.csv, accuracy/accuracy.csv, depth.csv, subdivisions.csv) and the plots
+// drawn from those CSVs by tools/plot_study.py and tools/plot_accuracy.py (python3 with
+// matplotlib). The texts are functions of the result alone, so tests can check them without running
+// a study.
 #pragma once
 
 #include <string>
@@ -46,6 +47,13 @@ std::string DepthCsv(const DepthStudy& d);
 // report.md's depth section: the table, or why it was not measured; empty when the result has
 // neither (a DepthStudy never measured).
 std::string DepthReport(const DepthStudy& d);
+// subdivisions.csv, one row per SubdivisionStudy row, in its order: spec, scheduler, cells,
+// footprint_min, footprint_median, footprint_max, fetches, cache_bytes, board_bytes,
+// stall_ps, time_ps (totals over the frames).
+std::string SubdivisionsCsv(const SubdivisionStudy& d);
+// report.md's subdivision section: the table (changes against the first SPEC under the same
+// scheduler), or why it was not measured; empty when neither.
+std::string SubdivisionsReport(const SubdivisionStudy& d);
 // report.md.
 std::string StudyReport(const StudyResult& r);
 

@@ -306,6 +306,9 @@ StudyResult RunStudy(const StudyOptions& a) {
   if (a.accuracy_frames < 0 || a.accuracy_frames > 1000) {
     throw InputError("--accuracy-frames: must be in 0..1000");
   }
+  if (a.subdivision_frames < 0 || a.subdivision_frames > 1000) {
+    throw InputError("--subdivision-frames: must be in 0..1000");
+  }
   ParseResolution(a.accuracy_res);  // InputError naming it, before any work
   BracketEffort(a.effort);          // likewise
   if (!std::isfinite(a.orbit_degrees())) {
@@ -336,6 +339,13 @@ StudyResult RunStudy(const StudyOptions& a) {
   result.accuracy.options = accuracy;
   if (a.accuracy_frames > 0) result.accuracy = MeasureAccuracy(accuracy);
   result.depth = MeasureDepth(result.accuracy);
+  SubdivisionOptions sub;
+  sub.scene = accuracy.scene;  // a sequence's first volume, or the first given trace's scene
+  sub.res = a.accuracy_res;
+  sub.frames = a.subdivision_frames;
+  sub.out = (fs::path(a.out) / "subdivisions").string();
+  sub.quiet = a.quiet;
+  result.subdivisions = MeasureSubdivisions(sub);
   return result;
 }
 

@@ -18,6 +18,7 @@
 #include "scheduling/scheduler.h"
 #include "study/accuracy.h"
 #include "study/depth.h"
+#include "study/subdivisions.h"
 
 namespace raycell {
 
@@ -26,6 +27,7 @@ struct StudyOptions {
   std::string accuracy_res = "128x128";
   std::string frames = "24";        // a count N (frames 0..N-1) or frame numbers A..B
   int accuracy_frames = 2;          // 0: no run time against error section
+  int subdivision_frames = 8;       // 0: no subdivision section (study/subdivisions.h)
   std::vector<std::string> traces;  // reused captures instead of recording
   std::string effort = "quick";     // the bracket's budget (BracketEffort)
   // Degrees the camera turns over the frames. Default: 90 for one volume (3.75 degrees per
@@ -84,13 +86,15 @@ struct StudyResult {
   std::vector<int> frame_numbers;  // what options.frames says; empty for given traces
   std::vector<GridStudy> grids;    // in the order of --cells, or of the given traces
   AccuracyStudy accuracy;
-  DepthStudy depth;  // from accuracy's captures: not measured when accuracy was not
+  DepthStudy depth;               // from accuracy's captures: not measured when accuracy was not
+  SubdivisionStudy subdivisions;  // one fine capture of the scene, at accuracy_res
 };
 
 // Runs the study: checks the options (InputError naming the option, before any work),
 // records and studies each grid (or each given trace) into options.out, replays the last one
 // on several processors, then measures run time against error into options.out/accuracy/ and
-// the depth section from its captures. One summary line per capture on stderr, progress bars
+// the depth section from its captures, and the subdivision section into
+// options.out/subdivisions/. One summary line per capture on stderr, progress bars
 // unless quiet.
 StudyResult RunStudy(const StudyOptions& options);
 

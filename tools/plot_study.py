@@ -3,10 +3,11 @@
 frame's optimum, and Cell Tree size per frame, one PNG each per cell grid; with --processors,
 processors.png: time and fetches against the processor count (processors.csv); with --depth,
 depth.png: rays, Cell Tree nodes, fetches, simulated time and image RMSE against the maximum
-depth (depth.csv). Reads the CSVs the study wrote; exits non-zero (and the study fails) if
-anything cannot be drawn.
+depth (depth.csv); with --subdivisions, subdivisions.png: bytes into the cache and fetch
+stall per subdivision and scheduler (subdivisions.csv). Reads the CSVs the study wrote;
+exits non-zero (and the study fails) if anything cannot be drawn.
 
-Usage: plot_study.py STUDY_DIR [--processors] [--depth] CELLS [CELLS ...]
+Usage: plot_study.py STUDY_DIR [--processors] [--depth] [--subdivisions] CELLS [CELLS ...]
        e.g. plot_study.py study --processors --depth 2x2x2 3x3x3
 """
 import csv
@@ -166,11 +167,39 @@ def plot_depth(folder):
     plt.close(fig)
 
 
+def plot_subdivisions(folder):
+    """Two panels per SPEC, bars per scheduler: bytes into the cache (board->cache link) and
+    fetch stall, each against the first SPEC's (the uniform grid)."""
+    rows = read(f"{folder}/subdivisions.csv")
+    specs = list(dict.fromkeys(r["spec"] for r in rows))
+    schedulers = list(dict.fromkeys(r["scheduler"] for r in rows))
+    fig, (bytes_ax, stall_ax) = plt.subplots(1, 2, figsize=(12, 4.5))
+    width = 0.8 / len(schedulers)
+    for i, sched in enumerate(schedulers):
+        by_spec = {r["spec"]: r for r in rows if r["scheduler"] == sched}
+        xs = [k + (i - (len(schedulers) - 1) / 2) * width for k in range(len(specs))]
+        bytes_ax.bar(xs, [int(by_spec[s]["cache_bytes"]) / 1e6 for s in specs], width,
+                     label=sched)
+        stall_ax.bar(xs, [int(by_spec[s]["stall_ps"]) / 1e9 for s in specs], width, label=sched)
+    for ax, ylabel, title in [(bytes_ax, "MB into the cache, all frames", "Bytes moved"),
+                              (stall_ax, "fetch stall (ms), all frames", "Stall")]:
+        ax.set_xticks(range(len(specs)))
+        ax.set_xticklabels(specs, rotation=25, ha="right", fontsize=8)
+        ax.set_ylabel(ylabel)
+        ax.set_title(f"{title} per subdivision")
+        ax.grid(alpha=0.3, axis="y")
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(f"{folder}/subdivisions.png", dpi=100)
+    plt.close(fig)
+
+
 def main():
     args = sys.argv[1:]
     processors = "--processors" in args
     depth = "--depth" in args
-    args = [a for a in args if a not in ("--processors", "--depth")]
+    subdivisions = "--subdivisions" in args
+    args = [a for a in args if a not in ("--processors", "--depth", "--subdivisions")]
     if len(args) < 2:
         print(__doc__, file=sys.stderr)
         return 2
@@ -183,6 +212,8 @@ def main():
         plot_processors(folder)
     if depth:
         plot_depth(folder)
+    if subdivisions:
+        plot_subdivisions(folder)
     return 0
 
 

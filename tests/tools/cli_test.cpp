@@ -460,6 +460,32 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
     ++depths;
   }
   EXPECT_EQ(depths, 6);
+  // The subdivision section: one fine capture regrouped into every SPEC, each under Max Work and
+  // Cell Tree scheduling, the cache sized to the median 3x3x3 footprint; the uniform grid's rows
+  // are what `raycell replay` of the fine capture with --cells 3x3x3 reports.
+  EXPECT_NE(report.find("## Subdivisions\n\nCells of several shapes from one capture"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(report.find("![bytes moved and fetch stall per subdivision](subdivisions.png)"),
+            std::string::npos);
+  EXPECT_GT(std::filesystem::file_size(out / "subdivisions.png"), 1000u);
+  std::istringstream subdivisions(raycell::testing::ReadBytes((out / "subdivisions.csv").string()));
+  std::getline(subdivisions, row);
+  EXPECT_EQ(row,
+            "spec,scheduler,cells,footprint_min,footprint_median,footprint_max,fetches,cache_bytes,"
+            "board_bytes,stall_ps,time_ps");
+  std::vector<std::vector<std::string>> sub_rows;
+  while (std::getline(subdivisions, row)) sub_rows.push_back(CsvRow(row));
+  ASSERT_EQ(sub_rows.size(), 12u);
+  EXPECT_EQ(sub_rows[0][0], "3x3x3");
+  EXPECT_EQ(sub_rows[10][0], "dynamic:27");
+  const Result uniform =
+      Raycell("replay " + (out / "subdivisions" / "fine.rct").string() +
+              " --cells 3x3x3 --scheduler celltree --set level.cache.capacity=" + sub_rows[1][4] +
+              "B --format json");
+  ASSERT_EQ(uniform.code, 0) << uniform.out;
+  EXPECT_NE(uniform.out.find("\"total\":{\"fetches\":" + sub_rows[1][6] + ","), std::string::npos)
+      << uniform.out;
   // Several processors, on the finest grid (the last of --cells) only.
   EXPECT_NE(report.find("## Several processors (1x2x1 cells)\n"), std::string::npos) << report;
   EXPECT_EQ(report.find("## Several processors (2x2x2 cells)"), std::string::npos) << report;
@@ -494,6 +520,14 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
       << again_report;
   EXPECT_FALSE(std::filesystem::exists(again / "depth.csv"));
   EXPECT_FALSE(std::filesystem::exists(again / "depth.png"));
+  // --subdivision-frames 0 skips that section altogether.
+  const Result r_nosub = Raycell("study --trace " + capture +
+                                 " --accuracy-frames 0 --subdivision-frames 0 --quiet --out " +
+                                 (Dir() / "study_nosub").string());
+  ASSERT_EQ(r_nosub.code, 0) << r_nosub.out;
+  EXPECT_EQ(raycell::testing::ReadBytes((Dir() / "study_nosub" / "report.md").string())
+                .find("## Subdivisions"),
+            std::string::npos);
   const Result r3 = Raycell("study --trace " + capture + " --cells 3x3x3 --out " + again.string());
   EXPECT_EQ(r3.code, 2);
   EXPECT_NE(r3.out.find("--cells excludes --trace"), std::string::npos) << r3.out;
