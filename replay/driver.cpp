@@ -230,6 +230,7 @@ const LoadedFrame* FrameWalker::Next() {
   ++position_;
   f.index = i;
   f.number = reader_.frames()[i].frame;
+  f.footprints = &reader_.FrameFootprints(i);
   return &f;
 }
 
@@ -242,8 +243,8 @@ ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& head
   RAYCELL_CHECK(work != nullptr);  // the walker was asked for this granularity
   const FrameInfo info{frame.index, frame.tree.get(), frame.previous.get(), header.cell_count(),
                        frame.before_previous.get()};
-  ReplayResult r =
-      ReplayFrame(*work, header.footprints, config, scheduler, info, frame.bound, observer, memory);
+  ReplayResult r = ReplayFrame(*work, frame.footprints ? *frame.footprints : header.footprints,
+                               config, scheduler, info, frame.bound, observer, memory);
   ScaleBack(r, sample_every, config.processors.count);
   r.frame = frame.number;
   return r;

@@ -46,7 +46,10 @@ struct LoadedFrame {
   std::unique_ptr<CellTree> previous;  // frame index - 1's; null for index 0
   // Frame index - 2's, when a scheduler reads two earlier frames (SchedulerHistory); else null.
   std::unique_ptr<CellTree> before_previous;
-  std::uint64_t bound = 0;              // of `tree`
+  std::uint64_t bound = 0;  // of `tree`
+  // The cells' footprints in this frame (TraceReader::FrameFootprints: a dynamic
+  // subdivision's own, else the header's); the reader's, valid while it is.
+  const std::vector<std::uint64_t>* footprints = nullptr;
   std::unique_ptr<WorkGraph> segments;  // per ray segment, when some replay needs it
   std::unique_ptr<WorkGraph> nodes;     // per Cell Tree node, when some replay needs it
 };

@@ -234,6 +234,9 @@ struct Subdivision {
   boxes @4 :List(FineBox);
   # Per cell, its box. "dynamic:N": per frame of the file, in frame order, N boxes each
   # (frame f's cell c is boxes[f * N + c]). The boxes of a frame tile the fine grid.
+  frameFootprints @5 :List(UInt64);
+  # "dynamic:N" only: per box, the footprint of that cell in that frame (Header footprints
+  # are each cell's largest over the frames). Empty otherwise.
 }
 
 # A box of fine cells [lo, hi) on each axis.

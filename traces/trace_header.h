@@ -113,9 +113,13 @@ struct SubdivisionInfo {
   // Per cell its box of fine cells; `dynamic:N`: per frame the file holds, in frame order,
   // cell_count() boxes each (each frame has its own subdivision).
   std::vector<FineBox> boxes;
+  // `dynamic:N` only: per box, that cell's footprint in that frame (footprints are each
+  // cell's largest over the frames); empty otherwise.
+  std::vector<std::uint64_t> frame_footprints;
   bool empty() const { return spec.empty(); }
   bool operator==(const SubdivisionInfo& o) const {
-    return spec == o.spec && fine == o.fine && boxes == o.boxes;
+    return spec == o.spec && fine == o.fine && boxes == o.boxes &&
+           frame_footprints == o.frame_footprints;
   }
 };
 

@@ -368,6 +368,12 @@ SubdivisionInfo ToSubdivision(schema::Subdivision::Reader r, const TraceHeader& 
     }
     s.boxes.push_back(box);
   }
+  const auto ff = r.getFrameFootprints();
+  if (ff.size() != (dynamic ? r.getBoxes().size() : 0)) {
+    throw BadData("a subdivision with " + Str(ff.size()) + " frame footprints for " +
+                  Str(r.getBoxes().size()) + " boxes" + (dynamic ? "" : " (not dynamic)"));
+  }
+  for (std::uint64_t f : ff) s.frame_footprints.push_back(f);
   return s;
 }
 
@@ -517,6 +523,12 @@ TraceHeader ReadHeader(const FileIn& file, std::uint64_t& length) {
   }
   if (header.footprints.size() != cells) {
     throw BadData(Str(header.footprints.size()) + " footprints for " + Str(cells) + " cells");
+  }
+  const std::vector<std::uint64_t>& ff = header.subdivision.frame_footprints;
+  for (std::uint64_t i = 0; i < ff.size(); ++i) {
+    if (ff[i] > header.footprints[i % cells]) {
+      throw BadData("frame footprint " + Str(i) + " above its cell's footprint");
+    }
   }
   if (header.regroupable) {
     if (header.leaves.bytes.size() != leaf_count || header.leaves.begin.size() != cells + 1) {
@@ -1085,6 +1097,18 @@ struct TraceReader::Impl {
   // Per fine cell, its cell in the view (kNoCell: an empty one); one map for every frame, or
   // one per frame (a dynamic subdivision).
   std::vector<std::vector<CellId>> maps;
+  // A dynamic subdivision's footprints, per frame (empty otherwise): the shown header's
+  // subdivision.frame_footprints cut per frame.
+  std::vector<std::vector<std::uint64_t>> frame_footprints;
+  void CutFrameFootprints() {
+    const TraceHeader& h = view ? view_header : header;
+    const std::vector<std::uint64_t>& ff = h.subdivision.frame_footprints;
+    const std::size_t n = h.cell_count();
+    for (std::size_t f = 0; n > 0 && f * n < ff.size(); ++f) {
+      frame_footprints.emplace_back(ff.begin() + std::ptrdiff_t(f * n),
+                                    ff.begin() + std::ptrdiff_t((f + 1) * n));
+    }
+  }
 
   void ForEachStored(std::size_t i, const BatchFn& fn) const {
     const FrameSummary& s = Frame(i);
@@ -1170,6 +1194,10 @@ struct TraceReader::Impl {
           fp[c] = h.leaves.UnionBytes(members);
         }
         maps.push_back(Map(&sub, fp, fine_cells));
+        if (dynamic) {
+          view_header.subdivision.frame_footprints.insert(
+              view_header.subdivision.frame_footprints.end(), fp.begin(), fp.end());
+        }
         view_header.subdivision.boxes.insert(view_header.subdivision.boxes.end(), sub.boxes.begin(),
                                              sub.boxes.end());
         if (view_header.footprints.empty()) view_header.footprints.assign(fp.size(), 0);
@@ -1220,6 +1248,7 @@ TraceReader TraceReader::Open(const std::string& path, const std::string& cells)
                      "--cells 12x12x12 --regroupable)");
   }
   if (impl->header.regroupable) impl->MakeView(cells);
+  impl->CutFrameFootprints();
   return TraceReader(std::move(impl));
 }
 
@@ -1227,6 +1256,7 @@ TraceReader TraceReader::OpenStored(const std::string& path) {
   auto impl = std::make_unique<Impl>(path);
   impl->ReadHeaderFrame();
   impl->ReadFrameList();
+  impl->CutFrameFootprints();
   return TraceReader(std::move(impl));
 }
 
@@ -1234,6 +1264,7 @@ TraceReader TraceReader::OpenBytes(std::string bytes, const std::string& name) {
   auto impl = std::make_unique<Impl>(name, std::move(bytes));
   impl->ReadHeaderFrame();
   impl->ReadFrameList();
+  impl->CutFrameFootprints();
   return TraceReader(std::move(impl));
 }
 
@@ -1245,6 +1276,11 @@ const std::vector<FrameSummary>& TraceReader::frames() const {
   return impl_->view ? impl_->view_frames : impl_->frames;
 }
 bool TraceReader::regrouped() const { return impl_->view; }
+const std::vector<std::uint64_t>& TraceReader::FrameFootprints(std::size_t frame_index) const {
+  impl_->Frame(frame_index);
+  if (impl_->frame_footprints.empty()) return header().footprints;
+  return impl_->frame_footprints[frame_index];
+}
 const std::vector<CellId>& TraceReader::CellMap(std::size_t frame_index) const {
   RAYCELL_CHECK(impl_->view);
   impl_->Frame(frame_index);

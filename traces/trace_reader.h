@@ -58,6 +58,9 @@ class TraceReader {
   // When regrouped: per stored cell, its cell in the view (kNoCell: an empty one) in frame
   // `frame_index` (RayRegrouper's map).
   const std::vector<CellId>& CellMap(std::size_t frame_index) const;
+  // The cells' footprints in frame `frame_index`: a dynamic subdivision's own (its cells are
+  // other boxes every frame; header() has each cell's largest), else header().footprints.
+  const std::vector<std::uint64_t>& FrameFootprints(std::size_t frame_index) const;
   const TraceHeader& header() const;
   // Summaries of the readable frames in file order, with their offset and length.
   const std::vector<FrameSummary>& frames() const;

@@ -395,6 +395,9 @@ void FillHeader(schema::Header::Builder out, const TraceHeader& h) {
       o.setLoX(b.lo[0]), o.setLoY(b.lo[1]), o.setLoZ(b.lo[2]);
       o.setHiX(b.hi[0]), o.setHiY(b.hi[1]), o.setHiZ(b.hi[2]);
     }
+    const auto& ff = h.subdivision.frame_footprints;
+    auto out_ff = sub.initFrameFootprints(static_cast<unsigned>(ff.size()));
+    for (unsigned i = 0; i < ff.size(); ++i) out_ff.set(i, ff[i]);
   }
 }
 

@@ -113,6 +113,39 @@ TEST_F(RegroupCaptureTest, RegroupedCellTreeBoundAndPeelEqualTheDirectCapture) {
   }
 }
 
+// A dynamic subdivision's cells are other boxes each frame: each frame's footprints are its
+// boxes' leaf unions (the replay uses them), the header's the largest over the frames, and the
+// file `trace regroup` writes keeps them.
+TEST_F(RegroupCaptureTest, DynamicCellsHaveEachFramesFootprints) {
+  const TraceReader stored = TraceReader::OpenStored(Path("fine.rct"));
+  const TraceReader view = TraceReader::Open(Path("fine.rct"), "dynamic:9");
+  const TraceHeader& h = view.header();
+  ASSERT_EQ(h.cell_count(), 9u);
+  ASSERT_EQ(h.subdivision.boxes.size(), 9u * view.frames().size());
+  EXPECT_TRUE(h.cells_change());
+  std::vector<std::uint64_t> largest(9, 0);
+  for (std::size_t f = 0; f < view.frames().size(); ++f) {
+    const std::vector<std::uint64_t>& fp = view.FrameFootprints(f);
+    ASSERT_EQ(fp.size(), 9u);
+    for (std::uint32_t c = 0; c < 9; ++c) {
+      const FineBox& b = h.subdivision.boxes[f * 9 + c];
+      std::vector<std::uint32_t> members;
+      for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
+        for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y)
+          for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x)
+            members.push_back(x + 12 * (y + 12 * z));
+      EXPECT_EQ(fp[c], stored.header().leaves.UnionBytes(members));
+      largest[c] = std::max(largest[c], fp[c]);
+    }
+  }
+  EXPECT_EQ(h.footprints, largest);
+  RegroupTrace(Path("fine.rct"), "dynamic:9", Path("dyn.rct"));
+  const TraceReader written = TraceReader::Open(Path("dyn.rct"));
+  for (std::size_t f = 0; f < view.frames().size(); ++f) {
+    EXPECT_EQ(written.FrameFootprints(f), view.FrameFootprints(f));
+  }
+}
+
 // Without empty cells dropped, a regroupable capture's rays are those of a plain capture on
 // the same grid: the empty visits it adds change nothing once dropped.
 TEST_F(RegroupCaptureTest, ItsOwnGridIsThePlainCapture) {

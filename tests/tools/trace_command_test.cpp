@@ -168,6 +168,13 @@ TEST(TraceRegroupCommand, CellsSpecOfTheReadingCommandsEqualsTheRegroupedFile) {
     ASSERT_EQ(view.code, 0) << view.err;
     EXPECT_EQ(file.out, view.out) << command;
   }
+  // A dynamic subdivision's file keeps each frame's own footprints: the same replay too.
+  const std::string dyn = dir + "/dyn.rct";
+  ASSERT_EQ(Raycell("trace regroup " + fine + " --cells dynamic:5 --out " + dyn).code, 0);
+  const Result dyn_file = Raycell("replay --format json " + dyn);
+  const Result dyn_view = Raycell("replay --format json " + fine + " --cells dynamic:5");
+  ASSERT_EQ(dyn_file.code, 0) << dyn_file.err;
+  EXPECT_EQ(dyn_file.out, dyn_view.out);
   const std::string vary = " --vary scheduler=maxwork,celltree --quiet --out ";
   ASSERT_EQ(Raycell("sweep " + c3 + vary + dir + "/a.csv").code, 0);
   ASSERT_EQ(Raycell("sweep " + fine + " --cells 3x3x3" + vary + dir + "/b.csv").code, 0);
