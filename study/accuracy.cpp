@@ -255,18 +255,23 @@ const std::vector<AccuracyKnob>& AccuracyKnobs() {
   return knobs;
 }
 
+std::string SceneNotLoadable(const std::string& scene) {
+  try {
+    SceneSpec spec;
+    spec.source = scene;
+    Scene::Load(spec, 0);
+  } catch (const InputError& e) {
+    return "the scene `" + scene + "` cannot be loaded here (" + e.what() + ")";
+  }
+  return "";
+}
+
 AccuracyStudy MeasureAccuracy(const AccuracyOptions& o) {
   AccuracyStudy study;
   study.options = o;
   if (o.frames <= 0) return study;  // not asked for
-  try {
-    SceneSpec spec;
-    spec.source = o.scene;
-    Scene::Load(spec, 0);  // a given trace's scene may live elsewhere
-  } catch (const InputError& e) {
-    study.not_measured = "the scene `" + o.scene + "` cannot be loaded here (" + e.what() + ")";
-    return study;
-  }
+  study.not_measured = SceneNotLoadable(o.scene);
+  if (!study.not_measured.empty()) return study;
   if (!o.quiet) {
     std::cerr << "measuring run time against error: " << o.frames << " frame(s) of `" << o.scene
               << "` at " << o.res << " in 3x3x3 cells, captures in " << o.out << "/\n";

@@ -75,6 +75,11 @@ struct AccuracyStudy {
   std::vector<AccuracyRow> rows;  // when measured: one per AccuracyKnobs() entry, in its order
 };
 
+// Why `scene` cannot be loaded here ("the scene `S` cannot be loaded here (...)"), or empty
+// when it can: the sections that capture the scene again (a given trace's scene may live
+// elsewhere) say so instead of failing.
+std::string SceneNotLoadable(const std::string& scene);
+
 // Measures every knob on options.frames frames of the scene (none: nothing measured), or says
 // why it cannot (the scene cannot be loaded here: a given trace's scene may live elsewhere).
 // InputError on a capture or replay that fails, or a reference with no fetches or no simulated

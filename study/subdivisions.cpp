@@ -11,9 +11,9 @@
 #include "replay/config.h"
 #include "replay/driver.h"
 #include "replay/replayer.h"
+#include "study/accuracy.h"
 #include "traces/record/record_flags.h"
 #include "traces/record/recorder.h"
-#include "traces/record/scene.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {
@@ -48,14 +48,8 @@ SubdivisionStudy MeasureSubdivisions(const SubdivisionOptions& o) {
   SubdivisionStudy study;
   study.options = o;
   if (o.frames <= 0) return study;
-  try {
-    SceneSpec spec;
-    spec.source = o.scene;
-    Scene::Load(spec, 0);  // a given trace's scene may live elsewhere
-  } catch (const InputError& e) {
-    study.not_measured = "the scene `" + o.scene + "` cannot be loaded here (" + e.what() + ")";
-    return study;
-  }
+  study.not_measured = SceneNotLoadable(o.scene);
+  if (!study.not_measured.empty()) return study;
   if (!o.quiet) {
     std::cerr << "measuring subdivisions: " << o.frames << " frame(s) of `" << o.scene << "` at "
               << o.res << ", one capture on " << o.fine << " cells regrouped, in " << o.out
