@@ -309,6 +309,11 @@ StudyResult RunStudy(const StudyOptions& a) {
   if (a.subdivision_frames < 0 || a.subdivision_frames > 1000) {
     throw InputError("--subdivision-frames: must be in 0..1000");
   }
+  const auto fine = ParseCellDims(a.subdivision_fine);
+  if (fine[0] % 3 || fine[1] % 3 || fine[2] % 3) {
+    throw InputError("--subdivision-fine '" + a.subdivision_fine + "': each count must be a " +
+                     "multiple of 3, so that the uniform 3x3x3 grid is made of its cells");
+  }
   ParseResolution(a.accuracy_res);  // InputError naming it, before any work
   BracketEffort(a.effort);          // likewise
   if (!std::isfinite(a.orbit_degrees())) {
@@ -343,6 +348,7 @@ StudyResult RunStudy(const StudyOptions& a) {
   sub.scene = accuracy.scene;  // a sequence's first volume, or the first given trace's scene
   sub.res = a.accuracy_res;
   sub.frames = a.subdivision_frames;
+  sub.fine = a.subdivision_fine;
   sub.out = (fs::path(a.out) / "subdivisions").string();
   sub.quiet = a.quiet;
   result.subdivisions = MeasureSubdivisions(sub);

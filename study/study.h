@@ -25,11 +25,12 @@ namespace raycell {
 struct StudyOptions {
   std::string scene = "builtin", cells = "2x2x2,3x3x3", res = "256x256", out = "study";
   std::string accuracy_res = "128x128";
-  std::string frames = "24";        // a count N (frames 0..N-1) or frame numbers A..B
-  int accuracy_frames = 2;          // 0: no run time against error section
-  int subdivision_frames = 8;       // 0: no subdivision section (study/subdivisions.h)
-  std::vector<std::string> traces;  // reused captures instead of recording
-  std::string effort = "quick";     // the bracket's budget (BracketEffort)
+  std::string frames = "24";                  // a count N (frames 0..N-1) or frame numbers A..B
+  int accuracy_frames = 2;                    // 0: no run time against error section
+  int subdivision_frames = 8;                 // 0: no subdivision section (study/subdivisions.h)
+  std::string subdivision_fine = "12x12x12";  // its fine grid: each count a multiple of 3
+  std::vector<std::string> traces;            // reused captures instead of recording
+  std::string effort = "quick";               // the bracket's budget (BracketEffort)
   // Degrees the camera turns over the frames. Default: 90 for one volume (3.75 degrees per
   // frame over 24: consecutive frames alike, as in an animation), 0 for a sequence, whose
   // volumes are the animation.

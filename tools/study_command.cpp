@@ -31,11 +31,12 @@ void AddStudyCommand(CLI::App& app) {
       "depth 0..5 the depth section: rays, Cell Tree nodes, fetches and simulated time under\n"
       "Max Work and Cell Tree scheduling, image RMSE against max depth 5 (OUT/depth.csv,\n"
       "depth.png; absent, saying why, when run time against error is skipped).\n"
-      "Last, the subdivision section: one capture of the scene on 12x12x12 cells with\n"
-      "--regroupable (--subdivision-frames frames at --accuracy-res; 0 skips it) replayed\n"
-      "regrouped into 3x3x3, kd:27:footprint, kd:27:work, a byte budget, an octree and\n"
-      "dynamic:27 under Max Work and Cell Tree scheduling, the cache sized to the median\n"
-      "3x3x3 footprint: fetches, bytes over each link, stall (OUT/subdivisions.csv, .png).\n"
+      "Last, the subdivision section: one capture of the scene with --regroupable on\n"
+      "12x12x12 cells (--subdivision-fine; --subdivision-frames frames at --accuracy-res;\n"
+      "0 frames skips it) replayed regrouped into 3x3x3, kd:27:footprint, kd:27:work, a\n"
+      "byte budget, an octree and dynamic:27 under Max Work and Cell Tree scheduling, the\n"
+      "cache sized to the median 3x3x3 footprint: fetches, bytes over each link, stall\n"
+      "(OUT/subdivisions.csv, subdivisions.png).\n"
       "With no options: the built-in scene, 24 frames over 90 degrees, 2x2x2 and 3x3x3\n"
       "cells, 256x256; about two minutes on 2 cores.\n"
       "--frames N records frames 0..N-1 of one volume; --frames A..B records frames A to B,\n"
@@ -76,6 +77,10 @@ void AddStudyCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--subdivision-frames", args->subdivision_frames,
                   "frames of the subdivision section's fine capture; 0 skips the section")
+      ->capture_default_str();
+  cmd->add_option("--subdivision-fine", args->subdivision_fine,
+                  "the subdivision section's fine grid, each count a multiple of 3 (e.g. "
+                  "24x24x24 for finer k-d and octree cells, at about 8 times the capture)")
       ->capture_default_str();
   cmd->add_option("--accuracy-res", args->accuracy_res,
                   "image size of the run time against error captures (the depth and subdivision "

@@ -528,6 +528,14 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
   EXPECT_EQ(raycell::testing::ReadBytes((Dir() / "study_nosub" / "report.md").string())
                 .find("## Subdivisions"),
             std::string::npos);
+  // A fine grid 3x3x3 is not made of is refused before any work, naming the option.
+  const Result r_fine = Raycell("study --trace " + capture + " --subdivision-fine 8x8x8 --out " +
+                                (Dir() / "study_badfine").string());
+  EXPECT_EQ(r_fine.code, 2);
+  EXPECT_NE(r_fine.out.find("--subdivision-fine '8x8x8': each count must be a multiple of 3"),
+            std::string::npos)
+      << r_fine.out;
+  EXPECT_FALSE(std::filesystem::exists(Dir() / "study_badfine" / "report.md"));
   const Result r3 = Raycell("study --trace " + capture + " --cells 3x3x3 --out " + again.string());
   EXPECT_EQ(r3.code, 2);
   EXPECT_NE(r3.out.find("--cells excludes --trace"), std::string::npos) << r3.out;
