@@ -79,6 +79,51 @@ CellTree UnionTree(const std::vector<const CellTree*>& trees) {
   return u;
 }
 
+CellTree ContractTree(const CellTree& tree, const std::vector<CellId>& coarse_of,
+                      std::vector<NodeId>* image) {
+  CellTree u;
+  std::vector<NodeId> to(tree.size(), kNoNode);
+  to[kRootNode.index()] = kRootNode;
+  for (NodeId n : tree.nodes()) {  // parents before children
+    RAYCELL_CHECK_LT(tree.cell(n).value(), coarse_of.size());
+    const CellId c = coarse_of[tree.cell(n).value()];
+    const NodeId p = to[tree.parent(n).index()];
+    NodeId m = p;
+    if (p == kRootNode || u.cell(p) != c) {  // a new coarse node, or one already made
+      m = u.FindChild(p, c);
+      if (m == kNoNode) m = u.AddNode(p, c);
+      u.enter_[m.index()] += tree.enter(n);
+    }
+    to[n.index()] = m;
+    u.samples_[m.index()] += tree.samples(n);
+    u.visits_[m.index()] += tree.visits(n);
+  }
+  u.rays_ = tree.rays();
+  u.last_child_.clear();
+  u.ComputeGenerations();
+  if (image != nullptr) *image = std::move(to);
+  return u;
+}
+
+CellTree SubTree(const CellTree& tree, const std::vector<NodeId>& nodes) {
+  CellTree u;
+  std::vector<NodeId> to(tree.size(), kNoNode);
+  NodeId last = kRootNode;
+  for (const NodeId n : nodes) {
+    RAYCELL_CHECK(last < n && n.index() < tree.size());
+    last = n;
+    const NodeId p = to[tree.parent(n).index()];
+    const NodeId m = u.AddNode(p == kNoNode ? kRootNode : p, tree.cell(n));
+    to[n.index()] = m;
+    u.enter_[m.index()] = tree.enter(n);
+    u.samples_[m.index()] = tree.samples(n);
+    u.visits_[m.index()] = tree.visits(n);
+  }
+  u.last_child_.clear();
+  u.ComputeGenerations();
+  return u;
+}
+
 void CellTree::ComputeGenerations() {
   generation_.assign(size(), 0);
   std::vector<std::uint32_t> on_path(cell_count_, 0);

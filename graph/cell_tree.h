@@ -76,6 +76,9 @@ class CellTree {
  private:
   friend class CellTreeBuilder;
   friend CellTree UnionTree(const std::vector<const CellTree*>& trees);
+  friend CellTree ContractTree(const CellTree& tree, const std::vector<CellId>& coarse_of,
+                               std::vector<NodeId>* image);
+  friend CellTree SubTree(const CellTree& tree, const std::vector<NodeId>& nodes);
   CellTree();
   NodeId AddNode(NodeId parent, CellId cell);
   void ComputeGenerations();
@@ -105,6 +108,22 @@ inline CellTree::NodeRange CellTree::nodes() const {
 // feasible for the union is feasible for each of them. Trees are merged in order: the
 // union of A and B numbers its nodes as a builder fed A's rays, then B's, would.
 CellTree UnionTree(const std::vector<const CellTree*>& trees);
+
+// The tree a coarser subdivision gives (issue 23's two levels; docs/design.md §5 "Two-level
+// scheduling"): every node's cell mapped by `coarse_of` (per cell of the tree), and a node
+// whose coarse cell is its parent's merged into the parent's coarse node, as a ray's
+// consecutive visits to one coarse cell merge when a capture is regrouped. So each coarse node
+// stands for a connected set of the tree's nodes, all in its coarse cell, and the coarse tree
+// is the dependency structure of the coarse cells. Counts are summed (enter: only the rays
+// entering a coarse node from another coarse cell). `image`, when given, gets per node of
+// `tree` its coarse node (the root's: the root). O(nodes x children).
+CellTree ContractTree(const CellTree& tree, const std::vector<CellId>& coarse_of,
+                      std::vector<NodeId>* image = nullptr);
+
+// The nodes `nodes` of `tree` (node ids, strictly increasing, no root) as a tree of their
+// own, numbered in that order: a node whose parent is not among them hangs from the root.
+// Cells and counts are kept.
+CellTree SubTree(const CellTree& tree, const std::vector<NodeId>& nodes);
 
 // maxGen(c) for every cell c < tree.cell_count(): the largest generation of a node of c
 // (0 for a cell without nodes).

@@ -149,4 +149,54 @@ class Peeler {
 
 PeelResult Peel(const CellTree& tree) { return Peeler(tree).Run(); }
 
+namespace {
+
+// The run of docs/design.md §1: at each entry of `schedule`, every node of its cell whose
+// parent is done (the root: always). Calls step(cell, nodes) for each entry that processes
+// some nodes. In a tree (a SubTree too) a child never has its parent's cell, so nothing an
+// entry makes ready is processed by the same entry. O(nodes + entries).
+template <typename Step>
+void RunGreedy(const CellTree& tree, const std::vector<CellId>& schedule, Step step) {
+  std::vector<std::vector<NodeId>> ready(tree.cell_count());
+  for (NodeId c = tree.first_child(kRootNode); c != kNoNode; c = tree.next_sibling(c)) {
+    ready[tree.cell(c).value()].push_back(c);
+  }
+  std::vector<NodeId> now;
+  for (const CellId cell : schedule) {
+    if (cell.value() >= ready.size() || ready[cell.value()].empty()) continue;
+    now.clear();
+    now.swap(ready[cell.value()]);
+    for (const NodeId n : now) {
+      for (NodeId c = tree.first_child(n); c != kNoNode; c = tree.next_sibling(c)) {
+        ready[tree.cell(c).value()].push_back(c);
+      }
+    }
+    step(cell, now);
+  }
+}
+
+}  // namespace
+
+std::vector<CellId> TwoLevelPeel(const CellTree& tree, const std::vector<CellId>& coarse_of) {
+  std::vector<NodeId> image;
+  const CellTree coarse = ContractTree(tree, coarse_of, &image);
+  // Per coarse node, the tree's nodes it stands for, in increasing order.
+  std::vector<std::vector<NodeId>> members(coarse.size());
+  for (NodeId n : tree.nodes()) members[image[n.index()].index()].push_back(n);
+  std::vector<CellId> out;
+  std::vector<NodeId> forest;
+  RunGreedy(coarse, Peel(coarse).schedule, [&](CellId, const std::vector<NodeId>& step) {
+    forest.clear();
+    for (const NodeId m : step) {
+      forest.insert(forest.end(), members[m.index()].begin(), members[m.index()].end());
+    }
+    std::sort(forest.begin(), forest.end());
+    // Peel's entries that process nothing in the run (it builds backwards) are left out.
+    const CellTree inner = SubTree(tree, forest);
+    RunGreedy(inner, Peel(inner).schedule,
+              [&](CellId cell, const std::vector<NodeId>&) { out.push_back(cell); });
+  });
+  return out;
+}
+
 }  // namespace raycell

@@ -31,4 +31,19 @@ struct PeelResult {
 // memory.
 PeelResult Peel(const CellTree& tree);
 
+// A schedule of `tree`'s cells planned at two levels (issue 23; docs/design.md §5 "Two-level
+// scheduling"): `coarse_of` maps each cell to a coarser cell holding it (a board's cell; the
+// tree's cells are a cache's). First the order of the coarse cells: Peel of the tree
+// contracted to them (ContractTree). That schedule is run on the coarse tree (the run of §1:
+// each entry processes every coarse node of its cell whose parent is done); then, per entry,
+// the tree's nodes inside the coarse nodes it processed, a forest whose parents are all done
+// by earlier entries, are ordered by Peel of that forest (SubTree), without its entries that
+// process nothing in the run. The schedules of the entries, concatenated, are the result: feasible
+// for `tree` (each forest's schedule is, once the forests before it are done), and every stretch of
+// it stays inside one coarse cell, so a board that holds one coarse cell at a time fetches each
+// coarse cell as often as the coarse schedule says. With every cell its own coarse cell it is
+// Peel's schedule without the entries that process nothing in the run. O(nodes log cells + coarse
+// entries x cells).
+std::vector<CellId> TwoLevelPeel(const CellTree& tree, const std::vector<CellId>& coarse_of);
+
 }  // namespace raycell

@@ -16,6 +16,7 @@
 #include "base/parse.h"
 #include "replay/replacement.h"
 #include "scheduling/scheduler.h"
+#include "traces/subdivision.h"
 
 namespace raycell {
 namespace {
@@ -253,6 +254,25 @@ const std::vector<Key<LevelConfig>>& LevelKeys() {
          l.replacement = ParseReplacement(Trim(t), what);
        },
        [](const LevelConfig& l) { return std::string(ToString(l.replacement)); }, "", ""},
+      {"cells",
+       "what the level stores and moves: same (the replay's cells), or a SPEC of a regroupable "
+       "capture's fine grid (3x3x3, kd:27:footprint, octree:BYTES...) whose cells are unions of "
+       "the replay's (shared levels only)",
+       TomlKind::kString, "a string", 0, 0,
+       [](std::string_view t, const std::string& what, LevelConfig& l) {
+         l.cells = std::string(Trim(t));
+         if (l.cells == "same") l.cells.clear();
+         if (l.cells.empty()) return;
+         const SubdivisionSpec spec = ParseSubdivisionSpec(l.cells, what);
+         if (spec.kind == SubdivisionSpec::Kind::kDynamic) {
+           Fail(what, "'" + l.cells +
+                          "': a memory level's cells stay the same over the frames; "
+                          "dynamic subdivisions are for --cells");
+         }
+         l.cells = spec.ToString();
+       },
+       [](const LevelConfig& l) { return l.cells.empty() ? std::string("same") : l.cells; }, "",
+       ""},
   };
   return keys;
 }
@@ -266,7 +286,7 @@ struct DefaultLevel {
   };
   const char* name;
   const char* about;
-  Value values[4];  // one per LevelKeys() entry, in any order
+  Value values[5];  // one per LevelKeys() entry, in any order
 
   // The value of `key`; every key has one (a CHECK).
   const Value& Of(const std::string& key) const {
@@ -283,13 +303,15 @@ constexpr DefaultLevel kDefaultLevels[] = {
      {{"capacity", "1 cell", "\"cell size set to memory size\", the paper's case"},
       {"bandwidth", "1.6GB/s", "one Direct RDRAM PC800 channel, 2 bytes x 800 MT/s"},
       {"latency", "40ns", "RDRAM row access"},
-      {"replacement", "lru", "with one cell every policy behaves alike"}}},
+      {"replacement", "lru", "with one cell every policy behaves alike"},
+      {"cells", "same", "the replay's cells"}}},
     {"board",
      "board memory (RDRAM) of the PCI board",
      {{"capacity", "256MiB", "RDRAM board memory of a PCI board of the period"},
       {"bandwidth", "133MB/s", "32-bit 33 MHz PCI to host memory"},
       {"latency", "1us", "a PCI transaction"},
-      {"replacement", "lru", "LRU, the usual hardware policy"}}},
+      {"replacement", "lru", "LRU, the usual hardware policy"},
+      {"cells", "same", "the replay's cells, as on the slides"}}},
 };
 
 const DefaultLevel* DefaultLevelOf(const std::string& name) {
@@ -472,8 +494,8 @@ LevelConfig ReadLevel(const toml::table& table, std::size_t index, const std::st
   Section s(table, "[[level]] '" + level.name + "'", "level '" + level.name + "' ", file);
   s.Get("name");
   for (const Key<LevelConfig>& key : LevelKeys()) {
-    // A level not named like a default one needs every value but its replacement.
-    if (!s.Read(key, level) && !is_default && key.name != "replacement") {
+    // A level not named like a default one needs every value but its replacement and cells.
+    if (!s.Read(key, level) && !is_default && key.name != "replacement" && key.name != "cells") {
       s.Missing(key.name.c_str());
     }
   }
@@ -573,7 +595,7 @@ LevelConfig* FindLevel(ReplayConfig& config, const std::string& name, const std:
 bool operator==(const LevelConfig& a, const LevelConfig& b) {
   return a.name == b.name && a.capacity_unit == b.capacity_unit && a.capacity == b.capacity &&
          a.bandwidth_below == b.bandwidth_below && a.latency_below == b.latency_below &&
-         a.replacement == b.replacement;
+         a.replacement == b.replacement && a.cells == b.cells;
 }
 bool operator!=(const LevelConfig& a, const LevelConfig& b) { return !(a == b); }
 
@@ -619,6 +641,11 @@ void ValidateConfig(const ReplayConfig& config, const std::string& where) {
     if (!ValidLevelName(l.name)) Fail(where, "invalid level name '" + l.name + "'");
     if (!names.insert(l.name).second) Fail(where, "duplicate level name '" + l.name + "'");
     if (l.capacity == 0) Fail(where, "level '" + l.name + "' capacity must be greater than zero");
+  }
+  if (!config.levels[0].cells.empty()) {
+    Fail(where, "level '" + config.levels[0].name + "' cells = '" + config.levels[0].cells +
+                    "': the first level holds the cells the processors work; only a shared "
+                    "level may hold coarser ones");
   }
   if (config.processors.count < 1 || config.processors.count > 1024) {
     Fail(where,

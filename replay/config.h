@@ -38,6 +38,12 @@ struct LevelConfig {
   SimTime latency_below;
   // A level a file adds without naming its replacement gets LRU.
   Replacement replacement = Replacement::kLru;
+  // What the level stores and moves (docs/design.md §2 "Levels of coarser cells"): empty
+  // ("same" in files and overrides), the replay's cells; else a SPEC of a regroupable capture's
+  // fine grid (traces/subdivision.h, not dynamic) whose cells are unions of the replay's, e.g. a
+  // board of 3x3x3 cells for caches of 6x6x6 ones. Only shared levels (not the first); checked
+  // against the trace when a replay starts (TraceReader::CoarserCells).
+  std::string cells;
 };
 
 struct ProcessorConfig {

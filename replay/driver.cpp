@@ -237,17 +237,50 @@ const LoadedFrame* FrameWalker::Next() {
 ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& header,
                                const ReplayConfig& config, Scheduler& scheduler,
                                std::uint32_t sample_every, ReplayObserver* observer,
-                               MemoryState* memory) {
+                               MemoryState* memory, const MemoryUnits* units) {
   const bool per_ray = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay;
   const WorkGraph* work = per_ray ? frame.segments.get() : frame.nodes.get();
   RAYCELL_CHECK(work != nullptr);  // the walker was asked for this granularity
   const FrameInfo info{frame.index, frame.tree.get(), frame.previous.get(), header.cell_count(),
                        frame.before_previous.get()};
   ReplayResult r = ReplayFrame(*work, frame.footprints ? *frame.footprints : header.footprints,
-                               config, scheduler, info, frame.bound, observer, memory);
+                               config, scheduler, info, frame.bound, observer, memory, units);
   ScaleBack(r, sample_every, config.processors.count);
   r.frame = frame.number;
   return r;
+}
+
+MemoryUnits LevelUnitsOf(const ReplayConfig& config, const TraceReader& reader) {
+  MemoryUnits units(config.levels.size());
+  bool any = false;
+  for (std::size_t i = 0; i < config.levels.size(); ++i) {
+    const LevelConfig& level = config.levels[i];
+    if (level.cells.empty()) continue;
+    const std::string key = "level." + level.name + ".cells";
+    TraceReader::CoarseCells coarse = reader.CoarserCells(level.cells, key);
+    units[i].unit_of_cell = std::move(coarse.of_cell);
+    units[i].bytes = std::move(coarse.bytes);
+    any = true;
+    // Each unit of the nearest level above with units of its own lies in one unit of this.
+    for (std::size_t j = i; j-- > 1;) {
+      if (units[j].identity()) continue;
+      std::vector<std::uint32_t> below(units[j].bytes.size(), UINT32_MAX);
+      for (std::size_t c = 0; c < units[i].unit_of_cell.size(); ++c) {
+        const std::uint32_t a = units[j].unit_of_cell[c].value();
+        const std::uint32_t b = units[i].unit_of_cell[c].value();
+        if (below[a] != UINT32_MAX && below[a] != b) {
+          throw InputError(key + ": '" + level.cells + "' splits cell " + std::to_string(a) +
+                           " of level." + config.levels[j].name + ".cells '" +
+                           config.levels[j].cells +
+                           "': a level's cells must be unions of the cells of the level above it");
+        }
+        below[a] = b;
+      }
+      break;
+    }
+  }
+  if (!any) units.clear();
+  return units;
 }
 
 // ---- Many configurations -----------------------------------------------------------------
@@ -304,6 +337,9 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
     memory[d] = std::make_unique<MemoryState>();
     warm.push_back(d);
   }
+  // What each distinct configuration's levels hold; checked before any frame is read.
+  std::vector<MemoryUnits> units;
+  for (const ReplayConfig& c : distinct) units.push_back(LevelUnitsOf(c, reader));
   const TraceHeader& header = reader.header();
   FrameWalker walker(reader, frame_indices, need_segments, need_nodes, options.sample_every,
                      history, options.compact_above_visits, !warm.empty());
@@ -320,8 +356,9 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
     ReplayObserver* observer = frame->warm_up ? nullptr : options.observer;
     pool.ParallelFor(run.size(), [&](std::size_t n) {
       const std::size_t d = run[n];
-      distinct_results[d] = ReplayLoadedFrame(*frame, header, distinct[d], *schedulers[d],
-                                              options.sample_every, observer, memory[d].get());
+      distinct_results[d] =
+          ReplayLoadedFrame(*frame, header, distinct[d], *schedulers[d], options.sample_every,
+                            observer, memory[d].get(), &units[d]);
     });
     if (frame->warm_up) {
       if (options.progress) options.progress(double(walked) / double(walker.walked()));

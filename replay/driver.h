@@ -91,10 +91,18 @@ class FrameWalker {
 // kept across frames): ReplayFrame on the frame's work graph of the config's granularity,
 // scaled back when the frame is sampled (see ReplayTrace), numbered.
 // `memory`: as ReplayFrame takes it (null: cold).
+// `units`: the levels' units (LevelUnitsOf; null: every level holds the cells).
 ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& header,
                                const ReplayConfig& config, Scheduler& scheduler,
                                std::uint32_t sample_every = 1, ReplayObserver* observer = nullptr,
-                               MemoryState* memory = nullptr);
+                               MemoryState* memory = nullptr, const MemoryUnits* units = nullptr);
+
+// What each level of `config` stores and moves on `reader`'s cells (replay/memory.h
+// LevelUnits): empty when every level holds the replay's cells. InputError naming the key
+// (level.NAME.cells) when a level's cells cannot be made (TraceReader::CoarserCells: not a
+// regroupable capture, cells that are not unions of the replay's) or do not nest in the cells
+// of the level below it.
+MemoryUnits LevelUnitsOf(const ReplayConfig& config, const TraceReader& reader);
 
 // What a frame's result cannot depend on, removed: granularity resolved (EffectiveGranularity),
 // the seed unless the scheduler uses it (SchedulerEntry::seeded: random and the planners),

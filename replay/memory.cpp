@@ -53,11 +53,26 @@ void CellStore::Restore(const std::vector<CellId>& cells) {
   for (const CellId c : cells) RAYCELL_CHECK(Insert(c));
 }
 
+std::uint32_t UnitCount(const MemoryUnits* units, std::size_t level, std::uint32_t cells) {
+  if (units == nullptr || units->empty() || (*units)[level].identity()) return cells;
+  return std::uint32_t((*units)[level].bytes.size());
+}
+
 MemoryHierarchy::MemoryHierarchy(const ReplayConfig& config,
                                  const std::vector<std::uint64_t>& footprints,
-                                 const Requests& futures, const MemoryState& start)
+                                 const Requests& futures, const MemoryState& start,
+                                 const MemoryUnits* units)
     : levels_(config.levels), footprints_(footprints) {
   RAYCELL_CHECK(!levels_.empty());
+  const bool given = units != nullptr && !units->empty();
+  RAYCELL_CHECK(!given || units->size() == levels_.size());
+  for (std::size_t i = 0; i < levels_.size(); ++i) {
+    const bool own = given && !(*units)[i].identity();
+    RAYCELL_CHECK(!own || i > 0);  // the processors' caches hold the cells they work
+    if (own) RAYCELL_CHECK_EQ((*units)[i].unit_of_cell.size(), footprints.size());
+    unit_of_.push_back(own ? &(*units)[i].unit_of_cell : nullptr);
+    bytes_.push_back(own ? &(*units)[i].bytes : &footprints_);
+  }
   for (std::size_t i = 0; i < levels_.size(); ++i) {
     // A policy that needs the future runs as LRU until a run has made the requests.
     const bool min = ReplacementOf(levels_[i].replacement).needs_future;
@@ -66,7 +81,7 @@ MemoryHierarchy::MemoryHierarchy(const ReplayConfig& config,
     const std::uint32_t copies = i == 0 ? config.processors.count : 1;
     stores_.emplace_back();
     for (std::uint32_t k = 0; k < copies; ++k) {
-      stores_.back().emplace_back(level, &footprints_,
+      stores_.back().emplace_back(level, bytes_[i],
                                   min && !futures.empty() ? futures[i][k] : std::vector<CellId>{});
     }
     link_free_.emplace_back(copies, SimTime::Zero());
@@ -81,7 +96,7 @@ MemoryHierarchy::MemoryHierarchy(const ReplayConfig& config,
   }
   arrival_.assign(config.processors.count, std::vector<SimTime>(footprints.size()));
   arrives_.assign(levels_.size(), std::vector<SimTime>());
-  for (std::size_t i = 1; i < levels_.size(); ++i) arrives_[i].assign(footprints.size(), SimTime());
+  for (std::size_t i = 1; i < levels_.size(); ++i) arrives_[i].assign(bytes_[i]->size(), SimTime());
   prefetched_.assign(config.processors.count, std::vector<bool>(footprints.size(), false));
 }
 
@@ -102,10 +117,11 @@ MemoryState MemoryHierarchy::State() const {
   return state;
 }
 
-std::vector<std::vector<bool>> HeldAnywhere(const MemoryState& state, std::uint32_t cells) {
+std::vector<std::vector<bool>> HeldAnywhere(const MemoryState& state, std::uint32_t cells,
+                                            const MemoryUnits* units) {
   std::vector<std::vector<bool>> held;
   for (const auto& level : state.held) {
-    held.emplace_back(cells, false);
+    held.emplace_back(UnitCount(units, held.size(), cells), false);
     for (const auto& copy : level) {
       for (const CellId c : copy) held.back()[c.value()] = true;
     }
@@ -134,28 +150,32 @@ SimTime MemoryHierarchy::Transfer(std::uint32_t processor, CellId cell, std::siz
                                   std::optional<CellId> pinned) {
   // A shared level holds a cell from when it is asked for there, but can pass it on only
   // once it has arrived (another processor's transfer of it may still be on its way).
-  if (from >= 1 && from < levels_.size()) t = std::max(t, arrives_[from][cell.value()]);
+  // Each link carries its level's unit of the cell.
+  if (from >= 1 && from < levels_.size()) {
+    t = std::max(t, arrives_[from][UnitOf(from, cell).value()]);
+  }
   for (std::size_t i = from; i-- > 0;) {  // down through every level above `from`
+    const CellId unit = UnitOf(i, cell);
+    const std::uint64_t bytes = Bytes(i, unit);
     SimTime& free = LinkFree(i, processor);
     const SimTime start = std::max(t, free);
-    t = start + levels_[i].latency_below +
-        levels_[i].bandwidth_below.TransferTime(footprints_[cell.value()]);
+    t = start + levels_[i].latency_below + levels_[i].bandwidth_below.TransferTime(bytes);
     free = t;
     if (observer_) {  // a prefetch keeps the cell being worked: only it passes `pinned`
-      observer_->Transfer(i, i == 0 ? processor : 0, cell, footprints_[cell.value()], start, t,
-                          processor, pinned.has_value());
+      observer_->Transfer(i, i == 0 ? processor : 0, unit, bytes, start, t, processor,
+                          pinned.has_value());
     }
-    Store(i, processor).Insert(cell, i == 0 ? pinned : std::nullopt);
-    if (i >= 1) arrives_[i][cell.value()] = t;
+    Store(i, processor).Insert(unit, i == 0 ? pinned : std::nullopt);
+    if (i >= 1) arrives_[i][unit.value()] = t;
     CheckedIncrement(stats_[i].fetches);
-    CheckedIncrement(stats_[i].bytes, footprints_[cell.value()]);
+    CheckedIncrement(stats_[i].bytes, bytes);
   }
   return t;
 }
 
 SimTime MemoryHierarchy::Fetch(std::uint32_t processor, CellId cell, SimTime now) {
   std::size_t from = 0;  // the nearest level holding the cell; levels_.size() = host
-  while (from < levels_.size() && !Store(from, processor).Lookup(cell)) ++from;
+  while (from < levels_.size() && !Store(from, processor).Lookup(UnitOf(from, cell))) ++from;
   if (from == 0) {
     if (prefetched_[processor][cell.value()]) CheckedIncrement(prefetch_hits_);
     prefetched_[processor][cell.value()] = false;
@@ -169,7 +189,7 @@ bool MemoryHierarchy::Prefetch(std::uint32_t processor, CellId cell, SimTime now
   CellStore& cache = Store(0, processor);
   if (cache.Contains(cell) || !cache.Fits(cell, working)) return false;
   std::size_t from = 1;
-  while (from < levels_.size() && !Store(from, processor).Lookup(cell)) ++from;
+  while (from < levels_.size() && !Store(from, processor).Lookup(UnitOf(from, cell))) ++from;
   arrival_[processor][cell.value()] = Transfer(processor, cell, from, now, working);
   prefetched_[processor][cell.value()] = true;
   CheckedIncrement(prefetches_);

@@ -57,6 +57,23 @@ class CellStore {
   std::vector<CellId> requests_;
 };
 
+// What a memory level stores, moves and counts (docs/design.md §2 "Levels of coarser cells"):
+// the replay's cells, or, with `level.NAME.cells` (a SPEC of a regroupable capture's fine
+// grid), coarser cells, each a union of the replay's (a board that loads 3x3x3 cells for
+// caches that hold 6x6x6 ones). A unit is numbered as a cell of its own subdivision; the link
+// below a level carries that level's units, at their bytes.
+struct LevelUnits {
+  std::vector<CellId> unit_of_cell;  // per replay cell; empty: the replay's cells
+  std::vector<std::uint64_t> bytes;  // per unit, its footprint (each leaf once)
+  bool identity() const { return unit_of_cell.empty(); }
+};
+// Per level (nearest first); empty, or a level's identity(): that level holds the replay's
+// cells. A level's units nest in the next level's (each unit lies in one unit below it).
+using MemoryUnits = std::vector<LevelUnits>;
+// The units of level `level` under `units` (null or empty: the replay's cells): `cells` or
+// that level's unit count.
+std::uint32_t UnitCount(const MemoryUnits* units, std::size_t level, std::uint32_t cells);
+
 // What the levels hold: per level and copy (processor for level 0, else one), the held cells
 // in the order the copy's policy would evict them. A frame with warm memory starts from the
 // state the previous frame ended with (docs/design.md §2 "Memory"); empty: every level empty.
@@ -64,8 +81,10 @@ struct MemoryState {
   std::vector<std::vector<std::vector<CellId>>> held;  // [level][copy]
   bool empty() const { return held.empty(); }
 };
-// Per level of `state`, per cell of `cells`: whether some copy of the level holds it.
-std::vector<std::vector<bool>> HeldAnywhere(const MemoryState& state, std::uint32_t cells);
+// Per level of `state`, per unit of the level (`cells` of the replay, units as UnitCount
+// gives them): whether some copy of the level holds it.
+std::vector<std::vector<bool>> HeldAnywhere(const MemoryState& state, std::uint32_t cells,
+                                            const MemoryUnits* units = nullptr);
 
 struct LevelStats {
   std::string name;
@@ -80,9 +99,11 @@ class MemoryHierarchy {
   // `futures`: for levels with MIN replacement, the requests of a previous run; empty on the
   // first run, when MIN levels run LRU to learn them.
   // `start`: what the levels hold when the frame starts (empty: nothing), as State() gave it
-  // for the same configuration and footprints.
+  // for the same configuration and footprints. `units` (null: every level the replay's cells)
+  // must outlive the hierarchy.
   MemoryHierarchy(const ReplayConfig& config, const std::vector<std::uint64_t>& footprints,
-                  const Requests& futures = {}, const MemoryState& start = {});
+                  const Requests& futures = {}, const MemoryState& start = {},
+                  const MemoryUnits* units = nullptr);
   // What the levels hold now.
   MemoryState State() const;
   Requests requests() const;
@@ -109,15 +130,24 @@ class MemoryHierarchy {
   SimTime Transfer(std::uint32_t processor, CellId cell, std::size_t from, SimTime t,
                    std::optional<CellId> pinned);
   SimTime& LinkFree(std::size_t level, std::uint32_t processor);
+  // Level `level`'s unit holding `cell`, and a unit's bytes.
+  CellId UnitOf(std::size_t level, CellId cell) const {
+    return unit_of_[level] ? (*unit_of_[level])[cell.value()] : cell;
+  }
+  std::uint64_t Bytes(std::size_t level, CellId unit) const {
+    return (*bytes_[level])[unit.value()];
+  }
 
   std::vector<LevelConfig> levels_;
   const std::vector<std::uint64_t>& footprints_;
-  std::vector<std::vector<CellStore>> stores_;   // [level][processor, or 0 when shared]
-  std::vector<std::vector<SimTime>> link_free_;  // the link below each level, likewise
+  std::vector<const std::vector<CellId>*> unit_of_;       // per level; null: the cells
+  std::vector<const std::vector<std::uint64_t>*> bytes_;  // per level, per unit
+  std::vector<std::vector<CellStore>> stores_;            // [level][processor, or 0 when shared]
+  std::vector<std::vector<SimTime>> link_free_;           // the link below each level, likewise
   std::vector<LevelStats> stats_;
   std::vector<std::vector<SimTime>> arrival_;  // [processor][cell]: when a prefetch lands
   std::vector<std::vector<bool>> prefetched_;  // [processor][cell]: not yet used
-  std::vector<std::vector<SimTime>> arrives_;  // [shared level][cell]: when it gets there
+  std::vector<std::vector<SimTime>> arrives_;  // [shared level][unit]: when it gets there
   std::uint64_t prefetches_ = 0, prefetch_hits_ = 0;
   ReplayObserver* observer_ = nullptr;
 };

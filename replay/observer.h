@@ -43,7 +43,9 @@ class ReplayObserver {
   virtual void BatchEnd(std::uint32_t p, CellId cell, SimTime now) = 0;
   // A cell crossed the link below memory level `level` (0: the processors' caches) into
   // `copy` of that level (the processor for level 0, else 0), from `start` to `end`, for
-  // processor `processor`; `prefetch`: started by a prefetch, not by a fetch.
+  // processor `processor`; `prefetch`: started by a prefetch, not by a fetch. `cell` is the
+  // level's unit: a cell of the level's own subdivision when it has one (level.NAME.cells,
+  // replay/memory.h LevelUnits), with `bytes` its footprint.
   virtual void Transfer(std::size_t level, std::uint32_t copy, CellId cell, std::uint64_t bytes,
                         SimTime start, SimTime end, std::uint32_t processor, bool prefetch) = 0;
   // The run ended at `end`: every unit done (the result's `time`).

@@ -136,15 +136,15 @@ class Board {
  public:
   using Entry = typename Units::Entry;
 
-  Board(const WorkGraph& w, Units units, const std::vector<std::uint64_t>& footprints,
+  Board(const WorkGraph& w, Units graph_units, const std::vector<std::uint64_t>& footprints,
         const ReplayConfig& config, Scheduler& scheduler, const MemoryHierarchy::Requests& futures,
-        const MemoryState& start, ReplayObserver* observer)
+        const MemoryState& start, ReplayObserver* observer, const MemoryUnits* units)
       : w_(w),
-        u_(units),
+        u_(graph_units),
         config_(config),
         tps_(config.processors.time_per_sample),
         scheduler_(scheduler),
-        memory_(config, footprints, futures, start),
+        memory_(config, footprints, futures, start, units),
         queues_(w.cells),
         queued_rays_(w.cells, 0),
         view_(w.cells, 0),
@@ -449,22 +449,31 @@ bool NeedsFuture(const ReplayConfig& config) {
 }
 
 template <typename Units>
-ReplayResult Replay(const WorkGraph& work, Units units,
+ReplayResult Replay(const WorkGraph& work, Units graph_units,
                     const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
                     Scheduler& scheduler, const FrameInfo& frame, std::uint64_t bound,
-                    ReplayObserver* observer, MemoryState* memory) {
+                    ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units) {
   static const MemoryState kEmpty;
   const MemoryState& start = memory ? *memory : kEmpty;
   const std::vector<double> fetch_samples = FetchSamples(config, footprints);
   FrameInfo info = frame;
   info.fetch_samples = &fetch_samples;
   info.processors = config.processors.count;
+  if (units != nullptr) {
+    for (const LevelUnits& level : *units) {
+      if (!level.identity()) {
+        info.board_cell_of = &level.unit_of_cell;
+        break;
+      }
+    }
+  }
   const bool min = NeedsFuture(config);
   const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
   MemoryHierarchy::Requests futures;
   for (std::uint32_t pass = 1;; ++pass) {
     scheduler.BeginFrame(info);
-    Board<Units> board(work, units, footprints, config, scheduler, futures, start, observer);
+    Board<Units> board(work, graph_units, footprints, config, scheduler, futures, start, observer,
+                       units);
     board.Run(frame.frame_index);
     const bool converged = pass > 1 && !board.memory().diverged();
     if (!min || converged || pass == max_passes) {
@@ -475,8 +484,9 @@ ReplayResult Replay(const WorkGraph& work, Units units,
         r.bound = warm_cache && bound > 0 ? bound - 1 : bound;
       }
       const std::vector<std::vector<bool>> held =
-          start.empty() ? std::vector<std::vector<bool>>() : HeldAnywhere(start, work.cells);
-      r.time_bound = TimeLowerBound(work, footprints, config, start.empty() ? nullptr : &held);
+          start.empty() ? std::vector<std::vector<bool>>() : HeldAnywhere(start, work.cells, units);
+      r.time_bound =
+          TimeLowerBound(work, footprints, config, start.empty() ? nullptr : &held, units);
       r.passes = pass;
       r.min_converged = !min || converged;
       if (memory) *memory = board.memory().State();
@@ -529,20 +539,21 @@ void CheckModelSize(const ReplayConfig& config, std::uint64_t cells) {
 
 ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                          const ReplayConfig& config, Scheduler& scheduler, const FrameInfo& frame,
-                         std::uint64_t bound, ReplayObserver* observer, MemoryState* memory) {
+                         std::uint64_t bound, ReplayObserver* observer, MemoryState* memory,
+                         const MemoryUnits* units) {
   RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
   CheckReplayable(config);
   CheckModelSize(config, work.cells);
   if (work.compact.units != 0) {
     return Replay(work, CompactUnits{work.compact.stream.data(), &work.compact}, footprints, config,
-                  scheduler, frame, bound, observer, memory);
+                  scheduler, frame, bound, observer, memory, units);
   }
   if (!work.packed.empty()) {
     return Replay(work, PackedUnits{work.packed.data(), UnitId(work.roots.size())}, footprints,
-                  config, scheduler, frame, bound, observer, memory);
+                  config, scheduler, frame, bound, observer, memory, units);
   }
   return Replay(work, ColumnUnits{&work}, footprints, config, scheduler, frame, bound, observer,
-                memory);
+                memory, units);
 }
 
 }  // namespace raycell

@@ -61,10 +61,14 @@ struct ReplayResult {
 // is replaced by what they hold when it ends: the caller carries it to the next frame when
 // memory is warm (docs/design.md §2 "Memory"). With a warm cell in the cache, the maxGen bound
 // reported is one less: a schedule may start with that cell without fetching it.
+//
+// `units` (null: every level holds the cells) gives the levels that hold coarser cells
+// (level.NAME.cells; replay/memory.h LevelUnits), as LevelUnitsOf makes them; the scheduler is
+// told the nearest such level's map (FrameInfo::board_cell_of).
 ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                          const ReplayConfig& config, Scheduler& scheduler, const FrameInfo& frame,
                          std::uint64_t bound, ReplayObserver* observer = nullptr,
-                         MemoryState* memory = nullptr);
+                         MemoryState* memory = nullptr, const MemoryUnits* units = nullptr);
 
 // Per cell, what the schedulers are told a fetch costs (FrameInfo::fetch_samples): the first
 // link's latency + footprint / bandwidth, in units of one sample's work.

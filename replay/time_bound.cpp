@@ -113,21 +113,31 @@ SimTime LinkCost(const LevelConfig& level, std::uint64_t bytes) {
 
 SimTime LinksTerm(const std::vector<std::uint8_t>& used,
                   const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
-                  const std::vector<std::vector<bool>>* held) {
+                  const std::vector<std::vector<bool>>* held, const MemoryUnits* units) {
   const std::size_t cells = used.size();
-  // held_up_to[c]: some copy of a level <= i holds c at the start, for the level i at hand.
-  std::vector<bool> held_up_to(cells, false);
-  const auto hold = [&](std::size_t level) {
-    if (held == nullptr) return;
-    for (std::size_t c = 0; c < cells; ++c) held_up_to[c] = held_up_to[c] || (*held)[level][c];
+  const bool given = units != nullptr && !units->empty();
+  // nearer[c]: some copy of a level nearer than the one at hand holds c's unit at the start.
+  std::vector<bool> nearer(cells, false);
+  // Per unit of `level`, whether it must cross the link below it; then nearer updated.
+  const auto needed = [&](std::size_t level) {
+    const LevelUnits* own = given && !(*units)[level].identity() ? &(*units)[level] : nullptr;
+    std::vector<bool> need(own ? own->bytes.size() : cells, false);
+    for (std::size_t c = 0; c < cells; ++c) {
+      const std::size_t u = own ? own->unit_of_cell[c].value() : c;
+      const bool here = held != nullptr && (*held)[level][u];
+      if (used[c] && !nearer[c] && !here) need[u] = true;
+      nearer[c] = nearer[c] || here;
+    }
+    return std::make_pair(need, own);
   };
   // The links below level 0, one per processor: the sum over cells, shared out over them.
   // In 128 bits: P links may carry more than one SimTime's worth between them.
-  hold(0);
   unsigned __int128 below_caches = 0;
-  for (std::size_t c = 0; c < cells; ++c) {
-    if (used[c] && !held_up_to[c]) {
-      below_caches += LinkCost(config.levels[0], footprints[c]).picoseconds();
+  {
+    const auto [need, own] = needed(0);
+    RAYCELL_CHECK(own == nullptr);  // the caches hold the cells
+    for (std::size_t c = 0; c < cells; ++c) {
+      if (need[c]) below_caches += LinkCost(config.levels[0], footprints[c]).picoseconds();
     }
   }
   const std::uint32_t p = config.processors.count;
@@ -135,10 +145,11 @@ SimTime LinksTerm(const std::vector<std::uint8_t>& used,
   RAYCELL_CHECK(per_processor <= SimTime::Max().picoseconds());
   SimTime links = SimTime::Picoseconds(std::uint64_t(per_processor));
   for (std::size_t i = 1; i < config.levels.size(); ++i) {
-    hold(i);
+    const auto [need, own] = needed(i);
     SimTime shared;
-    for (std::size_t c = 0; c < cells; ++c) {
-      if (used[c] && !held_up_to[c]) shared = shared + LinkCost(config.levels[i], footprints[c]);
+    for (std::size_t u = 0; u < need.size(); ++u) {
+      if (need[u])
+        shared = shared + LinkCost(config.levels[i], own ? own->bytes[u] : footprints[u]);
     }
     links = std::max(links, shared);
   }
@@ -165,13 +176,14 @@ std::string TimeBoundTerms::ToString() const {
 TimeBoundTerms TimeLowerBoundTerms(const WorkGraph& work,
                                    const std::vector<std::uint64_t>& footprints,
                                    const ReplayConfig& config,
-                                   const std::vector<std::vector<bool>>* held_at_start) {
+                                   const std::vector<std::vector<bool>>* held_at_start,
+                                   const MemoryUnits* units) {
   RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
   RAYCELL_CHECK(!config.levels.empty() && config.processors.count > 0);
   if (held_at_start != nullptr) {
     RAYCELL_CHECK_EQ(held_at_start->size(), config.levels.size());
-    for (const std::vector<bool>& level : *held_at_start) {
-      RAYCELL_CHECK_EQ(level.size(), std::size_t(work.cells));
+    for (std::size_t i = 0; i < held_at_start->size(); ++i) {
+      RAYCELL_CHECK_EQ((*held_at_start)[i].size(), std::size_t(UnitCount(units, i, work.cells)));
     }
   }
   const SimTime tps = config.processors.time_per_sample;
@@ -183,15 +195,16 @@ TimeBoundTerms TimeLowerBoundTerms(const WorkGraph& work,
   const std::uint64_t total = (tps * work.total_samples()).picoseconds();
   const std::uint32_t p = config.processors.count;
   t.work = SimTime::Picoseconds(total / p + (total % p != 0 ? 1 : 0));
-  t.links = LinksTerm(used, footprints, config, held_at_start);
+  t.links = LinksTerm(used, footprints, config, held_at_start, units);
   t.chain = tps * chain;
   return t;
 }
 
 SimTime TimeLowerBound(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                        const ReplayConfig& config,
-                       const std::vector<std::vector<bool>>* held_at_start) {
-  return TimeLowerBoundTerms(work, footprints, config, held_at_start).value();
+                       const std::vector<std::vector<bool>>* held_at_start,
+                       const MemoryUnits* units) {
+  return TimeLowerBoundTerms(work, footprints, config, held_at_start, units).value();
 }
 
 }  // namespace raycell

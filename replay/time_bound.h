@@ -25,6 +25,11 @@
 //         some processor's link that ends by T; the P links carry at most P x T of transfers,
 //         and T >= ceil(sum / P).
 //      A cell held at the start is taken to be there at time 0 (the warm memory of issue 22).
+//      A level of coarser cells (level.NAME.cells, replay/memory.h LevelUnits) stores and
+//      moves units: a used cell that no nearer level holds at the start reaches the caches
+//      only through a lookup of its unit at level i, so its unit, unless level i holds it at
+//      the start, crosses the link below level i at least once, at the unit's bytes; each
+//      such unit is counted once.
 //  (c) chain: the longest path of the work graph from a root, summing samples x
 //      time_per_sample. A unit is released only when its predecessor is done, and takes its
 //      samples x time_per_sample, so the units of a path are worked one after the other.
@@ -39,6 +44,7 @@
 
 #include "engine/time.h"
 #include "replay/config.h"
+#include "replay/memory.h"
 #include "replay/work.h"
 
 namespace raycell {
@@ -55,12 +61,15 @@ struct TimeBoundTerms {
 
 // The terms for `work` (any of its three forms: columns, packed or compact) on a board of
 // `config` with `footprints` (one per cell). `held_at_start`, when given, has one vector per
-// level (config.levels' order) of one flag per cell: some copy of the level holds the cell when
-// the frame starts; null: every level starts empty. Linear in the units, without recursion.
+// level (config.levels' order) of one flag per unit of the level (HeldAnywhere): some copy of
+// the level holds it when the frame starts; null: every level starts empty. `units` (null:
+// every level holds the cells) as ReplayFrame takes them. Linear in the units, without
+// recursion.
 TimeBoundTerms TimeLowerBoundTerms(const WorkGraph& work,
                                    const std::vector<std::uint64_t>& footprints,
                                    const ReplayConfig& config,
-                                   const std::vector<std::vector<bool>>* held_at_start = nullptr);
+                                   const std::vector<std::vector<bool>>* held_at_start = nullptr,
+                                   const MemoryUnits* units = nullptr);
 
 // The longest chain and the used cells, the walk the terms need (WorkGraph::Shape).
 WorkGraph::Shape ShapeOf(const WorkGraph& work);
@@ -68,6 +77,7 @@ WorkGraph::Shape ShapeOf(const WorkGraph& work);
 // The bound: the largest of the terms.
 SimTime TimeLowerBound(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                        const ReplayConfig& config,
-                       const std::vector<std::vector<bool>>* held_at_start = nullptr);
+                       const std::vector<std::vector<bool>>* held_at_start = nullptr,
+                       const MemoryUnits* units = nullptr);
 
 }  // namespace raycell

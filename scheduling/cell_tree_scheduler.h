@@ -15,4 +15,15 @@ class CellTreeScheduler : public FollowingScheduler {
   void BeginFrame(const FrameInfo& frame) override;
 };
 
+// Two-level Cell Tree scheduling (issue 23; docs/design.md §5 "Two-level scheduling"): frame
+// i+1 follows TwoLevelPeel of frame i's tree with the board's cells (FrameInfo::board_cell_of,
+// a shared level's level.NAME.cells): the board's cells in the order Peel gives the tree
+// contracted to them, the cells within each by Peel. Without board cells it plans as celltree
+// (Peel), but for entries that process nothing. Frame 0: Max Work.
+class TwoLevelScheduler : public FollowingScheduler {
+ public:
+  std::string Name() const override { return "celltree-2level"; }
+  void BeginFrame(const FrameInfo& frame) override;
+};
+
 }  // namespace raycell

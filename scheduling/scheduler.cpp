@@ -188,6 +188,15 @@ const std::vector<SchedulerEntry>& SchedulerRegistry() {
        "weighted); on 8+ processors, while all others work, a batch under 3 fetches' worth waits",
        "balanced (plan, affinity, shared cells, postponing)",
        MakeBalanced<true, false, false, true, true, true>, 1, true, true, false, false},
+      // Two memory levels (issue 23): a board of coarser cells (level.NAME.cells).
+      {"celltree-2level",
+       "frame i+1 follows a two-level plan of frame i's tree: Peel of the tree contracted to "
+       "the board's cells (level.NAME.cells) orders them, Peel orders the cells within each",
+       "Cell Tree, two levels (board cells, then cache cells)",
+       [](std::uint64_t) -> std::unique_ptr<Scheduler> {
+         return std::make_unique<TwoLevelScheduler>();
+       },
+       1, false, true, false, false},
   };
   return registry;
 }

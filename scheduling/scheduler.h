@@ -60,6 +60,10 @@ struct FrameInfo {
   // unknown (a scheduler asked outside a replay).
   const std::vector<double>* fetch_samples = nullptr;
   std::uint32_t processors = 1;  // block processors of the replay
+  // The board's cells, when a shared memory level holds coarser cells than the replay's
+  // (level.NAME.cells; the nearest such level): per cell of the grid, the board cell holding
+  // it; null when every level holds the grid's cells.
+  const std::vector<CellId>* board_cell_of = nullptr;
 };
 
 // A scheduling policy. Per frame: BeginFrame once, then Next once per fetch.

@@ -1151,6 +1151,34 @@ struct TraceReader::Impl {
     return samples;
   }
 
+  // What a subdivision of the stored fine grid is made from; kd:N:work's samples over every
+  // frame.
+  FineCells Fine(const SubdivisionSpec& spec) const {
+    FineCells fine;
+    fine.grid = header.cells;
+    fine.union_footprint = [this](const std::vector<std::uint32_t>& c) {
+      return header.leaves.UnionBytes(c);
+    };
+    if (spec.kind == SubdivisionSpec::Kind::kKdWork) fine.samples = FineSamples(std::size_t(-1));
+    return fine;
+  }
+  // Per cell of `sub`, the bytes of its fine cells' leaves, each once.
+  std::vector<std::uint64_t> Footprints(const Subdivision& sub) const {
+    const std::array<std::uint32_t, 3>& g = header.cells;
+    std::vector<std::uint64_t> fp(sub.cells());
+    std::vector<std::uint32_t> members;
+    for (std::uint32_t c = 0; c < sub.cells(); ++c) {
+      const FineBox& b = sub.boxes[c];
+      members.clear();
+      for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
+        for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y)
+          for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x)
+            members.push_back(x + g[0] * (y + g[1] * z));
+      fp[c] = header.leaves.UnionBytes(members);
+    }
+    return fp;
+  }
+
   void MakeView(const std::string& cells) {
     const TraceHeader& h = header;
     view = true;
@@ -1163,13 +1191,8 @@ struct TraceReader::Impl {
     } else {
       const std::string what = "--cells '" + cells + "'";
       const SubdivisionSpec spec = ParseSubdivisionSpec(cells, what);
-      FineCells fine;
-      fine.grid = h.cells;
-      fine.union_footprint = [&h](const std::vector<std::uint32_t>& c) {
-        return h.leaves.UnionBytes(c);
-      };
+      FineCells fine = Fine(spec);
       const bool dynamic = spec.kind == SubdivisionSpec::Kind::kDynamic;
-      if (spec.kind == SubdivisionSpec::Kind::kKdWork) fine.samples = FineSamples(std::size_t(-1));
       view_header.subdivision.spec = spec.ToString();
       view_header.subdivision.fine = h.cells;
       view_header.footprints.clear();
@@ -1182,17 +1205,7 @@ struct TraceReader::Impl {
       for (std::size_t i = 0; i < std::max<std::size_t>(subdivisions, 1); ++i) {
         if (dynamic && i > 0) fine.samples = FineSamples(i - 1);
         const Subdivision sub = Subdivide(spec, fine);
-        std::vector<std::uint64_t> fp(sub.cells());
-        std::vector<std::uint32_t> members;
-        for (std::uint32_t c = 0; c < sub.cells(); ++c) {
-          const FineBox& b = sub.boxes[c];
-          members.clear();
-          for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
-            for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y)
-              for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x)
-                members.push_back(x + h.cells[0] * (y + h.cells[1] * z));
-          fp[c] = h.leaves.UnionBytes(members);
-        }
+        const std::vector<std::uint64_t> fp = Footprints(sub);
         maps.push_back(Map(&sub, fp, fine_cells));
         if (dynamic) {
           view_header.subdivision.frame_footprints.insert(
@@ -1285,6 +1298,53 @@ const std::vector<CellId>& TraceReader::CellMap(std::size_t frame_index) const {
   RAYCELL_CHECK(impl_->view);
   impl_->Frame(frame_index);
   return impl_->MapOf(frame_index);
+}
+TraceReader::CoarseCells TraceReader::CoarserCells(const std::string& cells,
+                                                   const std::string& what) const {
+  const Impl& m = *impl_;
+  if (!m.view) {
+    throw InputError(what + ": '" + cells + "' needs a regroupable capture (raycell record " +
+                     "--regroupable): a coarse cell's footprint counts each leaf once, which " +
+                     m.path + " cannot tell");
+  }
+  if (m.maps.size() != 1 || m.view_header.subdivision.spec.rfind("dynamic:", 0) == 0) {
+    throw InputError(what + ": '" + cells + "' cannot hold the cells of " + m.path +
+                     " shown as a dynamic subdivision (--cells " + m.view_header.subdivision.spec +
+                     "): they are other boxes every frame");
+  }
+  const SubdivisionSpec spec = ParseSubdivisionSpec(cells, what);
+  if (spec.kind == SubdivisionSpec::Kind::kDynamic) {
+    throw InputError(what + ": '" + cells + "': a memory level's cells stay the same over the " +
+                     "frames");
+  }
+  Subdivision sub;
+  try {
+    sub = Subdivide(spec, m.Fine(spec));
+  } catch (const InputError& e) {
+    throw InputError(what + ": " + e.what());
+  }
+  CoarseCells out;
+  out.bytes = m.Footprints(sub);
+  const std::vector<CellId>& view = m.maps[0];
+  const std::uint32_t n = std::uint32_t(header().cell_count());
+  std::vector<bool> seen(n, false);
+  out.of_cell.assign(n, CellId(0));  // an empty cell, never fetched: 0
+  for (std::size_t f = 0; f < view.size(); ++f) {
+    if (view[f] == kNoCell) continue;
+    const std::uint32_t v = view[f].value();
+    const CellId c = sub.coarse_of_fine[f];
+    if (seen[v] && out.of_cell[v] != c) {
+      throw InputError(what + ": '" + cells + "' does not hold whole cells of the replay (" +
+                       (m.view_header.subdivision.spec.empty() ? "the captured grid"
+                                                               : m.view_header.subdivision.spec) +
+                       "): its cells " + std::to_string(out.of_cell[v].value()) + " and " +
+                       std::to_string(c.value()) + " share cell " + std::to_string(v) +
+                       "; use a subdivision whose boundaries include the replay's");
+    }
+    seen[v] = true;
+    out.of_cell[v] = c;
+  }
+  return out;
 }
 const std::string& TraceReader::warning() const { return impl_->warning; }
 std::uint64_t TraceReader::file_size() const { return impl_->file.size(); }

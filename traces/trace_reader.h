@@ -61,6 +61,17 @@ class TraceReader {
   // The cells' footprints in frame `frame_index`: a dynamic subdivision's own (its cells are
   // other boxes every frame; header() has each cell's largest), else header().footprints.
   const std::vector<std::uint64_t>& FrameFootprints(std::size_t frame_index) const;
+  // The cells of `cells` (a SPEC, not dynamic) over this view's cells, for a memory level
+  // that holds coarser cells (level.NAME.cells; replay/memory.h LevelUnits): per cell of the
+  // view, the coarse cell holding it (an empty cell, never fetched: 0), and per coarse cell its
+  // footprint (its fine cells' leaves, each once). InputError prefixed with `what` when the
+  // trace is not a regroupable capture (Open), is shown as a dynamic subdivision, `cells` is
+  // a bad SPEC, or a cell of the view is not inside one coarse cell.
+  struct CoarseCells {
+    std::vector<CellId> of_cell;
+    std::vector<std::uint64_t> bytes;
+  };
+  CoarseCells CoarserCells(const std::string& cells, const std::string& what) const;
   const TraceHeader& header() const;
   // Summaries of the readable frames in file order, with their offset and length.
   const std::vector<FrameSummary>& frames() const;

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <set>
 #include <sstream>
 #include <string>
 
@@ -12,6 +13,8 @@
 #include "base/check.h"
 #include "graph/cell_tree.h"
 #include "graph/frame_tree.h"
+#include "replay/config.h"
+#include "replay/driver.h"
 #include "tests/record/record_test_util.h"
 #include "traces/trace_reader.h"
 #include "traces/trace_regroup.h"
@@ -175,6 +178,98 @@ TEST_F(RegroupCaptureTest, TraceRegroupWritesTheRegroupedTrace) {
   EXPECT_FALSE(std::filesystem::exists(Path("x.rct")));
   EXPECT_THROW(RegroupTrace(Path("fine.rct"), "5x5x5", Path("x.rct")), InputError);
   EXPECT_FALSE(std::filesystem::exists(Path("x.rct")));
+}
+
+// A board of coarser cells (level.NAME.cells; docs/design.md §2 "Levels of coarser cells")
+// over the 6x6x6 view of the fine capture: its 3x3x3 cells hold the 6x6x6 cells by their
+// coordinates, with the footprints of the capture recorded on 3x3x3; a roomy board loads each
+// used one over PCI once; a board SPEC equal to the view's cells replays as "same".
+TEST_F(RegroupCaptureTest, ABoardOfCoarserCellsReadsThemFromTheCapture) {
+  const TraceReader fine = TraceReader::Open(Path("fine.rct"), "6x6x6");
+  ReplayConfig c = DefaultConfig();
+  ApplyOverride(c, "level.board.cells", "3x3x3");
+  const MemoryUnits units = LevelUnitsOf(c, fine);
+  ASSERT_EQ(units.size(), 2u);
+  EXPECT_TRUE(units[0].identity());
+  EXPECT_EQ(units[1].bytes, TraceReader::Open(Path("direct3.rct")).header().footprints);
+  const auto coarse = [](std::uint32_t v) {
+    const std::uint32_t x = v % 6, y = v / 6 % 6, z = v / 36;
+    return CellId(x / 2 + 3 * (y / 2 + 3 * (z / 2)));
+  };
+  int nonempty = 0;
+  for (std::uint32_t v = 0; v < 216; ++v) {
+    if (fine.header().footprints[v] == 0) continue;
+    ++nonempty;
+    EXPECT_EQ(units[1].unit_of_cell[v], coarse(v)) << "cell " << v;
+  }
+  EXPECT_GT(nonempty, 100);
+
+  // Each used board cell crosses PCI once (the board holds the volume); the cache fetches
+  // cells of 6x6x6.
+  std::set<std::uint32_t> used;
+  fine.ForEachBatch(0, [&](const RayBatch& b) {
+    for (std::size_t v = 0; v < b.visit_count(); ++v)
+      used.insert(coarse(b.cells()[v].value()).value());
+  });
+  const TraceReplay r = ReplayTrace(fine, {0}, c);
+  EXPECT_EQ(r.total.levels[1].fetches, used.size());
+  std::uint64_t bytes = 0;
+  for (const std::uint32_t u : used) bytes += units[1].bytes[u];
+  EXPECT_EQ(r.total.levels[1].bytes, bytes);
+
+  // The view's own cells as a SPEC: the replay of "same", every figure.
+  for (const char* scheduler : {"maxwork", "celltree-2level"}) {
+    ReplayConfig same = DefaultConfig(), own = DefaultConfig();
+    for (ReplayConfig* x : {&same, &own}) {
+      ApplyOverride(*x, "scheduler", scheduler);
+      ApplyOverride(*x, "processors.count", "2");
+      ApplyOverride(*x, "level.board.capacity", "600KiB");
+    }
+    ApplyOverride(own, "level.board.cells", "6x6x6");
+    const TraceReplay a = ReplayTrace(fine, {0}, same), b = ReplayTrace(fine, {0}, own);
+    EXPECT_EQ(a.total.time, b.total.time);
+    EXPECT_EQ(a.total.time_bound, b.total.time_bound);
+    ASSERT_EQ(a.total.levels.size(), b.total.levels.size());
+    for (std::size_t i = 0; i < a.total.levels.size(); ++i) {
+      EXPECT_EQ(a.total.levels[i].fetches, b.total.levels[i].fetches);
+      EXPECT_EQ(a.total.levels[i].bytes, b.total.levels[i].bytes);
+    }
+  }
+}
+
+TEST_F(RegroupCaptureTest, ABoardOfCoarserCellsThatCannotBeMadeIsRefused) {
+  ReplayConfig c = DefaultConfig();
+  ApplyOverride(c, "level.board.cells", "3x3x3");
+  const auto error = [&](const TraceReader& reader) {
+    try {
+      LevelUnitsOf(c, reader);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error(TraceReader::Open(Path("fine.rct"), "4x4x4"))
+                .find("level.board.cells: '3x3x3' does not hold whole cells of the replay (4x4x4)"),
+            std::string::npos);
+  EXPECT_NE(error(TraceReader::Open(Path("direct6.rct")))
+                .find("level.board.cells: '3x3x3' needs a regroupable capture"),
+            std::string::npos);
+  EXPECT_NE(error(TraceReader::Open(Path("fine.rct"), "dynamic:8")).find("dynamic subdivision"),
+            std::string::npos);
+  ApplyOverride(c, "level.board.cells", "5x5x5");  // 5 does not divide 12
+  EXPECT_EQ(error(TraceReader::Open(Path("fine.rct"), "6x6x6")),
+            "level.board.cells: cell subdivision '5x5x5': its 5 cells along x do not divide the "
+            "fine grid's 12 (a cell boundary must be a fine-cell boundary)");
+  // A third level must hold unions of the board's cells.
+  c.levels.push_back(c.levels[1]);
+  c.levels[2].name = "host_cache";
+  c.levels[1].cells = "2x2x2";
+  c.levels[2].cells = "3x3x3";
+  EXPECT_NE(error(TraceReader::Open(Path("fine.rct"), "6x6x6"))
+                .find("a level's cells must be unions of the cells of the level above it"),
+            std::string::npos);
+  c.levels[1].cells = "6x6x6";
+  EXPECT_EQ(error(TraceReader::Open(Path("fine.rct"), "6x6x6")), "no error");
 }
 
 }  // namespace

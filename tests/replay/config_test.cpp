@@ -225,7 +225,7 @@ TEST(LoadConfig, BadUnitsAndValuesNameFileAndLine) {
   EXPECT_EQ(LoadError("scheduler = \"fastest\"\n"),
             "replay.toml:1:13: scheduler: unknown scheduler 'fastest' (expected maxwork, "
             "roundrobin, random, peel, celltree, best, celltree-best, celltree-union, affinity, "
-            "partition, steal, partition-steal, share or balanced)");
+            "partition, steal, partition-steal, share, balanced or celltree-2level)");
   EXPECT_EQ(
       LoadError("granularity = \"cell\"\n"),
       "replay.toml:1:15: granularity: unknown granularity 'cell' (expected ray, node or auto)");
@@ -287,8 +287,34 @@ ReplayConfig Unusual() {
   l3.bandwidth_below = Bandwidth::Unlimited();
   l3.latency_below = SimTime::Max();
   l3.replacement = LevelConfig::Replacement::kFifo;
+  l3.cells = "kd:budget:1MiB";
+  c.levels[1].cells = "3x3x3";
   c.levels.push_back(l3);
   return c;
+}
+
+// A level of coarser cells (issue 23): a SPEC, checked and printed canonically; "same" is the
+// replay's cells; only shared levels; not dynamic.
+TEST(LoadConfig, LevelCellsAreASpecOfASharedLevel) {
+  ReplayConfig c = LoadConfigFromString(
+      "[[level]]\nname = \"cache\"\n[[level]]\nname = \"board\"\ncells = \"kd:27:footprint\"\n",
+      "x");
+  EXPECT_EQ(c.levels[0].cells, "");
+  EXPECT_EQ(c.levels[1].cells, "kd:27:footprint");
+  EXPECT_NE(ToToml(c).find("cells = \"kd:27:footprint\""), std::string::npos);
+  ApplyOverride(c, "level.board.cells", "same");
+  EXPECT_EQ(c, DefaultConfig());
+  EXPECT_EQ(LoadError("[[level]]\nname = \"cache\"\ncells = \"3x3x3\"\n"),
+            "replay.toml: level 'cache' cells = '3x3x3': the first level holds the cells the "
+            "processors work; only a shared level may hold coarser ones");
+  EXPECT_EQ(ErrorOf([&] { ApplyOverride(c, "level.board.cells", "dynamic:8"); }),
+            "override 'level.board.cells': 'dynamic:8': a memory level's cells stay the same "
+            "over the frames; dynamic subdivisions are for --cells");
+  EXPECT_EQ(ErrorOf([&] {
+              ApplyOverride(c, "level.board.cells", "3x3");
+            }).rfind("override 'level.board.cells': ", 0),
+            0u);
+  EXPECT_EQ(c, DefaultConfig());  // a refused override changes nothing
 }
 
 TEST(ToToml, RoundTripsExactly) {
@@ -362,7 +388,7 @@ TEST(ApplyOverride, ErrorsNameTheKeyAndLeaveTheConfigUnchanged) {
             "override 'level.l3.capacity': no level named 'l3' (levels: cache, board)");
   EXPECT_EQ(err("level.cache.size", "1MiB"),
             "override 'level.cache.size': unknown level key 'size' (expected capacity, "
-            "bandwidth, latency or replacement)");
+            "bandwidth, latency, replacement or cells)");
   EXPECT_EQ(err("processors.count", "0"), "override 'processors.count': must be in 1..1024, got 0");
   EXPECT_EQ(err("processors.count", "four"),
             "override 'processors.count': expected a whole number, got 'four'");
@@ -378,14 +404,14 @@ TEST(ApplyOverride, ErrorsNameTheKeyAndLeaveTheConfigUnchanged) {
   EXPECT_EQ(err("scheduler", "fastest"),
             "override 'scheduler': unknown scheduler 'fastest' (expected maxwork, roundrobin, "
             "random, peel, celltree, best, celltree-best, celltree-union, affinity, partition, "
-            "steal, partition-steal, share or balanced)");
+            "steal, partition-steal, share, balanced or celltree-2level)");
   EXPECT_EQ(c, DefaultConfig());
 }
 
 TEST(OverrideKeys, ListsLevelKeysByName) {
   const std::vector<std::string> keys = OverrideKeys(DefaultConfig());
-  EXPECT_EQ(keys.size(), 8u + 2 * 4);
-  EXPECT_EQ(keys.back(), "level.board.replacement");
+  EXPECT_EQ(keys.size(), 8u + 2 * 5);
+  EXPECT_EQ(keys.back(), "level.board.cells");
 }
 
 TEST(ValidateConfig, Invariants) {

@@ -351,7 +351,7 @@ TEST(MakeSchedulerTest, EveryNameRoundTrips) {
     ASSERT_NE(s, nullptr);
     EXPECT_EQ(s->Name(), name);
   }
-  EXPECT_EQ(SchedulerNames().size(), 14u);
+  EXPECT_EQ(SchedulerNames().size(), 15u);
   EXPECT_NE(dynamic_cast<RandomScheduler*>(MakeScheduler("random", 99).get()), nullptr);
   EXPECT_EQ(dynamic_cast<RandomScheduler&>(*MakeScheduler("random", 99)).seed(), 99u);
 }
@@ -364,7 +364,7 @@ TEST(MakeSchedulerTest, UnknownNameListsTheValidOnes) {
     EXPECT_STREQ(e.what(),
                  "scheduler: unknown scheduler 'MaxWork' (expected maxwork, roundrobin, random, "
                  "peel, celltree, best, celltree-best, celltree-union, affinity, partition, steal, "
-                 "partition-steal, share or balanced)");
+                 "partition-steal, share, balanced or celltree-2level)");
   }
   EXPECT_THROW(MakeScheduler("", 0), InputError);
 }
