@@ -178,6 +178,12 @@ void RunGreedy(const CellTree& tree, const std::vector<CellId>& schedule, Step s
 }  // namespace
 
 std::vector<CellId> TwoLevelPeel(const CellTree& tree, const std::vector<CellId>& coarse_of) {
+  const TreePlanner peel = [](const CellTree& t) { return Peel(t).schedule; };
+  return TwoLevelSchedule(tree, coarse_of, peel, peel);
+}
+
+std::vector<CellId> TwoLevelSchedule(const CellTree& tree, const std::vector<CellId>& coarse_of,
+                                     const TreePlanner& coarse_plan, const TreePlanner& fine_plan) {
   std::vector<NodeId> image;
   const CellTree coarse = ContractTree(tree, coarse_of, &image);
   // Per coarse node, the tree's nodes it stands for, in increasing order.
@@ -185,15 +191,15 @@ std::vector<CellId> TwoLevelPeel(const CellTree& tree, const std::vector<CellId>
   for (NodeId n : tree.nodes()) members[image[n.index()].index()].push_back(n);
   std::vector<CellId> out;
   std::vector<NodeId> forest;
-  RunGreedy(coarse, Peel(coarse).schedule, [&](CellId, const std::vector<NodeId>& step) {
+  RunGreedy(coarse, coarse_plan(coarse), [&](CellId, const std::vector<NodeId>& step) {
     forest.clear();
     for (const NodeId m : step) {
       forest.insert(forest.end(), members[m.index()].begin(), members[m.index()].end());
     }
     std::sort(forest.begin(), forest.end());
-    // Peel's entries that process nothing in the run (it builds backwards) are left out.
+    // Entries that process nothing in the run (Peel builds backwards) are left out.
     const CellTree inner = SubTree(tree, forest);
-    RunGreedy(inner, Peel(inner).schedule,
+    RunGreedy(inner, fine_plan(inner),
               [&](CellId cell, const std::vector<NodeId>&) { out.push_back(cell); });
   });
   return out;

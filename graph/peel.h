@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -45,5 +46,12 @@ PeelResult Peel(const CellTree& tree);
 // Peel's schedule without the entries that process nothing in the run. O(nodes log cells + coarse
 // entries x cells).
 std::vector<CellId> TwoLevelPeel(const CellTree& tree, const std::vector<CellId>& coarse_of);
+
+// A feasible schedule of a tree (Peel's, or a best-schedule search's).
+using TreePlanner = std::function<std::vector<CellId>(const CellTree&)>;
+// TwoLevelPeel with other planners: `coarse_plan` orders the coarse cells (it is given the
+// contracted tree), `fine_plan` each entry's forest. Both must return feasible schedules.
+std::vector<CellId> TwoLevelSchedule(const CellTree& tree, const std::vector<CellId>& coarse_of,
+                                     const TreePlanner& coarse_plan, const TreePlanner& fine_plan);
 
 }  // namespace raycell

@@ -54,4 +54,18 @@ class CellTreeBestScheduler : public FollowingScheduler {
   bool union_frames_;
 };
 
+// Two-level scheduling with the best-schedule search at both levels (issue 23; docs/design.md
+// §5 "Two-level scheduling"): frame i+1 follows TwoLevelSchedule of frame i's tree, the board's
+// cells (FrameInfo::board_cell_of) ordered by the plan for the contracted tree (PlanFor), the
+// cells within each by the plan for each forest (PlanEffort). Frame 0: Max Work.
+class TwoLevelBestScheduler : public FollowingScheduler {
+ public:
+  explicit TwoLevelBestScheduler(std::uint64_t seed) : seed_(seed) {}
+  std::string Name() const override { return "celltree-2level-best"; }
+  void BeginFrame(const FrameInfo& frame) override;
+
+ private:
+  std::uint64_t seed_;
+};
+
 }  // namespace raycell

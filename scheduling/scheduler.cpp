@@ -197,6 +197,14 @@ const std::vector<SchedulerEntry>& SchedulerRegistry() {
          return std::make_unique<TwoLevelScheduler>();
        },
        1, false, true, false, false},
+      {"celltree-2level-best",
+       "celltree-2level with the best-schedule search at both levels: the plan for the tree "
+       "contracted to the board's cells, then the plan for each board cell's part",
+       "Cell Tree, two levels, best schedules",
+       [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+         return std::make_unique<TwoLevelBestScheduler>(seed);
+       },
+       1, true, true, false, false},
   };
   return registry;
 }

@@ -153,6 +153,30 @@ TEST(TwoLevelPeel, FeasibleAndFollowsTheCoarseSchedule) {
   });
 }
 
+// Any planners: a coarse plan that is not Peel's (every coarse cell in turn, as often as the
+// coarse tree is deep) is followed stretch for stretch, and the plan stays feasible.
+TEST(TwoLevelSchedule, FollowsAnyCoarsePlan) {
+  ForRandomTrees(1000, [](const CellTree& t, const std::vector<CellId>& map) {
+    const CellTree coarse = ContractTree(t, map);
+    std::size_t depth = 0;
+    for (NodeId n : coarse.nodes()) depth = std::max(depth, PathOf(coarse, n).size());
+    std::vector<CellId> rounds;
+    for (std::size_t r = 0; r < depth; ++r) {
+      for (const CellId c : CellRange(coarse.cell_count())) rounds.push_back(c);
+    }
+    const TreePlanner peel = [](const CellTree& u) { return Peel(u).schedule; };
+    const std::vector<CellId> plan = TwoLevelSchedule(
+        t, map, [&](const CellTree&) { return rounds; }, peel);
+    ASSERT_TRUE(IsFeasible(t, plan));
+    CellList stretches;
+    for (const CellId c : plan) {
+      if (stretches.empty() || stretches.back() != map[c.value()])
+        stretches.push_back(map[c.value()]);
+    }
+    EXPECT_EQ(stretches, Useful(coarse, rounds));
+  });
+}
+
 // With every cell its own coarse cell, the plan is Peel's schedule without the entries that
 // process nothing.
 TEST(TwoLevelPeel, OneLevelIsPeel) {

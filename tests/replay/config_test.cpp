@@ -225,7 +225,8 @@ TEST(LoadConfig, BadUnitsAndValuesNameFileAndLine) {
   EXPECT_EQ(LoadError("scheduler = \"fastest\"\n"),
             "replay.toml:1:13: scheduler: unknown scheduler 'fastest' (expected maxwork, "
             "roundrobin, random, peel, celltree, best, celltree-best, celltree-union, affinity, "
-            "partition, steal, partition-steal, share, balanced or celltree-2level)");
+            "partition, steal, partition-steal, share, balanced, celltree-2level or "
+            "celltree-2level-best)");
   EXPECT_EQ(
       LoadError("granularity = \"cell\"\n"),
       "replay.toml:1:15: granularity: unknown granularity 'cell' (expected ray, node or auto)");
@@ -404,7 +405,8 @@ TEST(ApplyOverride, ErrorsNameTheKeyAndLeaveTheConfigUnchanged) {
   EXPECT_EQ(err("scheduler", "fastest"),
             "override 'scheduler': unknown scheduler 'fastest' (expected maxwork, roundrobin, "
             "random, peel, celltree, best, celltree-best, celltree-union, affinity, partition, "
-            "steal, partition-steal, share, balanced or celltree-2level)");
+            "steal, partition-steal, share, balanced, celltree-2level or "
+            "celltree-2level-best)");
   EXPECT_EQ(c, DefaultConfig());
 }
 

@@ -343,6 +343,45 @@ TEST(BestSchedulersTest, CellTreeUnionPlansTheLastTwoFramesTogether) {
   EXPECT_EQ(SchedulerByName("celltree-best", "test").history, 1u);
 }
 
+// ------------------------------------------------------------------ two levels
+
+// Cells 0 and 1 on board cell 0, 2 on board cell 1 (FrameInfo::board_cell_of): frame i+1
+// follows frame i's two-level plan (graph/peel.h TwoLevelPeel; two_level_test has its
+// properties); without board cells, Peel's schedule (no entry of it wasted on this tree).
+TEST(TwoLevelSchedulersTest, FollowThePreviousFramesTwoLevelPlan) {
+  const CellTree t0 = FromPaths({{0, 2}, {1, 2, 0}, {2, 1}}), t1 = FromPaths({{0}});
+  const std::vector<CellId> board{A, A, CellId(1)};
+  TwoLevelScheduler s;
+  EXPECT_EQ(s.Name(), "celltree-2level");
+  FrameInfo f = Frame(0, 3, &t0, nullptr);
+  f.board_cell_of = &board;
+  s.BeginFrame(f);
+  EXPECT_TRUE(s.follower().schedule().empty());  // frame 0: Max Work
+  f = Frame(1, 3, &t1, &t0);
+  f.board_cell_of = &board;
+  s.BeginFrame(f);
+  EXPECT_EQ(s.follower().schedule(), (Schedule{B, A, C, B, A}));  // board cells 0 1 0
+  s.BeginFrame(Frame(1, 3, &t1, &t0));
+  EXPECT_EQ(s.follower().schedule(), (Schedule{C, B, A, C, A}));  // Peel's
+
+  // With the best-schedule search at both levels: feasible for frame i's tree, its stretches
+  // on one board cell those of the plan for the contracted tree.
+  TwoLevelBestScheduler b(3);
+  EXPECT_EQ(b.Name(), "celltree-2level-best");
+  f = Frame(1, 3, &t1, &t0);
+  f.board_cell_of = &board;
+  b.BeginFrame(f);
+  const Schedule plan = b.follower().schedule();
+  EXPECT_TRUE(IsFeasible(t0, plan));
+  Schedule stretches;
+  for (const CellId c : plan) {
+    if (stretches.empty() || stretches.back() != board[c.value()])
+      stretches.push_back(board[c.value()]);
+  }
+  EXPECT_EQ(stretches, (Schedule{A, CellId(1), A}));  // X Y X, the shortest for X Y X and Y X
+  EXPECT_EQ(plan.size(), 5u);
+}
+
 // ------------------------------------------------------------------ factory
 
 TEST(MakeSchedulerTest, EveryNameRoundTrips) {
@@ -351,7 +390,7 @@ TEST(MakeSchedulerTest, EveryNameRoundTrips) {
     ASSERT_NE(s, nullptr);
     EXPECT_EQ(s->Name(), name);
   }
-  EXPECT_EQ(SchedulerNames().size(), 15u);
+  EXPECT_EQ(SchedulerNames().size(), 16u);
   EXPECT_NE(dynamic_cast<RandomScheduler*>(MakeScheduler("random", 99).get()), nullptr);
   EXPECT_EQ(dynamic_cast<RandomScheduler&>(*MakeScheduler("random", 99)).seed(), 99u);
 }
@@ -364,7 +403,7 @@ TEST(MakeSchedulerTest, UnknownNameListsTheValidOnes) {
     EXPECT_STREQ(e.what(),
                  "scheduler: unknown scheduler 'MaxWork' (expected maxwork, roundrobin, random, "
                  "peel, celltree, best, celltree-best, celltree-union, affinity, partition, steal, "
-                 "partition-steal, share, balanced or celltree-2level)");
+                 "partition-steal, share, balanced, celltree-2level or celltree-2level-best)");
   }
   EXPECT_THROW(MakeScheduler("", 0), InputError);
 }

@@ -5,7 +5,8 @@
 # board of COARSE cells (default 3x3x3; level.board.cells) sized to each FRACTION of the
 # volume (the 3x3x3 cells' footprints summed), one processor, the rest the default
 # configuration (warm memory, a one-cell cache). Schedulers: Max Work, Cell Tree (Peel of frame
-# i), celltree-best and the two-level plan (celltree-2level); and, for reference, Cell Tree with
+# i), celltree-best, the two-level plans (celltree-2level, celltree-2level-best) and, for
+# reference, Cell Tree with
 # a board of the caches' own cells. Prints one markdown row per board size and scheduler:
 # fetches and bytes over each link (host->board: PCI; board->cache) and the simulated time,
 # with the change against Cell Tree on the same board.
@@ -41,6 +42,7 @@ for fraction in $fractions; do
   run celltree celltree "$coarse"
   run best celltree-best "$coarse"
   run two celltree-2level "$coarse"
+  run twobest celltree-2level-best "$coarse"
   run own celltree same
   python3 - "$work" "$fraction" "$board" "$coarse" "$fine" <<'PY'
 import json, sys
@@ -52,7 +54,7 @@ def row(name):
             lv["board"]["bytes"], t["time_ps"] / 1e9]
 base = row("celltree")
 names = [("maxwork", "Max Work"), ("celltree", "Cell Tree"), ("best", "celltree-best"),
-         ("two", "**two-level**"), ("own", "Cell Tree, board of %s cells" % fine)]
+         ("two", "two-level (Peel)"), ("twobest", "**two-level, best schedules**"), ("own", "Cell Tree, board of %s cells" % fine)]
 for name, label in names:
     r = row(name)
     rel = lambda i: "" if name == "celltree" else " (%+.1f%%)" % (100.0 * (r[i] - base[i]) / base[i])
