@@ -256,27 +256,31 @@ MemoryUnits LevelUnitsOf(const ReplayConfig& config, const TraceReader& reader) 
   for (std::size_t i = 0; i < config.levels.size(); ++i) {
     const LevelConfig& level = config.levels[i];
     if (level.cells.empty()) continue;
-    const std::string key = "level." + level.name + ".cells";
-    TraceReader::CoarseCells coarse = reader.CoarserCells(level.cells, key);
+    TraceReader::CoarseCells coarse =
+        reader.CoarserCells(level.cells, "level." + level.name + ".cells");
     units[i].unit_of_cell = std::move(coarse.of_cell);
     units[i].bytes = std::move(coarse.bytes);
     any = true;
-    // Each unit of the nearest level above with units of its own lies in one unit of this.
-    for (std::size_t j = i; j-- > 1;) {
-      if (units[j].identity()) continue;
-      std::vector<std::uint32_t> below(units[j].bytes.size(), UINT32_MAX);
-      for (std::size_t c = 0; c < units[i].unit_of_cell.size(); ++c) {
-        const std::uint32_t a = units[j].unit_of_cell[c].value();
-        const std::uint32_t b = units[i].unit_of_cell[c].value();
-        if (below[a] != UINT32_MAX && below[a] != b) {
-          throw InputError(key + ": '" + level.cells + "' splits cell " + std::to_string(a) +
-                           " of level." + config.levels[j].name + ".cells '" +
-                           config.levels[j].cells +
-                           "': a level's cells must be unions of the cells of the level above it");
-        }
-        below[a] = b;
+  }
+  // Each level's units lie in one unit of the level below it (a fetch that misses brings the
+  // missing level's unit from the one below, which must hold all of it).
+  const std::uint32_t cells = std::uint32_t(reader.header().cell_count());
+  const auto unit = [&](std::size_t i, std::uint32_t c) {
+    return units[i].identity() ? c : units[i].unit_of_cell[c].value();
+  };
+  for (std::size_t i = 2; any && i < config.levels.size(); ++i) {
+    std::vector<std::uint32_t> below(UnitCount(&units, i - 1, cells), UINT32_MAX);
+    for (std::uint32_t c = 0; c < cells; ++c) {
+      std::uint32_t& b = below[unit(i - 1, c)];
+      if (b != UINT32_MAX && b != unit(i, c)) {
+        const LevelConfig &above = config.levels[i - 1], &level = config.levels[i];
+        throw InputError("level." + level.name + ".cells: '" +
+                         (level.cells.empty() ? "same" : level.cells) + "' splits cell " +
+                         std::to_string(unit(i - 1, c)) + " of level." + above.name + ".cells '" +
+                         above.cells +
+                         "': a level's cells must be unions of the cells of the level above it");
       }
-      break;
+      b = unit(i, c);
     }
   }
   if (!any) units.clear();

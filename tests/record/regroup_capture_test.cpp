@@ -268,7 +268,12 @@ TEST_F(RegroupCaptureTest, ABoardOfCoarserCellsThatCannotBeMadeIsRefused) {
   EXPECT_NE(error(TraceReader::Open(Path("fine.rct"), "6x6x6"))
                 .find("a level's cells must be unions of the cells of the level above it"),
             std::string::npos);
+  c.levels[2].cells = "";  // the replay's cells below a board of coarser ones
+  EXPECT_NE(error(TraceReader::Open(Path("fine.rct"), "6x6x6"))
+                .find("level.host_cache.cells: 'same' splits cell"),
+            std::string::npos);
   c.levels[1].cells = "6x6x6";
+  c.levels[2].cells = "3x3x3";
   EXPECT_EQ(error(TraceReader::Open(Path("fine.rct"), "6x6x6")), "no error");
 }
 
