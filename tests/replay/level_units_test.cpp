@@ -89,7 +89,7 @@ TEST(LevelUnits, ABoardOfBytesCountsItsUnitsBytes) {
 }
 
 // Random nested unit maps on random frames and boards, every scheduler, cold and then warm
-// memory: the time bound never exceeds the replay's time.
+// memory, with and without prefetch: the time bound never exceeds the replay's time.
 TEST(LevelUnits, TheTimeBoundNeverExceedsAReplaysTime) {
   std::mt19937 rng(2323);
   const std::uint32_t processor_counts[] = {1, 2, 4, 8};
@@ -104,6 +104,10 @@ TEST(LevelUnits, TheTimeBoundNeverExceedsAReplaysTime) {
     base.processors.count = processor_counts[trial % 4];
     base.processors.time_per_sample = SimTime::Picoseconds(1 + rng() % 3 * 5000);
     base.levels.resize(2 + trial % 2, base.levels[1]);
+    if (trial % 3 == 0) {  // double buffering: the cache must hold two cells
+      base.levels[0].capacity = 2;
+      base.processors.prefetch = true;
+    }
     MemoryUnits units(base.levels.size());
     // Level 1: cells grouped in 1..cells units; level 2 (if any): those grouped again.
     std::vector<std::uint32_t> group(cells);
