@@ -10,10 +10,13 @@
 // handled in the same order on either (tests/engine/slot_queue_test.cpp; the replay checks it
 // field by field against tests/replay/reference_replayer.cpp).
 //
-// Each tree node holds its winner's key and nothing else: (time, seq << shift | slot), 16
-// bytes. Updating a slot walks from its leaf to the root comparing the changed key with one
-// sibling node per level (one load, no indirection through the slots) and picks the earlier
-// without a branch (with several components the winner is unpredictable). seq is unique per
+// Each tree node holds its winner's key and nothing else: (time, seq << shift | slot), in two
+// arrays of 64-bit words (a node's index is a scaled address, no multiply). Updating a slot
+// walks from its leaf to the root comparing the changed key with one sibling node per level
+// (two loads, no indirection through the slots) and picks the earlier without a branch (with
+// several components the winner is unpredictable): on x86-64 a 128-bit subtraction's borrow
+// and two conditional moves, written as such since compilers make a branch of the selection
+// or a longer mask sequence (14 instructions a level, 19 with masks). seq is unique per
 // pending event, so the slot index below it changes no order; it only names the winner, and
 // among empty slots (seq all ones) makes the left one win. The earliest slot is known in
 // O(1), a changed slot costs O(log slots).
@@ -43,10 +46,16 @@ class SlotQueue {
     while (leaves_ < slots) leaves_ *= 2, ++shift_;
     max_seq_ = (UINT64_MAX >> shift_) - 1;
     slots_.resize(leaves_);  // padding slots stay empty forever
-    nodes_.assign(2 * leaves_, Node{});
-    for (std::uint32_t i = 0; i < leaves_; ++i) nodes_[leaves_ + i] = NodeOf(i);
-    for (std::uint32_t k = leaves_ - 1; k >= 1; --k) {
-      nodes_[k] = Earlier(nodes_[2 * k], nodes_[2 * k + 1]);
+    time_.assign(2 * leaves_, UINT64_MAX);
+    key_.assign(2 * leaves_, UINT64_MAX);
+    for (std::uint32_t i = 0; i < leaves_; ++i) {
+      time_[leaves_ + i] = slots_[i].time.picoseconds();
+      key_[leaves_ + i] = slots_[i].seq << shift_ | i;
+    }
+    for (std::size_t k = leaves_ - 1; k >= 1; --k) {
+      std::uint64_t t = time_[2 * k], key = key_[2 * k];
+      KeepEarlier(t, key, time_[2 * k + 1], key_[2 * k + 1]);
+      time_[k] = t, key_[k] = key;
     }
   }
 
@@ -77,18 +86,20 @@ class SlotQueue {
 
   // The earliest slot's index, as of the last Updates; its kind is Kind{} when nothing is
   // pending.
-  std::uint32_t top() const { return std::uint32_t(nodes_[1].seq_index & (leaves_ - 1)); }
+  std::uint32_t top() const { return std::uint32_t(key_[1] & (leaves_ - 1)); }
 
   // Brings the tree up to date with slot i; returns top() afterwards.
   std::uint32_t Update(std::uint32_t i) {
-    Node cur = NodeOf(i);
-    std::uint32_t k = leaves_ + i;
-    nodes_[k] = cur;
+    std::uint64_t t = slots_[i].time.picoseconds(), key = slots_[i].seq << shift_ | i;
+    std::uint64_t* const time = time_.data();
+    std::uint64_t* const keys = key_.data();
+    std::size_t k = std::size_t{leaves_} + i;
+    time[k] = t, keys[k] = key;
     for (; k > 1; k /= 2) {
-      cur = Earlier(cur, nodes_[k ^ 1]);
-      nodes_[k / 2] = cur;
+      KeepEarlier(t, key, time[k ^ 1], keys[k ^ 1]);
+      time[k / 2] = t, keys[k / 2] = key;
     }
-    return std::uint32_t(cur.seq_index & (leaves_ - 1));
+    return std::uint32_t(key & (leaves_ - 1));
   }
 
   // Events scheduled so far.
@@ -98,24 +109,35 @@ class SlotQueue {
   std::uint64_t max_events() const { return max_seq_ + 1; }
 
  private:
-  struct Node {
-    std::uint64_t time = UINT64_MAX, seq_index = UINT64_MAX;
-  };
-  // The earlier of two nodes (keys are distinct), selected without a branch.
-  static Node Earlier(const Node& a, const Node& b) {
+  // (t, key) becomes the earlier of itself and (bt, bkey) (keys are distinct), without a
+  // branch: with several components the winner is unpredictable.
+  static void KeepEarlier(std::uint64_t& t, std::uint64_t& key, std::uint64_t bt,
+                          std::uint64_t bkey) {
+#if defined(__x86_64__)
+    // (bt, bkey) - (t, key) borrows iff b is earlier; then both move (compilers make a
+    // branch of the portable form's selection, or a longer mask sequence).
+    std::uint64_t scratch;
+    asm("cmp %[key], %[bkey]\n\t"
+        "mov %[bt], %[scratch]\n\t"
+        "sbb %[t], %[scratch]\n\t"
+        "cmovb %[bt], %[t]\n\t"
+        "cmovb %[bkey], %[key]"
+        : [t] "+&r"(t), [key] "+&r"(key), [scratch] "=&r"(scratch)
+        : [bt] "r"(bt), [bkey] "r"(bkey)
+        : "cc");
+#else
     using Key = unsigned __int128;
-    const Key ka = Key{a.time} << 64 | a.seq_index, kb = Key{b.time} << 64 | b.seq_index;
-    const std::uint64_t m = 0 - std::uint64_t{kb < ka};  // all ones: b
-    return {a.time ^ ((a.time ^ b.time) & m), a.seq_index ^ ((a.seq_index ^ b.seq_index) & m)};
-  }
-  Node NodeOf(std::uint32_t i) const {
-    return {slots_[i].time.picoseconds(), slots_[i].seq << shift_ | i};
+    const std::uint64_t m = 0 - std::uint64_t{(Key{bt} << 64 | bkey) < (Key{t} << 64 | key)};
+    t ^= (t ^ bt) & m;
+    key ^= (key ^ bkey) & m;
+#endif
   }
 
   std::uint32_t leaves_ = 1, shift_ = 0;
   std::uint64_t max_seq_ = 0, next_seq_ = 0;
   std::vector<Slot> slots_;
-  std::vector<Node> nodes_;  // nodes_[1] the root; slot i's leaf at leaves_ + i
+  // Node k's winner: time_[k], key_[k]; node 1 the root, slot i's leaf at leaves_ + i.
+  std::vector<std::uint64_t> time_, key_;
 };
 
 }  // namespace raycell
