@@ -108,9 +108,9 @@ class SlotQueue {
   // the slot): about 2^64 / slots.
   std::uint64_t max_events() const { return max_seq_ + 1; }
 
- private:
   // (t, key) becomes the earlier of itself and (bt, bkey) (keys are distinct), without a
-  // branch: with several components the winner is unpredictable.
+  // branch: with several components the winner is unpredictable. Public for its test, which
+  // checks the x86-64 form against the portable one.
   static void KeepEarlier(std::uint64_t& t, std::uint64_t& key, std::uint64_t bt,
                           std::uint64_t bkey) {
 #if defined(__x86_64__)
@@ -126,13 +126,19 @@ class SlotQueue {
         : [bt] "r"(bt), [bkey] "r"(bkey)
         : "cc");
 #else
+    KeepEarlierPortable(t, key, bt, bkey);
+#endif
+  }
+  // The same with masks, for any platform.
+  static void KeepEarlierPortable(std::uint64_t& t, std::uint64_t& key, std::uint64_t bt,
+                                  std::uint64_t bkey) {
     using Key = unsigned __int128;
     const std::uint64_t m = 0 - std::uint64_t{(Key{bt} << 64 | bkey) < (Key{t} << 64 | key)};
     t ^= (t ^ bt) & m;
     key ^= (key ^ bkey) & m;
-#endif
   }
 
+ private:
   std::uint32_t leaves_ = 1, shift_ = 0;
   std::uint64_t max_seq_ = 0, next_seq_ = 0;
   std::vector<Slot> slots_;

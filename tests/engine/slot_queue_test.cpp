@@ -98,6 +98,29 @@ std::vector<Handled> RunHeap(std::uint32_t slots, std::uint64_t span, std::uint6
   return out;
 }
 
+// The selection of each tree level (written in asm on x86-64) against a plain comparison of
+// (time, key) pairs, and the portable form likewise: random words, equal times, extremes.
+TEST(SlotQueue, EachLevelKeepsTheEarlierKey) {
+  using Q = SlotQueue<int>;
+  SplitMix64 rng(23);
+  const std::uint64_t extremes[] = {0, 1, 2, UINT64_MAX - 1, UINT64_MAX, 1ull << 63};
+  for (int i = 0; i < 200000; ++i) {
+    std::uint64_t t = rng.Next(), key = rng.Next(), bt = rng.Next(), bkey = rng.Next();
+    if (i % 3 == 0) bt = t;  // ties on time: the key decides
+    if (i % 7 == 0) t = extremes[rng.Next() % 6], bt = extremes[rng.Next() % 6];
+    if (i % 11 == 0) key = extremes[rng.Next() % 6], bkey = extremes[rng.Next() % 6];
+    if (t == bt && key == bkey) continue;  // keys are distinct in a queue
+    const bool b_earlier = bt < t || (bt == t && bkey < key);
+    std::uint64_t t1 = t, k1 = key, t2 = t, k2 = key;
+    Q::KeepEarlier(t1, k1, bt, bkey);
+    Q::KeepEarlierPortable(t2, k2, bt, bkey);
+    ASSERT_EQ(t1, b_earlier ? bt : t) << i;
+    ASSERT_EQ(k1, b_earlier ? bkey : key) << i;
+    ASSERT_EQ(t2, t1) << i;
+    ASSERT_EQ(k2, k1) << i;
+  }
+}
+
 TEST(SlotQueue, HandsOutEventsInTheEnginesOrder) {
   // Slot counts around powers of two (padding slots), delays from "all ties" to spread out.
   for (std::uint32_t slots : {1u, 2u, 3u, 5u, 8u, 13u, 16u, 17u}) {
