@@ -113,14 +113,9 @@ BestScheduleOptions FinePlanEffort(std::uint64_t seed) {
 void TwoLevelBestScheduler::BeginFrame(const FrameInfo& frame) {
   std::vector<CellId> plan;
   if (frame.previous != nullptr) {
-    std::vector<CellId> own;
-    if (frame.board_cell_of == nullptr) {
-      for (const CellId c : CellRange(frame.previous->cell_count())) own.push_back(c);
-    }
     const std::uint64_t seed = seed_;
     plan = TwoLevelSchedule(
-        *frame.previous, frame.board_cell_of ? *frame.board_cell_of : own,
-        [seed](const CellTree& t) { return PlanFor(t, seed); },
+        *frame.previous, BoardCellOf(frame), [seed](const CellTree& t) { return PlanFor(t, seed); },
         [seed](const CellTree& t) { return BestSchedule(t, FinePlanEffort(seed)).schedule; });
   }
   follower_.Reset(std::move(plan), frame.cells);

@@ -10,17 +10,9 @@ void CellTreeScheduler::BeginFrame(const FrameInfo& frame) {
 }
 
 void TwoLevelScheduler::BeginFrame(const FrameInfo& frame) {
-  std::vector<CellId> plan;
-  if (frame.previous != nullptr) {
-    if (frame.board_cell_of != nullptr) {
-      plan = TwoLevelPeel(*frame.previous, *frame.board_cell_of);
-    } else {
-      std::vector<CellId> own(frame.previous->cell_count());
-      for (const CellId c : CellRange(frame.previous->cell_count())) own[c.value()] = c;
-      plan = TwoLevelPeel(*frame.previous, own);
-    }
-  }
-  follower_.Reset(std::move(plan), frame.cells);
+  follower_.Reset(
+      frame.previous ? TwoLevelPeel(*frame.previous, BoardCellOf(frame)) : std::vector<CellId>{},
+      frame.cells);
 }
 
 }  // namespace raycell

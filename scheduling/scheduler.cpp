@@ -209,6 +209,13 @@ const std::vector<SchedulerEntry>& SchedulerRegistry() {
   return registry;
 }
 
+std::vector<CellId> BoardCellOf(const FrameInfo& frame) {
+  if (frame.board_cell_of != nullptr) return *frame.board_cell_of;
+  std::vector<CellId> own;
+  for (const CellId c : CellRange(frame.previous->cell_count())) own.push_back(c);
+  return own;
+}
+
 // The entry's name, found by its factory (each registry entry has its own).
 template <bool kPlan, bool kPartition, bool kSteal, bool kAffinity, bool kPostpone, bool kShare>
 std::unique_ptr<Scheduler> MakeBalanced(std::uint64_t seed) {

@@ -65,6 +65,9 @@ struct FrameInfo {
   // it; null when every level holds the grid's cells.
   const std::vector<CellId>* board_cell_of = nullptr;
 };
+// The board cell of every cell of frame.previous (not null): FrameInfo::board_cell_of, or
+// each cell its own when every level holds the grid's cells.
+std::vector<CellId> BoardCellOf(const FrameInfo& frame);
 
 // A scheduling policy. Per frame: BeginFrame once, then Next once per fetch.
 //

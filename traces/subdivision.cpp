@@ -20,18 +20,6 @@ std::uint64_t ParseBudget(std::string_view text, const std::string& what) {
   return b;
 }
 
-// The fine cells of a box, in increasing order.
-std::vector<std::uint32_t> FineCellsOf(const FineBox& b, const std::array<std::uint32_t, 3>& g) {
-  std::vector<std::uint32_t> out;
-  out.reserve(b.volume());
-  for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z) {
-    for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y) {
-      for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x) out.push_back(x + g[0] * (y + g[1] * z));
-    }
-  }
-  return out;
-}
-
 // What a k-d split balances.
 class Weigher {
  public:
@@ -131,6 +119,17 @@ std::uint64_t FineBox::volume() const {
   std::uint64_t v = 1;
   for (int a = 0; a < 3; ++a) v *= hi[a] > lo[a] ? hi[a] - lo[a] : 0;
   return v;
+}
+
+std::vector<std::uint32_t> FineCellsOf(const FineBox& b, const std::array<std::uint32_t, 3>& g) {
+  std::vector<std::uint32_t> out;
+  out.reserve(b.volume());
+  for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z) {
+    for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y) {
+      for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x) out.push_back(x + g[0] * (y + g[1] * z));
+    }
+  }
+  return out;
 }
 
 std::string SubdivisionSpec::ToString() const {

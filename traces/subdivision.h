@@ -78,6 +78,9 @@ struct FineBox {
   }
 };
 
+// The fine cells of a box of a fine grid `g` (numbered x + nx*(y + ny*z)), in increasing order.
+std::vector<std::uint32_t> FineCellsOf(const FineBox& b, const std::array<std::uint32_t, 3>& g);
+
 struct Subdivision {
   // Per coarse cell, its box, ordered by the box's lowest corner (z, then y, then x), so that
   // a uniform subdivision numbers its cells as a grid recorded directly (x + nx*(y + ny*z)).

@@ -1164,17 +1164,9 @@ struct TraceReader::Impl {
   }
   // Per cell of `sub`, the bytes of its fine cells' leaves, each once.
   std::vector<std::uint64_t> Footprints(const Subdivision& sub) const {
-    const std::array<std::uint32_t, 3>& g = header.cells;
     std::vector<std::uint64_t> fp(sub.cells());
-    std::vector<std::uint32_t> members;
     for (std::uint32_t c = 0; c < sub.cells(); ++c) {
-      const FineBox& b = sub.boxes[c];
-      members.clear();
-      for (std::uint32_t z = b.lo[2]; z < b.hi[2]; ++z)
-        for (std::uint32_t y = b.lo[1]; y < b.hi[1]; ++y)
-          for (std::uint32_t x = b.lo[0]; x < b.hi[0]; ++x)
-            members.push_back(x + g[0] * (y + g[1] * z));
-      fp[c] = header.leaves.UnionBytes(members);
+      fp[c] = header.leaves.UnionBytes(FineCellsOf(sub.boxes[c], header.cells));
     }
     return fp;
   }
