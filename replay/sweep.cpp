@@ -680,9 +680,14 @@ SweepOutcome RunSweep(const TraceReader& reader, const SweepSpec& spec, const st
                       const SweepOptions& options) {
   ValidateVaries(spec.base, spec.varies);
   const std::uint64_t cells = reader.header().cell_count();
+  std::set<std::vector<std::string>> level_cells;  // the levels' cells, each set checked once
   for (std::size_t i = 0, n = CombinationCount(spec.varies); i < n; ++i) {
     try {
-      CheckModelSize(CombinationConfig(spec.base, spec.varies, i), cells);
+      const ReplayConfig c = CombinationConfig(spec.base, spec.varies, i);
+      CheckModelSize(c, cells);
+      std::vector<std::string> levels;
+      for (const LevelConfig& l : c.levels) levels.push_back(l.cells);
+      if (level_cells.insert(levels).second) LevelUnitsOf(c, reader);
     } catch (const InputError& e) {
       throw InputError((spec.varies.empty() ? "--config " + spec.config
                                             : "--vary: combination " + std::to_string(i)) +

@@ -247,6 +247,13 @@ TEST_F(SweepTest, BadValuesFailBeforeAnyWork) {
             std::string::npos)
       << prefetch;
   EXPECT_FALSE(Exists(out + ".partial"));
+  // A board of coarser cells needs a regroupable capture: refused before the file is opened.
+  spec.varies.back() = Vary::Parse("level.board.cells=same,3x3x3");
+  const std::string board = ErrorOf([&] { RunSweep(*reader_, spec, out); });
+  EXPECT_NE(board.find("combination 1: level.board.cells: '3x3x3' needs a regroupable capture"),
+            std::string::npos)
+      << board;
+  EXPECT_FALSE(Exists(out + ".partial"));
 }
 
 constexpr char kMixedHeader[] =
