@@ -145,6 +145,9 @@ void Accumulate(const ReplayResult& f, ReplayResult* t) {
   CheckedIncrement(t->events, f.events);
   CheckedIncrement(t->prefetches, f.prefetches);
   CheckedIncrement(t->prefetch_hits, f.prefetch_hits);
+  CheckedIncrement(t->decisions, f.decisions);
+  CheckedIncrement(t->decision_steps, f.decision_steps);
+  t->scheduler_bytes = std::max(t->scheduler_bytes, f.scheduler_bytes);
   t->passes = std::max(t->passes, f.passes);
   t->min_converged = t->min_converged && f.min_converged;
 }

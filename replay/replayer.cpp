@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <sstream>
+#include <unordered_map>
 
 #include "base/check.h"
 #include "base/checked.h"
@@ -19,8 +20,10 @@ namespace {
 // record is then in cache, being read for the unit's cell), so working a unit reads only
 // its successors' records, which lie together: one cache miss per unit, not three. Without
 // packed records (values beyond 32 bits), an entry is the unit id and the columns are read.
-// Either way ForEachChild(e, f) calls f(child entry, child's cell, child's queued rays) in
-// the work graph's successor order.
+// Either way ForEachChild(e, f) calls f(child entry, child's cell, child's queued rays, child's
+// index) in the work graph's successor order; the index (the packed record, the unit id, the
+// compact visit) numbers the units 0 .. size() - 1, for the Cell Tree paths of a scheduler that
+// watches the frame unfold (UnitPaths).
 
 struct PackedUnits {
   struct Entry {
@@ -32,12 +35,14 @@ struct PackedUnits {
   Entry MakeEntry(UnitId x) const { return {p[x].first_child, p[x + 1].first_child, p[x].samples}; }
   template <typename F>
   void ForEachRoot(F f) const {
-    for (UnitId x = 0; x < roots; ++x) f(MakeEntry(x), p[x].cell, std::uint64_t{p[x].queued_rays});
+    for (UnitId x = 0; x < roots; ++x) {
+      f(MakeEntry(x), p[x].cell, std::uint64_t{p[x].queued_rays}, x);
+    }
   }
   template <typename F>
   void ForEachChild(const Entry& e, F f) const {
     for (UnitId x = e.first_child; x < e.end_child; ++x) {
-      f(MakeEntry(x), p[x].cell, std::uint64_t{p[x].queued_rays});
+      f(MakeEntry(x), p[x].cell, std::uint64_t{p[x].queued_rays}, x);
     }
   }
   std::uint64_t samples(const Entry& e) const { return e.samples; }
@@ -51,13 +56,13 @@ struct ColumnUnits {
 
   template <typename F>
   void ForEachRoot(F f) const {
-    for (UnitId u : w->roots) f(u, w->cell[u], w->queued_rays[u]);
+    for (UnitId u : w->roots) f(u, w->cell[u], w->queued_rays[u], u);
   }
   template <typename F>
   void ForEachChild(UnitId u, F f) const {
     for (UnitId i = w->succ_begin[u]; i < w->succ_begin[u + 1]; ++i) {
       const UnitId s = w->succ[i];
-      f(s, w->cell[s], w->queued_rays[s]);
+      f(s, w->cell[s], w->queued_rays[s], s);
     }
   }
   std::uint64_t samples(UnitId u) const { return w->samples[u]; }
@@ -78,7 +83,7 @@ struct CompactUnits {
 
   template <typename F>
   void ForEachRoot(F f) const {
-    for (const Entry& e : c->roots) f(e, CellAt(e.offset), std::uint64_t{1});
+    for (const Entry& e : c->roots) f(e, CellAt(e.offset), std::uint64_t{1}, UnitId(e.visit));
   }
   template <typename F>
   void ForEachChild(const Entry& e, F f) const {
@@ -89,9 +94,9 @@ struct CompactUnits {
     const std::uint32_t n = std::uint32_t(c->spawned.size());
     std::uint32_t end = e.spawned;
     while (end < n && s[end].at == e.visit) ++end;
-    if (!last) f(Entry{at, e.visit + 1, end}, CellAt(at), std::uint64_t{1});
+    if (!last) f(Entry{at, e.visit + 1, end}, CellAt(at), std::uint64_t{1}, UnitId(e.visit + 1));
     for (std::uint32_t k = e.spawned; k < end; ++k) {
-      f(s[k].unit, CellAt(s[k].unit.offset), std::uint64_t{0});
+      f(s[k].unit, CellAt(s[k].unit.offset), std::uint64_t{0}, UnitId(s[k].unit.visit));
     }
   }
   std::uint64_t samples(const Entry& e) const {
@@ -104,6 +109,51 @@ struct CompactUnits {
     __builtin_prefetch(c->spawned.data() + e.spawned);
   }
 };
+
+// ---- Paths, for schedulers that watch the frame unfold ---------------------------------
+// Per unit (its index), the Cell Tree node it belongs to, named by its path: a unit in its
+// predecessor's cell (a spawned ray's first visit) is in the predecessor's node, any other in
+// the child of that node for its cell (docs/design.md §1 "Cell Tree"). Paths are numbered
+// 1, 2, ... in the order of this walk, 0 being the root; the board renumbers them in the
+// order they are queued before a scheduler sees them (Scheduler::Arrival).
+struct UnitPaths {
+  std::vector<std::uint32_t> of_unit;
+  std::vector<std::uint32_t> parent;  // per path
+};
+
+template <typename Units>
+UnitPaths PathsOf(const Units& u, std::size_t units) {
+  using Entry = typename Units::Entry;
+  UnitPaths p;
+  p.of_unit.assign(units, 0);
+  p.parent = {0};
+  std::unordered_map<std::uint64_t, std::uint32_t> child;
+  const auto path = [&](std::uint32_t parent, CellId c) {
+    const auto [it, added] =
+        child.try_emplace(std::uint64_t{parent} << 32 | c.value(), std::uint32_t(p.parent.size()));
+    if (added) p.parent.push_back(parent);
+    return it->second;
+  };
+  struct Item {
+    Entry e;
+    UnitId x;
+    CellId c;
+  };
+  std::vector<Item> stack;
+  u.ForEachRoot([&](const Entry& e, CellId c, std::uint64_t, UnitId x) {
+    p.of_unit[x] = path(0, c);
+    stack.push_back({e, x, c});
+  });
+  while (!stack.empty()) {
+    const Item it = stack.back();
+    stack.pop_back();
+    u.ForEachChild(it.e, [&](const Entry& e, CellId c, std::uint64_t, UnitId x) {
+      p.of_unit[x] = c == it.c ? p.of_unit[it.x] : path(p.of_unit[it.x], c);
+      stack.push_back({e, x, c});
+    });
+  }
+  return p;
+}
 
 // ---- Pending events -------------------------------------------------------------------
 // Each processor has at most one pending event: the end of its fetch, of its unit, or its
@@ -138,7 +188,8 @@ class Board {
 
   Board(const WorkGraph& w, Units graph_units, const std::vector<std::uint64_t>& footprints,
         const ReplayConfig& config, Scheduler& scheduler, const MemoryHierarchy::Requests& futures,
-        const MemoryState& start, ReplayObserver* observer, const MemoryUnits* units)
+        const MemoryState& start, ReplayObserver* observer, const MemoryUnits* units,
+        const UnitPaths* paths)
       : w_(w),
         u_(graph_units),
         config_(config),
@@ -152,8 +203,11 @@ class Board {
         holders_(w.cells, 0),
         processors_(config.processors.count),
         slots_(config.processors.count),
-        obs_(observer) {
-    u_.ForEachRoot([this](const Entry& e, CellId c, std::uint64_t q) { Enqueue(e, c, q); });
+        obs_(observer),
+        paths_(paths) {
+    if (paths_) revealed_.assign(paths_->parent.size(), 0);
+    u_.ForEachRoot(
+        [this](const Entry& e, CellId c, std::uint64_t q, UnitId x) { Enqueue(e, c, q, x); });
     memory_.set_observer(obs_);
   }
 
@@ -210,7 +264,8 @@ class Board {
   // handled (its slot is brought up to date after the handler), or one that was waiting.
   void Schedule(std::uint32_t p, SimTime when, Kind kind) { slots_.Schedule(p, when, kind); }
 
-  void Enqueue(const Entry& e, CellId c, std::uint64_t q) {
+  void Enqueue(const Entry& e, CellId c, std::uint64_t q, UnitId x) {
+    if (paths_) Reveal(x, c, q);
     queues_[c.value()].push_back(e);
     const bool starts = (queued_rays_[c.value()] == 0) & (q != 0);
     available_ += starts & (open_[c.value()] != 0);
@@ -218,6 +273,16 @@ class Board {
     queued_rays_[c.value()] += q;
     queued_total_ += q;
     peak_queued_ = std::max(peak_queued_, queued_total_);
+  }
+
+  // Tells a watching scheduler the node of unit x, queued at c (Scheduler::Arrival).
+  void Reveal(UnitId x, CellId c, std::uint64_t q) {
+    const std::uint32_t path = paths_->of_unit[x];
+    std::uint32_t& id = revealed_[path];
+    if (id == 0) id = ++revealed_count_;
+    const std::uint32_t parent = paths_->parent[path];
+    RAYCELL_CHECK(parent == 0 || revealed_[parent] != 0);  // a parent is queued before
+    scheduler_.Arrived({id, revealed_[parent], c, q});
   }
 
   // The queues a scheduler may choose from: cells being worked are not available.
@@ -274,6 +339,7 @@ class Board {
     std::vector<Entry>& q = queues_[c.value()];
     if (q.empty()) return;
     if (obs_) obs_->QueueTaken(p, c, queued_rays_[c.value()], now_);
+    if (paths_) scheduler_.Taken(c);
     joinable_ -= queued_rays_[c.value()] != 0;
     queued_total_ -= queued_rays_[c.value()];
     queued_rays_[c.value()] = 0;
@@ -354,11 +420,11 @@ class Board {
       updated_ = true;
     }
     bool released = false;
-    u_.ForEachChild(unit, [&](const Entry& e, CellId c, std::uint64_t q) {
+    u_.ForEachChild(unit, [&](const Entry& e, CellId c, std::uint64_t q, UnitId x) {
       if (c == cell) {
         ps.worklist.push_back(e);  // spawned in the loaded cell: worked now
       } else {
-        Enqueue(e, c, q);
+        Enqueue(e, c, q, x);
         released = true;
       }
     });
@@ -415,6 +481,11 @@ class Board {
   std::uint64_t events_ = 0, events_since_progress_ = 0;
   std::uint64_t done_ = 0, queued_total_ = 0, peak_queued_ = 0;
   ReplayObserver* obs_;  // null: nothing observes (replay/observer.h)
+  // A watching scheduler's paths (null: the scheduler does not watch), and per path its
+  // number as the scheduler knows it (0: not queued yet).
+  const UnitPaths* paths_ = nullptr;
+  std::vector<std::uint32_t> revealed_;
+  std::uint32_t revealed_count_ = 0;
 };
 
 template <typename Units>
@@ -459,6 +530,12 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
   FrameInfo info = frame;
   info.fetch_samples = &fetch_samples;
   info.processors = config.processors.count;
+  // A scheduler that watches the frame unfold learns it only from what is queued.
+  std::optional<UnitPaths> paths;
+  if (scheduler.Watches()) {
+    paths = PathsOf(graph_units, work.size());
+    info.current = nullptr;
+  }
   if (units != nullptr) {
     for (const LevelUnits& level : *units) {
       if (!level.identity()) {
@@ -473,7 +550,7 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
   for (std::uint32_t pass = 1;; ++pass) {
     scheduler.BeginFrame(info);
     Board<Units> board(work, graph_units, footprints, config, scheduler, futures, start, observer,
-                       units);
+                       units, paths ? &*paths : nullptr);
     board.Run(frame.frame_index);
     const bool converged = pass > 1 && !board.memory().diverged();
     if (!min || converged || pass == max_passes) {
@@ -489,6 +566,10 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
           TimeLowerBound(work, footprints, config, start.empty() ? nullptr : &held, units);
       r.passes = pass;
       r.min_converged = !min || converged;
+      const Scheduler::DecisionCost cost = scheduler.Cost();
+      r.decisions = cost.decisions;
+      r.decision_steps = cost.steps;
+      r.scheduler_bytes = cost.peak_bytes;
       if (memory) *memory = board.memory().State();
       return r;
     }

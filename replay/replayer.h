@@ -40,6 +40,9 @@ struct ReplayResult {
   std::uint64_t events = 0;                           // engine events handled
   std::uint64_t prefetches = 0;                       // cells prefetched while another was worked
   std::uint64_t prefetch_hits = 0;                    // of them, fetched next from the cache
+  // What deciding cost the scheduler (Scheduler::Cost; zeros for one that does not count):
+  // cells chosen, elementary steps spent planning and choosing, most bytes of state kept.
+  std::uint64_t decisions = 0, decision_steps = 0, scheduler_bytes = 0;
   // Runs of the frame: 1, or more with MIN replacement (see ReplayFrame).
   std::uint32_t passes = 1;
   bool min_converged = true;  // MIN's last run made exactly the requests it was told

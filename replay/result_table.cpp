@@ -23,7 +23,10 @@ void AddResult(const ReplayResult& r, const ResultColumns& columns, StatsTable* 
   if (columns.extras) {
     t->AddCount("prefetches", r.prefetches)
         .AddCount("prefetch_hits", r.prefetch_hits)
-        .AddBool("min_converged", r.min_converged);
+        .AddBool("min_converged", r.min_converged)
+        .AddCount("decisions", r.decisions)
+        .AddCount("decision_steps", r.decision_steps)
+        .AddCount("scheduler_bytes", r.scheduler_bytes);
   }
   if (columns.levels) {
     StatTables levels;

@@ -27,6 +27,9 @@ namespace raycell {
 // The schedule search budget of the following schedulers.
 BestScheduleOptions PlanEffort(std::uint64_t seed);
 
+// The effort for small forests planned many times a frame: the beam search alone (width 64).
+BestScheduleOptions FinePlanEffort(std::uint64_t seed);
+
 // The best schedule BestSchedule(tree, PlanEffort(seed)) finds, memoised (thread-safe).
 std::vector<CellId> PlanFor(const CellTree& tree, std::uint64_t seed);
 

@@ -5,6 +5,7 @@
 
 #include "base/check.h"
 #include "base/parse.h"
+#include "scheduling/adaptive_scheduler.h"
 #include "scheduling/balanced_scheduler.h"
 #include "scheduling/best_scheduler.h"
 #include "scheduling/cell_tree_scheduler.h"
@@ -205,6 +206,16 @@ const std::vector<SchedulerEntry>& SchedulerRegistry() {
          return std::make_unique<TwoLevelBestScheduler>(seed);
        },
        1, true, true, false, false},
+      // Adaptive scheduling (adaptive_scheduler.h): they watch the frame unfold.
+      {"celltree-adaptive",
+       "celltree-union followed node by node as the frame unfolds: work waits for the entry "
+       "its predicted node is due at, and the rest is planned again by Peel when the plan "
+       "runs out",
+       "Cell Tree, adaptive",
+       [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+         return std::make_unique<AdaptiveScheduler>(seed);
+       },
+       2, true},
   };
   return registry;
 }

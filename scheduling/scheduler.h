@@ -101,6 +101,32 @@ class Scheduler {
   // policy has nothing to say beyond its name. Read only when asked: never on the replay's
   // path unless a timeline is written.
   virtual std::string Reason() const { return {}; }
+
+  // Watching the frame unfold (docs/design.md §5 "Adaptive scheduling"). A scheduler that
+  // watches is told, as the replay queues it, each unit of work released into a cell with the
+  // Cell Tree node it belongs to, as a ray packet carrying its node would tell the board; and
+  // each time a processor takes a cell's queue. It is not given the frame's own tree
+  // (FrameInfo::current is null for it): what it knows of the frame is what was queued so far.
+  // Nodes are numbered in the order they are first queued, from 1; 0 is the root.
+  struct Arrival {
+    std::uint32_t node = 0;    // the node the unit's rays enter
+    std::uint32_t parent = 0;  // its parent, queued before it (0: the root)
+    CellId cell{0};            // the node's cell, where the unit is queued
+    std::uint64_t rays = 0;    // rays the unit adds to the cell's queue
+  };
+  virtual bool Watches() const { return false; }
+  virtual void Arrived(const Arrival& /*arrival*/) {}
+  // A processor took `cell`'s queue: every unit queued there so far is being worked.
+  virtual void Taken(CellId /*cell*/) {}
+
+  // What deciding has cost so far this frame (docs/design.md §5 "The cost of deciding"): calls
+  // of Next that chose a cell, and the elementary steps spent planning and choosing (tree nodes
+  // and schedule entries visited, search states), and the most bytes of state the scheduler
+  // kept. A scheduler that does not count reports zeros.
+  struct DecisionCost {
+    std::uint64_t decisions = 0, steps = 0, peak_bytes = 0;
+  };
+  virtual DecisionCost Cost() const { return {}; }
 };
 
 // Max Work's choice: the cell with the most queued rays, lowest number on ties; nullopt when

@@ -224,6 +224,22 @@ std::string GridReport(const GridStudy& g) {
       << (std::string(k.name) == "celltree" ? " (the paper: 30% fewer)" : "") << " | "
       << Percent(f - double(mw), double(mw)) << " |\n";
   }
+  // Online against the oracle (issue 24): the fewest fetches of a scheduler that knows only
+  // earlier frames (Max Work included), over those of the frame's own best schedule.
+  const SchedulerReplay* online = nullptr;
+  const SchedulerReplay* oracle = nullptr;
+  for (const SchedulerReplay& r : g.replays) {
+    if (!r.scheduler->oracle) {
+      if (online == nullptr || r.replay.total.fetches < online->replay.total.fetches) online = &r;
+    } else if (std::string(r.scheduler->name) == "best") {
+      oracle = &r;
+    }
+  }
+  if (online != nullptr && oracle != nullptr && oracle->replay.total.fetches > 0) {
+    s << "| online / oracle: " << online->scheduler->label << " against the best-schedule oracle | "
+      << FormatFixed(double(online->replay.total.fetches) / double(oracle->replay.total.fetches), 2)
+      << " |\n";
+  }
   // Nothing to close when Peel already meets the lower bound.
   const std::string closed =
       peel == lower ? "-" : Percent(double(peel) - double(best), double(peel) - double(lower));

@@ -16,8 +16,9 @@
 namespace raycell {
 namespace {
 
-const char* const kBalancing[] = {"affinity",        "partition", "steal",
-                                  "partition-steal", "share",     "balanced"};
+// With the adaptive scheduler (issue 24), which must work with any number of processors too.
+const char* const kBalancing[] = {
+    "affinity", "partition", "steal", "partition-steal", "share", "balanced", "celltree-adaptive"};
 
 std::string Describe(const ReplayResult& r) {
   std::ostringstream s;

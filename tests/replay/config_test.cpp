@@ -225,8 +225,8 @@ TEST(LoadConfig, BadUnitsAndValuesNameFileAndLine) {
   EXPECT_EQ(LoadError("scheduler = \"fastest\"\n"),
             "replay.toml:1:13: scheduler: unknown scheduler 'fastest' (expected maxwork, "
             "roundrobin, random, peel, celltree, best, celltree-best, celltree-union, affinity, "
-            "partition, steal, partition-steal, share, balanced, celltree-2level or "
-            "celltree-2level-best)");
+            "partition, steal, partition-steal, share, balanced, celltree-2level, "
+            "celltree-2level-best or celltree-adaptive)");
   EXPECT_EQ(
       LoadError("granularity = \"cell\"\n"),
       "replay.toml:1:15: granularity: unknown granularity 'cell' (expected ray, node or auto)");
@@ -405,8 +405,8 @@ TEST(ApplyOverride, ErrorsNameTheKeyAndLeaveTheConfigUnchanged) {
   EXPECT_EQ(err("scheduler", "fastest"),
             "override 'scheduler': unknown scheduler 'fastest' (expected maxwork, roundrobin, "
             "random, peel, celltree, best, celltree-best, celltree-union, affinity, partition, "
-            "steal, partition-steal, share, balanced, celltree-2level or "
-            "celltree-2level-best)");
+            "steal, partition-steal, share, balanced, celltree-2level, "
+            "celltree-2level-best or celltree-adaptive)");
   EXPECT_EQ(c, DefaultConfig());
 }
 

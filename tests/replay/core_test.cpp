@@ -36,9 +36,9 @@ std::string Describe(const ReplayResult& r) {
   return s.str();
 }
 
-const char* const kSchedulers[] = {"maxwork",         "roundrobin", "random",    "peel",
-                                   "celltree",        "affinity",   "partition", "steal",
-                                   "partition-steal", "share",      "balanced"};
+const char* const kSchedulers[] = {
+    "maxwork",   "roundrobin", "random",          "peel",  "celltree", "affinity",
+    "partition", "steal",      "partition-steal", "share", "balanced", "celltree-adaptive"};
 
 LevelConfig::Replacement RandomReplacement(std::mt19937& rng) {
   switch (rng() % 4) {

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <deque>
+#include <map>
 #include <numeric>
 #include <sstream>
 
@@ -44,6 +45,27 @@ class Board : public Component {
         view_(w.cells, 0),
         locked_(w.cells, 0),
         processors_(config.processors.count) {
+    if (scheduler_.Watches()) {
+      // Each unit's Cell Tree node, named by its path of cells: a unit in its predecessor's
+      // cell is in its node, any other in that node's child for its cell.
+      path_.assign(w.size(), {});
+      std::vector<UnitId> stack;
+      for (UnitId u : w.roots) {
+        path_[u] = {w.cell[u]};
+        stack.push_back(u);
+      }
+      while (!stack.empty()) {
+        const UnitId u = stack.back();
+        stack.pop_back();
+        for (UnitId i = w.succ_begin[u]; i < w.succ_begin[u + 1]; ++i) {
+          const UnitId s = w.succ[i];
+          path_[s] = path_[u];
+          if (w.cell[s] != w.cell[u]) path_[s].push_back(w.cell[s]);
+          stack.push_back(s);
+        }
+      }
+      known_[{}] = 0;
+    }
     for (UnitId u : w.roots) Enqueue(u);
   }
 
@@ -75,6 +97,13 @@ class Board : public Component {
  private:
   void Enqueue(UnitId u) {
     const CellId c = w_.cell[u];
+    if (scheduler_.Watches()) {  // the node of u as the rays entering it would carry it
+      const std::vector<CellId>& path = path_[u];
+      const auto it = known_.try_emplace(path, std::uint32_t(known_.size())).first;
+      const std::vector<CellId> parent(path.begin(), path.end() - 1);
+      RAYCELL_CHECK(known_.count(parent) == 1);
+      scheduler_.Arrived({it->second, known_.at(parent), c, w_.queued_rays[u]});
+    }
     queues_[c.value()].push_back(u);
     queued_rays_[c.value()] += w_.queued_rays[u];
     queued_total_ += w_.queued_rays[u];
@@ -113,6 +142,7 @@ class Board : public Component {
 
   void TakeQueue(ProcessorState& ps) {
     auto& q = queues_[ps.cell->value()];
+    if (!q.empty() && scheduler_.Watches()) scheduler_.Taken(*ps.cell);
     for (UnitId u : q) {
       ps.worklist.push_back(u);
       queued_rays_[ps.cell->value()] -= w_.queued_rays[u];
@@ -185,6 +215,10 @@ class Board : public Component {
   ComponentId id_ = 0;
   std::uint64_t done_ = 0, queued_total_ = 0, peak_queued_ = 0;
   std::uint64_t rays_ = 0, segments_ = 0, samples_ = 0;
+  // For a scheduler that watches the frame unfold: per unit its path of cells, and the paths
+  // queued so far, numbered in that order from 1 (the root's, empty, is 0).
+  std::vector<std::vector<CellId>> path_;
+  std::map<std::vector<CellId>, std::uint32_t> known_;
 };
 
 ReplayResult Board::Result(SimTime end) const {
@@ -235,6 +269,7 @@ ReplayResult ReferenceReplayFrame(const WorkGraph& work,
   FrameInfo info = frame;
   info.fetch_samples = &fetch_samples;
   info.processors = config.processors.count;
+  if (scheduler.Watches()) info.current = nullptr;  // it sees the frame only as it is queued
   for (std::uint32_t pass = 1;; ++pass) {
     scheduler.BeginFrame(info);
     Board board(work, footprints, config, scheduler, futures);
@@ -249,6 +284,10 @@ ReplayResult ReferenceReplayFrame(const WorkGraph& work,
       r.events = sim.events_handled();
       r.passes = pass;
       r.min_converged = !min || converged;
+      const Scheduler::DecisionCost cost = scheduler.Cost();
+      r.decisions = cost.decisions;
+      r.decision_steps = cost.steps;
+      r.scheduler_bytes = cost.peak_bytes;
       return r;
     }
     futures = board.memory().requests();

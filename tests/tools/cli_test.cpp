@@ -378,6 +378,7 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
             std::string::npos);
   EXPECT_NE(report.find("![fetches per frame](fetches_2x2x2.png)"), std::string::npos);
   EXPECT_NE(report.find("![bracket of the optimum](bracket_2x2x2.png)"), std::string::npos);
+  EXPECT_NE(report.find("against the best-schedule oracle | "), std::string::npos) << report;
   // With two cells Peel meets the lower bound on every frame: nothing to close.
   EXPECT_NE(report.find("| share of Peel's distance to the lower bound closed by the best "
                         "schedule | - |"),
@@ -386,7 +387,8 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
   const std::string fetches = raycell::testing::ReadBytes((out / "fetches_2x2x2.csv").string());
   EXPECT_EQ(std::count(fetches.begin(), fetches.end(), '\n'), 4);  // header + 3 frames
   EXPECT_EQ(fetches.substr(0, fetches.find('\n')),
-            "frame,maxwork,celltree,celltree-best,celltree-union,peel,best,bound,lower_bound,"
+            "frame,maxwork,celltree,celltree-best,celltree-union,celltree-adaptive,peel,best,bound,"
+            "lower_bound,"
             "best_length");
   // Per frame: maxGen bound <= best lower bound <= best schedule found <= Peel's length, and
   // the optimum, where proved, is both ends.

@@ -1,0 +1,237 @@
+#include "scheduling/adaptive_scheduler.h"
+
+#include <algorithm>
+
+#include "base/check.h"
+#include "graph/peel.h"
+#include "scheduling/best_scheduler.h"
+
+namespace raycell {
+
+void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
+  cells_ = frame.cells;
+  own_.reset();
+  predicted_ = frame.previous;
+  if (frame.previous != nullptr && frame.before_previous != nullptr) {
+    own_ = UnionTree({frame.before_previous, frame.previous});
+    predicted_ = &*own_;
+  }
+  match_.assign(1, predicted_ != nullptr ? kRootNode : kNoNode);
+  node_cell_.assign(1, kNoCell);
+  queued_.assign(cells_, {});
+  min_due_.assign(cells_, kNever);
+  replans_ = 0;
+  last_how_ = 0;
+  cost_ = {};
+  stand_in_.clear();
+  plan_.clear();
+  used_.clear();
+  cursor_ = 0;
+  due_.clear();
+  if (predicted_ == nullptr) return;
+  // Stand-ins: per (parent's cell, cell) the first predicted node with those cells.
+  const CellTree& t = *predicted_;
+  stand_in_.assign(std::size_t{cells_} + 1, std::vector<NodeId>(cells_, kNoNode));
+  for (NodeId n : t.nodes()) {
+    const NodeId parent = t.parent(n);
+    const std::size_t pc = parent == kRootNode ? 0 : std::size_t{t.cell(parent).value()} + 1;
+    NodeId& s = stand_in_[pc][t.cell(n).value()];
+    if (s == kNoNode) s = n;
+  }
+  cost_.steps += t.size();
+  SetPlan(PlanFor(t, seed_), &t, nullptr);
+}
+
+void AdaptiveScheduler::SetPlan(std::vector<CellId> plan, const CellTree* planned,
+                                const std::vector<NodeId>* nodes) {
+  due_.assign(predicted_->size(), kNever);
+  if (planned != nullptr) {
+    // The run of docs/design.md §1 on `planned`: each entry processes every node of its cell
+    // whose parent is done.
+    const CellTree& f = *planned;
+    std::vector<std::vector<NodeId>> ready(cells_);
+    for (NodeId c = f.first_child(kRootNode); c != kNoNode; c = f.next_sibling(c)) {
+      ready[f.cell(c).value()].push_back(c);
+    }
+    for (std::size_t i = 0; i < plan.size(); ++i) {
+      std::vector<NodeId> now;
+      now.swap(ready[plan[i].value()]);
+      for (NodeId n : now) {
+        due_[nodes == nullptr ? n.index() : (*nodes)[n.index() - 1].index()] = std::uint32_t(i);
+        for (NodeId c = f.first_child(n); c != kNoNode; c = f.next_sibling(c)) {
+          ready[f.cell(c).value()].push_back(c);
+        }
+      }
+      cost_.steps += 1 + now.size();
+    }
+  }
+  plan_ = std::move(plan);
+  used_.assign(plan_.size(), false);
+  cursor_ = 0;
+  for (std::uint32_t c = 0; c < cells_; ++c) RecomputeDue(CellId(c));
+  CountBytes();
+}
+
+void AdaptiveScheduler::RecomputeDue(CellId c) {
+  std::uint32_t d = kNever;
+  for (std::uint32_t r : queued_[c.value()]) {
+    const NodeId m = match_[r];
+    d = std::min(d, m == kNoNode ? 0 : due_[m.index()] == kNever ? 0 : due_[m.index()]);
+  }
+  min_due_[c.value()] = d;
+  cost_.steps += queued_[c.value()].size();
+}
+
+void AdaptiveScheduler::Arrived(const Arrival& a) {
+  cost_.steps += 1;
+  if (a.node == match_.size()) {  // first queued: match it
+    NodeId m = kNoNode;
+    if (predicted_ != nullptr) {
+      const NodeId parent = match_[a.parent];
+      if (parent != kNoNode) m = predicted_->FindChild(parent, a.cell);
+      if (m == kNoNode) {
+        const std::size_t pc = a.parent == 0 ? 0 : std::size_t{node_cell_[a.parent].value()} + 1;
+        m = stand_in_[pc][a.cell.value()];
+      }
+    }
+    match_.push_back(m);
+    node_cell_.push_back(a.cell);
+  }
+  RAYCELL_CHECK_LT(a.node, match_.size());
+  queued_[a.cell.value()].push_back(a.node);
+  const NodeId m = match_[a.node];
+  const std::uint32_t d =
+      m == kNoNode || due_.empty() || due_[m.index()] == kNever ? 0 : due_[m.index()];
+  min_due_[a.cell.value()] = std::min(min_due_[a.cell.value()], d);
+}
+
+void AdaptiveScheduler::Taken(CellId cell) {
+  queued_[cell.value()].clear();
+  min_due_[cell.value()] = kNever;
+}
+
+std::uint32_t AdaptiveScheduler::DueAt(CellId c) const {
+  // Work with no queued node known (a replay that does not tell) is due now.
+  return min_due_[c.value()] == kNever ? 0 : min_due_[c.value()];
+}
+
+std::size_t AdaptiveScheduler::Find(const QueueView& queues) const {
+  for (std::size_t i = cursor_; i < plan_.size(); ++i) {
+    ++cost_.steps;
+    if (!used_[i] && queues.has_work(plan_[i]) && DueAt(plan_[i]) <= i) return i;
+  }
+  return plan_.size();
+}
+
+bool AdaptiveScheduler::PlanAgain(const QueueView& queues) {
+  if (predicted_ == nullptr) return false;
+  // The forest: the queued nodes' matches and their predicted subtrees.
+  const CellTree& t = *predicted_;
+  std::vector<bool> in(t.size(), false);
+  std::vector<NodeId> stack;
+  std::vector<bool> outside(cells_, false);  // cells with work outside the forest
+  for (std::uint32_t c = 0; c < cells_; ++c) {
+    for (std::uint32_t r : queued_[c]) {
+      const NodeId m = match_[r];
+      if (m == kNoNode) {
+        outside[c] = true;
+      } else if (!in[m.index()]) {
+        in[m.index()] = true;
+        stack.push_back(m);
+      }
+    }
+    if (queued_[c].empty() && queues.has_work(CellId(c))) outside[c] = true;
+  }
+  while (!stack.empty()) {
+    const NodeId n = stack.back();
+    stack.pop_back();
+    ++cost_.steps;
+    for (NodeId c = t.first_child(n); c != kNoNode; c = t.next_sibling(c)) {
+      if (!in[c.index()]) {
+        in[c.index()] = true;
+        stack.push_back(c);
+      }
+    }
+  }
+  std::vector<NodeId> nodes;
+  for (NodeId n : t.nodes()) {
+    if (in[n.index()]) nodes.push_back(n);
+  }
+  std::vector<CellId> plan;
+  std::optional<CellTree> forest;
+  if (!nodes.empty()) {
+    forest = SubTree(t, nodes);
+    plan = Peel(*forest).schedule;
+    cost_.steps += forest->size();
+  }
+  for (std::uint32_t c = 0; c < cells_; ++c) {
+    if (outside[c]) plan.push_back(CellId(c));
+  }
+  if (plan.empty()) return false;
+  ++replans_;
+  SetPlan(std::move(plan), forest ? &*forest : nullptr, &nodes);
+  return true;
+}
+
+std::optional<CellId> AdaptiveScheduler::Next(const QueueView& queues) {
+  if (queues.empty()) {
+    last_how_ = 0;
+    return std::nullopt;
+  }
+  ++cost_.decisions;
+  last_how_ = 1;
+  std::size_t found = Find(queues);
+  if (found == plan_.size() && PlanAgain(queues)) {
+    last_how_ = 2;
+    found = Find(queues);
+  }
+  // Entries before the one taken: used up, unless another processor works their cell.
+  for (std::size_t i = cursor_; i < found; ++i) {
+    if (!used_[i] && !queues.busy(plan_[i])) used_[i] = true;
+  }
+  if (found < plan_.size()) used_[found] = true;
+  while (cursor_ < plan_.size() && used_[cursor_]) ++cursor_;
+  if (found < plan_.size()) return plan_[found];
+  last_how_ = 3;
+  return MostQueuedCell(queues);
+}
+
+std::optional<CellId> AdaptiveScheduler::Peek(const QueueView& queues) const {
+  const std::size_t i = Find(queues);
+  return i < plan_.size() ? std::optional<CellId>(plan_[i]) : MostQueuedCell(queues);
+}
+
+std::string AdaptiveScheduler::Reason() const {
+  switch (last_how_) {
+    case 1:
+      return "followed";
+    case 2:
+      return "re-planned";
+    case 3:
+      return "max work";
+    default:
+      return {};
+  }
+}
+
+std::uint64_t AdaptiveScheduler::StateBytes() const {
+  // What a hardware block would keep: per predicted node its cell, parent and due entry (12
+  // bytes); per queued node its match and cell (8); per plan entry its cell (4); per entry of
+  // a cell's list of queued nodes 4.
+  std::uint64_t queued = 0;
+  for (const auto& q : queued_) queued += q.size();
+  return 12 * std::uint64_t(predicted_ ? predicted_->size() : 0) +
+         8 * std::uint64_t(match_.size()) + 4 * std::uint64_t(plan_.size()) + 4 * queued;
+}
+
+void AdaptiveScheduler::CountBytes() {
+  cost_.peak_bytes = std::max(cost_.peak_bytes, StateBytes());
+}
+
+Scheduler::DecisionCost AdaptiveScheduler::Cost() const {
+  DecisionCost c = cost_;
+  c.peak_bytes = std::max(c.peak_bytes, StateBytes());
+  return c;
+}
+
+}  // namespace raycell

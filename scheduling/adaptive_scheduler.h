@@ -1,0 +1,91 @@
+// Adaptive scheduling (issue 24; docs/design.md §5 "Adaptive scheduling"): schedulers that
+// plan frame i+1 from earlier frames, as Cell Tree scheduling does, and then watch frame i+1
+// unfold (Scheduler::Watches) and correct the plan with what they see.
+//
+// `celltree-adaptive` predicts the frame by the union of frames i-1 and i's trees (as
+// `celltree-union`) and follows the best schedule found for it, node by node:
+//  - Each node queued in the frame is matched to the predicted node of the same cell path
+//    (its parent's match, then the child of the same cell). A node on a path the prediction
+//    does not have gets a stand-in: the first predicted node of the same cell whose parent's
+//    cell is its parent's, so that its descendants are matched below the stand-in.
+//  - Running the plan on the predicted tree gives each predicted node the entry that
+//    processes it (its *due* entry). An entry is fetched when its cell has queued work due
+//    there or earlier (late work, work on paths with no match, work of unknown node); an entry
+//    whose cell has work due only at a later entry of the same cell is skipped, so that the
+//    work waits for that entry, which the plan says comes with more of it. An entry whose cell
+//    has no work is skipped as by Cell Tree scheduling; with several processors one whose cell
+//    another processor works is deferred (ScheduleFollower).
+//  - When the plan is used up and work remains (rays on paths the earlier frames did not
+//    have), the rest is planned again: the forest of the queued nodes' matches with their
+//    predicted subtrees, by Peel; cells with work outside that forest come after it. With
+//    nothing to plan, Max Work.
+// Frame 0 runs Max Work; frame 1 predicts from frame 0 alone.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "scheduling/scheduler.h"
+
+namespace raycell {
+
+class AdaptiveScheduler : public Scheduler {
+ public:
+  explicit AdaptiveScheduler(std::uint64_t seed) : seed_(seed) {}
+
+  std::string Name() const override { return "celltree-adaptive"; }
+  void BeginFrame(const FrameInfo& frame) override;
+  std::optional<CellId> Next(const QueueView& queues) override;
+  std::optional<CellId> Peek(const QueueView& queues) const override;
+  std::string Reason() const override;
+  bool Watches() const override { return true; }
+  void Arrived(const Arrival& arrival) override;
+  void Taken(CellId cell) override;
+  DecisionCost Cost() const override;
+
+  // Plans made this frame after the first (re-plans), for tests and benchmarks.
+  std::uint64_t replans() const { return replans_; }
+
+ private:
+  static constexpr std::uint32_t kNever = ~std::uint32_t{0};
+
+  // Sets the plan and the due entry of every predicted node it processes when run on
+  // `planned` (null: none), whose node k + 1 is predicted node (*nodes)[k] (null: the
+  // predicted tree itself).
+  void SetPlan(std::vector<CellId> plan, const CellTree* planned, const std::vector<NodeId>* nodes);
+  // The earliest entry that work queued at `c` is due at (0: due now).
+  std::uint32_t DueAt(CellId c) const;
+  void RecomputeDue(CellId c);
+  // The entry Next would take from the cursor on; plan_.size() when none.
+  std::size_t Find(const QueueView& queues) const;
+  // Plans the queued work again; false when there is nothing to plan.
+  bool PlanAgain(const QueueView& queues);
+  // The bytes of state StateBytes counts now; CountBytes keeps the largest.
+  std::uint64_t StateBytes() const;
+  void CountBytes();
+
+  std::uint64_t seed_;
+  std::uint32_t cells_ = 0;
+  std::optional<CellTree> own_;          // the union of the last two trees, when planned from it
+  const CellTree* predicted_ = nullptr;  // null: no earlier frame (Max Work)
+  std::vector<std::vector<NodeId>> stand_in_;  // per cell of the parent (+1), per cell: a node
+
+  std::vector<CellId> plan_;
+  std::vector<bool> used_;
+  std::size_t cursor_ = 0;
+  std::vector<std::uint32_t> due_;  // per predicted node: its entry in plan_, or kNever
+
+  std::vector<NodeId> match_;      // per queued node (Arrival::node): its prediction
+  std::vector<CellId> node_cell_;  // per queued node: its cell
+  std::vector<std::vector<std::uint32_t>> queued_;  // per cell: nodes queued, not yet taken
+  std::vector<std::uint32_t> min_due_;              // per cell: the least due entry of queued_
+
+  std::uint64_t replans_ = 0;
+  std::uint8_t last_how_ = 0;  // 0 none, 1 followed, 2 re-planned, 3 max work
+  mutable DecisionCost cost_;  // Find counts the entries it scans
+};
+
+}  // namespace raycell

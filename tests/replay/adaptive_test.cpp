@@ -1,0 +1,199 @@
+// Adaptive scheduling (issue 24; scheduling/adaptive_scheduler.h): the scheduler decides only
+// on what the frame has shown so far, follows the predecessor's best schedule at least as
+// well as celltree-best when the frame repeats it, plans again when it runs out, and its cost
+// of deciding is reported and deterministic.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <string>
+#include <vector>
+
+#include "graph/cell_tree.h"
+#include "replay/config.h"
+#include "replay/replayer.h"
+#include "replay/work.h"
+#include "scheduling/adaptive_scheduler.h"
+#include "scheduling/scheduler.h"
+#include "tests/graph/test_trees.h"
+#include "tests/replay/random_frame.h"
+
+namespace raycell {
+namespace {
+
+// Forwards to a scheduler and logs, in order, what it was told ("in ...": queue views,
+// arrivals, queues taken) and what it chose ("out ...").
+class Logged : public Scheduler {
+ public:
+  explicit Logged(std::unique_ptr<Scheduler> s) : s_(std::move(s)) {}
+  std::vector<std::string> log;
+
+  std::string Name() const override { return s_->Name(); }
+  void BeginFrame(const FrameInfo& frame) override {
+    log.push_back("in begin");
+    s_->BeginFrame(frame);
+  }
+  std::optional<CellId> Next(const QueueView& q) override {
+    std::string v = "in view " + std::to_string(q.processor) + ":";
+    for (std::uint32_t c = 0; c < q.cells; ++c) {
+      v += " " + std::to_string(q.queued_rays[c]) + (q.busy(CellId(c)) ? "b" : "");
+    }
+    log.push_back(v);
+    const std::optional<CellId> c = s_->Next(q);
+    log.push_back("out " + (c ? std::to_string(c->value()) : std::string("none")));
+    return c;
+  }
+  bool Watches() const override { return s_->Watches(); }
+  void Arrived(const Arrival& a) override {
+    log.push_back("in arrival " + std::to_string(a.node) + " " + std::to_string(a.parent) + " " +
+                  std::to_string(a.cell.value()) + " " + std::to_string(a.rays));
+    s_->Arrived(a);
+  }
+  void Taken(CellId c) override {
+    log.push_back("in taken " + std::to_string(c.value()));
+    s_->Taken(c);
+  }
+
+ private:
+  std::unique_ptr<Scheduler> s_;
+};
+
+// `rays` with one more visit at the end of ray `r`, to a cell other than its last.
+RayBatch WithOneMoreVisit(const RayBatch& rays, std::size_t r, std::uint32_t cells,
+                          std::mt19937& rng) {
+  RayBatch b(false);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const RayView ray = rays.ray(i);
+    b.BeginRay(ray.kind, ray.parent, ray.spawn, 0, 0);
+    for (std::size_t v = 0; v < ray.visit_count; ++v) {
+      b.AddVisit(ray.cells[v], ray.samples[v], 0, 0);
+    }
+    if (i == r) {
+      CellId next;
+      do next = CellId(std::uint32_t(rng() % cells));
+      while (next == ray.cells[ray.visit_count - 1]);
+      b.AddVisit(next, 1 + std::uint32_t(rng() % 10), 0, 0);
+    }
+  }
+  return b;
+}
+
+std::vector<std::string> RunLogged(const RayBatch& rays, const ReplayConfig& config,
+                                   const FrameInfo& base, std::uint32_t cells) {
+  const CellTree tree = testing::TreeOf(rays);
+  const WorkGraph w = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay
+                          ? RaySegmentWork(rays, cells)
+                          : NodeWork(tree, cells);
+  Logged s(MakeScheduler("celltree-adaptive", config.seed));
+  FrameInfo info = base;
+  info.current = &tree;  // offered, as to every scheduler; a watching one must not get it
+  const std::vector<std::uint64_t> footprints(cells, 50'000);
+  ReplayFrame(w, footprints, config, s, info, Bound(tree));
+  return s.log;
+}
+
+// Two frames that differ only in one ray's extra last visit: until the replay shows the
+// scheduler something different (a view, an arrival, a queue taken), it chooses the same
+// cells. A scheduler that read the frame's future (its own tree, all its rays) would choose
+// differently before that.
+TEST(Adaptive, DecidesOnlyOnWhatTheFrameHasShown) {
+  std::mt19937 rng(24);
+  int compared = 0, decisions_before = 0;
+  for (int trial = 0; trial < 80; ++trial) {
+    const std::uint32_t cells = 2 + rng() % 8;
+    const RayBatch a = testing::RandomReplayFrame(rng, cells, 60);
+    const RayBatch b = WithOneMoreVisit(a, rng() % a.size(), cells, rng);
+    const CellTree previous = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 30));
+    const CellTree before = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 30));
+    ReplayConfig config = DefaultConfig();
+    config.scheduler = &SchedulerByName("celltree-adaptive", "test");
+    config.processors.count = 1 + rng() % 4;
+    if (trial % 2 == 1) config.granularity = ReplayConfig::Granularity::kNode;
+    FrameInfo info{2, nullptr, &previous, cells};
+    if (trial % 3 != 0) info.before_previous = &before;
+    const std::vector<std::string> la = RunLogged(a, config, info, cells),
+                                   lb = RunLogged(b, config, info, cells);
+    std::size_t i = 0;
+    while (i < la.size() && i < lb.size() && la[i] == lb[i]) {
+      decisions_before += la[i].rfind("out ", 0) == 0;
+      ++i;
+    }
+    ASSERT_TRUE(i < la.size() || i < lb.size()) << "trial " << trial << ": same logs";
+    const bool a_out = i < la.size() && la[i].rfind("out ", 0) == 0;
+    const bool b_out = i < lb.size() && lb[i].rfind("out ", 0) == 0;
+    ASSERT_FALSE(a_out && b_out) << "trial " << trial << ": entry " << i << " chose " << la[i]
+                                 << " and " << lb[i] << " on the same information";
+    ++compared;
+  }
+  EXPECT_EQ(compared, 80);
+  EXPECT_GT(decisions_before, 80 * 3);  // the frames share many decisions before they differ
+}
+
+// On a frame equal to its predecessor the adaptive scheduler fetches no more than following
+// the predecessor's best schedule (celltree-best), and has nothing to plan again.
+TEST(Adaptive, AFrameThatRepeatsItsPredecessorCostsNoMoreThanItsBestSchedule) {
+  std::mt19937 rng(2024);
+  int compared = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const std::uint32_t cells = 2 + rng() % 9;
+    const RayBatch rays = testing::RandomReplayFrame(rng, cells, 50);
+    const CellTree tree = testing::TreeOf(rays);
+    ReplayConfig config = DefaultConfig();  // one processor, a one-cell cache
+    if (trial % 2 == 1) config.granularity = ReplayConfig::Granularity::kNode;
+    if (trial % 4 >= 2) config.levels[0].capacity = 2;
+    const WorkGraph w = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay
+                            ? RaySegmentWork(rays, cells)
+                            : NodeWork(tree, cells);
+    const std::vector<std::uint64_t> footprints(cells, 50'000);
+    // The predecessor is the frame itself; the one before it too, or none.
+    const FrameInfo info{2, &tree, &tree, cells, trial % 3 == 0 ? nullptr : &tree};
+    config.scheduler = &SchedulerByName("celltree-best", "test");
+    auto best = MakeScheduler(*config.scheduler, config.seed);
+    const ReplayResult follow = ReplayFrame(w, footprints, config, *best, info, Bound(tree));
+    config.scheduler = &SchedulerByName("celltree-adaptive", "test");
+    AdaptiveScheduler adaptive(config.seed);
+    const ReplayResult r = ReplayFrame(w, footprints, config, adaptive, info, Bound(tree));
+    EXPECT_LE(r.fetches, follow.fetches) << "trial " << trial;
+    EXPECT_EQ(adaptive.replans(), 0u) << "trial " << trial;
+    ++compared;
+  }
+  EXPECT_EQ(compared, 60);
+}
+
+// Frames unlike their predecessors: the plan runs out and the rest is planned again; every
+// ray, segment and sample is processed once (also for several processors: balance_test), and
+// the choices and their counted cost are the same on every run.
+TEST(Adaptive, PlansAgainWhenThePredictionRunsOutAndIsDeterministic) {
+  std::mt19937 rng(7);
+  std::uint64_t replans = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const std::uint32_t cells = 2 + rng() % 9;
+    const RayBatch rays = testing::RandomReplayFrame(rng, cells, 80);
+    const CellTree tree = testing::TreeOf(rays);
+    const CellTree previous = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 30));
+    ReplayConfig config = DefaultConfig();
+    config.scheduler = &SchedulerByName("celltree-adaptive", "test");
+    config.processors.count = 1 + rng() % 3;
+    const WorkGraph w = RaySegmentWork(rays, cells);
+    const std::vector<std::uint64_t> footprints(cells, 50'000);
+    const FrameInfo info{1, &tree, &previous, cells};
+    AdaptiveScheduler s1(config.seed), s2(config.seed);
+    const ReplayResult a = ReplayFrame(w, footprints, config, s1, info, Bound(tree));
+    const ReplayResult b = ReplayFrame(w, footprints, config, s2, info, Bound(tree));
+    EXPECT_EQ(a.samples, w.totals.samples);
+    EXPECT_EQ(a.segments, rays.visit_count());
+    EXPECT_EQ(a.fetches, b.fetches);
+    EXPECT_EQ(a.time, b.time);
+    EXPECT_EQ(a.decisions, b.decisions);
+    EXPECT_EQ(a.decision_steps, b.decision_steps);
+    EXPECT_EQ(a.scheduler_bytes, b.scheduler_bytes);
+    EXPECT_EQ(s1.replans(), s2.replans());
+    EXPECT_GE(a.decisions, a.fetches);  // each fetch was a decision
+    EXPECT_GT(a.decision_steps, 0u);
+    EXPECT_GT(a.scheduler_bytes, 0u);
+    replans += s1.replans();
+  }
+  EXPECT_GT(replans, 100u);  // the random predecessors leave work for a second plan often
+}
+
+}  // namespace
+}  // namespace raycell
