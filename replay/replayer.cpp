@@ -155,6 +155,36 @@ UnitPaths PathsOf(const Units& u, std::size_t units) {
   return p;
 }
 
+// What the board tells a scheduler that watches (Scheduler::Arrived, Taken). The board is a
+// template on it: NoWatch, for every other scheduler, is empty and does nothing, so that their
+// replay core is the same code as if watching did not exist.
+struct NoWatch {
+  void Queued(UnitId, CellId, std::uint64_t) {}
+  void Taken(CellId) {}
+};
+
+class Watch {
+ public:
+  Watch(const UnitPaths& paths, Scheduler& scheduler)
+      : paths_(&paths), scheduler_(&scheduler), revealed_(paths.parent.size(), 0) {}
+  // Unit x was queued at c: the scheduler is told its node, numbered as first queued.
+  void Queued(UnitId x, CellId c, std::uint64_t q) {
+    const std::uint32_t path = paths_->of_unit[x];
+    std::uint32_t& id = revealed_[path];
+    if (id == 0) id = ++count_;
+    const std::uint32_t parent = paths_->parent[path];
+    RAYCELL_CHECK(parent == 0 || revealed_[parent] != 0);  // a parent is queued before
+    scheduler_->Arrived({id, revealed_[parent], c, q});
+  }
+  void Taken(CellId c) { scheduler_->Taken(c); }
+
+ private:
+  const UnitPaths* paths_;
+  Scheduler* scheduler_;
+  std::vector<std::uint32_t> revealed_;  // per path: its number as told (0: not queued yet)
+  std::uint32_t count_ = 0;
+};
+
 // ---- Pending events -------------------------------------------------------------------
 // Each processor has at most one pending event: the end of its fetch, of its unit, or its
 // call for a cell (and none while it waits for work). So the pending set is the engine's
@@ -181,15 +211,14 @@ struct Processor {
 // worked by its own loop iteration, without a queue push and pop: while a processor works
 // the queued units of a cell, its next unit's end is compared with the other processors'
 // pending events only.
-template <typename Units>
+template <typename Units, typename W>
 class Board {
  public:
   using Entry = typename Units::Entry;
 
   Board(const WorkGraph& w, Units graph_units, const std::vector<std::uint64_t>& footprints,
         const ReplayConfig& config, Scheduler& scheduler, const MemoryHierarchy::Requests& futures,
-        const MemoryState& start, ReplayObserver* observer, const MemoryUnits* units,
-        const UnitPaths* paths)
+        const MemoryState& start, ReplayObserver* observer, const MemoryUnits* units, W watch)
       : w_(w),
         u_(graph_units),
         config_(config),
@@ -204,14 +233,17 @@ class Board {
         processors_(config.processors.count),
         slots_(config.processors.count),
         obs_(observer),
-        paths_(paths) {
-    if (paths_) revealed_.assign(paths_->parent.size(), 0);
+        watch_(std::move(watch)) {
     u_.ForEachRoot(
         [this](const Entry& e, CellId c, std::uint64_t q, UnitId x) { Enqueue(e, c, q, x); });
     memory_.set_observer(obs_);
   }
 
-  void Run(std::size_t frame_index) {
+  // Flattened: every call inside is inlined into this one loop, so that GCC's limits on a
+  // function's growth never leave the core's small steps (SlotQueue::Update, WorkNext) out of
+  // line, whatever surrounds the loop (they did by a few per cent when the board grew a
+  // template parameter, 4% more instructions and 15-20% less speed).
+  [[gnu::noinline, gnu::flatten]] void Run(std::size_t frame_index) {
     if (obs_) obs_->BeginRun(frame_index, queued_rays_);
     for (std::uint32_t p = 0; p < processors_.size(); ++p) {
       Schedule(p, SimTime::Zero(), Kind::kIdle);
@@ -265,7 +297,7 @@ class Board {
   void Schedule(std::uint32_t p, SimTime when, Kind kind) { slots_.Schedule(p, when, kind); }
 
   void Enqueue(const Entry& e, CellId c, std::uint64_t q, UnitId x) {
-    if (paths_) Reveal(x, c, q);
+    watch_.Queued(x, c, q);
     queues_[c.value()].push_back(e);
     const bool starts = (queued_rays_[c.value()] == 0) & (q != 0);
     available_ += starts & (open_[c.value()] != 0);
@@ -273,16 +305,6 @@ class Board {
     queued_rays_[c.value()] += q;
     queued_total_ += q;
     peak_queued_ = std::max(peak_queued_, queued_total_);
-  }
-
-  // Tells a watching scheduler the node of unit x, queued at c (Scheduler::Arrival).
-  void Reveal(UnitId x, CellId c, std::uint64_t q) {
-    const std::uint32_t path = paths_->of_unit[x];
-    std::uint32_t& id = revealed_[path];
-    if (id == 0) id = ++revealed_count_;
-    const std::uint32_t parent = paths_->parent[path];
-    RAYCELL_CHECK(parent == 0 || revealed_[parent] != 0);  // a parent is queued before
-    scheduler_.Arrived({id, revealed_[parent], c, q});
   }
 
   // The queues a scheduler may choose from: cells being worked are not available.
@@ -339,7 +361,8 @@ class Board {
     std::vector<Entry>& q = queues_[c.value()];
     if (q.empty()) return;
     if (obs_) obs_->QueueTaken(p, c, queued_rays_[c.value()], now_);
-    if (paths_) scheduler_.Taken(c);
+    watch_.Taken(c);
+
     joinable_ -= queued_rays_[c.value()] != 0;
     queued_total_ -= queued_rays_[c.value()];
     queued_rays_[c.value()] = 0;
@@ -480,16 +503,12 @@ class Board {
   SimTime now_;
   std::uint64_t events_ = 0, events_since_progress_ = 0;
   std::uint64_t done_ = 0, queued_total_ = 0, peak_queued_ = 0;
-  ReplayObserver* obs_;  // null: nothing observes (replay/observer.h)
-  // A watching scheduler's paths (null: the scheduler does not watch), and per path its
-  // number as the scheduler knows it (0: not queued yet).
-  const UnitPaths* paths_ = nullptr;
-  std::vector<std::uint32_t> revealed_;
-  std::uint32_t revealed_count_ = 0;
+  ReplayObserver* obs_;            // null: nothing observes (replay/observer.h)
+  [[no_unique_address]] W watch_;  // NoWatch, or what a watching scheduler is told
 };
 
-template <typename Units>
-ReplayResult Board<Units>::Result() const {
+template <typename Units, typename W>
+ReplayResult Board<Units, W>::Result() const {
   RAYCELL_CHECK_EQ(done_, std::uint64_t(w_.size()));
   ReplayResult r;
   r.levels = memory_.stats();
@@ -519,11 +538,13 @@ bool NeedsFuture(const ReplayConfig& config) {
   return false;
 }
 
-template <typename Units>
+// `make_watch()` gives each run's W (NoWatch, or Watch for a scheduler that watches).
+template <typename Units, typename W, typename MakeWatch>
 ReplayResult Replay(const WorkGraph& work, Units graph_units,
                     const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
                     Scheduler& scheduler, const FrameInfo& frame, std::uint64_t bound,
-                    ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units) {
+                    ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units,
+                    MakeWatch make_watch) {
   static const MemoryState kEmpty;
   const MemoryState& start = memory ? *memory : kEmpty;
   const std::vector<double> fetch_samples = FetchSamples(config, footprints);
@@ -531,11 +552,7 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
   info.fetch_samples = &fetch_samples;
   info.processors = config.processors.count;
   // A scheduler that watches the frame unfold learns it only from what is queued.
-  std::optional<UnitPaths> paths;
-  if (scheduler.Watches()) {
-    paths = PathsOf(graph_units, work.size());
-    info.current = nullptr;
-  }
+  if (scheduler.Watches()) info.current = nullptr;
   if (units != nullptr) {
     for (const LevelUnits& level : *units) {
       if (!level.identity()) {
@@ -549,8 +566,8 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
   MemoryHierarchy::Requests futures;
   for (std::uint32_t pass = 1;; ++pass) {
     scheduler.BeginFrame(info);
-    Board<Units> board(work, graph_units, footprints, config, scheduler, futures, start, observer,
-                       units, paths ? &*paths : nullptr);
+    Board<Units, W> board(work, graph_units, footprints, config, scheduler, futures, start,
+                          observer, units, make_watch());
     board.Run(frame.frame_index);
     const bool converged = pass > 1 && !board.memory().diverged();
     if (!min || converged || pass == max_passes) {
@@ -575,6 +592,21 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
     }
     futures = board.memory().requests();
   }
+}
+
+// Replay with the board's W chosen by whether the scheduler watches.
+template <typename Units>
+ReplayResult Replay(const WorkGraph& work, Units graph_units,
+                    const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
+                    Scheduler& scheduler, const FrameInfo& frame, std::uint64_t bound,
+                    ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units) {
+  if (!scheduler.Watches()) {
+    return Replay<Units, NoWatch>(work, graph_units, footprints, config, scheduler, frame, bound,
+                                  observer, memory, units, [] { return NoWatch{}; });
+  }
+  const UnitPaths paths = PathsOf(graph_units, work.size());
+  return Replay<Units, Watch>(work, graph_units, footprints, config, scheduler, frame, bound,
+                              observer, memory, units, [&] { return Watch(paths, scheduler); });
 }
 
 }  // namespace

@@ -17,6 +17,7 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
     predicted_ = &*own_;
   }
   match_.assign(1, predicted_ != nullptr ? kRootNode : kNoNode);
+  guess_.assign(1, false);
   node_cell_.assign(1, kNoCell);
   queued_.assign(cells_, {});
   min_due_.assign(cells_, kNever);
@@ -68,6 +69,8 @@ void AdaptiveScheduler::SetPlan(std::vector<CellId> plan, const CellTree* planne
   plan_ = std::move(plan);
   used_.assign(plan_.size(), false);
   cursor_ = 0;
+  remaining_.assign(cells_, 0);
+  for (CellId c : plan_) ++remaining_[c.value()];
   for (std::uint32_t c = 0; c < cells_; ++c) RecomputeDue(CellId(c));
   CountBytes();
 }
@@ -86,14 +89,17 @@ void AdaptiveScheduler::Arrived(const Arrival& a) {
   cost_.steps += 1;
   if (a.node == match_.size()) {  // first queued: match it
     NodeId m = kNoNode;
+    bool guess = guess_[a.parent];  // a match below a stand-in is a guess too
     if (predicted_ != nullptr) {
       const NodeId parent = match_[a.parent];
       if (parent != kNoNode) m = predicted_->FindChild(parent, a.cell);
       if (m == kNoNode) {
         const std::size_t pc = a.parent == 0 ? 0 : std::size_t{node_cell_[a.parent].value()} + 1;
         m = stand_in_[pc][a.cell.value()];
+        guess = true;
       }
     }
+    guess_.push_back(guess);
     match_.push_back(m);
     node_cell_.push_back(a.cell);
   }
@@ -133,7 +139,7 @@ bool AdaptiveScheduler::PlanAgain(const QueueView& queues) {
   for (std::uint32_t c = 0; c < cells_; ++c) {
     for (std::uint32_t r : queued_[c]) {
       const NodeId m = match_[r];
-      if (m == kNoNode) {
+      if (m == kNoNode || guess_[r]) {  // a guessed subtree is not worth planning for
         outside[c] = true;
       } else if (!in[m.index()]) {
         in[m.index()] = true;
@@ -179,6 +185,11 @@ std::optional<CellId> AdaptiveScheduler::Next(const QueueView& queues) {
     return std::nullopt;
   }
   ++cost_.decisions;
+  // An orphan first: work in a cell that no entry left in the plan fetches.
+  if (const std::optional<CellId> orphan = Orphan(queues)) {
+    last_how_ = 4;
+    return orphan;
+  }
   last_how_ = 1;
   std::size_t found = Find(queues);
   if (found == plan_.size() && PlanAgain(queues)) {
@@ -187,16 +198,36 @@ std::optional<CellId> AdaptiveScheduler::Next(const QueueView& queues) {
   }
   // Entries before the one taken: used up, unless another processor works their cell.
   for (std::size_t i = cursor_; i < found; ++i) {
-    if (!used_[i] && !queues.busy(plan_[i])) used_[i] = true;
+    if (!used_[i] && !queues.busy(plan_[i])) Use(i);
   }
-  if (found < plan_.size()) used_[found] = true;
+  if (found < plan_.size()) Use(found);
   while (cursor_ < plan_.size() && used_[cursor_]) ++cursor_;
   if (found < plan_.size()) return plan_[found];
   last_how_ = 3;
   return MostQueuedCell(queues);
 }
 
+void AdaptiveScheduler::Use(std::size_t i) {
+  used_[i] = true;
+  --remaining_[plan_[i].value()];
+}
+
+std::optional<CellId> AdaptiveScheduler::Orphan(const QueueView& queues) const {
+  if (cursor_ == plan_.size()) return std::nullopt;  // the plan is used up: planned again
+  std::optional<CellId> orphan;
+  std::uint64_t most = 0;
+  for (std::uint32_t c = 0; c < cells_; ++c) {
+    ++cost_.steps;
+    if (remaining_[c] == 0 && queues.queued(CellId(c)) > most) {
+      most = queues.queued(CellId(c));
+      orphan = CellId(c);
+    }
+  }
+  return orphan;
+}
+
 std::optional<CellId> AdaptiveScheduler::Peek(const QueueView& queues) const {
+  if (const std::optional<CellId> orphan = Orphan(queues)) return orphan;
   const std::size_t i = Find(queues);
   return i < plan_.size() ? std::optional<CellId>(plan_[i]) : MostQueuedCell(queues);
 }
@@ -209,6 +240,8 @@ std::string AdaptiveScheduler::Reason() const {
       return "re-planned";
     case 3:
       return "max work";
+    case 4:
+      return "orphan";
     default:
       return {};
   }

@@ -15,9 +15,14 @@
 //    work waits for that entry, which the plan says comes with more of it. An entry whose cell
 //    has no work is skipped as by Cell Tree scheduling; with several processors one whose cell
 //    another processor works is deferred (ScheduleFollower).
-//  - When the plan is used up and work remains (rays on paths the earlier frames did not
-//    have), the rest is planned again: the forest of the queued nodes' matches with their
-//    predicted subtrees, by Peel; cells with work outside that forest come after it. With
+//  - Work in a cell that no entry left in the plan fetches (an *orphan*: rays on a path the
+//    earlier frames did not have, arriving after the plan is done with their cell) is fetched
+//    first, the orphan cell with the most queued rays, so that the rays it sends on may still
+//    meet the entries left; waiting for the plan's end, they would each need fetches of their
+//    own (BENCHMARKS.md "Online against the oracle").
+//  - When the plan is used up and work remains, the rest is planned again: the forest of the
+//    queued nodes matched by path (not through a stand-in, whose subtree is a guess) with their
+//    predicted subtrees, by Peel; cells with other work come after it, in cell order. With
 //    nothing to plan, Max Work.
 // Frame 0 runs Max Work; frame 1 predicts from frame 0 alone.
 #pragma once
@@ -61,6 +66,11 @@ class AdaptiveScheduler : public Scheduler {
   void RecomputeDue(CellId c);
   // The entry Next would take from the cursor on; plan_.size() when none.
   std::size_t Find(const QueueView& queues) const;
+  // Marks entry i used up.
+  void Use(std::size_t i);
+  // The cell with the most queued rays in view among those no entry left in the plan fetches
+  // (lowest number on ties); none when there is none or the plan is used up.
+  std::optional<CellId> Orphan(const QueueView& queues) const;
   // Plans the queued work again; false when there is nothing to plan.
   bool PlanAgain(const QueueView& queues);
   // The bytes of state StateBytes counts now; CountBytes keeps the largest.
@@ -75,16 +85,18 @@ class AdaptiveScheduler : public Scheduler {
 
   std::vector<CellId> plan_;
   std::vector<bool> used_;
+  std::vector<std::uint32_t> remaining_;  // per cell: entries of plan_ not used up
   std::size_t cursor_ = 0;
   std::vector<std::uint32_t> due_;  // per predicted node: its entry in plan_, or kNever
 
   std::vector<NodeId> match_;      // per queued node (Arrival::node): its prediction
+  std::vector<bool> guess_;        // per queued node: matched through a stand-in
   std::vector<CellId> node_cell_;  // per queued node: its cell
   std::vector<std::vector<std::uint32_t>> queued_;  // per cell: nodes queued, not yet taken
   std::vector<std::uint32_t> min_due_;              // per cell: the least due entry of queued_
 
   std::uint64_t replans_ = 0;
-  std::uint8_t last_how_ = 0;  // 0 none, 1 followed, 2 re-planned, 3 max work
+  std::uint8_t last_how_ = 0;  // 0 none, 1 followed, 2 re-planned, 3 max work, 4 orphan
   mutable DecisionCost cost_;  // Find counts the entries it scans
 };
 

@@ -209,8 +209,8 @@ const std::vector<SchedulerEntry>& SchedulerRegistry() {
       // Adaptive scheduling (adaptive_scheduler.h): they watch the frame unfold.
       {"celltree-adaptive",
        "celltree-union followed node by node as the frame unfolds: work waits for the entry "
-       "its predicted node is due at, and the rest is planned again by Peel when the plan "
-       "runs out",
+       "its predicted node is due at, work the plan is done with is fetched at once, and the "
+       "rest is planned again by Peel when the plan runs out",
        "Cell Tree, adaptive",
        [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
          return std::make_unique<AdaptiveScheduler>(seed);

@@ -159,6 +159,36 @@ TEST(Adaptive, AFrameThatRepeatsItsPredecessorCostsNoMoreThanItsBestSchedule) {
   EXPECT_EQ(compared, 60);
 }
 
+// Hand-worked: the prediction has paths A and B, the frame also C. C's work is an orphan (no
+// entry of the plan fetches C), fetched first so that its rays may still meet the plan; then
+// the plan, A and B in its order.
+TEST(Adaptive, AnOrphanIsFetchedBeforeThePlanGoesOn) {
+  constexpr CellId A{0}, B{1}, C{2};
+  const CellTree previous = testing::FromPaths({{A}, {B}});
+  AdaptiveScheduler s(1);
+  s.BeginFrame(FrameInfo{1, nullptr, &previous, 3});
+  s.Arrived({1, 0, A, 2});
+  s.Arrived({2, 0, B, 2});
+  s.Arrived({3, 0, C, 1});
+  std::vector<std::uint64_t> queued = {2, 2, 1};
+  EXPECT_EQ(s.Peek(QueueView::Of(queued)), C);
+  EXPECT_EQ(s.Next(QueueView::Of(queued)), C);
+  EXPECT_EQ(s.Reason(), "orphan");
+  s.Taken(C);
+  queued[2] = 0;
+  const std::optional<CellId> first = s.Next(QueueView::Of(queued));
+  ASSERT_TRUE(first == A || first == B);
+  EXPECT_EQ(s.Reason(), "followed");
+  s.Taken(*first);
+  queued[first->value()] = 0;
+  const CellId second = *first == A ? B : A;
+  EXPECT_EQ(s.Next(QueueView::Of(queued)), second);
+  s.Taken(second);
+  queued[second.value()] = 0;
+  EXPECT_EQ(s.Next(QueueView::Of(queued)), std::nullopt);
+  EXPECT_EQ(s.Cost().decisions, 3u);
+}
+
 // Frames unlike their predecessors: the plan runs out and the rest is planned again; every
 // ray, segment and sample is processed once (also for several processors: balance_test), and
 // the choices and their counted cost are the same on every run.
