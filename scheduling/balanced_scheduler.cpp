@@ -9,7 +9,9 @@
 namespace raycell {
 
 BalancedScheduler::BalancedScheduler(std::string name, BalanceOptions options, std::uint64_t seed)
-    : name_(std::move(name)), options_(options), seed_(seed) {}
+    : name_(std::move(name)), options_(options), seed_(seed) {
+  if (options_.adaptive) adaptive_ = std::make_unique<AdaptiveScheduler>(seed);
+}
 
 void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
   cells_ = frame.cells;
@@ -17,6 +19,7 @@ void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
   reason_.clear();
   plan_.clear();
   if (options_.plan && frame.previous != nullptr) plan_ = PlanFor(*frame.previous, seed_);
+  if (adaptive_) adaptive_->BeginFrame(frame);
   // What frame i-1's tree says of each cell: its work, samples per visit, where rays go next.
   work_.assign(cells_, 0.0);
   samples_per_visit_.assign(cells_, 0.0);
@@ -104,8 +107,9 @@ std::optional<CellId> BalancedScheduler::Best(const QueueView& queues, const std
 }
 
 std::optional<CellId> BalancedScheduler::Choose(const QueueView& queues,
-                                                ScheduleFollower** follower) const {
+                                                ScheduleFollower** follower, bool* adaptive) const {
   *follower = nullptr;
+  *adaptive = false;
   // Affinity: the cell in the processor's cache, when it has work, costs no fetch.
   if (options_.affinity && queues.loaded) {
     if (Queued(queues)[queues.loaded->value()] > 0) return queues.loaded;
@@ -114,7 +118,13 @@ std::optional<CellId> BalancedScheduler::Choose(const QueueView& queues,
       followers_.size() > 1 ? std::min<std::uint32_t>(queues.processor, followers_.size() - 1) : 0;
   const QueueView own = Own(queues);
   const auto mine = [&](std::uint32_t c) { return followers_.size() <= 1 || owner_[c] == k; };
-  if (options_.plan) {
+  if (adaptive_) {
+    // The adaptive rule's choice among the cells in view.
+    if (const std::optional<CellId> c = adaptive_->Peek(queues)) {
+      *adaptive = true;
+      return c;
+    }
+  } else if (options_.plan) {
     // Follower k's next entry with work in view, or Max Work over k's cells.
     const std::optional<CellId> c = followers_[k].Peek(own);
     if (c) {
@@ -156,13 +166,15 @@ bool BalancedScheduler::NoWork(const QueueView& queues) const {
 std::optional<CellId> BalancedScheduler::Peek(const QueueView& queues) const {
   if (NoWork(queues)) return std::nullopt;
   ScheduleFollower* follower = nullptr;
-  return Choose(queues, &follower);
+  bool adaptive = false;
+  return Choose(queues, &follower, &adaptive);
 }
 
 std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
   if (NoWork(queues)) return std::nullopt;
   ScheduleFollower* follower = nullptr;
-  std::optional<CellId> c = Choose(queues, &follower);
+  bool adaptive = false;
+  std::optional<CellId> c = Choose(queues, &follower, &adaptive);
   RAYCELL_CHECK(c.has_value());
   reason_ = follower ? follower->Reason() : "max work";
   // Postpone only while every other processor is working (at most one waits by choice), and
@@ -179,7 +191,13 @@ std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
     reason_.clear();
     return std::nullopt;  // postponed: wait for released work
   }
-  if (follower) {
+  if (adaptive) {
+    // The rule decides now (it may plan the rest again when its plan is used up, and then
+    // choose otherwise than it peeked): its choice is taken.
+    c = adaptive_->Next(queues);
+    RAYCELL_CHECK(c.has_value());
+    reason_ = adaptive_->Reason();
+  } else if (follower) {
     const std::optional<CellId> taken = follower->Next(Own(queues));
     RAYCELL_CHECK(taken == c);
     reason_ = follower->Reason();

@@ -26,16 +26,21 @@
 //    it is large enough, else the processor waits for released work (Scheduler::Next).
 //    Aila and Karras's postponing of rays until queues fill, as a rule on batch size; at
 //    most one processor waits by choice, so the tails of frames are not serialised.
+//  - adaptive: instead of following celltree-best's plan, ask celltree-adaptive
+//    (adaptive_scheduler.h), which watches the frame unfold: issue 24's adaptive rule with
+//    this class's affinity, sharing and postponing around it (`balanced-adaptive`).
 // With one processor nothing is busy, shared, stolen or postponed, the cached cell never has
 // work when the processor asks, and the one partition is the whole plan: `partition`,
 // `partition-steal` and `balanced` then choose exactly as celltree-best (a test).
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "scheduling/adaptive_scheduler.h"
 #include "scheduling/scheduler.h"
 
 namespace raycell {
@@ -47,6 +52,7 @@ struct BalanceOptions {
   bool affinity = false;
   bool postpone = false;
   bool share = false;
+  bool adaptive = false;
 };
 
 // A batch is postponed when its estimated work is below this many fetch times.
@@ -64,11 +70,20 @@ class BalancedScheduler : public Scheduler {
   std::optional<CellId> Next(const QueueView& queues) override;
   std::optional<CellId> Peek(const QueueView& queues) const override;
   std::string Reason() const override { return reason_; }
+  bool Watches() const override { return adaptive_ != nullptr; }
+  void Arrived(const Arrival& arrival) override {
+    if (adaptive_) adaptive_->Arrived(arrival);
+  }
+  void Taken(CellId cell) override {
+    if (adaptive_) adaptive_->Taken(cell);
+  }
+  DecisionCost Cost() const override { return adaptive_ ? adaptive_->Cost() : DecisionCost{}; }
 
  private:
   // The choice for `queues` without the postponing rule, and the follower it came from (null:
-  // not a plan entry).
-  std::optional<CellId> Choose(const QueueView& queues, ScheduleFollower** follower) const;
+  // not a plan entry) or whether the adaptive rule chose it.
+  std::optional<CellId> Choose(const QueueView& queues, ScheduleFollower** follower,
+                               bool* adaptive) const;
   // The queued rays this scheduler may choose from: every cell's with share, else the view's.
   const std::uint64_t* Queued(const QueueView& queues) const;
   // `queues` with the cells of other processors masked out (partition), in own_.
@@ -99,6 +114,7 @@ class BalancedScheduler : public Scheduler {
   std::vector<ScheduleFollower> followers_;
   mutable std::vector<std::uint64_t> own_;  // scratch for Own()
   std::string reason_;
+  std::unique_ptr<AdaptiveScheduler> adaptive_;  // options_.adaptive
 };
 
 }  // namespace raycell

@@ -207,6 +207,17 @@ const std::vector<SchedulerEntry>& SchedulerRegistry() {
        },
        1, true, true, false, false},
       // Adaptive scheduling (adaptive_scheduler.h): they watch the frame unfold.
+      {"balanced-adaptive",
+       "balanced with celltree-adaptive's rule in place of celltree-best's plan: the cached "
+       "cell first, then the adaptive choice, joining busy cells and postponing small batches "
+       "as balanced does",
+       "Balanced, adaptive",
+       [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+         return std::make_unique<BalancedScheduler>(
+             "balanced-adaptive", BalanceOptions{false, false, false, true, true, true, true},
+             seed);
+       },
+       2, true, true, false, false},
       {"celltree-adaptive",
        "celltree-union followed node by node as the frame unfolds: work waits for the entry "
        "its predicted node is due at, work the plan is done with is fetched at once, and the "

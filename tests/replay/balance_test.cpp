@@ -16,9 +16,10 @@
 namespace raycell {
 namespace {
 
-// With the adaptive scheduler (issue 24), which must work with any number of processors too.
+// With the adaptive schedulers (issue 24), which must work with any number of processors too.
 const char* const kBalancing[] = {
-    "affinity", "partition", "steal", "partition-steal", "share", "balanced", "celltree-adaptive"};
+    "affinity",          "partition",        "steal", "partition-steal", "share", "balanced",
+    "celltree-adaptive", "balanced-adaptive"};
 
 std::string Describe(const ReplayResult& r) {
   std::ostringstream s;
@@ -105,6 +106,8 @@ TEST(Balance, OneProcessorFollowsThePlanAsCellTreeBest) {
     for (const char* name : {"partition", "partition-steal", "balanced"}) {
       EXPECT_EQ(replay(name), reference) << name << " trial " << trial;
     }
+    // And the adaptive combination as the adaptive rule alone.
+    EXPECT_EQ(replay("balanced-adaptive"), replay("celltree-adaptive")) << "trial " << trial;
   }
 }
 

@@ -390,7 +390,7 @@ TEST(MakeSchedulerTest, EveryNameRoundTrips) {
     ASSERT_NE(s, nullptr);
     EXPECT_EQ(s->Name(), name);
   }
-  EXPECT_EQ(SchedulerNames().size(), 17u);
+  EXPECT_EQ(SchedulerNames().size(), 18u);
   EXPECT_NE(dynamic_cast<RandomScheduler*>(MakeScheduler("random", 99).get()), nullptr);
   EXPECT_EQ(dynamic_cast<RandomScheduler&>(*MakeScheduler("random", 99)).seed(), 99u);
 }
@@ -403,8 +403,8 @@ TEST(MakeSchedulerTest, UnknownNameListsTheValidOnes) {
     EXPECT_STREQ(e.what(),
                  "scheduler: unknown scheduler 'MaxWork' (expected maxwork, roundrobin, random, "
                  "peel, celltree, best, celltree-best, celltree-union, affinity, partition, steal, "
-                 "partition-steal, share, balanced, celltree-2level, celltree-2level-best or "
-                 "celltree-adaptive)");
+                 "partition-steal, share, balanced, celltree-2level, celltree-2level-best, "
+                 "balanced-adaptive or celltree-adaptive)");
   }
   EXPECT_THROW(MakeScheduler("", 0), InputError);
 }
