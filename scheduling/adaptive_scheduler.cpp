@@ -32,12 +32,9 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   if (predicted_ == nullptr) return;
   // Stand-ins: per (parent's cell, cell) the first predicted node with those cells.
   const CellTree& t = *predicted_;
-  stand_in_.assign(std::size_t{cells_} + 1, std::vector<NodeId>(cells_, kNoNode));
   for (NodeId n : t.nodes()) {
     const NodeId parent = t.parent(n);
-    const std::size_t pc = parent == kRootNode ? 0 : std::size_t{t.cell(parent).value()} + 1;
-    NodeId& s = stand_in_[pc][t.cell(n).value()];
-    if (s == kNoNode) s = n;
+    stand_in_.try_emplace(StandInKey(parent == kRootNode ? kNoCell : t.cell(parent), t.cell(n)), n);
   }
   cost_.steps += t.size();
   SetPlan(PlanFor(t, seed_), &t, nullptr);
@@ -94,8 +91,8 @@ void AdaptiveScheduler::Arrived(const Arrival& a) {
       const NodeId parent = match_[a.parent];
       if (parent != kNoNode) m = predicted_->FindChild(parent, a.cell);
       if (m == kNoNode) {
-        const std::size_t pc = a.parent == 0 ? 0 : std::size_t{node_cell_[a.parent].value()} + 1;
-        m = stand_in_[pc][a.cell.value()];
+        const auto it = stand_in_.find(StandInKey(node_cell_[a.parent], a.cell));
+        m = it == stand_in_.end() ? kNoNode : it->second;
         guess = true;
       }
     }

@@ -31,6 +31,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "scheduling/scheduler.h"
@@ -81,7 +82,12 @@ class AdaptiveScheduler : public Scheduler {
   std::uint32_t cells_ = 0;
   std::optional<CellTree> own_;          // the union of the last two trees, when planned from it
   const CellTree* predicted_ = nullptr;  // null: no earlier frame (Max Work)
-  std::vector<std::vector<NodeId>> stand_in_;  // per cell of the parent (+1), per cell: a node
+  // Stand-ins: per (parent's cell, cell), kNoCell for the root's, the first predicted node
+  // with those cells (a map: a grid may have millions of cells, and few pairs occur).
+  static std::uint64_t StandInKey(CellId parent, CellId cell) {
+    return std::uint64_t{parent.value()} << 32 | cell.value();
+  }
+  std::unordered_map<std::uint64_t, NodeId> stand_in_;
 
   std::vector<CellId> plan_;
   std::vector<bool> used_;
