@@ -8,6 +8,26 @@
 
 namespace raycell {
 
+StandIns StandInsOf(const CellTree& tree) {
+  StandIns s;
+  for (NodeId n : tree.nodes()) {
+    const NodeId parent = tree.parent(n);
+    s.try_emplace(StandInKey(parent == kRootNode ? kNoCell : tree.cell(parent), tree.cell(n)), n);
+  }
+  return s;
+}
+
+NodeId MatchNode(const CellTree& tree, const StandIns& stand_ins, NodeId parent, CellId parent_cell,
+                 CellId cell, bool* stand_in) {
+  if (parent != kNoNode) {
+    const NodeId m = tree.FindChild(parent, cell);
+    if (m != kNoNode) return m;
+  }
+  *stand_in = true;
+  const auto it = stand_ins.find(StandInKey(parent_cell, cell));
+  return it == stand_ins.end() ? kNoNode : it->second;
+}
+
 void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   cells_ = frame.cells;
   own_.reset();
@@ -30,12 +50,8 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   cursor_ = 0;
   due_.clear();
   if (predicted_ == nullptr) return;
-  // Stand-ins: per (parent's cell, cell) the first predicted node with those cells.
   const CellTree& t = *predicted_;
-  for (NodeId n : t.nodes()) {
-    const NodeId parent = t.parent(n);
-    stand_in_.try_emplace(StandInKey(parent == kRootNode ? kNoCell : t.cell(parent), t.cell(n)), n);
-  }
+  stand_in_ = StandInsOf(t);
   cost_.steps += t.size();
   SetPlan(PlanFor(t, seed_), &t, nullptr);
 }
@@ -88,13 +104,10 @@ void AdaptiveScheduler::Arrived(const Arrival& a) {
     NodeId m = kNoNode;
     bool guess = guess_[a.parent];  // a match below a stand-in is a guess too
     if (predicted_ != nullptr) {
-      const NodeId parent = match_[a.parent];
-      if (parent != kNoNode) m = predicted_->FindChild(parent, a.cell);
-      if (m == kNoNode) {
-        const auto it = stand_in_.find(StandInKey(node_cell_[a.parent], a.cell));
-        m = it == stand_in_.end() ? kNoNode : it->second;
-        guess = true;
-      }
+      bool stand_in = false;
+      m = MatchNode(*predicted_, stand_in_, match_[a.parent], node_cell_[a.parent], a.cell,
+                    &stand_in);
+      guess = guess || stand_in;
     }
     guess_.push_back(guess);
     match_.push_back(m);

@@ -38,6 +38,20 @@
 
 namespace raycell {
 
+// Stand-ins for nodes on paths a predicted tree lacks: per (parent's cell, cell), kNoCell for
+// the root's, the first node of the tree with those cells (a map: a grid may have millions of
+// cells, and few pairs occur).
+using StandIns = std::unordered_map<std::uint64_t, NodeId>;
+inline std::uint64_t StandInKey(CellId parent, CellId cell) {
+  return std::uint64_t{parent.value()} << 32 | cell.value();
+}
+StandIns StandInsOf(const CellTree& tree);
+// The node of `tree` matching a queued node of `cell` whose parent matched `parent` (kNoNode:
+// no match) in `parent_cell`: the parent's child of that cell, else the stand-in (then
+// *stand_in is set), else kNoNode.
+NodeId MatchNode(const CellTree& tree, const StandIns& stand_ins, NodeId parent, CellId parent_cell,
+                 CellId cell, bool* stand_in);
+
 class AdaptiveScheduler : public Scheduler {
  public:
   explicit AdaptiveScheduler(std::uint64_t seed) : seed_(seed) {}
@@ -82,12 +96,8 @@ class AdaptiveScheduler : public Scheduler {
   std::uint32_t cells_ = 0;
   std::optional<CellTree> own_;          // the union of the last two trees, when planned from it
   const CellTree* predicted_ = nullptr;  // null: no earlier frame (Max Work)
-  // Stand-ins: per (parent's cell, cell), kNoCell for the root's, the first predicted node
-  // with those cells (a map: a grid may have millions of cells, and few pairs occur).
-  static std::uint64_t StandInKey(CellId parent, CellId cell) {
-    return std::uint64_t{parent.value()} << 32 | cell.value();
-  }
-  std::unordered_map<std::uint64_t, NodeId> stand_in_;
+  // Stand-ins of the predicted tree.
+  StandIns stand_in_;
 
   std::vector<CellId> plan_;
   std::vector<bool> used_;

@@ -71,6 +71,82 @@ void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
   std::vector<std::vector<CellId>> parts(p);
   for (const CellId c : plan_) parts[owner_[c.value()]].push_back(c);
   for (std::uint32_t k = 0; k < p; ++k) followers_[k].Reset(std::move(parts[k]), cells_);
+  if (options_.critical) {
+    previous_ = frame.previous;
+    match_.assign(1, previous_ != nullptr ? kRootNode : kNoNode);
+    node_cell_.assign(1, kNoCell);
+    level_.assign(cells_, 0);
+    cost_ = {};
+    height_.clear();
+    stand_in_.clear();
+    if (previous_ != nullptr) SetHeights(*previous_);
+  }
+}
+
+void BalancedScheduler::SetHeights(const CellTree& t) {
+  // A node's children are numbered after it, so one pass from the last node up.
+  height_.assign(t.size(), 0);
+  for (std::size_t i = t.size(); i-- > 1;) {
+    const NodeId n(static_cast<std::uint32_t>(i));
+    height_[i] += 1;
+    const NodeId parent = t.parent(n);
+    height_[parent.index()] = std::max(height_[parent.index()], height_[i]);
+  }
+  stand_in_ = StandInsOf(t);
+  cost_.steps += 2 * t.size();
+}
+
+void BalancedScheduler::Arrived(const Arrival& a) {
+  if (adaptive_) adaptive_->Arrived(a);
+  if (!options_.critical) return;
+  cost_.steps += 1;
+  if (a.node == match_.size()) {  // first queued: match it
+    NodeId m = kNoNode;
+    if (previous_ != nullptr) {
+      bool stand_in = false;
+      m = MatchNode(*previous_, stand_in_, match_[a.parent], node_cell_[a.parent], a.cell,
+                    &stand_in);
+    }
+    match_.push_back(m);
+    node_cell_.push_back(a.cell);
+    cost_.peak_bytes = std::max(cost_.peak_bytes, Bytes());
+  }
+  RAYCELL_CHECK_LT(a.node, match_.size());
+  const NodeId m = match_[a.node];
+  if (m != kNoNode) level_[a.cell.value()] = std::max(level_[a.cell.value()], height_[m.index()]);
+}
+
+void BalancedScheduler::Taken(CellId cell) {
+  if (adaptive_) adaptive_->Taken(cell);
+  if (options_.critical) level_[cell.value()] = 0;
+}
+
+std::uint64_t BalancedScheduler::Bytes() const {
+  // As a hardware block would keep it: per node of frame i-1's tree its height (4 bytes), per
+  // queued node its match and cell (8), per cell its level (4).
+  return 4 * std::uint64_t{height_.size()} + 8 * std::uint64_t{match_.size()} +
+         4 * std::uint64_t{level_.size()};
+}
+
+Scheduler::DecisionCost BalancedScheduler::Cost() const {
+  if (adaptive_) return adaptive_->Cost();
+  return cost_;
+}
+
+std::optional<CellId> BalancedScheduler::Critical(const QueueView& queues,
+                                                  std::optional<CellId> plan) const {
+  cost_.steps += queues.cells;
+  std::optional<CellId> best;
+  for (std::uint32_t c = 0; c < queues.cells; ++c) {
+    const std::uint64_t q = queues.queued_rays[c];
+    if (q == 0) continue;
+    if (!best || level_[c] > level_[best->value()] ||
+        (level_[c] == level_[best->value()] && q > queues.queued_rays[best->value()])) {
+      best = CellId(c);
+    }
+  }
+  if (best && plan && level_[best->value()] <= level_[plan->value()]) return std::nullopt;
+  return best;
 }
 
 const std::uint64_t* BalancedScheduler::Queued(const QueueView& queues) const {
@@ -127,6 +203,9 @@ std::optional<CellId> BalancedScheduler::Choose(const QueueView& queues,
   } else if (options_.plan) {
     // Follower k's next entry with work in view, or Max Work over k's cells.
     const std::optional<CellId> c = followers_[k].Peek(own);
+    if (options_.critical && queues.processors > 1 && previous_ != nullptr) {
+      if (const std::optional<CellId> first = Critical(queues, c)) return first;
+    }
     if (c) {
       *follower = const_cast<ScheduleFollower*>(&followers_[k]);
       return c;
@@ -191,6 +270,7 @@ std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
     reason_.clear();
     return std::nullopt;  // postponed: wait for released work
   }
+  if (options_.critical) ++cost_.decisions;
   if (adaptive) {
     // The rule decides now (it may plan the rest again when its plan is used up, and then
     // choose otherwise than it peeked): its choice is taken.

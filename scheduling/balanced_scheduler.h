@@ -29,6 +29,15 @@
 //  - adaptive: instead of following celltree-best's plan, ask celltree-adaptive
 //    (adaptive_scheduler.h), which watches the frame unfold: issue 24's adaptive rule with
 //    this class's affinity, sharing and postponing around it (`balanced-adaptive`).
+//  - critical: with several processors, the free cell whose queued work starts the longest
+//    predicted chain first (Hu's highest-level-first list scheduling): the scheduler watches
+//    the frame (Scheduler::Watches), matches each queued node to frame i-1's node of the same
+//    cell path (else the first node with the same parent's cell and cell, as
+//    celltree-adaptive's stand-ins), and a cell's level is the largest height (nodes on the
+//    longest path down to a leaf, itself included) of its queued nodes' matches. The plan's
+//    entry is taken when no free cell's level is higher. The tails of frames are chains of
+//    fetches for a few rays on deep paths; started earlier, they overlap the bulk of the work
+//    (`balanced-critical`).
 // With one processor nothing is busy, shared, stolen or postponed, the cached cell never has
 // work when the processor asks, and the one partition is the whole plan: `partition`,
 // `partition-steal` and `balanced` then choose exactly as celltree-best (a test).
@@ -38,6 +47,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "scheduling/adaptive_scheduler.h"
@@ -53,6 +63,7 @@ struct BalanceOptions {
   bool postpone = false;
   bool share = false;
   bool adaptive = false;
+  bool critical = false;
 };
 
 // A batch is postponed when its estimated work is below this many fetch times.
@@ -70,14 +81,10 @@ class BalancedScheduler : public Scheduler {
   std::optional<CellId> Next(const QueueView& queues) override;
   std::optional<CellId> Peek(const QueueView& queues) const override;
   std::string Reason() const override { return reason_; }
-  bool Watches() const override { return adaptive_ != nullptr; }
-  void Arrived(const Arrival& arrival) override {
-    if (adaptive_) adaptive_->Arrived(arrival);
-  }
-  void Taken(CellId cell) override {
-    if (adaptive_) adaptive_->Taken(cell);
-  }
-  DecisionCost Cost() const override { return adaptive_ ? adaptive_->Cost() : DecisionCost{}; }
+  bool Watches() const override { return adaptive_ != nullptr || options_.critical; }
+  void Arrived(const Arrival& arrival) override;
+  void Taken(CellId cell) override;
+  DecisionCost Cost() const override;
 
  private:
   // The choice for `queues` without the postponing rule, and the follower it came from (null:
@@ -96,6 +103,13 @@ class BalancedScheduler : public Scheduler {
   bool NoWork(const QueueView& queues) const;
   // Whether a batch of `c` is too small to fetch while others work.
   bool TooSmall(const QueueView& queues, CellId c) const;
+  // Critical: the free cell in view with the highest level, when it is higher than the level
+  // of `plan` (the plan's choice; none: any); ties to the most queued rays, then the lowest
+  // number.
+  std::optional<CellId> Critical(const QueueView& queues, std::optional<CellId> plan) const;
+  void SetHeights(const CellTree& previous);
+  // The bytes of the critical rule's state now (DecisionCost::bytes keeps the largest).
+  std::uint64_t Bytes() const;
 
   std::string name_;
   BalanceOptions options_;
@@ -115,6 +129,16 @@ class BalancedScheduler : public Scheduler {
   mutable std::vector<std::uint64_t> own_;  // scratch for Own()
   std::string reason_;
   std::unique_ptr<AdaptiveScheduler> adaptive_;  // options_.adaptive
+  // Critical (options_.critical): per node of frame i-1's tree its height; per (parent's cell,
+  // cell) the first node with those cells (StandInKey); per queued node (Arrival::node) its
+  // match (kNoNode: none) and cell; per cell the highest level of its queued nodes (0: none).
+  const CellTree* previous_ = nullptr;
+  std::vector<std::uint32_t> height_;
+  std::unordered_map<std::uint64_t, NodeId> stand_in_;
+  std::vector<NodeId> match_;
+  std::vector<CellId> node_cell_;
+  std::vector<std::uint32_t> level_;
+  mutable DecisionCost cost_;  // the critical rule's own
 };
 
 }  // namespace raycell

@@ -207,6 +207,17 @@ const std::vector<SchedulerEntry>& SchedulerRegistry() {
        },
        1, true, true, false, false},
       // Adaptive scheduling (adaptive_scheduler.h): they watch the frame unfold.
+      {"balanced-critical",
+       "balanced, with the free cell whose queued rays start the longest chain in frame i's "
+       "tree first (highest level first, each queued node matched by its cell path) when it is "
+       "longer than the plan's",
+       "Balanced, critical path first",
+       [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+         BalanceOptions o{true, false, false, true, true, true};
+         o.critical = true;
+         return std::make_unique<BalancedScheduler>("balanced-critical", o, seed);
+       },
+       1, true, true, false, false},
       {"balanced-adaptive",
        "balanced with celltree-adaptive's rule in place of celltree-best's plan: the cached "
        "cell first, then the adaptive choice, joining busy cells and postponing small batches "

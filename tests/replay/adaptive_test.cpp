@@ -83,7 +83,7 @@ std::vector<std::string> RunLogged(const RayBatch& rays, const ReplayConfig& con
   const WorkGraph w = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay
                           ? RaySegmentWork(rays, cells)
                           : NodeWork(tree, cells);
-  Logged s(MakeScheduler("celltree-adaptive", config.seed));
+  Logged s(MakeScheduler(*config.scheduler, config.seed));
   FrameInfo info = base;
   info.current = &tree;  // offered, as to every scheduler; a watching one must not get it
   const std::vector<std::uint64_t> footprints(cells, 50'000);
@@ -94,19 +94,22 @@ std::vector<std::string> RunLogged(const RayBatch& rays, const ReplayConfig& con
 // Two frames that differ only in one ray's extra last visit: until the replay shows the
 // scheduler something different (a view, an arrival, a queue taken), it chooses the same
 // cells. A scheduler that read the frame's future (its own tree, all its rays) would choose
-// differently before that.
+// differently before that. Both watching schedulers: celltree-adaptive on 1-4 processors,
+// balanced-critical (whose rule acts only with several) on 2-8.
 TEST(Adaptive, DecidesOnlyOnWhatTheFrameHasShown) {
   std::mt19937 rng(24);
   int compared = 0, decisions_before = 0;
-  for (int trial = 0; trial < 40; ++trial) {
+  for (int trial = 0; trial < 60; ++trial) {
     const std::uint32_t cells = 2 + rng() % 8;
     const RayBatch a = testing::RandomReplayFrame(rng, cells, 60);
     const RayBatch b = WithOneMoreVisit(a, rng() % a.size(), cells, rng);
     const CellTree previous = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 30));
     const CellTree before = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 30));
     ReplayConfig config = DefaultConfig();
-    config.scheduler = &SchedulerByName("celltree-adaptive", "test");
-    config.processors.count = 1 + rng() % 4;
+    const bool critical = trial / 2 % 2 == 1;
+    config.scheduler =
+        &SchedulerByName(critical ? "balanced-critical" : "celltree-adaptive", "test");
+    config.processors.count = critical ? 2 + rng() % 7 : 1 + rng() % 4;
     if (trial % 2 == 1) config.granularity = ReplayConfig::Granularity::kNode;
     FrameInfo info{2, nullptr, &previous, cells};
     if (trial % 3 != 0) info.before_previous = &before;
@@ -124,8 +127,8 @@ TEST(Adaptive, DecidesOnlyOnWhatTheFrameHasShown) {
                                  << " and " << lb[i] << " on the same information";
     ++compared;
   }
-  EXPECT_EQ(compared, 40);
-  EXPECT_GT(decisions_before, 40 * 3);  // the frames share many decisions before they differ
+  EXPECT_EQ(compared, 60);
+  EXPECT_GT(decisions_before, 60 * 3);  // the frames share many decisions before they differ
 }
 
 // On a frame equal to its predecessor the adaptive scheduler fetches no more than following

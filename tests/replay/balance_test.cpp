@@ -16,10 +16,16 @@
 namespace raycell {
 namespace {
 
-// With the adaptive schedulers (issue 24), which must work with any number of processors too.
-const char* const kBalancing[] = {
-    "affinity",          "partition",        "steal", "partition-steal", "share", "balanced",
-    "celltree-adaptive", "balanced-adaptive"};
+// With the watching schedulers (issue 24), which must work with any number of processors too.
+const char* const kBalancing[] = {"affinity",
+                                  "partition",
+                                  "steal",
+                                  "partition-steal",
+                                  "share",
+                                  "balanced",
+                                  "balanced-critical",
+                                  "celltree-adaptive",
+                                  "balanced-adaptive"};
 
 std::string Describe(const ReplayResult& r) {
   std::ostringstream s;
@@ -103,7 +109,7 @@ TEST(Balance, OneProcessorFollowsThePlanAsCellTreeBest) {
       return Describe(ReplayFrame(w, footprints, config, *s, info, Bound(tree)));
     };
     const std::string reference = replay("celltree-best");
-    for (const char* name : {"partition", "partition-steal", "balanced"}) {
+    for (const char* name : {"partition", "partition-steal", "balanced", "balanced-critical"}) {
       EXPECT_EQ(replay(name), reference) << name << " trial " << trial;
     }
     // And the adaptive combination as the adaptive rule alone.
@@ -144,6 +150,44 @@ TEST(Balance, ASharingProcessorJoinsBusyCellsHandWorked) {
   EXPECT_EQ(share.fetches, 4u);
   EXPECT_EQ(share.time, SimTime::Picoseconds(102'080'000));
   EXPECT_EQ(share.samples, maxwork.samples);
+}
+
+// balanced-critical's rule, hand-worked. Frame i-1: one ray A B, one ray B C D; its only
+// shortest plan is A B C D (A must precede B for the first ray, B C D follow), so `balanced`
+// fetches A first. The queued node of A matches frame i-1's node A (height 2: A, B), that of B
+// the node B (height 3: B, C, D): with two processors balanced-critical starts the longer chain,
+// B; with one it follows the plan as celltree-best. Once B's queue is taken, B's level is that
+// of the work queued there since.
+TEST(Balance, CriticalStartsTheLongestPredictedChainHandWorked) {
+  constexpr CellId A{0}, B{1}, C{2}, D{3};
+  const CellTree previous =
+      testing::TreeOf(testing::RaysOf({{kNoParent, 0, {A, B}}, {kNoParent, 0, {B, C, D}}}, 10));
+  std::vector<std::uint64_t> queued = {10, 1, 0, 0};
+  for (const std::uint32_t p : {1u, 2u}) {
+    for (const char* name : {"balanced", "balanced-critical"}) {
+      auto s = MakeScheduler(name, 1);
+      FrameInfo info{1, nullptr, &previous, 4};
+      info.processors = p;
+      s->BeginFrame(info);
+      s->Arrived({1, 0, A, 10});
+      s->Arrived({2, 0, B, 1});
+      QueueView v = QueueView::Of(queued);
+      v.processors = p;
+      const bool critical = p > 1 && std::string(name) == "balanced-critical";
+      EXPECT_EQ(s->Next(v), critical ? B : A) << name << " P" << p;
+      if (critical) {
+        // B's queue taken, then a ray of A's node enters B: frame i-1's node A B, height 1,
+        // below A's 2.
+        s->Taken(B);
+        s->Arrived({3, 1, B, 1});
+        std::vector<std::uint64_t> left = {10, 1, 0, 0};
+        QueueView w = QueueView::Of(left);
+        w.processors = p;
+        EXPECT_EQ(s->Next(w), A);
+        EXPECT_GT(s->Cost().decisions, 0u);
+      }
+    }
+  }
 }
 
 }  // namespace

@@ -226,7 +226,7 @@ TEST(LoadConfig, BadUnitsAndValuesNameFileAndLine) {
             "replay.toml:1:13: scheduler: unknown scheduler 'fastest' (expected maxwork, "
             "roundrobin, random, peel, celltree, best, celltree-best, celltree-union, affinity, "
             "partition, steal, partition-steal, share, balanced, celltree-2level, "
-            "celltree-2level-best, balanced-adaptive or celltree-adaptive)");
+            "celltree-2level-best, balanced-critical, balanced-adaptive or celltree-adaptive)");
   EXPECT_EQ(
       LoadError("granularity = \"cell\"\n"),
       "replay.toml:1:15: granularity: unknown granularity 'cell' (expected ray, node or auto)");
@@ -406,7 +406,7 @@ TEST(ApplyOverride, ErrorsNameTheKeyAndLeaveTheConfigUnchanged) {
             "override 'scheduler': unknown scheduler 'fastest' (expected maxwork, roundrobin, "
             "random, peel, celltree, best, celltree-best, celltree-union, affinity, partition, "
             "steal, partition-steal, share, balanced, celltree-2level, "
-            "celltree-2level-best, balanced-adaptive or celltree-adaptive)");
+            "celltree-2level-best, balanced-critical, balanced-adaptive or celltree-adaptive)");
   EXPECT_EQ(c, DefaultConfig());
 }
 

@@ -201,7 +201,8 @@ TEST_F(DriverTest, TheSeedIsKeptForEverySchedulerThatUsesIt) {
     const bool seeded = s == "random" || s == "best" || s == "celltree-best" ||
                         s == "celltree-union" || s == "partition" || s == "partition-steal" ||
                         s == "balanced" || s == "celltree-2level-best" ||
-                        s == "celltree-adaptive" || s == "balanced-adaptive";
+                        s == "celltree-adaptive" || s == "balanced-adaptive" ||
+                        s == "balanced-critical";
     ReplayConfig a = Config(s.c_str(), 1), b = a;
     a.seed = 7, b.seed = 8;
     EXPECT_EQ(CanonicalConfig(a).seed, seeded ? 7u : 0u) << s;

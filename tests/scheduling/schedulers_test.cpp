@@ -390,7 +390,7 @@ TEST(MakeSchedulerTest, EveryNameRoundTrips) {
     ASSERT_NE(s, nullptr);
     EXPECT_EQ(s->Name(), name);
   }
-  EXPECT_EQ(SchedulerNames().size(), 18u);
+  EXPECT_EQ(SchedulerNames().size(), 19u);
   EXPECT_NE(dynamic_cast<RandomScheduler*>(MakeScheduler("random", 99).get()), nullptr);
   EXPECT_EQ(dynamic_cast<RandomScheduler&>(*MakeScheduler("random", 99)).seed(), 99u);
 }
@@ -404,7 +404,7 @@ TEST(MakeSchedulerTest, UnknownNameListsTheValidOnes) {
                  "scheduler: unknown scheduler 'MaxWork' (expected maxwork, roundrobin, random, "
                  "peel, celltree, best, celltree-best, celltree-union, affinity, partition, steal, "
                  "partition-steal, share, balanced, celltree-2level, celltree-2level-best, "
-                 "balanced-adaptive or celltree-adaptive)");
+                 "balanced-critical, balanced-adaptive or celltree-adaptive)");
   }
   EXPECT_THROW(MakeScheduler("", 0), InputError);
 }
