@@ -41,6 +41,8 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   node_cell_.assign(1, kNoCell);
   queued_.assign(cells_, {});
   min_due_.assign(cells_, kNever);
+  depth_.assign(1, 0);
+  min_depth_.assign(cells_, kNever);
   replans_ = 0;
   last_how_ = 0;
   cost_ = {};
@@ -110,6 +112,7 @@ void AdaptiveScheduler::Arrived(const Arrival& a) {
       guess = guess || stand_in;
     }
     guess_.push_back(guess);
+    depth_.push_back(depth_[a.parent] + 1);
     match_.push_back(m);
     node_cell_.push_back(a.cell);
   }
@@ -119,11 +122,13 @@ void AdaptiveScheduler::Arrived(const Arrival& a) {
   const std::uint32_t d =
       m == kNoNode || due_.empty() || due_[m.index()] == kNever ? 0 : due_[m.index()];
   min_due_[a.cell.value()] = std::min(min_due_[a.cell.value()], d);
+  min_depth_[a.cell.value()] = std::min(min_depth_[a.cell.value()], depth_[a.node]);
 }
 
 void AdaptiveScheduler::Taken(CellId cell) {
   queued_[cell.value()].clear();
   min_due_[cell.value()] = kNever;
+  min_depth_[cell.value()] = kNever;
 }
 
 std::uint32_t AdaptiveScheduler::DueAt(CellId c) const {
@@ -195,6 +200,10 @@ std::optional<CellId> AdaptiveScheduler::Next(const QueueView& queues) {
     return std::nullopt;
   }
   ++cost_.decisions;
+  if (predicted_ == nullptr) {  // no earlier frame
+    last_how_ = 5;
+    return Shallowest(queues);
+  }
   // An orphan first: work in a cell that no entry left in the plan fetches.
   if (const std::optional<CellId> orphan = Orphan(queues)) {
     last_how_ = 4;
@@ -217,6 +226,20 @@ std::optional<CellId> AdaptiveScheduler::Next(const QueueView& queues) {
   return MostQueuedCell(queues);
 }
 
+std::optional<CellId> AdaptiveScheduler::Shallowest(const QueueView& queues) const {
+  std::optional<CellId> best;
+  for (std::uint32_t c = 0; c < cells_; ++c) {
+    ++cost_.steps;
+    const std::uint64_t q = queues.queued(CellId(c));
+    if (q == 0) continue;
+    if (!best || min_depth_[c] < min_depth_[best->value()] ||
+        (min_depth_[c] == min_depth_[best->value()] && q > queues.queued(*best))) {
+      best = CellId(c);
+    }
+  }
+  return best;
+}
+
 void AdaptiveScheduler::Use(std::size_t i) {
   used_[i] = true;
   --remaining_[plan_[i].value()];
@@ -237,6 +260,7 @@ std::optional<CellId> AdaptiveScheduler::Orphan(const QueueView& queues) const {
 }
 
 std::optional<CellId> AdaptiveScheduler::Peek(const QueueView& queues) const {
+  if (predicted_ == nullptr) return Shallowest(queues);
   if (const std::optional<CellId> orphan = Orphan(queues)) return orphan;
   const std::size_t i = Find(queues);
   return i < plan_.size() ? std::optional<CellId>(plan_[i]) : MostQueuedCell(queues);
@@ -250,6 +274,8 @@ std::string AdaptiveScheduler::Reason() const {
       return "re-planned";
     case 3:
       return "max work";
+    case 5:
+      return "shallowest first (no earlier frame)";
     case 4:
       return "orphan";
     default:
@@ -259,12 +285,12 @@ std::string AdaptiveScheduler::Reason() const {
 
 std::uint64_t AdaptiveScheduler::StateBytes() const {
   // What a hardware block would keep: per predicted node its cell, parent and due entry (12
-  // bytes); per queued node its match and cell (8); per plan entry its cell (4); per entry of
-  // a cell's list of queued nodes 4.
+  // bytes); per queued node its match, cell and depth (12); per plan entry its cell (4); per
+  // entry of a cell's list of queued nodes 4.
   std::uint64_t queued = 0;
   for (const auto& q : queued_) queued += q.size();
   return 12 * std::uint64_t(predicted_ ? predicted_->size() : 0) +
-         8 * std::uint64_t(match_.size()) + 4 * std::uint64_t(plan_.size()) + 4 * queued;
+         12 * std::uint64_t(match_.size()) + 4 * std::uint64_t(plan_.size()) + 4 * queued;
 }
 
 void AdaptiveScheduler::CountBytes() {

@@ -24,7 +24,10 @@
 //    queued nodes matched by path (not through a stand-in, whose subtree is a guess) with their
 //    predicted subtrees, by Peel; cells with other work come after it, in cell order. With
 //    nothing to plan, Max Work.
-// Frame 0 runs Max Work; frame 1 predicts from frame 0 alone.
+// Frame 0, with no earlier frame, takes the shallowest queued work first: the cell whose queued
+// nodes include the least depth in the tree (the root's children 1), the most queued rays on
+// ties, so that deeper work gathers while the shallower is done (Max Work fetches 19% more
+// there: BENCHMARKS.md "Online against the oracle"). Frame 1 predicts from frame 0 alone.
 #pragma once
 
 #include <cstdint>
@@ -86,6 +89,9 @@ class AdaptiveScheduler : public Scheduler {
   // The cell with the most queued rays in view among those no entry left in the plan fetches
   // (lowest number on ties); none when there is none or the plan is used up.
   std::optional<CellId> Orphan(const QueueView& queues) const;
+  // The cell with the shallowest queued work in view (lowest min_depth_, then the most queued
+  // rays, then the lowest number); none when no cell has work.
+  std::optional<CellId> Shallowest(const QueueView& queues) const;
   // Plans the queued work again; false when there is nothing to plan.
   bool PlanAgain(const QueueView& queues);
   // The bytes of state StateBytes counts now; CountBytes keeps the largest.
@@ -110,9 +116,12 @@ class AdaptiveScheduler : public Scheduler {
   std::vector<CellId> node_cell_;  // per queued node: its cell
   std::vector<std::vector<std::uint32_t>> queued_;  // per cell: nodes queued, not yet taken
   std::vector<std::uint32_t> min_due_;              // per cell: the least due entry of queued_
+  std::vector<std::uint32_t> depth_;      // per queued node: its depth (the root's children 1)
+  std::vector<std::uint32_t> min_depth_;  // per cell: the least depth of queued_
 
   std::uint64_t replans_ = 0;
-  std::uint8_t last_how_ = 0;  // 0 none, 1 followed, 2 re-planned, 3 max work, 4 orphan
+  // 0 none, 1 followed, 2 re-planned, 3 max work, 4 orphan, 5 shallowest (no earlier frame)
+  std::uint8_t last_how_ = 0;
   mutable DecisionCost cost_;  // Find counts the entries it scans
 };
 

@@ -113,6 +113,7 @@ TEST(Adaptive, DecidesOnlyOnWhatTheFrameHasShown) {
     if (trial % 2 == 1) config.granularity = ReplayConfig::Granularity::kNode;
     FrameInfo info{2, nullptr, &previous, cells};
     if (trial % 3 != 0) info.before_previous = &before;
+    if (trial % 8 == 4) info = FrameInfo{0, nullptr, nullptr, cells};  // frame 0: no history
     const std::vector<std::string> la = RunLogged(a, config, info, cells),
                                    lb = RunLogged(b, config, info, cells);
     std::size_t i = 0;
@@ -129,6 +130,42 @@ TEST(Adaptive, DecidesOnlyOnWhatTheFrameHasShown) {
   }
   EXPECT_EQ(compared, 60);
   EXPECT_GT(decisions_before, 60 * 3);  // the frames share many decisions before they differ
+}
+
+// Frame 0, hand-worked: no earlier frame, so the shallowest queued work goes first. C's node
+// (depth 1) was taken and sent 100 rays to A (depth 2); B holds 5 rays of depth 1 and D 9 rays
+// of depth 1: Max Work would take A; the rule takes D (depth 1, more rays than B), then B (D's
+// new work is of depth 3), then A, then D. One processor and eight alike.
+TEST(Adaptive, FrameZeroTakesTheShallowestWorkFirstHandWorked) {
+  constexpr CellId A{0}, B{1}, C{2}, D{3};
+  for (const std::uint32_t p : {1u, 8u}) {
+    auto s = MakeScheduler("celltree-adaptive", 1);
+    FrameInfo info{0, nullptr, nullptr, 4};
+    info.processors = p;
+    s->BeginFrame(info);
+    s->Arrived({1, 0, C, 1});
+    s->Taken(C);
+    s->Arrived({2, 1, A, 100});
+    s->Arrived({3, 0, B, 5});
+    s->Arrived({4, 0, D, 9});
+    std::vector<std::uint64_t> queued = {100, 5, 0, 9};
+    QueueView v = QueueView::Of(queued);
+    v.processors = p;
+    EXPECT_EQ(MostQueuedCell(v), A);  // what Max Work takes
+    EXPECT_EQ(s->Peek(v), D) << p;
+    EXPECT_EQ(s->Next(v), D) << p;
+    s->Taken(D);
+    s->Arrived({5, 2, D, 50});  // a ray of A's node sent to D: depth 3
+    queued[D.value()] = 50;
+    EXPECT_EQ(s->Next(v), B) << p;
+    s->Taken(B);
+    queued[B.value()] = 0;
+    EXPECT_EQ(s->Next(v), A) << p;
+    s->Taken(A);
+    queued[A.value()] = 0;
+    EXPECT_EQ(s->Next(v), D) << p;
+    EXPECT_EQ(s->Cost().decisions, 4u);
+  }
 }
 
 // On a frame equal to its predecessor the adaptive scheduler fetches no more than following
