@@ -43,9 +43,11 @@ def plot_fetches(folder, cells):
     for key, label, style in [("maxwork", "Max Work", "o-"), ("celltree", "Cell Tree", "s-"),
                               ("celltree-best", "Cell Tree, best of frame i", "D-"),
                               ("celltree-union", "Cell Tree, best of frames i-1, i", "v-"),
+                              ("celltree-adaptive", "Cell Tree, adaptive", "P-"),
                               ("peel", "Peel oracle", "^:"), ("best", "best oracle", "x:"),
                               ("bound", "maxGen bound", "k--")]:
-        ax.plot(frames, [int(r[key]) for r in rows], style, label=label, markersize=4)
+        if key in rows[0]:  # (a study folder written before the scheduler existed lacks it)
+            ax.plot(frames, [int(r[key]) for r in rows], style, label=label, markersize=4)
     save_fetches_plot(fig, ax, f"Fetches per frame, {cells} cells", f"{folder}/fetches_{cells}.png")
 
 
