@@ -183,9 +183,11 @@ std::optional<CellId> BalancedScheduler::Best(const QueueView& queues, const std
 }
 
 std::optional<CellId> BalancedScheduler::Choose(const QueueView& queues,
-                                                ScheduleFollower** follower, bool* adaptive) const {
+                                                ScheduleFollower** follower, bool* adaptive,
+                                                bool* critical) const {
   *follower = nullptr;
   *adaptive = false;
+  *critical = false;
   // Affinity: the cell in the processor's cache, when it has work, costs no fetch.
   if (options_.affinity && queues.loaded) {
     if (Queued(queues)[queues.loaded->value()] > 0) return queues.loaded;
@@ -204,7 +206,10 @@ std::optional<CellId> BalancedScheduler::Choose(const QueueView& queues,
     // Follower k's next entry with work in view, or Max Work over k's cells.
     const std::optional<CellId> c = followers_[k].Peek(own);
     if (options_.critical && queues.processors > 1 && previous_ != nullptr) {
-      if (const std::optional<CellId> first = Critical(queues, c)) return first;
+      if (const std::optional<CellId> first = Critical(queues, c)) {
+        *critical = true;
+        return first;
+      }
     }
     if (c) {
       *follower = const_cast<ScheduleFollower*>(&followers_[k]);
@@ -245,17 +250,17 @@ bool BalancedScheduler::NoWork(const QueueView& queues) const {
 std::optional<CellId> BalancedScheduler::Peek(const QueueView& queues) const {
   if (NoWork(queues)) return std::nullopt;
   ScheduleFollower* follower = nullptr;
-  bool adaptive = false;
-  return Choose(queues, &follower, &adaptive);
+  bool adaptive = false, critical = false;
+  return Choose(queues, &follower, &adaptive, &critical);
 }
 
 std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
   if (NoWork(queues)) return std::nullopt;
   ScheduleFollower* follower = nullptr;
-  bool adaptive = false;
-  std::optional<CellId> c = Choose(queues, &follower, &adaptive);
+  bool adaptive = false, critical = false;
+  std::optional<CellId> c = Choose(queues, &follower, &adaptive, &critical);
   RAYCELL_CHECK(c.has_value());
-  reason_ = follower ? follower->Reason() : "max work";
+  reason_ = follower ? follower->Reason() : critical ? "critical path first" : "max work";
   // Postpone only while every other processor is working (at most one waits by choice), and
   // only on boards of kPostponeMinProcessors or more, where one waiting processor is a small
   // part of the whole.

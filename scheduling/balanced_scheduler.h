@@ -88,9 +88,9 @@ class BalancedScheduler : public Scheduler {
 
  private:
   // The choice for `queues` without the postponing rule, and the follower it came from (null:
-  // not a plan entry) or whether the adaptive rule chose it.
-  std::optional<CellId> Choose(const QueueView& queues, ScheduleFollower** follower,
-                               bool* adaptive) const;
+  // not a plan entry) or whether the adaptive rule or the critical rule chose it.
+  std::optional<CellId> Choose(const QueueView& queues, ScheduleFollower** follower, bool* adaptive,
+                               bool* critical) const;
   // The queued rays this scheduler may choose from: every cell's with share, else the view's.
   const std::uint64_t* Queued(const QueueView& queues) const;
   // `queues` with the cells of other processors masked out (partition), in own_.

@@ -175,6 +175,7 @@ TEST(Balance, CriticalStartsTheLongestPredictedChainHandWorked) {
       v.processors = p;
       const bool critical = p > 1 && std::string(name) == "balanced-critical";
       EXPECT_EQ(s->Next(v), critical ? B : A) << name << " P" << p;
+      EXPECT_EQ(s->Reason() == "critical path first", critical) << name << " P" << p;
       if (critical) {
         // B's queue taken, then a ray of A's node enters B: frame i-1's node A B, height 1,
         // below A's 2.
