@@ -111,9 +111,11 @@ SimTime LinkCost(const LevelConfig& level, std::uint64_t bytes) {
   return level.latency_below + level.bandwidth_below.TransferTime(bytes);
 }
 
+// (b), and in `below_caches` the sum over the links below level 0 that (d) adds to the work.
 SimTime LinksTerm(const std::vector<std::uint8_t>& used,
                   const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
-                  const std::vector<std::vector<bool>>* held, const MemoryUnits* units) {
+                  const std::vector<std::vector<bool>>* held, const MemoryUnits* units,
+                  unsigned __int128* below_caches_out) {
   const std::size_t cells = used.size();
   const bool given = units != nullptr && !units->empty();
   // nearer[c]: some copy of a level nearer than the one at hand holds c's unit at the start.
@@ -140,6 +142,7 @@ SimTime LinksTerm(const std::vector<std::uint8_t>& used,
       if (need[c]) below_caches += LinkCost(config.levels[0], footprints[c]).picoseconds();
     }
   }
+  *below_caches_out = below_caches;
   const std::uint32_t p = config.processors.count;
   const unsigned __int128 per_processor = below_caches / p + (below_caches % p != 0 ? 1 : 0);
   RAYCELL_CHECK(per_processor <= SimTime::Max().picoseconds());
@@ -167,10 +170,11 @@ WorkGraph::Shape ShapeOf(const WorkGraph& work) {
   return shape;
 }
 
-SimTime TimeBoundTerms::value() const { return std::max({work, links, chain}); }
+SimTime TimeBoundTerms::value() const { return std::max({work, links, chain, busy}); }
 
 std::string TimeBoundTerms::ToString() const {
-  return "work " + work.ToString() + ", links " + links.ToString() + ", chain " + chain.ToString();
+  return "work " + work.ToString() + ", links " + links.ToString() + ", chain " + chain.ToString() +
+         ", busy " + busy.ToString();
 }
 
 TimeBoundTerms TimeLowerBoundTerms(const WorkGraph& work,
@@ -195,8 +199,15 @@ TimeBoundTerms TimeLowerBoundTerms(const WorkGraph& work,
   const std::uint64_t total = (tps * work.total_samples()).picoseconds();
   const std::uint32_t p = config.processors.count;
   t.work = SimTime::Picoseconds(total / p + (total % p != 0 ? 1 : 0));
-  t.links = LinksTerm(used, footprints, config, held_at_start, units);
+  unsigned __int128 below_caches = 0;
+  t.links = LinksTerm(used, footprints, config, held_at_start, units, &below_caches);
   t.chain = tps * chain;
+  // (d): in 128 bits, as the sum of P processors' time may not fit one SimTime.
+  const unsigned __int128 busy =
+      (config.processors.prefetch ? 0 : below_caches) + static_cast<unsigned __int128>(total);
+  const unsigned __int128 per_processor = busy / p + (busy % p != 0 ? 1 : 0);
+  RAYCELL_CHECK(per_processor <= SimTime::Max().picoseconds());
+  t.busy = SimTime::Picoseconds(std::uint64_t(per_processor));
   return t;
 }
 

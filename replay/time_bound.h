@@ -1,6 +1,6 @@
 // A lower bound on a frame's simulated time that holds for any scheduler (issue 22): how far a
 // replay is from what no schedule of the same work on the same board can beat. The largest of
-// three terms, each a property of the work graph, the footprints and the configuration alone:
+// four terms, each a property of the work graph, the footprints and the configuration alone:
 //
 //  (a) work: ceil(W / P), W = sum over units of samples x time_per_sample, P processors.
 //      Every unit is worked by one processor for samples x time_per_sample, and each
@@ -33,6 +33,13 @@
 //  (c) chain: the longest path of the work graph from a root, summing samples x
 //      time_per_sample. A unit is released only when its predecessor is done, and takes its
 //      samples x time_per_sample, so the units of a path are worked one after the other.
+//  (d) busy: without prefetch, ceil((W + F) / P), F the least transfer time over the links
+//      below level 0 of (b) (each cell that no cache holds at the start, once). A processor's
+//      link carries only its own fetches (and prefetches, here off), and a fetch's transfers
+//      end by the fetch's end (ready), so every crossing of p's link lies inside one of p's
+//      fetches, from its call to ready: time p stalls, not working. So p's work plus the
+//      crossings of its link are at most T; summed over processors, W + F <= P x T. With
+//      prefetch a crossing may overlap work, and the term is (a)'s.
 //
 // Each term is at most the replay's time under every scheduler of the registry
 // (tests/replay/time_bound_test.cpp, on random frames and configurations).
@@ -49,13 +56,14 @@
 
 namespace raycell {
 
-// The three terms of the bound; value() is the bound.
+// The four terms of the bound; value() is the bound.
 struct TimeBoundTerms {
   SimTime work;   // (a) ceil(total work / processors)
   SimTime links;  // (b) the largest over the links: shared ones and those below level 0
   SimTime chain;  // (c) the longest chain of dependent work
+  SimTime busy;   // (d) ceil((total work + the caches' least fetches) / processors); (a) with prefetch
   SimTime value() const;
-  // "work 37ps, links 2400ps, chain 500ps".
+  // "work 37ps, links 2400ps, chain 500ps, busy 42ps".
   std::string ToString() const;
 };
 

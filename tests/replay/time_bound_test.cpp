@@ -63,8 +63,9 @@ ReplayConfig Board(std::uint32_t processors, std::vector<LevelConfig> levels) {
   return c;
 }
 
-std::string Terms(std::uint64_t work, std::uint64_t links, std::uint64_t chain) {
-  return TimeBoundTerms{Ps(work), Ps(links), Ps(chain)}.ToString();
+std::string Terms(std::uint64_t work, std::uint64_t links, std::uint64_t chain,
+                  std::uint64_t busy) {
+  return TimeBoundTerms{Ps(work), Ps(links), Ps(chain), Ps(busy)}.ToString();
 }
 
 // ---- Each term where it binds, by hand ------------------------------------------------
@@ -72,18 +73,18 @@ std::string Terms(std::uint64_t work, std::uint64_t links, std::uint64_t chain) 
 // Four independent rays of 3, 3, 3 and 2 samples in four cells on three processors:
 // 11 samples x 10 ps = 110 ps of work, at least ceil(110 / 3) = 37 ps on some processor
 // (36 rounded down would be wrong: 3 x 36 < 110). The longest chain is one ray, 30 ps. Cache
-// links (4 ps each, unlimited bandwidth): 4 cells x 4 ps over 3 processors, ceil(16 / 3) = 6;
-// board link: 4 x 6 ps = 24 ps. Per node the same: one node per ray.
+// links free (no latency, unlimited bandwidth), so busy is the work; board link: 4 x 6 ps =
+// 24 ps. Per node the same: one node per ray.
 TEST(TimeBound, WorkBindsOnManyIndependentUnits) {
   const RayBatch f = FrameOf({{kNoParent, 0, {{A, 3}}},
                               {kNoParent, 0, {{B, 3}}},
                               {kNoParent, 0, {{C, 3}}},
                               {kNoParent, 0, {{D, 2}}}});
   const ReplayConfig config =
-      Board(3, {Level("cache", 1, "unlimited", 4), Level("board", 100, "unlimited", 6)});
+      Board(3, {Level("cache", 1, "unlimited", 0), Level("board", 100, "unlimited", 6)});
   const std::vector<std::uint64_t> footprints(4, 4096);
   for (const WorkGraph& w : {RaySegmentWork(f, 4), NodeWork(testing::TreeOf(f), 4)}) {
-    EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(37, 24, 30));
+    EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(37, 24, 30, 37));
     EXPECT_EQ(TimeLowerBound(w, footprints, config), Ps(37));
   }
 }
@@ -92,7 +93,7 @@ TEST(TimeBound, WorkBindsOnManyIndependentUnits) {
 // count). Cache link: 40 ps + 0.5 ps/byte (2TB/s): A (100 bytes) 90 ps, B (300) 190 ps,
 // 280 ps on the one processor's link. Board link: 1000 ps + 1 ps/byte (1TB/s): 1100 + 1300 =
 // 2400 ps. Host link below a third level: 700 ps each, unlimited: 1400 ps. Work and chain
-// 20 ps.
+// 20 ps; busy 20 + 280 = 300 ps.
 TEST(TimeBound, SharedLinkBindsOnCostlyFetches) {
   const RayBatch f = FrameOf({{kNoParent, 0, {{A, 1}, {B, 1}}}});
   const std::vector<std::uint64_t> footprints = {100, 300, 1'000'000};
@@ -100,44 +101,103 @@ TEST(TimeBound, SharedLinkBindsOnCostlyFetches) {
       Board(1, {Level("cache", 1, "2TB/s", 40), Level("board", 100, "1TB/s", 1000),
                 Level("far", 100, "unlimited", 700)});
   const WorkGraph w = RaySegmentWork(f, 3);
-  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(20, 2400, 20));
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(20, 2400, 20, 300));
   EXPECT_EQ(TimeLowerBound(w, footprints, config), Ps(2400));
 
   // Held at the start. The board holds A: the cache link still moves A and B (280 ps), the
   // board link B alone (1300 ps), the host link B alone (700 ps).
   const std::vector<bool> none(3, false), a = {true, false, false}, b = {false, true, false};
   std::vector<std::vector<bool>> held = {none, a, none};
-  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config, &held).ToString(), Terms(20, 1300, 20));
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config, &held).ToString(),
+            Terms(20, 1300, 20, 300));
   // The cache holds B, host-side level A: the cache link moves A (90 ps), the board link A
-  // (1100 ps: B is above it), the host link nothing.
+  // (1100 ps: B is above it), the host link nothing; busy 20 + 90.
   held = {b, none, a};
-  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config, &held).ToString(), Terms(20, 1100, 20));
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config, &held).ToString(),
+            Terms(20, 1100, 20, 110));
   // Everything in the caches: no link needs to move anything.
   held = {{true, true, false}, none, none};
-  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config, &held).ToString(), Terms(20, 0, 20));
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config, &held).ToString(), Terms(20, 0, 20, 20));
 
   // Unlimited board bandwidth: latencies alone, 2 x 1000 ps.
   config.levels[1].bandwidth_below = Bandwidth::Unlimited();
-  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(20, 2000, 20));
-  // Prefetch keeps the shared links' term, with one processor or two (time_bound.h (b)).
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(20, 2000, 20, 300));
+  // Prefetch keeps the shared links' term, with one processor or two (time_bound.h (b)); its
+  // transfers may overlap work, so busy is the work (d).
   config.levels[0].capacity = 2;
   config.processors.prefetch = true;
-  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(20, 2000, 20));
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(20, 2000, 20, 20));
   config.processors.count = 2;
-  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(10, 2000, 20));
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(10, 2000, 20, 10));
 }
 
 // Three one-sample rays in A, B, C (1, 2 and 4 bytes) on two processors whose cache links
 // cost 1000 ps + 1 ps/byte: 1001 + 1002 + 1004 = 3007 ps over two links, ceil(3007 / 2) =
-// 1504 ps. Board link 10 ps each: 30 ps. Work ceil(30 / 2) = 15 ps, chain 10 ps.
+// 1504 ps. Board link 10 ps each: 30 ps. Work ceil(30 / 2) = 15 ps, chain 10 ps. Without
+// prefetch busy adds the work: ceil((30 + 3007) / 2) = 1519 ps; with it (caches of two cells)
+// the links bind.
 TEST(TimeBound, CacheLinksBindOnSlowCaches) {
   const RayBatch f =
       FrameOf({{kNoParent, 0, {{A, 1}}}, {kNoParent, 0, {{B, 1}}}, {kNoParent, 0, {{C, 1}}}});
-  const ReplayConfig config =
+  ReplayConfig config =
       Board(2, {Level("cache", 1, "1TB/s", 1000), Level("board", 100, "unlimited", 10)});
   const WorkGraph w = RaySegmentWork(f, 3);
-  EXPECT_EQ(TimeLowerBoundTerms(w, {1, 2, 4}, config).ToString(), Terms(15, 1504, 10));
+  EXPECT_EQ(TimeLowerBoundTerms(w, {1, 2, 4}, config).ToString(), Terms(15, 1504, 10, 1519));
+  EXPECT_EQ(TimeLowerBound(w, {1, 2, 4}, config), Ps(1519));
+  config.levels[0].capacity = 2;
+  config.processors.prefetch = true;
+  EXPECT_EQ(TimeLowerBoundTerms(w, {1, 2, 4}, config).ToString(), Terms(15, 1504, 10, 15));
   EXPECT_EQ(TimeLowerBound(w, {1, 2, 4}, config), Ps(1504));
+}
+
+// Four rays of 10 samples (100 ps), one in each of A..D, on two processors whose cache links
+// cost 50 ps a cell; board free. Work ceil(400 / 2) = 200 ps, links ceil(4 x 50 / 2) = 100
+// ps, chain 100 ps, but a processor cannot work while it fetches: busy ceil((400 + 200) / 2)
+// = 300 ps. Max Work gives each processor two cells, fetch 50 + work 100 twice: 300 ps, the
+// bound exactly. Held at the start in some cache, C and D need no fetch: busy 250 ps.
+TEST(TimeBound, BusyBindsWhenFetchesStallTheProcessors) {
+  const RayBatch f = FrameOf({{kNoParent, 0, {{A, 10}}},
+                              {kNoParent, 0, {{B, 10}}},
+                              {kNoParent, 0, {{C, 10}}},
+                              {kNoParent, 0, {{D, 10}}}});
+  ReplayConfig config =
+      Board(2, {Level("cache", 1, "unlimited", 50), Level("board", 100, "unlimited", 0)});
+  config.granularity = ReplayConfig::Granularity::kRay;
+  const std::vector<std::uint64_t> footprints(4, 4096);
+  const WorkGraph w = RaySegmentWork(f, 4);
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(200, 100, 100, 300));
+  const CellTree tree = testing::TreeOf(f);
+  const FrameInfo info{0, &tree, nullptr, 4};
+  auto s = MakeScheduler("maxwork", 1);
+  const ReplayResult r = ReplayFrame(w, footprints, config, *s, info, 0);
+  EXPECT_EQ(r.time, Ps(300));
+  EXPECT_EQ(r.time_bound, Ps(300));
+  const std::vector<std::vector<bool>> held = {{false, false, true, true}, std::vector<bool>(4)};
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config, &held).ToString(),
+            Terms(200, 50, 100, 250));
+}
+
+// Why busy leaves out fetches with prefetch: one processor, rays in A and B of 10 samples
+// (100 ps), cache links of 100 ps, caches of two cells. Without prefetch fetch A, work A,
+// fetch B, work B: 400 ps = busy (200 + 200). With prefetch B crosses the link while A is
+// worked: 300 ps, under 400; busy is then the work (200) and the link's 200 ps binds.
+TEST(TimeBound, PrefetchOverlapsFetchesWithWork) {
+  const RayBatch f = FrameOf({{kNoParent, 0, {{A, 10}}}, {kNoParent, 0, {{B, 10}}}});
+  ReplayConfig config =
+      Board(1, {Level("cache", 2, "unlimited", 100), Level("board", 100, "unlimited", 0)});
+  const std::vector<std::uint64_t> footprints(2, 4096);
+  const WorkGraph w = RaySegmentWork(f, 2);
+  const CellTree tree = testing::TreeOf(f);
+  const FrameInfo info{0, &tree, nullptr, 2};
+  auto s = MakeScheduler("maxwork", 1);
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(200, 200, 100, 400));
+  EXPECT_EQ(ReplayFrame(w, footprints, config, *s, info, 0).time, Ps(400));
+  config.processors.prefetch = true;
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(200, 200, 100, 200));
+  const ReplayResult r = ReplayFrame(w, footprints, config, *s, info, 0);
+  EXPECT_EQ(r.time, Ps(300));
+  EXPECT_EQ(r.prefetches, 1u);
+  EXPECT_EQ(r.time_bound, Ps(200));
 }
 
 // Ray 0 goes A B C (10 samples each); ray 1, spawned at its visit 2 (C), goes C A (10 each);
@@ -153,7 +213,7 @@ TEST(TimeBound, ChainBindsOnDependentWork) {
       Board(4, {Level("cache", 1, "unlimited", 1), Level("board", 100, "unlimited", 1)});
   const std::vector<std::uint64_t> footprints(3, 4096);
   for (const WorkGraph& w : {RaySegmentWork(f, 3), NodeWork(testing::TreeOf(f), 3)}) {
-    EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(138, 3, 500));
+    EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(138, 3, 500, 139));
     EXPECT_EQ(TimeLowerBound(w, footprints, config), Ps(500));
   }
 }
@@ -196,13 +256,13 @@ TEST(TimeBound, APrefetchFromASharedLevelWaitsForTheCellToArrive) {
   const ReplayResult on = ReplayFrame(w, footprints, config, *s, info, 0);
   EXPECT_EQ(on.time, Ps(3020));
   EXPECT_EQ(on.prefetches, 2u);
-  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(760, 3000, 1500));
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(760, 3000, 1500, 760));
   EXPECT_EQ(on.time_bound, Ps(3000));
 
   config.processors.prefetch = false;
   const ReplayResult off = ReplayFrame(w, footprints, config, *s, info, 0);
   EXPECT_EQ(off.time, Ps(3040));
-  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(760, 3000, 1500));
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(760, 3000, 1500, 775));
   EXPECT_EQ(off.time_bound, Ps(3000));
 }
 
