@@ -61,7 +61,7 @@ struct TimeBoundTerms {
   SimTime work;   // (a) ceil(total work / processors)
   SimTime links;  // (b) the largest over the links: shared ones and those below level 0
   SimTime chain;  // (c) the longest chain of dependent work
-  SimTime busy;   // (d) ceil((total work + the caches' least fetches) / processors); (a) with prefetch
+  SimTime busy;   // (d) ceil((work + caches' least fetches) / processors); (a) with prefetch
   SimTime value() const;
   // "work 37ps, links 2400ps, chain 500ps, busy 42ps".
   std::string ToString() const;
