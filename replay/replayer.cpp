@@ -203,6 +203,7 @@ struct Processor {
   std::size_t head = 0;
   Entry unit{};          // the unit being worked
   bool waiting = false;  // idle, no cell had work
+  bool holding = false;  // `cell` is locked by this processor (fetching or working it)
   SimTime work, stall;
 };
 
@@ -344,6 +345,7 @@ class Board {
     ++holders_[c->value()];  // more than one: processors sharing a cell (Scheduler::Next)
     ++working_;
     processors_[p].cell = *c;
+    processors_[p].holding = true;
     const std::uint64_t fetches = obs_ ? memory_.stats()[0].fetches : 0;  // observed only
     const SimTime ready = memory_.Fetch(p, *c, now_);
     processors_[p].stall = processors_[p].stall + (ready - now_);
@@ -394,7 +396,9 @@ class Board {
   void StartNext(std::uint32_t p) {
     Processor<Entry>& ps = processors_[p];
     if (ps.head == ps.worklist.size()) TakeQueue(p);  // units that arrived meanwhile
+    if (ps.head == ps.worklist.size() && holders_[ps.cell->value()] > 1) Split(p);
     if (ps.head == ps.worklist.size()) {
+      ps.holding = false;
       if (obs_) obs_->BatchEnd(p, *ps.cell, now_);
       RAYCELL_CHECK_EQ(queued_rays_[ps.cell->value()],
                        0u);  // so unlocking leaves available_ as it is
@@ -404,6 +408,27 @@ class Board {
       return;
     }
     WorkNext(p);
+  }
+
+  // p shares its cell and has nothing left: it takes the later half of the units not yet
+  // started of the holder with the most (lowest number on ties), if it has two or more.
+  void Split(std::uint32_t p) {
+    Processor<Entry>& ps = processors_[p];
+    std::uint32_t victim = p;
+    std::size_t most = 1;
+    for (std::uint32_t q = 0; q < processors_.size(); ++q) {
+      const Processor<Entry>& qs = processors_[q];
+      if (q == p || !qs.holding || qs.cell != ps.cell) continue;
+      const std::size_t left = qs.worklist.size() - qs.head;
+      if (left > most) victim = q, most = left;
+    }
+    if (victim == p) return;
+    std::vector<Entry>& from = processors_[victim].worklist;
+    const std::size_t n = most / 2;
+    ps.worklist.clear();
+    ps.head = 0;
+    ps.worklist.insert(ps.worklist.end(), from.end() - std::ptrdiff_t(n), from.end());
+    from.resize(from.size() - n);
   }
 
   // Starts working the unit at the head of p's worklist.

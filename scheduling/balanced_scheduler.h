@@ -18,7 +18,8 @@
 //  - share: when no free cell has work in view, the busy cell with the most queued rays
 //    (QueueView::all_queued): the processor joins a cell another one works, so the hot cells
 //    of a frame do not leave the other processors idle. The holders take the cell's queue
-//    whole, whoever asks first, so a join may find it taken and leave with nothing.
+//    whole, whoever asks first; one that finds it empty takes half of the units another
+//    holder has not started (docs/design.md §2), so a joiner shares the work already taken.
 //  - postpone: on boards of kPostponeMinProcessors or more, while every other processor is
 //    working, a cell whose queued work (queued rays
 //    x the cell's samples per ray visit in frame i-1's tree) is less than kPostponeFactor

@@ -125,7 +125,8 @@ TEST(Balance, OneProcessorFollowsThePlanAsCellTreeBest) {
 // and works the 40 until 22.08 + 80 = 102.08 us: 3 fetches.
 // `share` chooses as Max Work while a free cell has work, so the same until 90.04, when p0,
 // done with A, finds only B, busy, with 4 rays queued (84.04 .. 90.04): it joins B (ready
-// 100.08), but p1 took those 4 at 94.08, so p0 leaves with nothing: 4 fetches, same time.
+// 100.08), but p1 took those 4 at 94.08 and has one left not started, too few to split (it
+// works the third, 98.08-100.08), so p0 leaves with nothing: 4 fetches, same time.
 TEST(Balance, ASharingProcessorJoinsBusyCellsHandWorked) {
   constexpr CellId A{0}, B{1}, C{2};
   std::vector<testing::TestRay> paths;
@@ -149,6 +150,41 @@ TEST(Balance, ASharingProcessorJoinsBusyCellsHandWorked) {
   EXPECT_EQ(maxwork.time, SimTime::Picoseconds(102'080'000));
   EXPECT_EQ(share.fetches, 4u);
   EXPECT_EQ(share.time, SimTime::Picoseconds(102'080'000));
+  EXPECT_EQ(share.samples, maxwork.samples);
+}
+
+// A joining processor takes half of the holder's worklist when the queue gives it nothing
+// (design §2). Two processors, per ray segment, 2 us a visit, fetches 10.04 us as above: 20
+// rays in A, one ray C A. Both schedulers: p0 takes A (ready 10.04; works its 20 rays until
+// 50.04 alone), p1 takes C (ready 10.04) and works C until 12.04, releasing a visit into A,
+// busy. Max Work waits; p0 takes it at 50.04: 52.04 us, 2 fetches. `share` joins A (ready
+// 22.08), takes that visit (22.08-24.08), then, with the queue empty, half of p0's units not
+// started: p0 works its 8th, 24.04-26.04, and has 12 left, so p1 takes the last 6
+// (24.08-36.08) and p0 ends at 26.04 + 12 = 38.04 us: 3 fetches.
+TEST(Balance, AJoinerSplitsTheHoldersWorklistHandWorked) {
+  constexpr CellId A{0}, C{1};
+  std::vector<testing::TestRay> paths;
+  for (int i = 0; i < 20; ++i) paths.push_back({kNoParent, 0, {A}});
+  paths.push_back({kNoParent, 0, {C, A}});
+  const RayBatch rays = testing::RaysOf(paths, 200);
+  const CellTree tree = testing::TreeOf(rays);
+  const WorkGraph w = RaySegmentWork(rays, 2);
+  const std::vector<std::uint64_t> footprints(2, 16'000);
+  ReplayConfig config = DefaultConfig();
+  config.processors.count = 2;
+  config.levels[1].bandwidth_below = ParseBandwidth("unlimited", "test");
+  config.levels[1].latency_below = SimTime::Zero();
+  const auto replay = [&](const char* name) {
+    config.scheduler = &SchedulerByName(name, "test");
+    auto s = MakeScheduler(*config.scheduler, 1);
+    return ReplayFrame(w, footprints, config, *s, FrameInfo{0, &tree, nullptr, 2}, Bound(tree));
+  };
+  const ReplayResult maxwork = replay("maxwork"), share = replay("share");
+  EXPECT_EQ(maxwork.fetches, 2u);
+  EXPECT_EQ(maxwork.time, SimTime::Picoseconds(52'040'000));
+  EXPECT_EQ(share.fetches, 3u);
+  EXPECT_EQ(share.time, SimTime::Picoseconds(38'040'000));
+  EXPECT_EQ(share.work, maxwork.work);
   EXPECT_EQ(share.samples, maxwork.samples);
 }
 

@@ -27,6 +27,7 @@ struct ProcessorState {
   std::optional<CellId> cell;   // locked and loaded while working
   std::deque<UnitId> worklist;  // units of `cell` to work in this fetch
   bool waiting = false;         // idle, no cell had work
+  bool holding = false;         // `cell` is locked by this processor
   SimTime work, stall;
 };
 
@@ -135,6 +136,7 @@ class Board : public Component {
     RAYCELL_CHECK(!queues_[c->value()].empty());
     ++locked_[c->value()];  // more than one when a scheduler joins a busy cell
     processors_[p].cell = *c;
+    processors_[p].holding = true;
     const SimTime ready = memory_.Fetch(p, *c, sim.now());
     processors_[p].stall = processors_[p].stall + (ready - sim.now());
     sim.ScheduleAt(id_, ready, kFetched, Pack(p, 0));
@@ -163,7 +165,9 @@ class Board : public Component {
   void StartNext(std::uint32_t p, Simulator& sim) {
     ProcessorState& ps = processors_[p];
     if (ps.worklist.empty()) TakeQueue(ps);  // units that arrived while the cell was loaded
+    if (ps.worklist.empty() && locked_[ps.cell->value()] > 1) Split(p);
     if (ps.worklist.empty()) {
+      ps.holding = false;
       --locked_[ps.cell->value()];
       sim.Schedule(id_, SimTime::Zero(), kIdle, Pack(p, 0));
       return;
@@ -173,6 +177,23 @@ class Board : public Component {
     const SimTime dt = config_.processors.time_per_sample * w_.samples[u];
     ps.work = ps.work + dt;
     sim.Schedule(id_, dt, kUnitDone, Pack(p, u));
+  }
+
+  // p shares its cell and has nothing left: the later half of the units not yet started of
+  // the holder with the most (two or more; the lowest number on ties).
+  void Split(std::uint32_t p) {
+    ProcessorState& ps = processors_[p];
+    std::optional<std::uint32_t> victim;
+    for (std::uint32_t q = 0; q < processors_.size(); ++q) {
+      const ProcessorState& qs = processors_[q];
+      if (q == p || !qs.holding || qs.cell != ps.cell || qs.worklist.size() < 2) continue;
+      if (!victim || qs.worklist.size() > processors_[*victim].worklist.size()) victim = q;
+    }
+    if (!victim) return;
+    std::deque<UnitId>& from = processors_[*victim].worklist;
+    const std::size_t n = from.size() / 2;
+    ps.worklist.assign(from.end() - std::ptrdiff_t(n), from.end());
+    from.resize(from.size() - n);
   }
 
   void OnUnitDone(std::uint32_t p, UnitId u, Simulator& sim) {
