@@ -294,13 +294,14 @@ std::string ProcessorsReport(const GridStudy& g) {
        "way). Max Work (`maxwork`) and Cell Tree scheduling (`celltree`) against `balanced`, "
        "the scheduler for several processors (docs/design.md §5 \"Load balancing\"): "
        "celltree-best's plan shared by the processors, the cached cell first, "
-       "joining busy cells when no free one is ready, and postponing small batches on boards of "
-       "8 processors or more. Fetches into the processors' caches and simulated time are summed "
-       "over the frames; utilisation is the share of the processors' time spent working. The "
-       "time bound holds for any scheduler (the work over the processors, the busiest link's "
-       "least transfers, the longest chain of dependent work; `time_bound_ps` in "
-       "docs/schemas.md): time / bound is how far the fastest of the three is from what no "
-       "scheduler can beat.\n\n"
+       "joining busy cells when no free one is ready (processors sharing a cell share out its "
+       "rays), and postponing small batches on boards of 8 processors or more. Fetches into the "
+       "processors' caches and simulated time are summed over the frames; utilisation is the "
+       "share of the processors' time spent working. The time bound holds for any scheduler "
+       "(the work over the processors, the busiest link's least transfers, the longest chain of "
+       "dependent work, and the work with the caches' least fetches over the processors; "
+       "`time_bound_ps` in docs/schemas.md): time / bound is how far the fastest of the three "
+       "is from what no scheduler can beat.\n\n"
     << "| processors |";
   for (const char* what : {"fetches", "time ms", "utilisation"}) {
     for (const SchedulerEntry* e : schedulers) s << ' ' << what << ", `" << e->name << "` |";
