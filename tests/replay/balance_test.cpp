@@ -117,6 +117,23 @@ TEST(Balance, OneProcessorFollowsThePlanAsCellTreeBest) {
   }
 }
 
+// `paths` at 2 us a visit, per ray segment, on two processors whose fetches take 10.04 us
+// (16000 B at 1.6 GB/s after 40 ns; the board free), under scheduler `name`.
+ReplayResult ReplayOnTwoProcessors(const std::vector<testing::TestRay>& paths, std::uint32_t cells,
+                                   const char* name) {
+  const RayBatch rays = testing::RaysOf(paths, 200);
+  const CellTree tree = testing::TreeOf(rays);
+  const WorkGraph w = RaySegmentWork(rays, cells);
+  const std::vector<std::uint64_t> footprints(cells, 16'000);
+  ReplayConfig config = DefaultConfig();
+  config.processors.count = 2;
+  config.levels[1].bandwidth_below = ParseBandwidth("unlimited", "test");
+  config.levels[1].latency_below = SimTime::Zero();
+  config.scheduler = &SchedulerByName(name, "test");
+  auto s = MakeScheduler(*config.scheduler, 1);
+  return ReplayFrame(w, footprints, config, *s, FrameInfo{0, &tree, nullptr, cells}, Bound(tree));
+}
+
 // Two processors, per ray segment; 40 rays A B and one ray C, 2 us a visit; a fetch into a
 // cache takes 10.04 us (40 ns + 16000 B at 1.6 GB/s), the board costs nothing.
 // Max Work: p0 takes A (ready 10.04), p1 takes C (10.04, done 12.04), then B, whose first ray
@@ -132,20 +149,8 @@ TEST(Balance, ASharingProcessorJoinsBusyCellsHandWorked) {
   std::vector<testing::TestRay> paths;
   for (int i = 0; i < 40; ++i) paths.push_back({kNoParent, 0, {A, B}});
   paths.push_back({kNoParent, 0, {C}});
-  const RayBatch rays = testing::RaysOf(paths, 200);
-  const CellTree tree = testing::TreeOf(rays);
-  const WorkGraph w = RaySegmentWork(rays, 3);
-  const std::vector<std::uint64_t> footprints(3, 16'000);
-  ReplayConfig config = DefaultConfig();
-  config.processors.count = 2;
-  config.levels[1].bandwidth_below = ParseBandwidth("unlimited", "test");
-  config.levels[1].latency_below = SimTime::Zero();
-  const auto replay = [&](const char* name) {
-    config.scheduler = &SchedulerByName(name, "test");
-    auto s = MakeScheduler(*config.scheduler, 1);
-    return ReplayFrame(w, footprints, config, *s, FrameInfo{0, &tree, nullptr, 3}, Bound(tree));
-  };
-  const ReplayResult maxwork = replay("maxwork"), share = replay("share");
+  const ReplayResult maxwork = ReplayOnTwoProcessors(paths, 3, "maxwork");
+  const ReplayResult share = ReplayOnTwoProcessors(paths, 3, "share");
   EXPECT_EQ(maxwork.fetches, 3u);
   EXPECT_EQ(maxwork.time, SimTime::Picoseconds(102'080'000));
   EXPECT_EQ(share.fetches, 4u);
@@ -166,20 +171,8 @@ TEST(Balance, AJoinerSplitsTheHoldersWorklistHandWorked) {
   std::vector<testing::TestRay> paths;
   for (int i = 0; i < 20; ++i) paths.push_back({kNoParent, 0, {A}});
   paths.push_back({kNoParent, 0, {C, A}});
-  const RayBatch rays = testing::RaysOf(paths, 200);
-  const CellTree tree = testing::TreeOf(rays);
-  const WorkGraph w = RaySegmentWork(rays, 2);
-  const std::vector<std::uint64_t> footprints(2, 16'000);
-  ReplayConfig config = DefaultConfig();
-  config.processors.count = 2;
-  config.levels[1].bandwidth_below = ParseBandwidth("unlimited", "test");
-  config.levels[1].latency_below = SimTime::Zero();
-  const auto replay = [&](const char* name) {
-    config.scheduler = &SchedulerByName(name, "test");
-    auto s = MakeScheduler(*config.scheduler, 1);
-    return ReplayFrame(w, footprints, config, *s, FrameInfo{0, &tree, nullptr, 2}, Bound(tree));
-  };
-  const ReplayResult maxwork = replay("maxwork"), share = replay("share");
+  const ReplayResult maxwork = ReplayOnTwoProcessors(paths, 2, "maxwork");
+  const ReplayResult share = ReplayOnTwoProcessors(paths, 2, "share");
   EXPECT_EQ(maxwork.fetches, 2u);
   EXPECT_EQ(maxwork.time, SimTime::Picoseconds(52'040'000));
   EXPECT_EQ(share.fetches, 3u);
