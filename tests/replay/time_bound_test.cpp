@@ -108,13 +108,11 @@ TEST(TimeBound, SharedLinkBindsOnCostlyFetches) {
   // board link B alone (1300 ps), the host link B alone (700 ps).
   const std::vector<bool> none(3, false), a = {true, false, false}, b = {false, true, false};
   std::vector<std::vector<bool>> held = {none, a, none};
-  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config, &held).ToString(),
-            Terms(20, 1300, 20, 300));
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config, &held).ToString(), Terms(20, 1300, 20, 300));
   // The cache holds B, host-side level A: the cache link moves A (90 ps), the board link A
   // (1100 ps: B is above it), the host link nothing; busy 20 + 90.
   held = {b, none, a};
-  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config, &held).ToString(),
-            Terms(20, 1100, 20, 110));
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config, &held).ToString(), Terms(20, 1100, 20, 110));
   // Everything in the caches: no link needs to move anything.
   held = {{true, true, false}, none, none};
   EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config, &held).ToString(), Terms(20, 0, 20, 20));
@@ -173,8 +171,7 @@ TEST(TimeBound, BusyBindsWhenFetchesStallTheProcessors) {
   EXPECT_EQ(r.time, Ps(300));
   EXPECT_EQ(r.time_bound, Ps(300));
   const std::vector<std::vector<bool>> held = {{false, false, true, true}, std::vector<bool>(4)};
-  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config, &held).ToString(),
-            Terms(200, 50, 100, 250));
+  EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config, &held).ToString(), Terms(200, 50, 100, 250));
 }
 
 // Why busy leaves out fetches with prefetch: one processor, rays in A and B of 10 samples
