@@ -481,13 +481,20 @@ class Board {
     StartNext(p);
   }
 
+  // Wakes every waiting processor: first, in processor order, those whose last cell (the one
+  // in their cache, QueueView::loaded) now has queued rays, so that such a cell goes to a
+  // processor that holds it rather than to one that would fetch it; then the others.
   void WakeWaiting() {
-    for (std::uint32_t q = 0; q < processors_.size(); ++q) {
-      if (!processors_[q].waiting) continue;
-      processors_[q].waiting = false;
-      --waiting_;
-      Schedule(q, now_, Kind::kIdle);
-      slots_.Update(q);
+    for (const bool holders_first : {true, false}) {
+      for (std::uint32_t q = 0; q < processors_.size(); ++q) {
+        Processor<Entry>& qs = processors_[q];
+        if (!qs.waiting) continue;
+        if (holders_first && (!qs.cell || queued_rays_[qs.cell->value()] == 0)) continue;
+        qs.waiting = false;
+        --waiting_;
+        Schedule(q, now_, Kind::kIdle);
+        slots_.Update(q);
+      }
     }
   }
 

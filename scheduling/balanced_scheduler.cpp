@@ -275,6 +275,19 @@ std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
     reason_.clear();
     return std::nullopt;  // postponed: wait for released work
   }
+  // A join (a busy cell: its holder takes released work when its worklist runs out) costs a
+  // fetch for at most the rays queued there; too few, and the largest batch worth a fetch is
+  // taken instead, or the processor waits (the holder is working, so the replay progresses).
+  if (options_.postpone && queues.busy(*c) && TooSmall(queues, *c)) {
+    const std::optional<CellId> largest =
+        Best(queues, Queued(queues), [&](std::uint32_t x) { return !TooSmall(queues, CellId(x)); });
+    if (largest) {
+      reason_ = "largest (join too small)";
+      return largest;
+    }
+    reason_.clear();
+    return std::nullopt;
+  }
   if (options_.critical) ++cost_.decisions;
   if (adaptive) {
     // The rule decides now (it may plan the rest again when its plan is used up, and then

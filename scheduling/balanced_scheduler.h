@@ -26,7 +26,11 @@
 //    fetches (FrameInfo::fetch_samples) is not fetched: the largest queue is taken instead if
 //    it is large enough, else the processor waits for released work (Scheduler::Next).
 //    Aila and Karras's postponing of rays until queues fill, as a rule on batch size; at
-//    most one processor waits by choice, so the tails of frames are not serialised.
+//    most one processor waits by choice, so the tails of frames are not serialised. On any
+//    board, a join (share) whose busy cell has less than kPostponeFactor fetches of work
+//    queued is not made: the largest batch worth a fetch is taken instead, else the processor
+//    waits; the holder takes those rays when its worklist runs out, and in a frame's tail a
+//    joiner would pay a fetch to find the queue already taken.
 //  - adaptive: instead of following celltree-best's plan, ask celltree-adaptive
 //    (adaptive_scheduler.h), which watches the frame unfold: issue 24's adaptive rule with
 //    this class's affinity, sharing and postponing around it (`balanced-adaptive`).

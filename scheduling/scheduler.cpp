@@ -186,7 +186,8 @@ const std::vector<SchedulerEntry>& SchedulerRegistry() {
       {"balanced",
        "the cached cell if it has work, else celltree-best's plan shared by the processors (busy "
        "entries deferred, then Max Work); no free cell ready: joins a busy one (affinity-"
-       "weighted); on 8+ processors, while all others work, a batch under 3 fetches' worth waits",
+       "weighted; not for under 3 fetches' worth of queued work); on 8+ processors, while all "
+       "others work, a batch under 3 fetches' worth waits",
        "balanced (plan, affinity, shared cells, postponing)",
        MakeBalanced<true, false, false, true, true, true>, 1, true, true, false, false},
       // Two memory levels (issue 23): a board of coarser cells (level.NAME.cells).

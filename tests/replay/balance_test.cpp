@@ -117,16 +117,16 @@ TEST(Balance, OneProcessorFollowsThePlanAsCellTreeBest) {
   }
 }
 
-// `paths` at 2 us a visit, per ray segment, on two processors whose fetches take 10.04 us
-// (16000 B at 1.6 GB/s after 40 ns; the board free), under scheduler `name`.
-ReplayResult ReplayOnTwoProcessors(const std::vector<testing::TestRay>& paths, std::uint32_t cells,
-                                   const char* name) {
+// `paths` at 2 us a visit, per ray segment, on `processors` processors whose fetches take
+// 10.04 us (16000 B at 1.6 GB/s after 40 ns; the board free), under scheduler `name`.
+ReplayResult ReplayOnProcessors(const std::vector<testing::TestRay>& paths, std::uint32_t cells,
+                                const char* name, std::uint32_t processors = 2) {
   const RayBatch rays = testing::RaysOf(paths, 200);
   const CellTree tree = testing::TreeOf(rays);
   const WorkGraph w = RaySegmentWork(rays, cells);
   const std::vector<std::uint64_t> footprints(cells, 16'000);
   ReplayConfig config = DefaultConfig();
-  config.processors.count = 2;
+  config.processors.count = processors;
   config.levels[1].bandwidth_below = ParseBandwidth("unlimited", "test");
   config.levels[1].latency_below = SimTime::Zero();
   config.scheduler = &SchedulerByName(name, "test");
@@ -149,8 +149,8 @@ TEST(Balance, ASharingProcessorJoinsBusyCellsHandWorked) {
   std::vector<testing::TestRay> paths;
   for (int i = 0; i < 40; ++i) paths.push_back({kNoParent, 0, {A, B}});
   paths.push_back({kNoParent, 0, {C}});
-  const ReplayResult maxwork = ReplayOnTwoProcessors(paths, 3, "maxwork");
-  const ReplayResult share = ReplayOnTwoProcessors(paths, 3, "share");
+  const ReplayResult maxwork = ReplayOnProcessors(paths, 3, "maxwork");
+  const ReplayResult share = ReplayOnProcessors(paths, 3, "share");
   EXPECT_EQ(maxwork.fetches, 3u);
   EXPECT_EQ(maxwork.time, SimTime::Picoseconds(102'080'000));
   EXPECT_EQ(share.fetches, 4u);
@@ -171,14 +171,66 @@ TEST(Balance, AJoinerSplitsTheHoldersWorklistHandWorked) {
   std::vector<testing::TestRay> paths;
   for (int i = 0; i < 20; ++i) paths.push_back({kNoParent, 0, {A}});
   paths.push_back({kNoParent, 0, {C, A}});
-  const ReplayResult maxwork = ReplayOnTwoProcessors(paths, 2, "maxwork");
-  const ReplayResult share = ReplayOnTwoProcessors(paths, 2, "share");
+  const ReplayResult maxwork = ReplayOnProcessors(paths, 2, "maxwork");
+  const ReplayResult share = ReplayOnProcessors(paths, 2, "share");
   EXPECT_EQ(maxwork.fetches, 2u);
   EXPECT_EQ(maxwork.time, SimTime::Picoseconds(52'040'000));
   EXPECT_EQ(share.fetches, 3u);
   EXPECT_EQ(share.time, SimTime::Picoseconds(38'040'000));
   EXPECT_EQ(share.work, maxwork.work);
   EXPECT_EQ(share.samples, maxwork.samples);
+}
+
+// Released work wakes first the waiting processors whose cache holds its cell (design §2).
+// Three processors, Max Work, per ray segment, 2 us a visit, fetches 10.04 us as above; cells
+// X, Y, Z; rays: 3 in Y, 2 in X, and in Z a chain of four rays each spawned by the one before,
+// the last going on to X. p0 takes Y (the most rays; ready 10.04, done 16.04), p1 X (done
+// 14.04), p2 Z, whose five units end at 20.04 releasing a visit into X; p0 and p1 wait. p1,
+// which holds X, asks first: a hit, 20.04-22.04, 3 fetches. Woken in processor order, p0
+// would fetch X instead: ready 30.08, done 32.08, 4 fetches.
+TEST(Balance, ReleasedWorkGoesFirstToAWaitingProcessorThatHoldsItsCellHandWorked) {
+  constexpr CellId X{0}, Y{1}, Z{2};
+  std::vector<testing::TestRay> paths;
+  for (int i = 0; i < 3; ++i) paths.push_back({kNoParent, 0, {Y}});
+  for (int i = 0; i < 2; ++i) paths.push_back({kNoParent, 0, {X}});
+  paths.push_back({kNoParent, 0, {Z}});
+  for (RayId parent = 5; parent < 8; ++parent) paths.push_back({parent, 0, {Z}});
+  paths.push_back({8, 0, {Z, X}});
+  const ReplayResult r = ReplayOnProcessors(paths, 3, "maxwork", 3);
+  EXPECT_EQ(r.fetches, 3u);
+  EXPECT_EQ(r.time, SimTime::Picoseconds(22'040'000));
+  EXPECT_EQ(r.samples, 11u * 200u);  // 11 visits
+}
+
+// `balanced` does not join a busy cell for less than 3 fetches' worth of queued work
+// (kPostponeFactor): it waits, and the holder takes those rays. Frame i-1 gives 10 samples a
+// visit in B; a fetch of B costs 100 samples; B is busy with 29 queued rays (290 samples,
+// under 300): `balanced` waits where `share` joins; with 30 both join.
+TEST(Balance, BalancedJoinsABusyCellOnlyForThreeFetchesOfWork) {
+  constexpr CellId A{0}, B{1};
+  const CellTree previous =
+      testing::TreeOf(testing::RaysOf({{kNoParent, 0, {A, B}}, {kNoParent, 0, {B}}}, 10));
+  const std::vector<double> fetch_samples = {100, 100};
+  const std::vector<std::uint64_t> open = {~std::uint64_t{0}, 0};  // B busy
+  const std::vector<std::uint64_t> view = {0, 0};                  // its rays masked out
+  for (const std::uint64_t queued : {29u, 30u}) {
+    for (const char* name : {"balanced", "share"}) {
+      auto s = MakeScheduler(name, 1);
+      FrameInfo info{1, nullptr, &previous, 2};
+      info.processors = 2;
+      info.fetch_samples = &fetch_samples;
+      s->BeginFrame(info);
+      const std::vector<std::uint64_t> all = {0, queued};
+      QueueView v = QueueView::Of(view, A);
+      v.processors = 2;
+      v.working = 1;
+      v.open = open.data();
+      v.all_queued = all.data();
+      const bool joins = queued >= 30 || std::string(name) == "share";
+      EXPECT_EQ(s->Next(v), joins ? std::optional<CellId>(B) : std::nullopt)
+          << name << " " << queued;
+    }
+  }
 }
 
 // balanced-critical's rule, hand-worked. Frame i-1: one ray A B, one ray B C D; its only

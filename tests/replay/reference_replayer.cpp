@@ -216,11 +216,16 @@ class Board : public Component {
     StartNext(p, sim);
   }
 
+  // First the waiting processors whose last cell has queued rays, then the others (design §2).
   void WakeWaiting(Simulator& sim) {
-    for (std::uint32_t q = 0; q < processors_.size(); ++q) {
-      if (!processors_[q].waiting) continue;
-      processors_[q].waiting = false;
-      sim.Schedule(id_, SimTime::Zero(), kIdle, Pack(q, 0));
+    for (const bool holders_first : {true, false}) {
+      for (std::uint32_t q = 0; q < processors_.size(); ++q) {
+        ProcessorState& qs = processors_[q];
+        if (!qs.waiting) continue;
+        if (holders_first && (!qs.cell || queued_rays_[qs.cell->value()] == 0)) continue;
+        qs.waiting = false;
+        sim.Schedule(id_, SimTime::Zero(), kIdle, Pack(q, 0));
+      }
     }
   }
 
