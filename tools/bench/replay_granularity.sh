@@ -28,7 +28,9 @@ t_ray=$(median "${times[ray]}"); t_node=$(median "${times[node]}")
 total() { grep '^total' "$work/$1.csv"; }
 IFS=, read -r _ f_ray _ time_ray _ <<< "$(total ray)"
 IFS=, read -r _ f_node _ time_node _ <<< "$(total node)"
-segments=$(total ray | cut -d, -f12)
+# The segments column, found by its name in the header (columns were added over time).
+col=$(grep -v '^#' "$work/ray.csv" | head -1 | tr ',' '\n' | grep -n -x segments | cut -d: -f1)
+segments=$(total ray | cut -d, -f"$col")
 echo "trace: $trace ($reps runs each, median wall time) $*"
 printf 'ray  granularity: %7.3f s  %6.2f M segments/s  fetches %s  simulated %s ps\n' \
   "$t_ray" "$(echo "$segments / $t_ray / 1000000" | bc -l)" "$f_ray" "$time_ray"
