@@ -334,13 +334,14 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
     return distinct[d].granularity == ReplayConfig::Granularity::kRay;
   });
   // Per distinct configuration with warm memory, what its levels hold between frames.
-  // A volume that changes every frame keeps nothing: warm is cold there; so do cells that
-  // are other boxes every frame (a dynamic subdivision).
+  // A volume that changes every frame keeps nothing: warm is cold there. Cells that are other
+  // boxes every frame (a dynamic subdivision) keep what the fine cells say they still hold
+  // (CarryOver).
   std::vector<std::unique_ptr<MemoryState>> memory(distinct.size());
   std::vector<std::size_t> warm;  // order's entries with warm memory
   for (std::size_t d : order) {
     if (distinct[d].memory.across_frames != MemoryConfig::AcrossFrames::kWarm) continue;
-    if (reader.header().volume_changes() || reader.header().cells_change()) continue;
+    if (reader.header().volume_changes()) continue;
     memory[d] = std::make_unique<MemoryState>();
     warm.push_back(d);
   }
@@ -356,8 +357,27 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
   ReplayFramesStats stats;
   stats.distinct = distinct.size();
   std::size_t walked = 0;
+  // A dynamic subdivision's cells per fine cell, in the frame walked before and in this one.
+  const bool carry = header.cells_change() && !warm.empty();
+  std::vector<CellId> of_fine_before, of_fine;
+  const std::vector<std::uint64_t>* footprints_before = nullptr;
   while (const LoadedFrame* frame = walker.Next()) {
     ++walked;
+    if (carry) {  // the walker walks every frame from 0 when some memory is warm
+      of_fine = header.subdivision.CellOfFine(frame->index, header.cell_count());
+      if (footprints_before != nullptr) {
+        const FrameCells from{&of_fine_before, footprints_before}, to{&of_fine, frame->footprints};
+        for (std::size_t d : warm) {
+          if (memory[d]->empty()) continue;
+          // What the levels keep of it: the cells that fit, as the policies keep them.
+          *memory[d] =
+              MemoryHierarchy(distinct[d], *frame->footprints, {}, CarryOver(*memory[d], from, to))
+                  .State();
+        }
+      }
+      of_fine_before.swap(of_fine);
+      footprints_before = frame->footprints;
+    }
     const std::vector<std::size_t>& run = frame->warm_up ? warm : order;
     // A warm-up frame is not watched: the observer sees the frames asked for.
     ReplayObserver* observer = frame->warm_up ? nullptr : options.observer;

@@ -1,6 +1,8 @@
 #include "replay/memory.h"
 
 #include <algorithm>
+#include <cstdint>
+#include <utility>
 
 #include "base/check.h"
 #include "base/checked.h"
@@ -50,7 +52,51 @@ bool CellStore::Insert(CellId cell, std::optional<CellId> pinned) {
 }
 
 void CellStore::Restore(const std::vector<CellId>& cells) {
-  for (const CellId c : cells) RAYCELL_CHECK(Insert(c));
+  for (const CellId c : cells) Insert(c);
+}
+
+MemoryState CarryOver(const MemoryState& state, const FrameCells& from, const FrameCells& to) {
+  RAYCELL_CHECK(from.of_fine && from.footprints && to.of_fine && to.footprints);
+  RAYCELL_CHECK_EQ(from.of_fine->size(), to.of_fine->size());
+  const std::size_t fine = to.of_fine->size(), cells = to.footprints->size();
+  constexpr std::size_t kNone = SIZE_MAX;
+  MemoryState out;
+  for (const auto& level : state.held) {
+    out.held.emplace_back();
+    for (const std::vector<CellId>& copy : level) {
+      // Position of each cell of `from` in the copy's eviction order; kNone: not held.
+      std::vector<std::size_t> position(from.footprints->size(), kNone);
+      for (std::size_t i = 0; i < copy.size(); ++i) {
+        RAYCELL_CHECK_LT(copy[i].value(), position.size());
+        position[copy[i].value()] = i;
+      }
+      // Per cell of `to`: the earliest victim holding part of its data; kNone and `missing`
+      // when part of its data is held by no cell of the copy.
+      std::vector<std::size_t> first(cells, kNone);
+      std::vector<bool> missing(cells, false);
+      for (std::size_t f = 0; f < fine; ++f) {
+        const CellId c = (*to.of_fine)[f], o = (*from.of_fine)[f];
+        if (c == kNoCell) continue;
+        RAYCELL_CHECK_LT(c.value(), cells);
+        if (o == kNoCell || (*from.footprints)[o.value()] == 0) continue;  // no data there
+        const std::size_t p = position[o.value()];
+        if (p == kNone) {
+          missing[c.value()] = true;
+        } else {
+          first[c.value()] = std::min(first[c.value()], p);
+        }
+      }
+      std::vector<std::pair<std::size_t, std::uint32_t>> kept;
+      for (std::uint32_t c = 0; c < cells; ++c) {
+        if (!missing[c] && first[c] != kNone && (*to.footprints)[c] > 0)
+          kept.push_back({first[c], c});
+      }
+      std::sort(kept.begin(), kept.end());
+      out.held.back().emplace_back();
+      for (const auto& [p, c] : kept) out.held.back().back().push_back(CellId(c));
+    }
+  }
+  return out;
 }
 
 std::uint32_t UnitCount(const MemoryUnits* units, std::size_t level, std::uint32_t cells) {

@@ -42,8 +42,9 @@ class CellStore {
   bool diverged() const { return policy_->diverged(); }
   // The held cells, first victim first (ReplacementPolicy::EvictionOrder).
   std::vector<CellId> Held() const { return policy_->EvictionOrder(held_); }
-  // Keeps `cells` (as Held() listed them) without counting them as requests or fetches: the
-  // state a frame starts from. They fit by construction (the same level held them).
+  // Keeps `cells` (as Held() listed them, or as CarryOver gave them) without counting them as
+  // requests or fetches: the state a frame starts from. Inserted in that order, the policy
+  // evicting as it must when they do not fit (they do when the same level held them).
   void Restore(const std::vector<CellId>& cells);
 
  private:
@@ -81,6 +82,23 @@ struct MemoryState {
   std::vector<std::vector<std::vector<CellId>>> held;  // [level][copy]
   bool empty() const { return held.empty(); }
 };
+
+// One frame's cells as unions of a fine grid's cells (a dynamic subdivision, whose cells are
+// other boxes every frame): per fine cell its cell (kNoCell: none), and per cell its
+// footprint in that frame (0: empty, no data).
+struct FrameCells {
+  const std::vector<CellId>* of_fine = nullptr;
+  const std::vector<std::uint64_t>* footprints = nullptr;
+};
+// What `state`, left by a frame of cells `from`, holds of the next frame's cells `to`
+// (docs/design.md §2 "Across frames"): a level copy holds a non-empty cell of `to` when each
+// of its fine cells lies in a cell of `from` that the copy held, or in an empty one (no
+// data); a cell only partly held is not held. Each copy lists its cells first victim first,
+// by the earliest victim among the cells of `from` that hold its data, ties by cell number.
+// The list may not fit the level (a cell larger than it, or more cells than it holds):
+// CellStore::Restore keeps what the policy keeps when inserting them in that order. Every
+// level must hold the replay's cells (no LevelUnits).
+MemoryState CarryOver(const MemoryState& state, const FrameCells& from, const FrameCells& to);
 // Per level of `state`, per unit of the level (`cells` of the replay, units as UnitCount
 // gives them): whether some copy of the level holds it.
 std::vector<std::vector<bool>> HeldAnywhere(const MemoryState& state, std::uint32_t cells,

@@ -132,6 +132,19 @@ std::vector<std::uint32_t> FineCellsOf(const FineBox& b, const std::array<std::u
   return out;
 }
 
+std::vector<CellId> CellOfFine(const std::vector<FineBox>& boxes,
+                               const std::array<std::uint32_t, 3>& g) {
+  std::vector<CellId> of(std::size_t{g[0]} * g[1] * g[2], kNoCell);
+  for (std::uint32_t c = 0; c < boxes.size(); ++c) {
+    for (std::uint32_t f : FineCellsOf(boxes[c], g)) {
+      RAYCELL_CHECK_LT(f, of.size());
+      RAYCELL_CHECK(of[f] == kNoCell);
+      of[f] = CellId(c);
+    }
+  }
+  return of;
+}
+
 std::string SubdivisionSpec::ToString() const {
   switch (kind) {
     case Kind::kUniform:
@@ -267,13 +280,7 @@ Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
   std::sort(out.boxes.begin(), out.boxes.end(), [](const FineBox& a, const FineBox& b) {
     return std::array{a.lo[2], a.lo[1], a.lo[0]} < std::array{b.lo[2], b.lo[1], b.lo[0]};
   });
-  out.coarse_of_fine.assign(n, kNoCell);
-  for (std::uint32_t c = 0; c < out.cells(); ++c) {
-    for (std::uint32_t f : FineCellsOf(out.boxes[c], fine.grid)) {
-      RAYCELL_CHECK(out.coarse_of_fine[f] == kNoCell);
-      out.coarse_of_fine[f] = CellId(c);
-    }
-  }
+  out.coarse_of_fine = CellOfFine(out.boxes, fine.grid);
   return out;
 }
 

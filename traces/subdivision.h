@@ -80,6 +80,10 @@ struct FineBox {
 
 // The fine cells of a box of a fine grid `g` (numbered x + nx*(y + ny*z)), in increasing order.
 std::vector<std::uint32_t> FineCellsOf(const FineBox& b, const std::array<std::uint32_t, 3>& g);
+// Per fine cell of `g`, the box of `boxes` holding it (its index), kNoCell where none does.
+// The boxes must not overlap (a RAYCELL_CHECK).
+std::vector<CellId> CellOfFine(const std::vector<FineBox>& boxes,
+                               const std::array<std::uint32_t, 3>& g);
 
 struct Subdivision {
   // Per coarse cell, its box, ordered by the box's lowest corner (z, then y, then x), so that

@@ -2,12 +2,22 @@
 
 #include <algorithm>
 
+#include "base/check.h"
 #include "base/format.h"
 
 namespace raycell {
 
 std::string FormatVec3(const Vec3d& v) {
   return FormatReal(v.x) + "," + FormatReal(v.y) + "," + FormatReal(v.z);
+}
+
+std::vector<CellId> SubdivisionInfo::CellOfFine(std::size_t frame, std::uint32_t cells) const {
+  const std::size_t per_frame = spec.rfind("dynamic:", 0) == 0 ? cells : 0;
+  const std::size_t first = frame * per_frame;
+  RAYCELL_CHECK_LE(first + cells, boxes.size());
+  return raycell::CellOfFine(std::vector<FineBox>(boxes.begin() + std::ptrdiff_t(first),
+                                                  boxes.begin() + std::ptrdiff_t(first + cells)),
+                             fine);
 }
 
 std::uint64_t CellLeaves::UnionBytes(const std::vector<std::uint32_t>& cells) const {

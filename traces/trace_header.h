@@ -117,6 +117,9 @@ struct SubdivisionInfo {
   // cell's largest over the frames); empty otherwise.
   std::vector<std::uint64_t> frame_footprints;
   bool empty() const { return spec.empty(); }
+  // Per fine cell, its cell in frame `frame` (an index into the trace's frames) of a trace of
+  // `cells` cells each frame: the boxes of that frame (`dynamic:N`) or the only ones.
+  std::vector<CellId> CellOfFine(std::size_t frame, std::uint32_t cells) const;
   bool operator==(const SubdivisionInfo& o) const {
     return spec == o.spec && fine == o.fine && boxes == o.boxes &&
            frame_footprints == o.frame_footprints;
@@ -149,7 +152,7 @@ struct TraceHeader {
   // such a capture (docs/design.md §2 "Memory").
   bool volume_changes() const { return scene.find('%') != std::string::npos; }
   // Whether a cell is a different box from one frame to the next (a dynamic subdivision):
-  // memory, like a changing volume's, keeps nothing between frames.
+  // warm memory carries what it held over through the fine cells (replay/memory.h CarryOver).
   bool cells_change() const { return subdivision.spec.rfind("dynamic:", 0) == 0; }
   bool operator==(const TraceHeader& o) const {
     return format_version == o.format_version && producer == o.producer && scene == o.scene &&

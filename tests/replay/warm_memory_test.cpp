@@ -204,5 +204,94 @@ TEST(WarmMemory, ASequenceOfVolumesKeepsNothing) {
   std::remove(path.c_str());
 }
 
+// A dynamic subdivision's cells are other boxes every frame: what a level held carries over
+// through the fine cells (CarryOver). Four fine cells in a row; the old cells X = {0, 1},
+// Y = {2} and Z = {3} (empty: no data); the new ones P = {0}, Q = {1}, S = {2, 3}.
+TEST(WarmMemory, CarryOverKeepsTheNewCellsWhoseDataIsHeld) {
+  const std::vector<CellId> old_of_fine{CellId(0), CellId(0), CellId(1), CellId(2)};
+  const std::vector<CellId> new_of_fine{CellId(0), CellId(1), CellId(2), CellId(2)};
+  const std::vector<std::uint64_t> old_fp{100, 50, 0}, new_fp{60, 40, 50};
+  const FrameCells from{&old_of_fine, &old_fp}, to{&new_of_fine, &new_fp};
+  MemoryState state;
+  // Level 0, two processors: one holds X (P and Q, ties by number), one Y (S: Z holds no
+  // data). Level 1 holds Y then X (Y the first victim): S first, then P and Q.
+  state.held = {{{CellId(0)}, {CellId(1)}}, {{CellId(1), CellId(0)}}};
+  const MemoryState out = CarryOver(state, from, to);
+  ASSERT_EQ(out.held.size(), 2u);
+  ASSERT_EQ(out.held[0].size(), 2u);
+  EXPECT_EQ(out.held[0][0], (std::vector<CellId>{CellId(0), CellId(1)}));
+  EXPECT_EQ(out.held[0][1], (std::vector<CellId>{CellId(2)}));
+  EXPECT_EQ(out.held[1][0], (std::vector<CellId>{CellId(2), CellId(0), CellId(1)}));
+  // Back the other way: a new cell partly held is not held. Holding P alone keeps none of
+  // X = {P, Q}; holding Q and S keeps Y, not X; an empty cell (Z) is never held.
+  const FrameCells back_from{&new_of_fine, &new_fp}, back_to{&old_of_fine, &old_fp};
+  state.held = {{{CellId(0)}, {CellId(1), CellId(2)}}};
+  const MemoryState back = CarryOver(state, back_from, back_to);
+  EXPECT_EQ(back.held[0][0], std::vector<CellId>{});
+  EXPECT_EQ(back.held[0][1], (std::vector<CellId>{CellId(1)}));
+}
+
+// The same through a whole replay: a trace of a dynamic:2 subdivision of four fine cells in a
+// row, a one-cell cache and a board that holds everything (the default configuration).
+//   frame 0: X = {0, 1}, Y = {2, 3}; one ray in X. PCI: X.
+//   frame 1: P = {0}, Q = {1, 2, 3}; a ray P then Q. P lies in X: the cache and the board hold
+//            it. Q is partly in Y, never loaded: fetched over PCI. Warm: 1 cache fetch, 1 PCI.
+//   frame 2: X and Y again; a ray Y then X. The board holds both (P and Q cover them), the
+//            cache Y (in Q): Y hits, X comes from the board. Warm: 1 cache fetch, 0 PCI.
+// Cold, every cell visited is fetched over PCI: 2 and 2.
+TEST(WarmMemory, ADynamicSubdivisionCarriesItsCellsThroughTheFineCells) {
+  const std::string path = testing::TempPath("warm", "dynamic.rct");
+  TraceHeader h;
+  h.producer = "raycell test";
+  h.scene = "builtin:test";
+  h.cells = {2, 1, 1};
+  h.subdivision.spec = "dynamic:2";
+  h.subdivision.fine = {4, 1, 1};
+  const auto box = [](std::uint32_t lo, std::uint32_t hi) {
+    return FineBox{{lo, 0, 0}, {hi, 1, 1}};
+  };
+  h.subdivision.boxes = {box(0, 2), box(2, 4), box(0, 1), box(1, 4), box(0, 2), box(2, 4)};
+  h.subdivision.frame_footprints = {4096, 4096, 2048, 8192, 4096, 4096};
+  h.footprints = {4096, 8192};
+  for (int f = 0; f < 3; ++f) h.cameras.push_back({f, {1, 2, 3.0 + f}, {0, 0, 0}, {0, 1, 0}, 40});
+  {
+    TraceWriter w = TraceWriter::Create(path, h, 3);
+    const std::vector<RayBatch> frames = {testing::RaysOf({{kNoParent, 0, {A}}}, 3),
+                                          testing::RaysOf({{kNoParent, 0, {A, B}}}, 3),
+                                          testing::RaysOf({{kNoParent, 0, {B, A}}}, 3)};
+    for (int f = 0; f < 3; ++f) {
+      w.BeginFrame(f);
+      w.Append(frames[std::size_t(f)]);
+      w.EndFrame();
+    }
+    w.Finish();
+  }
+  const TraceReader reader = TraceReader::Open(path);
+  ASSERT_TRUE(reader.header().cells_change());
+  ReplayConfig config = DefaultConfig();
+  const TraceReplay warm = ReplayTrace(reader, {0, 1, 2}, config);
+  ASSERT_EQ(warm.frames.size(), 3u);
+  const std::vector<std::uint64_t> cache{1, 1, 1}, pci{1, 1, 0};
+  for (std::size_t f = 0; f < 3; ++f) {
+    SCOPED_TRACE(f);
+    EXPECT_EQ(warm.frames[f].levels[0].fetches, cache[f]);
+    EXPECT_EQ(warm.frames[f].levels[1].fetches, pci[f]);
+  }
+  EXPECT_EQ(warm.frames[1].levels[1].bytes, 8192u);  // Q, at its frame-1 footprint
+  // A range that starts at frame 2 replays frames 0 and 1 first: the same frame 2.
+  const TraceReplay last = ReplayTrace(reader, {2}, config);
+  ASSERT_EQ(last.frames.size(), 1u);
+  EXPECT_EQ(last.frames[0].levels[0].fetches, 1u);
+  EXPECT_EQ(last.frames[0].levels[1].fetches, 0u);
+  EXPECT_EQ(last.frames[0].time, warm.frames[2].time);
+  config.memory.across_frames = kCold;
+  const TraceReplay cold = ReplayTrace(reader, {0, 1, 2}, config);
+  for (std::size_t f = 1; f < 3; ++f) {
+    EXPECT_EQ(cold.frames[f].levels[0].fetches, 2u);
+    EXPECT_EQ(cold.frames[f].levels[1].fetches, 2u);
+  }
+  std::remove(path.c_str());
+}
+
 }  // namespace
 }  // namespace raycell
