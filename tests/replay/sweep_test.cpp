@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -84,6 +85,47 @@ std::string WriteTrace(int frames) {
   const TraceHeader h = MakeHeader(frames);
   TraceWriter w = TraceWriter::Create(path, h, 3);
   std::mt19937 rng(7);
+  for (int f = 0; f < frames; ++f) {
+    w.BeginFrame(f);
+    w.Append(RandomFrame(rng, 40, h.cell_count()));
+    w.EndFrame();
+  }
+  w.Finish();
+  return path;
+}
+
+// WriteTrace's frames on the cells of a dynamic subdivision: six boxes of a 6x2x1 fine grid,
+// other boxes every frame (six slabs, then 2x1 blocks, then a mix, then the slabs again), so
+// that warm memory carries its cells over through the fine cells (design §2).
+std::string WriteDynamicTrace(int frames) {
+  const std::string path = TempPath("dynamic.rct");
+  TraceHeader h = MakeHeader(frames);
+  h.cells = {6, 1, 1};
+  h.subdivision.spec = "dynamic:6";
+  h.subdivision.fine = {6, 2, 1};
+  const auto box = [](std::uint32_t x0, std::uint32_t x1, std::uint32_t y0, std::uint32_t y1) {
+    return FineBox{{x0, y0, 0}, {x1, y1, 1}};
+  };
+  const std::vector<std::vector<FineBox>> partitions = {
+      {box(0, 1, 0, 2), box(1, 2, 0, 2), box(2, 3, 0, 2), box(3, 4, 0, 2), box(4, 5, 0, 2),
+       box(5, 6, 0, 2)},
+      {box(0, 2, 0, 1), box(2, 4, 0, 1), box(4, 6, 0, 1), box(0, 2, 1, 2), box(2, 4, 1, 2),
+       box(4, 6, 1, 2)},
+      {box(0, 1, 0, 2), box(1, 3, 0, 1), box(3, 5, 0, 1), box(5, 6, 0, 2), box(1, 3, 1, 2),
+       box(3, 5, 1, 2)}};
+  h.footprints.assign(6, 0);
+  for (int f = 0; f < frames; ++f) {
+    for (const FineBox& b : partitions[std::size_t(f) % partitions.size()]) {
+      std::uint64_t bytes = 0;  // fine cell x + 6y holds 1024 x (1 + (x + 6y) % 4) bytes
+      for (std::uint32_t fine : FineCellsOf(b, h.subdivision.fine)) bytes += 1024 * (1 + fine % 4);
+      const std::size_t c = h.subdivision.boxes.size() % 6;
+      h.subdivision.boxes.push_back(b);
+      h.subdivision.frame_footprints.push_back(bytes);
+      h.footprints[c] = std::max(h.footprints[c], bytes);
+    }
+  }
+  TraceWriter w = TraceWriter::Create(path, h, 3);
+  std::mt19937 rng(11);
   for (int f = 0; f < frames; ++f) {
     w.BeginFrame(f);
     w.Append(RandomFrame(rng, 40, h.cell_count()));
@@ -362,6 +404,37 @@ TEST_F(SweepTest, MergedFrameShardsEqualTheRunOverTheirRange) {
     MergeSweepShards(merged, both);
     EXPECT_EQ(ReadBytes(merged), whole);
   }
+}
+
+// The same on cells that change every frame: each part replays the frames before it to carry
+// its warm memory over, through the fine cells, as the whole run does.
+TEST_F(SweepTest, MergedFrameShardsEqualTheRunOverTheirRangeWithCellsThatChange) {
+  const std::string path = WriteDynamicTrace(4);
+  paths_.push_back(path);
+  const TraceReader reader = TraceReader::Open(path);
+  ASSERT_TRUE(reader.header().cells_change());
+  // The carry matters here: warm memory fetches less over PCI than cold.
+  ReplayConfig cold = DefaultConfig();
+  cold.memory.across_frames = MemoryConfig::AcrossFrames::kCold;
+  EXPECT_LT(ReplayTrace(reader, {0, 1, 2, 3}, DefaultConfig()).total.levels[1].fetches,
+            ReplayTrace(reader, {0, 1, 2, 3}, cold).total.levels[1].fetches);
+  SweepSpec base = Mixed();
+  base.trace = path;
+  const auto run = [&](const SweepSpec& spec, const std::string& name, unsigned jobs) {
+    const std::string out = Fresh(name);
+    SweepOptions options;
+    options.jobs = jobs;
+    EXPECT_TRUE(RunSweep(reader, spec, out, options).complete);
+    return out;
+  };
+  const std::string whole = ReadBytes(run(Frames(base, "0..3"), "dyn_whole.csv", 2));
+  std::vector<std::string> parts;
+  for (const char* range : {"2..3", "0..0", "1..1"}) {
+    parts.push_back(run(Frames(base, range), std::string("dyn_") + range + ".csv", 1));
+  }
+  const std::string merged = Fresh("dyn_merged.csv");
+  MergeSweepShards(merged, parts);
+  EXPECT_EQ(ReadBytes(merged), whole);
 }
 
 TEST_F(SweepTest, MergeRefusesOverlappingOrMissingFrames) {
