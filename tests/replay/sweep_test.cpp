@@ -80,13 +80,12 @@ RayBatch RandomFrame(std::mt19937& rng, std::size_t rays, std::uint32_t cells) {
   return b;
 }
 
-std::string WriteTrace(int frames) {
-  const std::string path = TempPath("trace.rct");
-  const TraceHeader h = MakeHeader(frames);
+// Writes `path`: `h` and one RandomFrame of 40 rays per camera, from `seed`.
+std::string WriteFrames(const std::string& path, const TraceHeader& h, std::uint32_t seed) {
   TraceWriter w = TraceWriter::Create(path, h, 3);
-  std::mt19937 rng(7);
-  for (int f = 0; f < frames; ++f) {
-    w.BeginFrame(f);
+  std::mt19937 rng(seed);
+  for (std::size_t f = 0; f < h.cameras.size(); ++f) {
+    w.BeginFrame(int(f));
     w.Append(RandomFrame(rng, 40, h.cell_count()));
     w.EndFrame();
   }
@@ -94,11 +93,14 @@ std::string WriteTrace(int frames) {
   return path;
 }
 
+std::string WriteTrace(int frames) {
+  return WriteFrames(TempPath("trace.rct"), MakeHeader(frames), 7);
+}
+
 // WriteTrace's frames on the cells of a dynamic subdivision: six boxes of a 6x2x1 fine grid,
 // other boxes every frame (six slabs, then 2x1 blocks, then a mix, then the slabs again), so
 // that warm memory carries its cells over through the fine cells (design §2).
 std::string WriteDynamicTrace(int frames) {
-  const std::string path = TempPath("dynamic.rct");
   TraceHeader h = MakeHeader(frames);
   h.cells = {6, 1, 1};
   h.subdivision.spec = "dynamic:6";
@@ -124,15 +126,7 @@ std::string WriteDynamicTrace(int frames) {
       h.footprints[c] = std::max(h.footprints[c], bytes);
     }
   }
-  TraceWriter w = TraceWriter::Create(path, h, 3);
-  std::mt19937 rng(11);
-  for (int f = 0; f < frames; ++f) {
-    w.BeginFrame(f);
-    w.Append(RandomFrame(rng, 40, h.cell_count()));
-    w.EndFrame();
-  }
-  w.Finish();
-  return path;
+  return WriteFrames(TempPath("dynamic.rct"), h, 11);
 }
 
 class SweepTest : public ::testing::Test {
