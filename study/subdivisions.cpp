@@ -40,7 +40,8 @@ std::uint64_t Median(const std::vector<std::uint64_t>& sorted) {
 
 std::vector<std::string> SubdivisionSpecs(std::uint64_t cache_bytes) {
   const std::string budget = std::to_string(cache_bytes) + "B";
-  return {"3x3x3",     "kd:27:footprint", "kd:27:work", "kd:budget:" + budget, "octree:" + budget,
+  return {"3x3x3",      "kd:27:footprint",     "kd:27:work",
+          "kd:27:sqrt", "kd:budget:" + budget, "octree:" + budget,
           "dynamic:27"};
 }
 

@@ -232,6 +232,8 @@ void AddRegroup(CLI::App& trace) {
       "  NXxNYxNZ          uniform; each count divides the fine grid's\n"
       "  kd:N:footprint    k-d tree of N cells, footprints as equal as possible\n"
       "  kd:N:work         k-d tree of N cells, samples (over all frames) as equal as possible\n"
+      "  kd:N:sqrt         k-d tree of N cells, footprint / sqrt(samples + 1) as equal as\n"
+      "                    possible: footprints in proportion to the square root of the work\n"
       "  kd:budget:BYTES   k-d tree until every cell fits BYTES (e.g. 256KiB) or is one fine cell\n"
       "  octree:BYTES      octree: halve every axis while a cell is over BYTES\n"
       "  dynamic:N         kd:N:work on the previous frame's samples, per frame (frame 0 by\n"

@@ -1,6 +1,7 @@
 #include "traces/subdivision.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "base/check.h"
 #include "base/parse.h"
@@ -20,27 +21,34 @@ std::uint64_t ParseBudget(std::string_view text, const std::string& what) {
   return b;
 }
 
-// What a k-d split balances.
+// What a k-d split balances: a box's footprint (the union's bytes), its samples, or its
+// footprint over the square root of its samples plus one (kd:N:sqrt, which gives each cell a
+// footprint in proportion to the square root of its work). Doubles: footprints are exact up
+// to 2^53 bytes.
 class Weigher {
  public:
-  Weigher(const FineCells& fine, bool by_work) : fine_(fine), by_work_(by_work) {}
-  std::uint64_t operator()(const FineBox& b) const {
+  enum class By { kFootprint, kWork, kSqrt };
+  Weigher(const FineCells& fine, By by) : fine_(fine), by_(by) {}
+  double operator()(const FineBox& b) const {
     const std::vector<std::uint32_t> cells = FineCellsOf(b, fine_.grid);
-    if (!by_work_) return fine_.union_footprint(cells);
-    std::uint64_t sum = 0;
-    for (std::uint32_t c : cells) sum += fine_.samples[c];
-    return sum;
+    std::uint64_t samples = 0;
+    if (by_ != By::kFootprint) {
+      for (std::uint32_t c : cells) samples += fine_.samples[c];
+    }
+    if (by_ == By::kWork) return double(samples);
+    const double bytes = double(fine_.union_footprint(cells));
+    return by_ == By::kFootprint ? bytes : bytes / std::sqrt(double(samples) + 1.0);
   }
 
  private:
   const FineCells& fine_;
-  bool by_work_;
+  By by_;
 };
 
 // A box split in two, and the weight of each half.
 struct BoxSplit {
   FineBox lower, upper;
-  std::uint64_t lower_weight = 0, upper_weight = 0;
+  double lower_weight = 0, upper_weight = 0;
 };
 
 // Splits `b` (more than one fine cell) at the fine boundary whose larger half weighs least;
@@ -70,7 +78,7 @@ BoxSplit BestSplit(const FineBox& b, const Weigher& weigh) {
 template <typename More>
 std::vector<FineBox> KdTree(const FineBox& whole, const Weigher& weigh, More more) {
   std::vector<FineBox> boxes{whole};
-  std::vector<std::uint64_t> weights{weigh(whole)};
+  std::vector<double> weights{weigh(whole)};
   while (more(boxes, weights)) {
     std::size_t pick = boxes.size();
     for (std::size_t i = 0; i < boxes.size(); ++i) {
@@ -89,7 +97,7 @@ std::vector<FineBox> KdTree(const FineBox& whole, const Weigher& weigh, More mor
 
 void Octree(const FineBox& b, const Weigher& weigh, std::uint64_t budget,
             std::vector<FineBox>* out) {
-  if (b.volume() < 2 || weigh(b) <= budget) {
+  if (b.volume() < 2 || weigh(b) <= double(budget)) {
     out->push_back(b);
     return;
   }
@@ -154,6 +162,8 @@ std::string SubdivisionSpec::ToString() const {
       return "kd:" + std::to_string(cells) + ":footprint";
     case Kind::kKdWork:
       return "kd:" + std::to_string(cells) + ":work";
+    case Kind::kKdSqrt:
+      return "kd:" + std::to_string(cells) + ":sqrt";
     case Kind::kKdBudget:
       return "kd:budget:" + Bytes(budget).ToString();
     case Kind::kOctree:
@@ -169,8 +179,8 @@ SubdivisionSpec ParseSubdivisionSpec(std::string_view text, const std::string& w
   const std::string t(Trim(text));
   const std::vector<std::string> parts = Split(t, ':');
   const std::string expected =
-      " (expected NXxNYxNZ, kd:N:footprint, kd:N:work, kd:budget:BYTES, octree:BYTES or "
-      "dynamic:N)";
+      " (expected NXxNYxNZ, kd:N:footprint, kd:N:work, kd:N:sqrt, kd:budget:BYTES, octree:BYTES "
+      "or dynamic:N)";
   SubdivisionSpec s;
   if (parts.size() == 1) {
     const std::vector<std::string> dims = Split(t, 'x');
@@ -199,8 +209,11 @@ SubdivisionSpec ParseSubdivisionSpec(std::string_view text, const std::string& w
       s.kind = SubdivisionSpec::Kind::kKdFootprint;
     } else if (parts[2] == "work") {
       s.kind = SubdivisionSpec::Kind::kKdWork;
+    } else if (parts[2] == "sqrt") {
+      s.kind = SubdivisionSpec::Kind::kKdSqrt;
     } else {
-      throw InputError(what + ": kd balances 'footprint' or 'work', not '" + parts[2] + "'");
+      throw InputError(what + ": kd balances 'footprint', 'work' or 'sqrt', not '" + parts[2] +
+                       "'");
     }
   } else if (kind == "octree" && parts.size() == 2) {
     s.kind = SubdivisionSpec::Kind::kOctree;
@@ -222,12 +235,15 @@ Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
   const FineBox whole{{0, 0, 0}, fine.grid};
   const bool dynamic_work = spec.kind == Kind::kDynamic && !fine.samples.empty();
   const bool by_work = spec.kind == Kind::kKdWork || dynamic_work;
-  if (by_work && fine.samples.size() != n) {
+  const bool by_sqrt = spec.kind == Kind::kKdSqrt;
+  if ((by_work || by_sqrt) && fine.samples.size() != n) {
     throw InputError(what + ": needs the samples of each of the " + std::to_string(n) +
                      " fine cells");
   }
   if (!by_work && spec.kind != Kind::kUniform) RAYCELL_CHECK(fine.union_footprint != nullptr);
-  const Weigher weigh(fine, by_work);
+  const Weigher weigh(fine, by_work   ? Weigher::By::kWork
+                            : by_sqrt ? Weigher::By::kSqrt
+                                      : Weigher::By::kFootprint);
   Subdivision out;
   switch (spec.kind) {
     case Kind::kUniform: {
@@ -257,6 +273,7 @@ Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
     }
     case Kind::kKdFootprint:
     case Kind::kKdWork:
+    case Kind::kKdSqrt:
     case Kind::kDynamic:
       if (spec.cells > n) {
         throw InputError(what + ": " + std::to_string(spec.cells) + " cells from " +
@@ -268,7 +285,7 @@ Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
     case Kind::kKdBudget:
       out.boxes = KdTree(whole, weigh, [&](const auto& boxes, const auto& weights) {
         for (std::size_t i = 0; i < boxes.size(); ++i) {
-          if (boxes[i].volume() > 1 && weights[i] > spec.budget) return true;
+          if (boxes[i].volume() > 1 && weights[i] > double(spec.budget)) return true;
         }
         return false;
       });

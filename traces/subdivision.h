@@ -13,6 +13,10 @@
 //                       fine boundary that makes the larger half smallest (footprints as equal
 //                       as possible);
 //   kd:N:work           the same balancing samples (work) instead of footprints;
+//   kd:N:sqrt           the same balancing footprint / sqrt(samples + 1): each cell's footprint
+//                       in proportion to the square root of its work, so that cells where rays
+//                       work much stay large (fewer crossings to fetch for) and cells of data
+//                       that little work needs are cut small (fewer bytes for it);
 //   kd:budget:BYTES     a k-d tree split until every cell's footprint is at most BYTES, or is
 //                       one fine cell ("cell size set to memory size");
 //   octree:BYTES        an octree: a box over BYTES splits in halves along every axis longer
@@ -35,10 +39,10 @@
 namespace raycell {
 
 struct SubdivisionSpec {
-  enum class Kind { kUniform, kKdFootprint, kKdWork, kKdBudget, kOctree, kDynamic };
+  enum class Kind { kUniform, kKdFootprint, kKdWork, kKdSqrt, kKdBudget, kOctree, kDynamic };
   Kind kind = Kind::kUniform;
   std::array<std::uint32_t, 3> grid{1, 1, 1};  // kUniform
-  std::uint32_t cells = 0;                     // kd:N:footprint, kd:N:work, dynamic:N
+  std::uint32_t cells = 0;                     // kd:N:footprint, kd:N:work, kd:N:sqrt, dynamic:N
   std::uint64_t budget = 0;                    // kd:budget:BYTES, octree:BYTES (bytes, > 0)
 
   // The canonical SPEC ("3x3x3", "kd:27:footprint", "octree:256KiB"); parses back equal.
@@ -62,8 +66,8 @@ struct FineCells {
   // The bytes a processor loads for the union of these fine cells, each leaf once. Called
   // with the fine cells of one box, in increasing order.
   std::function<std::uint64_t(const std::vector<std::uint32_t>&)> union_footprint;
-  // Work per fine cell (samples): kd:N:work's weights, and dynamic's (the previous frame's;
-  // empty for frame 0, which then splits by footprint).
+  // Work per fine cell (samples): kd:N:work's and kd:N:sqrt's weights, and dynamic's (the
+  // previous frame's; empty for frame 0, which then splits by footprint).
   std::vector<std::uint64_t> samples;
 
   std::uint32_t count() const { return grid[0] * grid[1] * grid[2]; }

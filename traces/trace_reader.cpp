@@ -1159,7 +1159,10 @@ struct TraceReader::Impl {
     fine.union_footprint = [this](const std::vector<std::uint32_t>& c) {
       return header.leaves.UnionBytes(c);
     };
-    if (spec.kind == SubdivisionSpec::Kind::kKdWork) fine.samples = FineSamples(std::size_t(-1));
+    if (spec.kind == SubdivisionSpec::Kind::kKdWork ||
+        spec.kind == SubdivisionSpec::Kind::kKdSqrt) {
+      fine.samples = FineSamples(std::size_t(-1));
+    }
     return fine;
   }
   // Per cell of `sub`, the bytes of its fine cells' leaves, each once.

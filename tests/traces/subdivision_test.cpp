@@ -100,8 +100,8 @@ void ExpectCoversOnce(const Subdivision& s, const Grid& g, const std::string& sp
 }
 
 TEST(SubdivisionSpec, ParsesEveryKindAndPrintsItBack) {
-  for (const char* text : {"3x3x3", "12x1x4", "kd:27:footprint", "kd:8:work", "kd:budget:256KiB",
-                           "octree:1MB", "octree:1500B", "dynamic:27"}) {
+  for (const char* text : {"3x3x3", "12x1x4", "kd:27:footprint", "kd:8:work", "kd:9:sqrt",
+                           "kd:budget:256KiB", "octree:1MB", "octree:1500B", "dynamic:27"}) {
     const SubdivisionSpec s = ParseSubdivisionSpec(text, "--cells");
     EXPECT_EQ(s.ToString(), text);
     EXPECT_EQ(ParseSubdivisionSpec(s.ToString(), "--cells"), s);
@@ -125,7 +125,8 @@ TEST(SubdivisionSpec, BadSpecsNameWhatIsWrong) {
   EXPECT_NE(message("3x3").find("is not a cell subdivision"), std::string::npos);
   EXPECT_NE(message("0x3x3").find("out of range"), std::string::npos);
   EXPECT_NE(message("kd:0:work").find("out of range"), std::string::npos);
-  EXPECT_NE(message("kd:27:voxels").find("'footprint' or 'work'"), std::string::npos);
+  EXPECT_NE(message("kd:27:voxels").find("'footprint', 'work' or 'sqrt', not 'voxels'"),
+            std::string::npos);
   EXPECT_NE(message("kd:x:work").find("not an integer"), std::string::npos);
   EXPECT_NE(message("octree:0B").find("greater than zero"), std::string::npos);
   EXPECT_NE(message("octree:12").find("missing unit"), std::string::npos);
@@ -148,7 +149,7 @@ TEST(Subdivision, EverySubdivisionCoversEachFineCellExactlyOnce) {
     const std::uint32_t n = g[0] * g[1] * g[2];
     for (std::uint32_t k : {2u, 7u, 27u, n}) {
       if (k > n) continue;
-      for (const char* kind : {"kd:%u:footprint", "kd:%u:work", "dynamic:%u"}) {
+      for (const char* kind : {"kd:%u:footprint", "kd:%u:work", "kd:%u:sqrt", "dynamic:%u"}) {
         char buf[64];
         std::snprintf(buf, sizeof buf, kind, k);
         specs.push_back(buf);
@@ -161,7 +162,11 @@ TEST(Subdivision, EverySubdivisionCoversEachFineCellExactlyOnce) {
     for (const std::string& text : specs) {
       const SubdivisionSpec spec = ParseSubdivisionSpec(text, "test");
       for (const bool samples : {true, false}) {
-        if (!samples && spec.kind == SubdivisionSpec::Kind::kKdWork) continue;
+        if (!samples && (spec.kind == SubdivisionSpec::Kind::kKdWork ||
+                         spec.kind == SubdivisionSpec::Kind::kKdSqrt)) {
+          EXPECT_THROW(Subdivide(spec, m.Cells(false)), InputError) << text;  // needs samples
+          continue;
+        }
         const Subdivision s = Subdivide(spec, m.Cells(samples));
         ExpectCoversOnce(s, g, text);
         if (spec.cells > 0) {
@@ -245,6 +250,32 @@ TEST(Subdivision, KdFootprintBalancesBetterThanTheUniformGrid) {
   const std::uint64_t kd =
       largest(Subdivide(ParseSubdivisionSpec("kd:27:footprint", "t"), m.Cells()));
   EXPECT_LT(kd, uniform);
+}
+
+// kd:N:sqrt balances footprint / sqrt(samples + 1). Four fine cells in a row, 100 bytes each
+// (no leaf shared), samples 0, 0, 3 and 96. The first split, by the larger half's weight:
+//   at 1: [0,1) 100 / 1 = 100, [1,4) 300 / 10 = 30         -> 100
+//   at 2: [0,2) 200 / 1 = 200, [2,4) 200 / 10 = 20         -> 200
+//   at 3: [0,3) 300 / 2 = 150, [3,4) 100 / sqrt(97) = 10.2 -> 150
+// so at 1, where kd:2:footprint splits at 2 (200 against 200) and kd:2:work at 3 (96 against
+// 99 elsewhere). The third cell splits [1,4), the only box of more than one fine cell: at 2
+// ([1,2) 100, [2,4) 20) and at 3 ([1,3) 200 / 2 = 100, [3,4) 10.2) tie at 100: the lower.
+TEST(Subdivision, KdSqrtBalancesFootprintOverTheSquareRootOfWork) {
+  FineCells fine;
+  fine.grid = {4, 1, 1};
+  fine.union_footprint = [](const std::vector<std::uint32_t>& f) { return 100 * f.size(); };
+  fine.samples = {0, 0, 3, 96};
+  const auto boxes = [&](const char* spec) {
+    std::vector<std::uint32_t> upper;  // each box's upper x
+    for (const FineBox& b : Subdivide(ParseSubdivisionSpec(spec, "t"), fine).boxes) {
+      upper.push_back(b.hi[0]);
+    }
+    return upper;
+  };
+  EXPECT_EQ(boxes("kd:2:sqrt"), (std::vector<std::uint32_t>{1, 4}));
+  EXPECT_EQ(boxes("kd:2:footprint"), (std::vector<std::uint32_t>{2, 4}));
+  EXPECT_EQ(boxes("kd:2:work"), (std::vector<std::uint32_t>{3, 4}));
+  EXPECT_EQ(boxes("kd:3:sqrt"), (std::vector<std::uint32_t>{1, 2, 4}));
 }
 
 TEST(Subdivision, DynamicIsDeterministicAndFollowsTheSamples) {
