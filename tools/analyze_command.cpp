@@ -386,7 +386,7 @@ void AddAnalyzeCommand(CLI::App& app) {
   cmd->add_option("--cells", args->cells,
                   "a regroupable capture (`record --regroupable`) regrouped into this subdivision: "
                   "NXxNYxNZ, kd:N:footprint, kd:N:work, kd:N:sqrt, kd:budget:BYTES, octree:BYTES, "
-                  "dynamic:N (see `raycell trace regroup --help`); default: its own grid");
+                  "dynamic:N[:sqrt] (see `raycell trace regroup --help`); default: its own grid");
   cmd->add_option("--frame", args->frame, "analyse only this frame number (of TRACE or --paths)");
   cmd->add_option("--frames", args->frames,
                   "analyse only the frames numbered A..B (inclusive; also A-B or A)");

@@ -219,7 +219,7 @@ void AddReplayCommand(CLI::App& app) {
   cmd->add_option("--cells", args->cells,
                   "a regroupable capture (`record --regroupable`) regrouped into this subdivision: "
                   "NXxNYxNZ, kd:N:footprint, kd:N:work, kd:N:sqrt, kd:budget:BYTES, octree:BYTES, "
-                  "dynamic:N (see `raycell trace regroup --help`); default: its own grid");
+                  "dynamic:N[:sqrt] (see `raycell trace regroup --help`); default: its own grid");
   cmd->add_option("--config", args->config, "TOML configuration (unknown keys are errors)");
   cmd->add_option("--scheduler", args->scheduler,
                   SchedulerNameList(", ") + " (see Schedulers below)");

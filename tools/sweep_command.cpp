@@ -126,7 +126,7 @@ void AddSweepCommand(CLI::App& app) {
   cmd->add_option("--cells", args->cells,
                   "a regroupable capture (`record --regroupable`) regrouped into this subdivision: "
                   "NXxNYxNZ, kd:N:footprint, kd:N:work, kd:N:sqrt, kd:budget:BYTES, octree:BYTES, "
-                  "dynamic:N (see `raycell trace regroup --help`); default: its own grid");
+                  "dynamic:N[:sqrt] (see `raycell trace regroup --help`); default: its own grid");
   cmd->add_option("--config", args->config, "TOML configuration (default: the GI-Cube defaults)");
   cmd->add_option("--vary", args->varies,
                   "KEY=V1,V2,... a configuration key and its values (repeatable), e.g. "

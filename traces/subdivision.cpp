@@ -169,7 +169,7 @@ std::string SubdivisionSpec::ToString() const {
     case Kind::kOctree:
       return "octree:" + Bytes(budget).ToString();
     case Kind::kDynamic:
-      return "dynamic:" + std::to_string(cells);
+      return "dynamic:" + std::to_string(cells) + (sqrt ? ":sqrt" : "");
   }
   RAYCELL_CHECK(false);
   return {};
@@ -179,8 +179,8 @@ SubdivisionSpec ParseSubdivisionSpec(std::string_view text, const std::string& w
   const std::string t(Trim(text));
   const std::vector<std::string> parts = Split(t, ':');
   const std::string expected =
-      " (expected NXxNYxNZ, kd:N:footprint, kd:N:work, kd:N:sqrt, kd:budget:BYTES, octree:BYTES "
-      "or dynamic:N)";
+      " (expected NXxNYxNZ, kd:N:footprint, kd:N:work, kd:N:sqrt, kd:budget:BYTES, octree:BYTES, "
+      "dynamic:N or dynamic:N:sqrt)";
   SubdivisionSpec s;
   if (parts.size() == 1) {
     const std::vector<std::string> dims = Split(t, 'x');
@@ -218,9 +218,14 @@ SubdivisionSpec ParseSubdivisionSpec(std::string_view text, const std::string& w
   } else if (kind == "octree" && parts.size() == 2) {
     s.kind = SubdivisionSpec::Kind::kOctree;
     s.budget = ParseBudget(parts[1], what);
-  } else if (kind == "dynamic" && parts.size() == 2) {
+  } else if (kind == "dynamic" && (parts.size() == 2 || parts.size() == 3)) {
     s.kind = SubdivisionSpec::Kind::kDynamic;
     s.cells = ParseCount(parts[1], what, "dynamic cell count");
+    if (parts.size() == 3 && parts[2] != "sqrt") {
+      throw InputError(what + ": dynamic balances work (dynamic:N) or 'sqrt' (dynamic:N:sqrt), " +
+                       "not '" + parts[2] + "'");
+    }
+    s.sqrt = parts.size() == 3;
   } else {
     throw InputError(what + ": '" + t + "' is not a cell subdivision" + expected);
   }
@@ -234,8 +239,8 @@ Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
   const std::string what = "cell subdivision '" + spec.ToString() + "'";
   const FineBox whole{{0, 0, 0}, fine.grid};
   const bool dynamic_work = spec.kind == Kind::kDynamic && !fine.samples.empty();
-  const bool by_work = spec.kind == Kind::kKdWork || dynamic_work;
-  const bool by_sqrt = spec.kind == Kind::kKdSqrt;
+  const bool by_work = spec.kind == Kind::kKdWork || (dynamic_work && !spec.sqrt);
+  const bool by_sqrt = spec.kind == Kind::kKdSqrt || (dynamic_work && spec.sqrt);
   if ((by_work || by_sqrt) && fine.samples.size() != n) {
     throw InputError(what + ": needs the samples of each of the " + std::to_string(n) +
                      " fine cells");

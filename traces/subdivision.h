@@ -23,6 +23,7 @@
 //                       than one fine cell, until each is at most BYTES or one fine cell;
 //   dynamic:N           kd:N:work on the previous frame's samples, recomputed per frame (frame 0:
 //                       kd:N:footprint).
+//   dynamic:N:sqrt      the same with kd:N:sqrt on the previous frame's samples.
 // Splits are deterministic (ties: the lowest cell, axis x before y before z, the lowest
 // boundary), so the same fine data gives the same subdivision on every machine.
 #pragma once
@@ -44,11 +45,13 @@ struct SubdivisionSpec {
   std::array<std::uint32_t, 3> grid{1, 1, 1};  // kUniform
   std::uint32_t cells = 0;                     // kd:N:footprint, kd:N:work, kd:N:sqrt, dynamic:N
   std::uint64_t budget = 0;                    // kd:budget:BYTES, octree:BYTES (bytes, > 0)
+  bool sqrt = false;  // kDynamic: dynamic:N:sqrt, each frame balanced as kd:N:sqrt
 
   // The canonical SPEC ("3x3x3", "kd:27:footprint", "octree:256KiB"); parses back equal.
   std::string ToString() const;
   friend bool operator==(const SubdivisionSpec& a, const SubdivisionSpec& b) {
-    return a.kind == b.kind && a.grid == b.grid && a.cells == b.cells && a.budget == b.budget;
+    return a.kind == b.kind && a.grid == b.grid && a.cells == b.cells && a.budget == b.budget &&
+           a.sqrt == b.sqrt;
   }
 };
 

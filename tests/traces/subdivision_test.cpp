@@ -132,7 +132,9 @@ TEST(SubdivisionSpec, BadSpecsNameWhatIsWrong) {
   EXPECT_NE(message("octree:12").find("missing unit"), std::string::npos);
   EXPECT_NE(message("octree:-1MB").find("negative"), std::string::npos);
   EXPECT_NE(message("sphere:3").find("expected NXxNYxNZ"), std::string::npos);
-  EXPECT_NE(message("dynamic:27:work").find("is not a cell subdivision"), std::string::npos);
+  EXPECT_NE(message("dynamic:27:work").find("'sqrt' (dynamic:N:sqrt), not 'work'"),
+            std::string::npos);
+  EXPECT_NE(message("dynamic:27:sqrt:x").find("is not a cell subdivision"), std::string::npos);
   EXPECT_NE(message("4096x4096x4096").find("more than"), std::string::npos);
   EXPECT_NE(message("").find("is not a cell subdivision"), std::string::npos);
   EXPECT_EQ(message("kd:27:work").find("--cells"), std::string::npos);  // valid: no error
@@ -149,7 +151,8 @@ TEST(Subdivision, EverySubdivisionCoversEachFineCellExactlyOnce) {
     const std::uint32_t n = g[0] * g[1] * g[2];
     for (std::uint32_t k : {2u, 7u, 27u, n}) {
       if (k > n) continue;
-      for (const char* kind : {"kd:%u:footprint", "kd:%u:work", "kd:%u:sqrt", "dynamic:%u"}) {
+      for (const char* kind :
+           {"kd:%u:footprint", "kd:%u:work", "kd:%u:sqrt", "dynamic:%u", "dynamic:%u:sqrt"}) {
         char buf[64];
         std::snprintf(buf, sizeof buf, kind, k);
         specs.push_back(buf);
@@ -292,6 +295,19 @@ TEST(Subdivision, DynamicIsDeterministicAndFollowsTheSamples) {
             Subdivide(ParseSubdivisionSpec("kd:27:footprint", "t"), m.Cells(false)).boxes);
   EXPECT_EQ(a.boxes, Subdivide(ParseSubdivisionSpec("kd:27:work", "t"), m.Cells(true, 11)).boxes);
   EXPECT_NE(a.boxes, Subdivide(spec, m.Cells(true, 12)).boxes);  // other samples, other cells
+}
+
+// dynamic:N:sqrt is kd:N:sqrt on the previous frame's samples, and kd:N:footprint in frame 0.
+TEST(Subdivision, DynamicSqrtBalancesAsKdSqrt) {
+  const Grid g{12, 12, 12};
+  const LeafModel m{g};
+  const SubdivisionSpec spec = ParseSubdivisionSpec("dynamic:27:sqrt", "t");
+  EXPECT_TRUE(spec.sqrt);
+  EXPECT_EQ(Subdivide(spec, m.Cells(false)).boxes,
+            Subdivide(ParseSubdivisionSpec("kd:27:footprint", "t"), m.Cells(false)).boxes);
+  const Subdivision a = Subdivide(spec, m.Cells(true, 11));
+  EXPECT_EQ(a.boxes, Subdivide(ParseSubdivisionSpec("kd:27:sqrt", "t"), m.Cells(true, 11)).boxes);
+  EXPECT_NE(a.boxes, Subdivide(ParseSubdivisionSpec("dynamic:27", "t"), m.Cells(true, 11)).boxes);
 }
 
 }  // namespace
