@@ -370,9 +370,8 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
         for (std::size_t d : warm) {
           if (memory[d]->empty()) continue;
           // What the levels keep of it: the cells that fit, as the policies keep them.
-          *memory[d] =
-              MemoryHierarchy(distinct[d], *frame->footprints, {}, CarryOver(*memory[d], from, to))
-                  .State();
+          *memory[d] = MemoryHierarchy::Fitted(distinct[d], *frame->footprints,
+                                               CarryOver(*memory[d], from, to));
         }
       }
       of_fine_before.swap(of_fine);

@@ -52,7 +52,7 @@ bool CellStore::Insert(CellId cell, std::optional<CellId> pinned) {
 }
 
 void CellStore::Restore(const std::vector<CellId>& cells) {
-  for (const CellId c : cells) Insert(c);
+  for (const CellId c : cells) RAYCELL_CHECK(Insert(c));
 }
 
 MemoryState CarryOver(const MemoryState& state, const FrameCells& from, const FrameCells& to) {
@@ -161,6 +161,20 @@ MemoryState MemoryHierarchy::State() const {
     for (const CellStore& s : level) state.held.back().push_back(s.Held());
   }
   return state;
+}
+
+MemoryState MemoryHierarchy::Fitted(const ReplayConfig& config,
+                                    const std::vector<std::uint64_t>& footprints,
+                                    const MemoryState& state) {
+  MemoryHierarchy h(config, footprints);
+  RAYCELL_CHECK_EQ(state.held.size(), h.stores_.size());
+  for (std::size_t i = 0; i < h.stores_.size(); ++i) {
+    RAYCELL_CHECK_EQ(state.held[i].size(), h.stores_[i].size());
+    for (std::size_t k = 0; k < h.stores_[i].size(); ++k) {
+      for (const CellId c : state.held[i][k]) h.stores_[i][k].Insert(c);
+    }
+  }
+  return h.State();
 }
 
 std::vector<std::vector<bool>> HeldAnywhere(const MemoryState& state, std::uint32_t cells,

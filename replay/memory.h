@@ -42,9 +42,9 @@ class CellStore {
   bool diverged() const { return policy_->diverged(); }
   // The held cells, first victim first (ReplacementPolicy::EvictionOrder).
   std::vector<CellId> Held() const { return policy_->EvictionOrder(held_); }
-  // Keeps `cells` (as Held() listed them, or as CarryOver gave them) without counting them as
-  // requests or fetches: the state a frame starts from. Inserted in that order, the policy
-  // evicting as it must when they do not fit (they do when the same level held them).
+  // Keeps `cells` (as Held() listed them) without counting them as requests or fetches: the
+  // state a frame starts from. They fit by construction (the same level held them, or
+  // MemoryHierarchy::Fitted kept them).
   void Restore(const std::vector<CellId>& cells);
 
  private:
@@ -96,8 +96,8 @@ struct FrameCells {
 // data); a cell only partly held is not held. Each copy lists its cells first victim first,
 // by the earliest victim among the cells of `from` that hold its data, ties by cell number.
 // The list may not fit the level (a cell larger than it, or more cells than it holds):
-// CellStore::Restore keeps what the policy keeps when inserting them in that order. Every
-// level must hold the replay's cells (no LevelUnits).
+// MemoryHierarchy::Fitted keeps what the policies keep. Every level must hold the replay's
+// cells (no LevelUnits).
 MemoryState CarryOver(const MemoryState& state, const FrameCells& from, const FrameCells& to);
 // Per level of `state`, per unit of the level (`cells` of the replay, units as UnitCount
 // gives them): whether some copy of the level holds it.
@@ -124,6 +124,11 @@ class MemoryHierarchy {
                   const MemoryUnits* units = nullptr);
   // What the levels hold now.
   MemoryState State() const;
+  // What levels of `config` keep of `state` (as CarryOver gives it) when each copy inserts its
+  // cells in their order, the policy evicting as it must (a policy that needs its future runs
+  // as LRU, as on a first run): a state that fits, for the next frame's start.
+  static MemoryState Fitted(const ReplayConfig& config,
+                            const std::vector<std::uint64_t>& footprints, const MemoryState& state);
   Requests requests() const;
   // True when a MIN level's requests strayed from its future (run again with requests()).
   bool diverged() const;

@@ -12,7 +12,7 @@ std::string FormatVec3(const Vec3d& v) {
 }
 
 std::vector<CellId> SubdivisionInfo::CellOfFine(std::size_t frame, std::uint32_t cells) const {
-  const std::size_t per_frame = spec.rfind("dynamic:", 0) == 0 ? cells : 0;
+  const std::size_t per_frame = dynamic() ? cells : 0;
   const std::size_t first = frame * per_frame;
   RAYCELL_CHECK_LE(first + cells, boxes.size());
   return raycell::CellOfFine(std::vector<FineBox>(boxes.begin() + std::ptrdiff_t(first),

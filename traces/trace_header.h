@@ -117,6 +117,8 @@ struct SubdivisionInfo {
   // cell's largest over the frames); empty otherwise.
   std::vector<std::uint64_t> frame_footprints;
   bool empty() const { return spec.empty(); }
+  // Whether each frame has its own boxes (`dynamic:N`).
+  bool dynamic() const { return spec.rfind("dynamic:", 0) == 0; }
   // Per fine cell, its cell in frame `frame` (an index into the trace's frames) of a trace of
   // `cells` cells each frame: the boxes of that frame (`dynamic:N`) or the only ones.
   std::vector<CellId> CellOfFine(std::size_t frame, std::uint32_t cells) const;
@@ -153,7 +155,7 @@ struct TraceHeader {
   bool volume_changes() const { return scene.find('%') != std::string::npos; }
   // Whether a cell is a different box from one frame to the next (a dynamic subdivision):
   // warm memory carries what it held over through the fine cells (replay/memory.h CarryOver).
-  bool cells_change() const { return subdivision.spec.rfind("dynamic:", 0) == 0; }
+  bool cells_change() const { return subdivision.dynamic(); }
   bool operator==(const TraceHeader& o) const {
     return format_version == o.format_version && producer == o.producer && scene == o.scene &&
            grids == o.grids && box_min == o.box_min && box_max == o.box_max && cells == o.cells &&
