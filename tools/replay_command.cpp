@@ -218,7 +218,8 @@ void AddReplayCommand(CLI::App& app) {
   cmd->add_option("TRACE", args->trace, "trace file written by `raycell record`");
   cmd->add_option("--cells", args->cells,
                   "a regroupable capture (`record --regroupable`) regrouped into this subdivision: "
-                  "NXxNYxNZ, kd:N:footprint, kd:N:work, kd:N:sqrt, kd:budget:BYTES, octree:BYTES, "
+                  "NXxNYxNZ, grid:NXxNYxNZ, kd:N:footprint, kd:N:work, kd:N:sqrt, kd:budget:BYTES, "
+                  "octree:BYTES, "
                   "dynamic:N[:sqrt] (see `raycell trace regroup --help`); default: its own grid");
   cmd->add_option("--config", args->config, "TOML configuration (unknown keys are errors)");
   cmd->add_option("--scheduler", args->scheduler,

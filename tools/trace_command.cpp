@@ -230,6 +230,8 @@ void AddRegroup(CLI::App& trace) {
       "file.\n\n"
       "SPEC (cells are boxes of whole fine cells; docs/design.md §1 \"Subdivisions\"):\n"
       "  NXxNYxNZ          uniform; each count divides the fine grid's\n"
+      "  grid:NXxNYxNZ     any counts up to the fine grid's: along each axis the fine boundaries\n"
+      "                    nearest to an even split (grid:1x3x9 on 12x12x12: cells long in x)\n"
       "  kd:N:footprint    k-d tree of N cells, footprints as equal as possible\n"
       "  kd:N:work         k-d tree of N cells, samples (over all frames) as equal as possible\n"
       "  kd:N:sqrt         k-d tree of N cells, footprint / sqrt(samples + 1) as equal as\n"

@@ -156,8 +156,9 @@ std::vector<CellId> CellOfFine(const std::vector<FineBox>& boxes,
 std::string SubdivisionSpec::ToString() const {
   switch (kind) {
     case Kind::kUniform:
-      return std::to_string(grid[0]) + "x" + std::to_string(grid[1]) + "x" +
-             std::to_string(grid[2]);
+    case Kind::kGrid:
+      return std::string(kind == Kind::kGrid ? "grid:" : "") + std::to_string(grid[0]) + "x" +
+             std::to_string(grid[1]) + "x" + std::to_string(grid[2]);
     case Kind::kKdFootprint:
       return "kd:" + std::to_string(cells) + ":footprint";
     case Kind::kKdWork:
@@ -179,15 +180,17 @@ SubdivisionSpec ParseSubdivisionSpec(std::string_view text, const std::string& w
   const std::string t(Trim(text));
   const std::vector<std::string> parts = Split(t, ':');
   const std::string expected =
-      " (expected NXxNYxNZ, kd:N:footprint, kd:N:work, kd:N:sqrt, kd:budget:BYTES, octree:BYTES, "
-      "dynamic:N or dynamic:N:sqrt)";
+      " (expected NXxNYxNZ, grid:NXxNYxNZ, kd:N:footprint, kd:N:work, kd:N:sqrt, "
+      "kd:budget:BYTES, octree:BYTES, dynamic:N or dynamic:N:sqrt)";
   SubdivisionSpec s;
-  if (parts.size() == 1) {
-    const std::vector<std::string> dims = Split(t, 'x');
+  const bool grid = parts.size() == 2 && parts[0] == "grid";
+  if (parts.size() == 1 || grid) {
+    const std::string& counts = grid ? parts[1] : t;
+    const std::vector<std::string> dims = Split(counts, 'x');
     if (dims.size() != 3) {
       throw InputError(what + ": '" + t + "' is not a cell subdivision" + expected);
     }
-    s.kind = SubdivisionSpec::Kind::kUniform;
+    s.kind = grid ? SubdivisionSpec::Kind::kGrid : SubdivisionSpec::Kind::kUniform;
     std::uint64_t n = 1;
     for (int a = 0; a < 3; ++a) {
       s.grid[a] = ParseCount(dims[a], what, "cells per axis");
@@ -245,7 +248,9 @@ Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
     throw InputError(what + ": needs the samples of each of the " + std::to_string(n) +
                      " fine cells");
   }
-  if (!by_work && spec.kind != Kind::kUniform) RAYCELL_CHECK(fine.union_footprint != nullptr);
+  if (!by_work && spec.kind != Kind::kUniform && spec.kind != Kind::kGrid) {
+    RAYCELL_CHECK(fine.union_footprint != nullptr);
+  }
   const Weigher weigh(fine, by_work   ? Weigher::By::kWork
                             : by_sqrt ? Weigher::By::kSqrt
                                       : Weigher::By::kFootprint);
@@ -271,6 +276,28 @@ Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
               b.hi[a] = (i[a] + 1) * step;
             }
             out.boxes.push_back(b);
+          }
+        }
+      }
+      break;
+    }
+    case Kind::kGrid: {
+      // Per axis, the boundaries: round(i F / N), halves up, strictly increasing as N <= F.
+      std::array<std::vector<std::uint32_t>, 3> at;
+      for (int a = 0; a < 3; ++a) {
+        const std::uint64_t f = fine.grid[a], c = spec.grid[a];
+        if (c > f) {
+          throw InputError(what + ": its " + std::to_string(c) + " cells along " + "xyz"[a] +
+                           " are more than the fine grid's " + std::to_string(f));
+        }
+        for (std::uint64_t i = 0; i <= c; ++i)
+          at[a].push_back(std::uint32_t((2 * i * f + c) / (2 * c)));
+      }
+      for (std::uint32_t z = 0; z < spec.grid[2]; ++z) {
+        for (std::uint32_t y = 0; y < spec.grid[1]; ++y) {
+          for (std::uint32_t x = 0; x < spec.grid[0]; ++x) {
+            out.boxes.push_back(
+                {{at[0][x], at[1][y], at[2][z]}, {at[0][x + 1], at[1][y + 1], at[2][z + 1]}});
           }
         }
       }

@@ -9,6 +9,11 @@
 // ParseSubdivisionSpec and printed back by ToString:
 //   NXxNYxNZ            uniform: every axis of the fine grid split evenly (NX must divide the
 //                       fine grid's x count, and so on);
+//   grid:NXxNYxNZ       a grid of any counts up to the fine grid's: along each axis the
+//                       boundaries are the fine boundaries nearest to an even split (F fine
+//                       cells in N: boundary i at round(i F / N), halves up), so that cells of
+//                       any shape can be compared at one cell count (1x3x9 on a 12-cell fine
+//                       axis); the uniform grid's boxes when the counts divide;
 //   kd:N:footprint      a k-d tree of N cells, splitting the cell of largest footprint at the
 //                       fine boundary that makes the larger half smallest (footprints as equal
 //                       as possible);
@@ -40,9 +45,9 @@
 namespace raycell {
 
 struct SubdivisionSpec {
-  enum class Kind { kUniform, kKdFootprint, kKdWork, kKdSqrt, kKdBudget, kOctree, kDynamic };
+  enum class Kind { kUniform, kGrid, kKdFootprint, kKdWork, kKdSqrt, kKdBudget, kOctree, kDynamic };
   Kind kind = Kind::kUniform;
-  std::array<std::uint32_t, 3> grid{1, 1, 1};  // kUniform
+  std::array<std::uint32_t, 3> grid{1, 1, 1};  // kUniform, kGrid
   std::uint32_t cells = 0;                     // kd:N:footprint, kd:N:work, kd:N:sqrt, dynamic:N
   std::uint64_t budget = 0;                    // kd:budget:BYTES, octree:BYTES (bytes, > 0)
   bool sqrt = false;  // kDynamic: dynamic:N:sqrt, each frame balanced as kd:N:sqrt
@@ -103,7 +108,8 @@ struct Subdivision {
 };
 
 // The subdivision `spec` gives on `fine`. InputError when it cannot be made: a uniform grid
-// whose counts do not divide the fine grid's, more kd cells than fine cells, kd:N:work or
+// whose counts do not divide the fine grid's, a grid: with more cells along an axis than the
+// fine grid, more kd cells than fine cells, kd:N:work or
 // dynamic beyond frame 0 without samples.
 Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine);
 

@@ -100,8 +100,9 @@ void ExpectCoversOnce(const Subdivision& s, const Grid& g, const std::string& sp
 }
 
 TEST(SubdivisionSpec, ParsesEveryKindAndPrintsItBack) {
-  for (const char* text : {"3x3x3", "12x1x4", "kd:27:footprint", "kd:8:work", "kd:9:sqrt",
-                           "kd:budget:256KiB", "octree:1MB", "octree:1500B", "dynamic:27"}) {
+  for (const char* text :
+       {"3x3x3", "12x1x4", "grid:1x3x9", "kd:27:footprint", "kd:8:work", "kd:9:sqrt",
+        "kd:budget:256KiB", "octree:1MB", "octree:1500B", "dynamic:27"}) {
     const SubdivisionSpec s = ParseSubdivisionSpec(text, "--cells");
     EXPECT_EQ(s.ToString(), text);
     EXPECT_EQ(ParseSubdivisionSpec(s.ToString(), "--cells"), s);
@@ -111,6 +112,10 @@ TEST(SubdivisionSpec, ParsesEveryKindAndPrintsItBack) {
   EXPECT_EQ(kd.cells, 27u);
   EXPECT_EQ(ParseSubdivisionSpec("octree:256KiB", "x").budget, 256u * 1024);
   EXPECT_EQ(ParseSubdivisionSpec("4x5x6", "x").grid, (Grid{4, 5, 6}));
+  const SubdivisionSpec grid = ParseSubdivisionSpec("grid:1x3x9", "x");
+  EXPECT_EQ(grid.kind, SubdivisionSpec::Kind::kGrid);
+  EXPECT_EQ(grid.grid, (Grid{1, 3, 9}));
+  EXPECT_FALSE(grid == ParseSubdivisionSpec("1x3x9", "x"));
 }
 
 TEST(SubdivisionSpec, BadSpecsNameWhatIsWrong) {
@@ -137,6 +142,9 @@ TEST(SubdivisionSpec, BadSpecsNameWhatIsWrong) {
   EXPECT_NE(message("dynamic:27:sqrt:x").find("is not a cell subdivision"), std::string::npos);
   EXPECT_NE(message("4096x4096x4096").find("more than"), std::string::npos);
   EXPECT_NE(message("").find("is not a cell subdivision"), std::string::npos);
+  EXPECT_NE(message("grid:3x3").find("is not a cell subdivision"), std::string::npos);
+  EXPECT_NE(message("grid:0x3x3").find("out of range"), std::string::npos);
+  EXPECT_NE(message("grid:3x3x3:x").find("is not a cell subdivision"), std::string::npos);
   EXPECT_EQ(message("kd:27:work").find("--cells"), std::string::npos);  // valid: no error
 }
 
@@ -147,7 +155,9 @@ TEST(Subdivision, EverySubdivisionCoversEachFineCellExactlyOnce) {
     std::vector<std::string> specs = {"1x1x1", "kd:1:footprint", "dynamic:1", "octree:1B",
                                       "kd:budget:1B"};
     if (g == Grid{12, 12, 12})
-      specs.insert(specs.end(), {"3x3x3", "4x4x4", "6x6x6", "2x2x2", "12x12x12", "4x2x6"});
+      specs.insert(specs.end(), {"3x3x3", "4x4x4", "6x6x6", "2x2x2", "12x12x12", "4x2x6",
+                                 "grid:1x3x9", "grid:5x7x11", "grid:12x12x12"});
+    if (g == Grid{5, 7, 3}) specs.insert(specs.end(), {"grid:2x3x2", "grid:5x7x3", "grid:4x1x2"});
     const std::uint32_t n = g[0] * g[1] * g[2];
     for (std::uint32_t k : {2u, 7u, 27u, n}) {
       if (k > n) continue;
@@ -205,6 +215,42 @@ TEST(Subdivision, AUniformGridMustAlignWithTheFineOne) {
   EXPECT_THROW(
       Subdivide(ParseSubdivisionSpec("kd:4:work", "t"), LeafModel{Grid{2, 2, 2}}.Cells(false)),
       InputError);  // no samples to balance
+}
+
+TEST(Subdivision, GridCutsEachAxisAtTheNearestFineBoundaries) {
+  const Grid g{12, 12, 12};
+  const LeafModel m{g};
+  // 9 cells along z of 12 fine: i * 12 / 9 = 0, 1.33, 2.67, 4, 5.33, 6.67, 8, 9.33, 10.67, 12,
+  // rounded 0, 1, 3, 4, 5, 7, 8, 9, 11, 12; 3 along y divide evenly: 0, 4, 8, 12.
+  const Subdivision s = Subdivide(ParseSubdivisionSpec("grid:1x3x9", "t"), m.Cells());
+  ASSERT_EQ(s.cells(), 27u);
+  const std::uint32_t z_at[] = {0, 1, 3, 4, 5, 7, 8, 9, 11, 12};
+  for (std::uint32_t z = 0; z < 9; ++z) {
+    for (std::uint32_t y = 0; y < 3; ++y) {
+      const FineBox want{{0, 4 * y, z_at[z]}, {12, 4 * y + 4, z_at[z + 1]}};
+      EXPECT_EQ(s.boxes[y + 3 * z], want) << "cell " << y + 3 * z;
+    }
+  }
+  // Halves round up: 2 cells of 5 fine cut at 2.5 -> 3; 4 cells of 6 at 1.5, 3, 4.5 -> 2, 3, 5.
+  const Subdivision h =
+      Subdivide(ParseSubdivisionSpec("grid:2x4x1", "t"), LeafModel{Grid{5, 6, 1}}.Cells());
+  ASSERT_EQ(h.cells(), 8u);
+  EXPECT_EQ(h.boxes[0], (FineBox{{0, 0, 0}, {3, 2, 1}}));
+  EXPECT_EQ(h.boxes[1], (FineBox{{3, 0, 0}, {5, 2, 1}}));
+  EXPECT_EQ(h.boxes[3], (FineBox{{3, 2, 0}, {5, 3, 1}}));
+  EXPECT_EQ(h.boxes[5], (FineBox{{3, 3, 0}, {5, 5, 1}}));
+  EXPECT_EQ(h.boxes[7], (FineBox{{3, 5, 0}, {5, 6, 1}}));
+  // Counts that divide give the uniform grid's boxes.
+  EXPECT_EQ(Subdivide(ParseSubdivisionSpec("grid:3x2x4", "t"), m.Cells()).boxes,
+            Subdivide(ParseSubdivisionSpec("3x2x4", "t"), m.Cells()).boxes);
+  try {
+    Subdivide(ParseSubdivisionSpec("grid:13x1x1", "t"), m.Cells());
+    FAIL() << "13 cells along x of 12";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("13 cells along x are more than the fine grid's 12"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(Subdivision, KdBudgetLeavesNoCellOverItsBudgetThatASplitCouldAvoid) {
