@@ -42,7 +42,7 @@ std::vector<std::string> SubdivisionSpecs(std::uint64_t cache_bytes) {
   const std::string budget = std::to_string(cache_bytes) + "B";
   return {"3x3x3",      "kd:27:footprint",     "kd:27:work",
           "kd:27:sqrt", "kd:budget:" + budget, "octree:" + budget,
-          "dynamic:27", "dynamic:27:sqrt"};
+          "dynamic:27", "dynamic:27:sqrt",     "grid:27:crossings"};
 }
 
 SubdivisionStudy MeasureSubdivisions(const SubdivisionOptions& o) {

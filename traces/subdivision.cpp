@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "base/check.h"
 #include "base/parse.h"
@@ -159,6 +160,8 @@ std::string SubdivisionSpec::ToString() const {
     case Kind::kGrid:
       return std::string(kind == Kind::kGrid ? "grid:" : "") + std::to_string(grid[0]) + "x" +
              std::to_string(grid[1]) + "x" + std::to_string(grid[2]);
+    case Kind::kGridCrossings:
+      return "grid:" + std::to_string(cells) + ":crossings";
     case Kind::kKdFootprint:
       return "kd:" + std::to_string(cells) + ":footprint";
     case Kind::kKdWork:
@@ -180,8 +183,8 @@ SubdivisionSpec ParseSubdivisionSpec(std::string_view text, const std::string& w
   const std::string t(Trim(text));
   const std::vector<std::string> parts = Split(t, ':');
   const std::string expected =
-      " (expected NXxNYxNZ, grid:NXxNYxNZ, kd:N:footprint, kd:N:work, kd:N:sqrt, "
-      "kd:budget:BYTES, octree:BYTES, dynamic:N or dynamic:N:sqrt)";
+      " (expected NXxNYxNZ, grid:NXxNYxNZ, grid:N:crossings, kd:N:footprint, kd:N:work, "
+      "kd:N:sqrt, kd:budget:BYTES, octree:BYTES, dynamic:N or dynamic:N:sqrt)";
   SubdivisionSpec s;
   const bool grid = parts.size() == 2 && parts[0] == "grid";
   if (parts.size() == 1 || grid) {
@@ -203,7 +206,14 @@ SubdivisionSpec ParseSubdivisionSpec(std::string_view text, const std::string& w
     return s;
   }
   const std::string& kind = parts[0];
-  if (kind == "kd" && parts.size() == 3 && parts[1] == "budget") {
+  if (kind == "grid" && parts.size() == 3) {
+    s.kind = SubdivisionSpec::Kind::kGridCrossings;
+    if (parts[2] != "crossings") {
+      throw InputError(what + ": a grid of N cells is chosen by 'crossings' (grid:N:crossings), " +
+                       "not '" + parts[2] + "'");
+    }
+    s.cells = ParseCount(parts[1], what, "grid cell count");
+  } else if (kind == "kd" && parts.size() == 3 && parts[1] == "budget") {
     s.kind = SubdivisionSpec::Kind::kKdBudget;
     s.budget = ParseBudget(parts[2], what);
   } else if (kind == "kd" && parts.size() == 3) {
@@ -235,6 +245,46 @@ SubdivisionSpec ParseSubdivisionSpec(std::string_view text, const std::string& w
   return s;
 }
 
+namespace {
+
+// grid:N:crossings's counts (subdivision.h): over every NX x NY x NZ = N with each count at most
+// the fine grid's, the least sum of crossings[a] (NA - 1) / (FA - 1), compared exactly over the
+// common denominator (FX - 1)(FY - 1)(FZ - 1) in 128 bits (an axis of one fine cell has no
+// boundary inside and counts 1 there); ties to the lowest NX, then NY.
+std::array<std::uint32_t, 3> GridByCrossings(std::uint32_t n, const FineCells& fine,
+                                             const std::string& what) {
+  if (!fine.has_crossings) {
+    throw InputError(what + ": needs the rays' steps between the fine cells, by axis");
+  }
+  using Wide = unsigned __int128;
+  std::optional<std::array<std::uint32_t, 3>> best;
+  Wide best_cost = 0;
+  for (std::uint32_t x = 1; x <= std::min(n, fine.grid[0]); ++x) {
+    if (n % x != 0) continue;
+    for (std::uint32_t y = 1; y <= std::min(n / x, fine.grid[1]); ++y) {
+      if ((n / x) % y != 0 || n / x / y > fine.grid[2]) continue;
+      const std::array<std::uint32_t, 3> c{x, y, n / x / y};
+      Wide cost = 0;
+      for (int a = 0; a < 3; ++a) {
+        Wide term = Wide{fine.crossings[a]} * (c[a] - 1);
+        for (int b = 0; b < 3; ++b) {
+          if (b != a) term *= std::max<std::uint32_t>(fine.grid[b] - 1, 1);
+        }
+        cost += term;
+      }
+      if (!best || cost < best_cost) best = c, best_cost = cost;
+    }
+  }
+  if (!best) {
+    throw InputError(what + ": no grid of " + std::to_string(n) + " cells fits the fine grid's " +
+                     std::to_string(fine.grid[0]) + "x" + std::to_string(fine.grid[1]) + "x" +
+                     std::to_string(fine.grid[2]));
+  }
+  return *best;
+}
+
+}  // namespace
+
 Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
   using Kind = SubdivisionSpec::Kind;
   const std::uint32_t n = fine.count();
@@ -248,7 +298,8 @@ Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
     throw InputError(what + ": needs the samples of each of the " + std::to_string(n) +
                      " fine cells");
   }
-  if (!by_work && spec.kind != Kind::kUniform && spec.kind != Kind::kGrid) {
+  if (!by_work && spec.kind != Kind::kUniform && spec.kind != Kind::kGrid &&
+      spec.kind != Kind::kGridCrossings) {
     RAYCELL_CHECK(fine.union_footprint != nullptr);
   }
   const Weigher weigh(fine, by_work   ? Weigher::By::kWork
@@ -281,11 +332,14 @@ Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
       }
       break;
     }
-    case Kind::kGrid: {
+    case Kind::kGrid:
+    case Kind::kGridCrossings: {
+      const std::array<std::uint32_t, 3> counts =
+          spec.kind == Kind::kGrid ? spec.grid : GridByCrossings(spec.cells, fine, what);
       // Per axis, the boundaries: round(i F / N), halves up, strictly increasing as N <= F.
       std::array<std::vector<std::uint32_t>, 3> at;
       for (int a = 0; a < 3; ++a) {
-        const std::uint64_t f = fine.grid[a], c = spec.grid[a];
+        const std::uint64_t f = fine.grid[a], c = counts[a];
         if (c > f) {
           throw InputError(what + ": its " + std::to_string(c) + " cells along " + "xyz"[a] +
                            " are more than the fine grid's " + std::to_string(f));
@@ -293,9 +347,9 @@ Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
         for (std::uint64_t i = 0; i <= c; ++i)
           at[a].push_back(std::uint32_t((2 * i * f + c) / (2 * c)));
       }
-      for (std::uint32_t z = 0; z < spec.grid[2]; ++z) {
-        for (std::uint32_t y = 0; y < spec.grid[1]; ++y) {
-          for (std::uint32_t x = 0; x < spec.grid[0]; ++x) {
+      for (std::uint32_t z = 0; z < counts[2]; ++z) {
+        for (std::uint32_t y = 0; y < counts[1]; ++y) {
+          for (std::uint32_t x = 0; x < counts[0]; ++x) {
             out.boxes.push_back(
                 {{at[0][x], at[1][y], at[2][z]}, {at[0][x + 1], at[1][y + 1], at[2][z + 1]}});
           }

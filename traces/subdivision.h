@@ -14,6 +14,12 @@
 //                       cells in N: boundary i at round(i F / N), halves up), so that cells of
 //                       any shape can be compared at one cell count (1x3x9 on a 12-cell fine
 //                       axis); the uniform grid's boxes when the counts divide;
+//   grid:N:crossings    the grid:NXxNYxNZ of N cells (NX NY NZ = N, each at most the fine
+//                       grid's count) that the rays' steps cross least: the counts minimising
+//                       sum over axes of crossings[a] (NA - 1) / (FA - 1), the steps across a
+//                       fine boundary of axis a times the share of those boundaries that are
+//                       cells' boundaries (ties: the lowest NX, then NY), so that cells are long
+//                       along the axes rays travel (one fetch where the ray stays in its cell);
 //   kd:N:footprint      a k-d tree of N cells, splitting the cell of largest footprint at the
 //                       fine boundary that makes the larger half smallest (footprints as equal
 //                       as possible);
@@ -45,12 +51,22 @@
 namespace raycell {
 
 struct SubdivisionSpec {
-  enum class Kind { kUniform, kGrid, kKdFootprint, kKdWork, kKdSqrt, kKdBudget, kOctree, kDynamic };
+  enum class Kind {
+    kUniform,
+    kGrid,
+    kGridCrossings,
+    kKdFootprint,
+    kKdWork,
+    kKdSqrt,
+    kKdBudget,
+    kOctree,
+    kDynamic
+  };
   Kind kind = Kind::kUniform;
   std::array<std::uint32_t, 3> grid{1, 1, 1};  // kUniform, kGrid
-  std::uint32_t cells = 0;                     // kd:N:footprint, kd:N:work, kd:N:sqrt, dynamic:N
-  std::uint64_t budget = 0;                    // kd:budget:BYTES, octree:BYTES (bytes, > 0)
-  bool sqrt = false;  // kDynamic: dynamic:N:sqrt, each frame balanced as kd:N:sqrt
+  std::uint32_t cells = 0;   // kd:N:footprint, kd:N:work, kd:N:sqrt, dynamic:N, grid:N:crossings
+  std::uint64_t budget = 0;  // kd:budget:BYTES, octree:BYTES (bytes, > 0)
+  bool sqrt = false;         // kDynamic: dynamic:N:sqrt, each frame balanced as kd:N:sqrt
 
   // The canonical SPEC ("3x3x3", "kd:27:footprint", "octree:256KiB"); parses back equal.
   std::string ToString() const;
@@ -77,6 +93,11 @@ struct FineCells {
   // Work per fine cell (samples): kd:N:work's and kd:N:sqrt's weights, and dynamic's (the
   // previous frame's; empty for frame 0, which then splits by footprint).
   std::vector<std::uint64_t> samples;
+  // grid:N:crossings's weights: over every frame, the steps of each ray from one non-empty fine
+  // cell to its next, by axis: |dx|, |dy| and |dz| of their fine coordinates (the boundaries
+  // crossed along each axis). Empty (has_crossings false) when not counted.
+  std::array<std::uint64_t, 3> crossings{};
+  bool has_crossings = false;
 
   std::uint32_t count() const { return grid[0] * grid[1] * grid[2]; }
 };
@@ -109,7 +130,8 @@ struct Subdivision {
 
 // The subdivision `spec` gives on `fine`. InputError when it cannot be made: a uniform grid
 // whose counts do not divide the fine grid's, a grid: with more cells along an axis than the
-// fine grid, more kd cells than fine cells, kd:N:work or
+// fine grid, a grid:N:crossings that no grid within the fine one makes or without crossings,
+// more kd cells than fine cells, kd:N:work or
 // dynamic beyond frame 0 without samples.
 Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine);
 

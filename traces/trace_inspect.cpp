@@ -1,8 +1,10 @@
 #include "traces/trace_inspect.h"
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <iomanip>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -69,8 +71,17 @@ void PrintHeader(const TraceReader& reader, const std::string& path, std::ostrea
       << h.cell_count() << " cells\n";
   if (!h.subdivision.empty()) {
     const auto& f = h.subdivision.fine;
-    out << "subdivision:    " << h.subdivision.spec << " of a fine grid " << f[0] << "x" << f[1]
-        << "x" << f[2] << (h.cells_change() ? " (boxes per frame)" : "") << "\n";
+    out << "subdivision:    " << h.subdivision.spec;
+    if (h.subdivision.spec.rfind("grid:", 0) == 0 && !h.cells_change()) {
+      // A grid's counts: its boxes' distinct lower corners per axis (grid:N:crossings chose).
+      std::array<std::set<std::uint32_t>, 3> lo;
+      for (const FineBox& b : h.subdivision.boxes) {
+        for (int a = 0; a < 3; ++a) lo[a].insert(b.lo[a]);
+      }
+      out << " (" << lo[0].size() << "x" << lo[1].size() << "x" << lo[2].size() << ")";
+    }
+    out << " of a fine grid " << f[0] << "x" << f[1] << "x" << f[2]
+        << (h.cells_change() ? " (boxes per frame)" : "") << "\n";
   }
   if (h.regroupable) {
     out << "regroupable:    yes (" << h.leaves.bytes.size() << " leaves, " << h.leaves.leaves.size()

@@ -1163,7 +1163,37 @@ struct TraceReader::Impl {
         spec.kind == SubdivisionSpec::Kind::kKdSqrt) {
       fine.samples = FineSamples(std::size_t(-1));
     }
+    if (spec.kind == SubdivisionSpec::Kind::kGridCrossings) {
+      fine.crossings = FineCrossings();
+      fine.has_crossings = true;
+    }
     return fine;
+  }
+  // grid:N:crossings's weights (FineCells::crossings): over every frame, each ray's steps
+  // from one non-empty fine cell to its next, |dx|, |dy|, |dz| of their coordinates (the
+  // visits to empty cells that a regroupable capture keeps are skipped, so that the counts
+  // are those of the rays as any command reads them).
+  std::array<std::uint64_t, 3> FineCrossings() const {
+    const auto g = header.cells;
+    std::array<std::uint64_t, 3> n{};
+    auto add = [&](const RayBatch& b) {
+      for (std::size_t r = 0; r < b.size(); ++r) {
+        std::optional<std::uint32_t> last;
+        for (std::size_t v = b.visit_begin(r); v < b.visit_end(r); ++v) {
+          const std::uint32_t c = b.cells()[v].value();
+          if (header.footprints[c] == 0) continue;
+          if (last) {
+            const std::uint32_t p = *last;
+            const std::array<std::uint32_t, 3> at{c % g[0], c / g[0] % g[1], c / g[0] / g[1]},
+                was{p % g[0], p / g[0] % g[1], p / g[0] / g[1]};
+            for (int a = 0; a < 3; ++a) n[a] += at[a] > was[a] ? at[a] - was[a] : was[a] - at[a];
+          }
+          last = c;
+        }
+      }
+    };
+    for (std::size_t f = 0; f < frames.size(); ++f) ForEachStored(f, add);
+    return n;
   }
   // Per cell of `sub`, the bytes of its fine cells' leaves, each once.
   std::vector<std::uint64_t> Footprints(const Subdivision& sub) const {

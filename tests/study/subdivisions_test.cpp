@@ -29,7 +29,7 @@ TEST(SubdivisionStudy, RowsAreWhatRecordRegroupAndReplayGiveOnTheirOwn) {
   o.out = (dir / "sub").string();
   const SubdivisionStudy s = MeasureSubdivisions(o);
   ASSERT_TRUE(s.measured);
-  ASSERT_EQ(s.rows.size(), 16u);  // 8 SPECs, 2 schedulers
+  ASSERT_EQ(s.rows.size(), 18u);  // 9 SPECs, 2 schedulers
 
   // The cache: the median footprint of a capture recorded directly on 3x3x3 cells.
   RecordOptions direct;

@@ -478,11 +478,12 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
             "board_bytes,stall_ps,time_ps");
   std::vector<std::vector<std::string>> sub_rows;
   while (std::getline(subdivisions, row)) sub_rows.push_back(CsvRow(row));
-  ASSERT_EQ(sub_rows.size(), 16u);
+  ASSERT_EQ(sub_rows.size(), 18u);
   EXPECT_EQ(sub_rows[0][0], "3x3x3");
   EXPECT_EQ(sub_rows[6][0], "kd:27:sqrt");
   EXPECT_EQ(sub_rows[12][0], "dynamic:27");
   EXPECT_EQ(sub_rows[14][0], "dynamic:27:sqrt");
+  EXPECT_EQ(sub_rows[16][0], "grid:27:crossings");
   const Result uniform =
       Raycell("replay " + (out / "subdivisions" / "fine.rct").string() +
               " --cells 3x3x3 --scheduler celltree --set level.cache.capacity=" + sub_rows[1][4] +

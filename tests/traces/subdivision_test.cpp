@@ -65,6 +65,8 @@ struct LeafModel {
     if (with_samples) {
       SplitMix64 r(seed);
       for (std::uint32_t i = 0; i < c.count(); ++i) c.samples.push_back(r.Next() % 1000);
+      c.crossings = {r.Next() % 1000, r.Next() % 1000, r.Next() % 1000};
+      c.has_crossings = true;
     }
     return c;
   }
@@ -101,8 +103,8 @@ void ExpectCoversOnce(const Subdivision& s, const Grid& g, const std::string& sp
 
 TEST(SubdivisionSpec, ParsesEveryKindAndPrintsItBack) {
   for (const char* text :
-       {"3x3x3", "12x1x4", "grid:1x3x9", "kd:27:footprint", "kd:8:work", "kd:9:sqrt",
-        "kd:budget:256KiB", "octree:1MB", "octree:1500B", "dynamic:27"}) {
+       {"3x3x3", "12x1x4", "grid:1x3x9", "grid:27:crossings", "kd:27:footprint", "kd:8:work",
+        "kd:9:sqrt", "kd:budget:256KiB", "octree:1MB", "octree:1500B", "dynamic:27"}) {
     const SubdivisionSpec s = ParseSubdivisionSpec(text, "--cells");
     EXPECT_EQ(s.ToString(), text);
     EXPECT_EQ(ParseSubdivisionSpec(s.ToString(), "--cells"), s);
@@ -144,7 +146,9 @@ TEST(SubdivisionSpec, BadSpecsNameWhatIsWrong) {
   EXPECT_NE(message("").find("is not a cell subdivision"), std::string::npos);
   EXPECT_NE(message("grid:3x3").find("is not a cell subdivision"), std::string::npos);
   EXPECT_NE(message("grid:0x3x3").find("out of range"), std::string::npos);
-  EXPECT_NE(message("grid:3x3x3:x").find("is not a cell subdivision"), std::string::npos);
+  EXPECT_NE(message("grid:3x3x3:x").find("'crossings' (grid:N:crossings), not 'x'"),
+            std::string::npos);
+  EXPECT_NE(message("grid:0:crossings").find("out of range"), std::string::npos);
   EXPECT_EQ(message("kd:27:work").find("--cells"), std::string::npos);  // valid: no error
 }
 
@@ -161,8 +165,8 @@ TEST(Subdivision, EverySubdivisionCoversEachFineCellExactlyOnce) {
     const std::uint32_t n = g[0] * g[1] * g[2];
     for (std::uint32_t k : {2u, 7u, 27u, n}) {
       if (k > n) continue;
-      for (const char* kind :
-           {"kd:%u:footprint", "kd:%u:work", "kd:%u:sqrt", "dynamic:%u", "dynamic:%u:sqrt"}) {
+      for (const char* kind : {"kd:%u:footprint", "kd:%u:work", "kd:%u:sqrt", "dynamic:%u",
+                               "dynamic:%u:sqrt", "grid:%u:crossings"}) {
         char buf[64];
         std::snprintf(buf, sizeof buf, kind, k);
         specs.push_back(buf);
@@ -176,9 +180,21 @@ TEST(Subdivision, EverySubdivisionCoversEachFineCellExactlyOnce) {
       const SubdivisionSpec spec = ParseSubdivisionSpec(text, "test");
       for (const bool samples : {true, false}) {
         if (!samples && (spec.kind == SubdivisionSpec::Kind::kKdWork ||
-                         spec.kind == SubdivisionSpec::Kind::kKdSqrt)) {
-          EXPECT_THROW(Subdivide(spec, m.Cells(false)), InputError) << text;  // needs samples
+                         spec.kind == SubdivisionSpec::Kind::kKdSqrt ||
+                         spec.kind == SubdivisionSpec::Kind::kGridCrossings)) {
+          EXPECT_THROW(Subdivide(spec, m.Cells(false)), InputError) << text;  // needs weights
           continue;
+        }
+        if (spec.kind == SubdivisionSpec::Kind::kGridCrossings) {
+          // A grid of k cells within g exists only for some k (7 in 5x7x3: 1x7x1).
+          bool fits = false;
+          for (std::uint32_t x = 1; x <= g[0]; ++x)
+            for (std::uint32_t y = 1; y <= g[1]; ++y)
+              for (std::uint32_t z = 1; z <= g[2]; ++z) fits = fits || x * y * z == spec.cells;
+          if (!fits) {
+            EXPECT_THROW(Subdivide(spec, m.Cells(samples)), InputError) << text;
+            continue;
+          }
         }
         const Subdivision s = Subdivide(spec, m.Cells(samples));
         ExpectCoversOnce(s, g, text);
@@ -248,6 +264,43 @@ TEST(Subdivision, GridCutsEachAxisAtTheNearestFineBoundaries) {
     FAIL() << "13 cells along x of 12";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("13 cells along x are more than the fine grid's 12"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// grid:N:crossings on 12x12x12 (11 fine boundaries inside each axis): the cost of NXxNYxNZ is
+// (crossings x (NX - 1) + crossings y (NY - 1) + crossings z (NZ - 1)) / 11. With crossings
+// 1000, 490, 110 (mj_smoke's frame 0 in thousands): 1x3x9 (490 x 2 + 110 x 8) / 11 = 169.1,
+// 3x3x3 290.9, 3x1x9 261.8, 1x9x3 376.4, 3x9x1 538.2, 9x1x3 747.3, 9x3x1 816.4 (27 cells
+// along one axis do not fit 12): 1x3x9. With 250, 880, 580 (the built-in scene's): 9x1x3
+// (2000 + 1160) / 11 = 287.3 against 3x3x3's 310.9, 9x3x1 341.8, 3x1x9 467.3.
+TEST(Subdivision, GridByCrossingsCutsLeastAcrossTheAxesRaysCrossMost) {
+  const Grid g{12, 12, 12};
+  const LeafModel m{g};
+  const auto grid = [&](std::array<std::uint64_t, 3> crossings, const char* spec) {
+    FineCells f = m.Cells();
+    f.crossings = crossings;
+    return Subdivide(ParseSubdivisionSpec(spec, "t"), f).boxes;
+  };
+  const auto boxes = [&](const char* spec) {
+    return Subdivide(ParseSubdivisionSpec(spec, "t"), m.Cells()).boxes;
+  };
+  EXPECT_EQ(grid({1000, 490, 110}, "grid:27:crossings"), boxes("grid:1x3x9"));
+  EXPECT_EQ(grid({250, 880, 580}, "grid:27:crossings"), boxes("grid:9x1x3"));
+  EXPECT_EQ(grid({1, 1, 1}, "grid:27:crossings"), boxes("3x3x3"));  // even: the cube
+  // Ties go to the lowest NX, then NY: with no crossings every grid costs 0.
+  EXPECT_EQ(grid({0, 0, 0}, "grid:27:crossings"), boxes("grid:1x3x9"));
+  EXPECT_EQ(grid({0, 0, 5}, "grid:12:crossings"), boxes("grid:1x12x1"));
+  // 8 cells, crossings only along z: no cut across z.
+  EXPECT_EQ(grid({0, 0, 5}, "grid:8:crossings"), boxes("grid:1x8x1"));
+  // 1x2x4 costs (2 + 3) / 11, the least: 2x2x2 and 2x1x4 (3 + 3) / 11, 1x1x8 7 / 11.
+  EXPECT_EQ(grid({3, 2, 1}, "grid:8:crossings"), boxes("grid:1x2x4"));
+  try {
+    grid({1, 1, 1}, "grid:13:crossings");
+    FAIL() << "13 cells fit no grid within 12x12x12";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("no grid of 13 cells fits the fine grid's 12x12x12"),
               std::string::npos)
         << e.what();
   }
