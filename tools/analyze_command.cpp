@@ -383,13 +383,7 @@ void AddAnalyzeCommand(CLI::App& app) {
       "  echo '{\"id\":0,\"parent\":null,\"spawn\":null,\"cells\":[0,1]}' > p.jsonl && "
       "raycell analyze --paths p.jsonl");
   cmd->add_option("TRACE", args->trace, "trace file written by `raycell record`");
-  cmd->add_option(
-      "--cells", args->cells,
-      "a regroupable capture (`record --regroupable`) regrouped into this subdivision: "
-      "NXxNYxNZ, grid:NXxNYxNZ, grid:N:crossings, kd:N:footprint, kd:N:work, kd:N:sqrt, "
-      "kd:budget:BYTES, "
-      "octree:BYTES, "
-      "dynamic:N[:sqrt] (see `raycell trace regroup --help`); default: its own grid");
+  cmd->add_option("--cells", args->cells, kCellsSpecHelp);
   cmd->add_option("--frame", args->frame, "analyse only this frame number (of TRACE or --paths)");
   cmd->add_option("--frames", args->frames,
                   "analyse only the frames numbered A..B (inclusive; also A-B or A)");

@@ -13,4 +13,11 @@ void AddReplayCommand(CLI::App& app);
 void AddStudyCommand(CLI::App& app);
 void AddSweepCommand(CLI::App& app);
 
+// The help of `--cells SPEC` for the commands that read a regroupable capture regrouped
+// (analyze, replay, sweep; `trace regroup --help` explains each SPEC).
+inline constexpr const char* kCellsSpecHelp =
+    "a regroupable capture (`record --regroupable`) regrouped into this subdivision: NXxNYxNZ, "
+    "grid:NXxNYxNZ, grid:N:crossings, kd:N:footprint, kd:N:work, kd:N:sqrt, kd:budget:BYTES, "
+    "octree:BYTES, dynamic:N[:sqrt] (see `raycell trace regroup --help`); default: its own grid";
+
 }  // namespace raycell

@@ -216,13 +216,7 @@ void AddReplayCommand(CLI::App& app) {
       "  raycell replay capture.rct --timeline timeline.json --frames 0..1   # ui.perfetto.dev\n"
       "  raycell replay --print-config > gicube.toml");
   cmd->add_option("TRACE", args->trace, "trace file written by `raycell record`");
-  cmd->add_option(
-      "--cells", args->cells,
-      "a regroupable capture (`record --regroupable`) regrouped into this subdivision: "
-      "NXxNYxNZ, grid:NXxNYxNZ, grid:N:crossings, kd:N:footprint, kd:N:work, kd:N:sqrt, "
-      "kd:budget:BYTES, "
-      "octree:BYTES, "
-      "dynamic:N[:sqrt] (see `raycell trace regroup --help`); default: its own grid");
+  cmd->add_option("--cells", args->cells, kCellsSpecHelp);
   cmd->add_option("--config", args->config, "TOML configuration (unknown keys are errors)");
   cmd->add_option("--scheduler", args->scheduler,
                   SchedulerNameList(", ") + " (see Schedulers below)");

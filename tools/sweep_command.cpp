@@ -123,13 +123,7 @@ void AddSweepCommand(CLI::App& app) {
   cmd->footer(kFooter);
   cmd->require_subcommand(0, 1);
   cmd->add_option("TRACE", args->trace, "trace file written by `raycell record`");
-  cmd->add_option(
-      "--cells", args->cells,
-      "a regroupable capture (`record --regroupable`) regrouped into this subdivision: "
-      "NXxNYxNZ, grid:NXxNYxNZ, grid:N:crossings, kd:N:footprint, kd:N:work, kd:N:sqrt, "
-      "kd:budget:BYTES, "
-      "octree:BYTES, "
-      "dynamic:N[:sqrt] (see `raycell trace regroup --help`); default: its own grid");
+  cmd->add_option("--cells", args->cells, kCellsSpecHelp);
   cmd->add_option("--config", args->config, "TOML configuration (default: the GI-Cube defaults)");
   cmd->add_option("--vary", args->varies,
                   "KEY=V1,V2,... a configuration key and its values (repeatable), e.g. "

@@ -72,6 +72,16 @@ struct LeafModel {
   }
 };
 
+// The InputError message of subdividing `fine` by `spec`, or "no error".
+std::string SubdivideError(const char* spec, const FineCells& fine) {
+  try {
+    Subdivide(ParseSubdivisionSpec(spec, "t"), fine);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
 // The fine cells of a box, computed here from its corners.
 std::vector<std::uint32_t> Inside(const FineBox& b, const Grid& g) {
   std::vector<std::uint32_t> out;
@@ -259,14 +269,9 @@ TEST(Subdivision, GridCutsEachAxisAtTheNearestFineBoundaries) {
   // Counts that divide give the uniform grid's boxes.
   EXPECT_EQ(Subdivide(ParseSubdivisionSpec("grid:3x2x4", "t"), m.Cells()).boxes,
             Subdivide(ParseSubdivisionSpec("3x2x4", "t"), m.Cells()).boxes);
-  try {
-    Subdivide(ParseSubdivisionSpec("grid:13x1x1", "t"), m.Cells());
-    FAIL() << "13 cells along x of 12";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("13 cells along x are more than the fine grid's 12"),
-              std::string::npos)
-        << e.what();
-  }
+  const std::string more = SubdivideError("grid:13x1x1", m.Cells());
+  EXPECT_NE(more.find("13 cells along x are more than the fine grid's 12"), std::string::npos)
+      << more;
 }
 
 // grid:N:crossings on 12x12x12 (11 fine boundaries inside each axis): the cost of NXxNYxNZ is
@@ -296,14 +301,9 @@ TEST(Subdivision, GridByCrossingsCutsLeastAcrossTheAxesRaysCrossMost) {
   EXPECT_EQ(grid({0, 0, 5}, "grid:8:crossings"), boxes("grid:1x8x1"));
   // 1x2x4 costs (2 + 3) / 11, the least: 2x2x2 and 2x1x4 (3 + 3) / 11, 1x1x8 7 / 11.
   EXPECT_EQ(grid({3, 2, 1}, "grid:8:crossings"), boxes("grid:1x2x4"));
-  try {
-    grid({1, 1, 1}, "grid:13:crossings");
-    FAIL() << "13 cells fit no grid within 12x12x12";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("no grid of 13 cells fits the fine grid's 12x12x12"),
-              std::string::npos)
-        << e.what();
-  }
+  const std::string none = SubdivideError("grid:13:crossings", m.Cells());  // 13 is prime
+  EXPECT_NE(none.find("no grid of 13 cells fits the fine grid's 12x12x12"), std::string::npos)
+      << none;
 }
 
 TEST(Subdivision, KdBudgetLeavesNoCellOverItsBudgetThatASplitCouldAvoid) {
