@@ -131,8 +131,7 @@ struct Subdivision {
 // The subdivision `spec` gives on `fine`. InputError when it cannot be made: a uniform grid
 // whose counts do not divide the fine grid's, a grid: with more cells along an axis than the
 // fine grid, a grid:N:crossings that no grid within the fine one makes or without crossings,
-// more kd cells than fine cells, kd:N:work or
-// dynamic beyond frame 0 without samples.
+// more kd cells than fine cells, kd:N:work or dynamic beyond frame 0 without samples.
 Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine);
 
 }  // namespace raycell
