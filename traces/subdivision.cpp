@@ -283,6 +283,34 @@ std::array<std::uint32_t, 3> GridByCrossings(std::uint32_t n, const FineCells& f
   return *best;
 }
 
+// The boxes of a grid of `counts` cells on the fine grid `g`, numbered x + NX (y + NY z): along
+// each axis of F fine cells cut into N, boundary i at round(i F / N), halves up (i F / N itself
+// when N divides F), strictly increasing as N <= F.
+std::vector<FineBox> GridBoxes(const std::array<std::uint32_t, 3>& counts,
+                               const std::array<std::uint32_t, 3>& g, const std::string& what) {
+  std::array<std::vector<std::uint32_t>, 3> at;
+  for (int a = 0; a < 3; ++a) {
+    const std::uint64_t f = g[a], c = counts[a];
+    if (c > f) {
+      throw InputError(what + ": its " + std::to_string(c) + " cells along " + "xyz"[a] +
+                       " are more than the fine grid's " + std::to_string(f));
+    }
+    for (std::uint64_t i = 0; i <= c; ++i) {
+      at[a].push_back(std::uint32_t((2 * i * f + c) / (2 * c)));
+    }
+  }
+  std::vector<FineBox> boxes;
+  for (std::uint32_t z = 0; z < counts[2]; ++z) {
+    for (std::uint32_t y = 0; y < counts[1]; ++y) {
+      for (std::uint32_t x = 0; x < counts[0]; ++x) {
+        boxes.push_back(
+            {{at[0][x], at[1][y], at[2][z]}, {at[0][x + 1], at[1][y + 1], at[2][z + 1]}});
+      }
+    }
+  }
+  return boxes;
+}
+
 }  // namespace
 
 Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
@@ -298,10 +326,9 @@ Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
     throw InputError(what + ": needs the samples of each of the " + std::to_string(n) +
                      " fine cells");
   }
-  if (!by_work && spec.kind != Kind::kUniform && spec.kind != Kind::kGrid &&
-      spec.kind != Kind::kGridCrossings) {
-    RAYCELL_CHECK(fine.union_footprint != nullptr);
-  }
+  const bool grid =
+      spec.kind == Kind::kUniform || spec.kind == Kind::kGrid || spec.kind == Kind::kGridCrossings;
+  if (!by_work && !grid) RAYCELL_CHECK(fine.union_footprint != nullptr);
   const Weigher weigh(fine, by_work   ? Weigher::By::kWork
                             : by_sqrt ? Weigher::By::kSqrt
                                       : Weigher::By::kFootprint);
@@ -316,47 +343,15 @@ Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
                            " (a cell boundary must be a fine-cell boundary)");
         }
       }
-      for (std::uint32_t z = 0; z < spec.grid[2]; ++z) {
-        for (std::uint32_t y = 0; y < spec.grid[1]; ++y) {
-          for (std::uint32_t x = 0; x < spec.grid[0]; ++x) {
-            const std::array<std::uint32_t, 3> i{x, y, z};
-            FineBox b;
-            for (int a = 0; a < 3; ++a) {
-              const std::uint32_t step = fine.grid[a] / spec.grid[a];
-              b.lo[a] = i[a] * step;
-              b.hi[a] = (i[a] + 1) * step;
-            }
-            out.boxes.push_back(b);
-          }
-        }
-      }
+      out.boxes = GridBoxes(spec.grid, fine.grid, what);
       break;
     }
     case Kind::kGrid:
-    case Kind::kGridCrossings: {
-      const std::array<std::uint32_t, 3> counts =
-          spec.kind == Kind::kGrid ? spec.grid : GridByCrossings(spec.cells, fine, what);
-      // Per axis, the boundaries: round(i F / N), halves up, strictly increasing as N <= F.
-      std::array<std::vector<std::uint32_t>, 3> at;
-      for (int a = 0; a < 3; ++a) {
-        const std::uint64_t f = fine.grid[a], c = counts[a];
-        if (c > f) {
-          throw InputError(what + ": its " + std::to_string(c) + " cells along " + "xyz"[a] +
-                           " are more than the fine grid's " + std::to_string(f));
-        }
-        for (std::uint64_t i = 0; i <= c; ++i)
-          at[a].push_back(std::uint32_t((2 * i * f + c) / (2 * c)));
-      }
-      for (std::uint32_t z = 0; z < counts[2]; ++z) {
-        for (std::uint32_t y = 0; y < counts[1]; ++y) {
-          for (std::uint32_t x = 0; x < counts[0]; ++x) {
-            out.boxes.push_back(
-                {{at[0][x], at[1][y], at[2][z]}, {at[0][x + 1], at[1][y + 1], at[2][z + 1]}});
-          }
-        }
-      }
+      out.boxes = GridBoxes(spec.grid, fine.grid, what);
       break;
-    }
+    case Kind::kGridCrossings:
+      out.boxes = GridBoxes(GridByCrossings(spec.cells, fine, what), fine.grid, what);
+      break;
     case Kind::kKdFootprint:
     case Kind::kKdWork:
     case Kind::kKdSqrt:

@@ -1175,20 +1175,21 @@ struct TraceReader::Impl {
   // are those of the rays as any command reads them).
   std::array<std::uint64_t, 3> FineCrossings() const {
     const auto g = header.cells;
+    const auto at = [&](std::uint32_t c) {
+      return std::array<std::uint32_t, 3>{c % g[0], c / g[0] % g[1], c / g[0] / g[1]};
+    };
     std::array<std::uint64_t, 3> n{};
     auto add = [&](const RayBatch& b) {
       for (std::size_t r = 0; r < b.size(); ++r) {
-        std::optional<std::uint32_t> last;
+        std::optional<std::array<std::uint32_t, 3>> last;
         for (std::size_t v = b.visit_begin(r); v < b.visit_end(r); ++v) {
           const std::uint32_t c = b.cells()[v].value();
           if (header.footprints[c] == 0) continue;
-          if (last) {
-            const std::uint32_t p = *last;
-            const std::array<std::uint32_t, 3> at{c % g[0], c / g[0] % g[1], c / g[0] / g[1]},
-                was{p % g[0], p / g[0] % g[1], p / g[0] / g[1]};
-            for (int a = 0; a < 3; ++a) n[a] += at[a] > was[a] ? at[a] - was[a] : was[a] - at[a];
+          const std::array<std::uint32_t, 3> now = at(c);
+          for (int a = 0; last && a < 3; ++a) {
+            n[a] += now[a] > (*last)[a] ? now[a] - (*last)[a] : (*last)[a] - now[a];
           }
-          last = c;
+          last = now;
         }
       }
     };
