@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
 # Subdivisions of one fine capture at about 27 cells (issue 23), BENCHMARKS.md "Subdivisions":
-# records SCENE once on a fine grid (FINE, 12x12x12 by default) with --regroupable (an orbit of
-# FRAMES frames, 3.75 degrees a frame, as the study's), then replays it regrouped into each SPEC under Max Work
-# and Cell Tree scheduling, with the on-chip cache sized in bytes to the median footprint of
-# the uniform 3x3x3 grid (default configuration otherwise: one processor, warm memory).
-# Prints one markdown row per SPEC and scheduler: cells, footprint spread, fetches, bytes
-# over the board->cache and host->board links, fetch stall, each against 3x3x3. Cells: the
-# non-empty ones. A fine grid with 27 cells along an axis adds the 27 slabs across it
-# (grid:27x1x1, grid:1x27x1 or grid:1x1x27).
+# records SCENE once on a fine grid (FINE, 12x12x12 by default) with --regroupable (an orbit
+# of FRAMES frames, 3.75 degrees a frame, as the study's), then replays it regrouped into each
+# SPEC under Max Work and Cell Tree scheduling, with the on-chip cache sized in bytes to the
+# median footprint of the uniform 3x3x3 grid (default configuration otherwise: one processor,
+# warm memory). Prints one markdown row per SPEC and scheduler: cells, footprint spread,
+# fetches, bytes over the board->cache and host->board links, fetch stall, each against 3x3x3.
+# Cells: the non-empty ones. A fine grid with 27 cells along an axis adds the 27 slabs across
+# it (grid:27x1x1, grid:1x27x1 or grid:1x1x27).
 #
 # Usage: tools/bench/subdivisions.sh SCENE [FRAMES=8] [RES=256x256] [RAYCELL=build/tools/raycell]
 #                                    [FINE=12x12x12]
