@@ -9,10 +9,11 @@
 
 #include "base/check.h"
 #include "base/parse.h"
+#include "record/cell_grid.h"
+#include "record/recorder.h"
+#include "record/scene.h"
+#include "traces/cell_dims.h"
 #include "traces/format.h"
-#include "traces/record/cell_grid.h"
-#include "traces/record/recorder.h"
-#include "traces/record/scene.h"
 #include "traces/subdivision.h"
 
 namespace raycell {

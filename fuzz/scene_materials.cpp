@@ -9,7 +9,7 @@
 
 #include "base/check.h"
 #include "base/parse.h"
-#include "traces/record/scene.h"
+#include "record/scene.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace raycell;

@@ -9,13 +9,13 @@
 #include <sstream>
 
 #include "base/check.h"
+#include "record/record_flags.h"
+#include "record/recorder.h"
+#include "record/scene.h"
 #include "replay/config.h"
 #include "replay/driver.h"
 #include "replay/replayer.h"
 #include "study/image_error.h"
-#include "traces/record/record_flags.h"
-#include "traces/record/recorder.h"
-#include "traces/record/scene.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {

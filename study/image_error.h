@@ -6,7 +6,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "traces/record/image.h"
+#include "record/image.h"
 
 namespace raycell {
 

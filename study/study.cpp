@@ -13,12 +13,13 @@
 #include "base/format.h"
 #include "base/parse.h"
 #include "base/progress.h"
+#include "record/cell_grid.h"
+#include "record/recorder.h"
+#include "record/scene.h"
 #include "replay/config.h"
 #include "replay/replayer.h"
+#include "traces/cell_dims.h"
 #include "traces/format.h"
-#include "traces/record/cell_grid.h"
-#include "traces/record/recorder.h"
-#include "traces/record/scene.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {

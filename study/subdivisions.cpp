@@ -8,12 +8,12 @@
 
 #include "base/check.h"
 #include "base/format.h"
+#include "record/record_flags.h"
+#include "record/recorder.h"
 #include "replay/config.h"
 #include "replay/driver.h"
 #include "replay/replayer.h"
 #include "study/accuracy.h"
-#include "traces/record/record_flags.h"
-#include "traces/record/recorder.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {

@@ -3,13 +3,13 @@
 
     base < engine, traces < graph < bounds, search < analysis
                                     search < scheduling < replay
-                 traces/record, analysis, replay < study < tools
+                 record, analysis, replay < study < tools
 
 A module may include its own headers and those of the modules below it (DEPS, closed
 transitively); base includes no other module; bounds (GLPK) and search (threads) are siblings,
 and neither scheduling nor replay sees bounds or analysis, so they never link GLPK;
-traces/record (the renderer) is included only from study, tools and the tests; OpenVDB headers
-appear only in traces/record. Every target exports the project root as its include path, so a wrong
+record (the renderer) is included only from study, tools and the tests; OpenVDB headers
+appear only in record. Every target exports the project root as its include path, so a wrong
 edge through a header is caught by nothing else.
 
 Usage: tools/check_deps.py [ROOT]   (exit 1 and one line per wrong include)
@@ -23,15 +23,15 @@ DEPS = {
     "base": set(),
     "engine": {"base"},
     "traces": {"base"},
-    "traces/record": {"traces"},
+    "record": {"traces"},
     "graph": {"traces"},
     "bounds": {"graph"},
     "search": {"graph"},
     "analysis": {"bounds", "search"},
     "scheduling": {"search"},
     "replay": {"engine", "scheduling"},
-    "study": {"analysis", "replay", "traces/record"},
-    "tools": {"study", "traces/record", "analysis", "replay"},
+    "study": {"analysis", "replay", "record"},
+    "tools": {"study", "record", "analysis", "replay"},
 }
 
 
@@ -52,14 +52,12 @@ def closure(deps):
 ALLOWED = closure(DEPS)
 # Tests and fuzz targets may include any module; OpenVDB still only in record's tests.
 ANY = {"tests", "fuzz"}
-OPENVDB_OK = ("traces/record/", "tests/record/")
+OPENVDB_OK = ("record/", "tests/record/")
 INCLUDE = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]')
 
 
 def module_of(rel):
     """The module a project path belongs to, or None for paths outside the modules."""
-    if rel.startswith("traces/record/"):
-        return "traces/record"
     top = rel.split("/", 1)[0]
     if top in ALLOWED or top in ANY:
         return top
@@ -83,7 +81,7 @@ def check(root):
             bracket, target = m.groups()
             if "openvdb" in target.lower() or "nanovdb" in target.lower():
                 if not rel.startswith(OPENVDB_OK):
-                    errors.append(f"{rel}:{n}: OpenVDB header <{target}> outside traces/record")
+                    errors.append(f"{rel}:{n}: OpenVDB header <{target}> outside record")
                 continue
             if bracket != '"':
                 continue

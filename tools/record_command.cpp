@@ -5,9 +5,9 @@
 #include <iostream>
 #include <memory>
 
+#include "record/record_flags.h"
+#include "record/recorder.h"
 #include "tools/commands.h"
-#include "traces/record/record_flags.h"
-#include "traces/record/recorder.h"
 
 namespace raycell {
 namespace {

@@ -7,6 +7,7 @@
 #include "base/check.h"
 #include "base/parse.h"
 #include "base/units.h"
+#include "traces/cell_dims.h"
 
 namespace raycell {
 namespace {
@@ -194,15 +195,7 @@ SubdivisionSpec ParseSubdivisionSpec(std::string_view text, const std::string& w
       throw InputError(what + ": '" + t + "' is not a cell subdivision" + expected);
     }
     s.kind = grid ? SubdivisionSpec::Kind::kGrid : SubdivisionSpec::Kind::kUniform;
-    std::uint64_t n = 1;
-    for (int a = 0; a < 3; ++a) {
-      s.grid[a] = ParseCount(dims[a], what, "cells per axis");
-      n *= s.grid[a];
-    }
-    if (n > kMaxSubdivisionCells) {
-      throw InputError(what + ": '" + t + "' has " + std::to_string(n) + " cells, more than " +
-                       std::to_string(kMaxSubdivisionCells));
-    }
+    s.grid = ParseCellDims(counts, what, kMaxSubdivisionCells);
     return s;
   }
   const std::string& kind = parts[0];

@@ -1,5 +1,5 @@
 // Camera paths: orbits and key frames, and the pinhole camera's rays.
-#include "traces/record/camera.h"
+#include "record/camera.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// CellGrid and CellDDA (traces/record/cell_grid.h): hand-written adversarial rays with their
+// CellGrid and CellDDA (record/cell_grid.h): hand-written adversarial rays with their
 // exact cell lists, and seeded random rays checked for the traversal's properties and
 // against a brute-force reference.
 #include <gtest/gtest.h>
@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "base/check.h"
+#include "record/cell_grid.h"
 #include "tests/cell_list.h"
-#include "traces/record/cell_grid.h"
 
 namespace raycell {
 namespace {
@@ -131,22 +131,6 @@ TEST(CellGridTest, CellOfClampsBoundaryPoints) {
   EXPECT_EQ(g.CellOf({0.5, 0.5, 0.5}), CellId(7));  // interior planes belong to the upper cell
   EXPECT_EQ(g.CellOf({std::nextafter(0.5, 0.0), 0, 0}), CellId(0));
   EXPECT_EQ(g.CellOf({-0.0, 0, 0}), CellId(0));
-}
-
-TEST(ParseCellDimsTest, ParsesAndRejects) {
-  EXPECT_EQ(ParseCellDims("3x3x3"), (std::array<std::uint32_t, 3>{3, 3, 3}));
-  EXPECT_EQ(ParseCellDims("2X4x1"), (std::array<std::uint32_t, 3>{2, 4, 1}));
-  EXPECT_EQ(ParseCellDims("65536x65535x1"), (std::array<std::uint32_t, 3>{65536, 65535, 1}));
-  for (const char* bad : {"0x2x2", "2x2", "axbxc", "2x2x2x2", "", "x2x2", "2x2x", "-1x2x2",
-                          "2x 2x2", "2.5x2x2", "99999999999x1x1", "65536x65536x2", "2x0x2"}) {
-    try {
-      ParseCellDims(bad);
-      ADD_FAILURE() << "accepted \"" << bad << "\"";
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("\"" + std::string(bad) + "\""), std::string::npos)
-          << e.what();
-    }
-  }
 }
 
 // ------------------------------------------------------- CellDDA: hand-written rays

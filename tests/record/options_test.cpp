@@ -11,9 +11,9 @@
 
 #include "base/check.h"
 #include "base/parse.h"
+#include "record/image.h"
+#include "record/recorder.h"
 #include "tests/record/record_test_util.h"
-#include "traces/record/image.h"
-#include "traces/record/recorder.h"
 
 namespace raycell {
 namespace {

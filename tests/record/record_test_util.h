@@ -12,9 +12,9 @@
 #include <iterator>
 #include <string>
 
+#include "record/image.h"
+#include "record/recorder.h"
 #include "tests/test_util.h"
-#include "traces/record/image.h"
-#include "traces/record/recorder.h"
 
 namespace raycell::testing {
 

@@ -10,11 +10,11 @@
 
 #include "base/check.h"
 #include "base/parse.h"
+#include "record/cell_grid.h"
+#include "record/image.h"
+#include "record/renderer.h"
+#include "record/scene.h"
 #include "tests/record/record_test_util.h"
-#include "traces/record/cell_grid.h"
-#include "traces/record/image.h"
-#include "traces/record/renderer.h"
-#include "traces/record/scene.h"
 #include "traces/trace_reader.h"
 #include "traces/trace_writer.h"
 

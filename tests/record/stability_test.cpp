@@ -15,10 +15,10 @@
 #include <tuple>
 
 #include "base/check.h"
+#include "record/cell_grid.h"
+#include "record/image.h"
+#include "record/renderer.h"
 #include "tests/record/record_test_util.h"
-#include "traces/record/cell_grid.h"
-#include "traces/record/image.h"
-#include "traces/record/renderer.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {

@@ -13,10 +13,10 @@
 #include <sstream>
 
 #include "base/check.h"
+#include "record/image.h"
+#include "record/recorder.h"
+#include "record/scene.h"
 #include "tests/record/record_test_util.h"
-#include "traces/record/image.h"
-#include "traces/record/recorder.h"
-#include "traces/record/scene.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {

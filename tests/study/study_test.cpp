@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "graph/frame_tree.h"
+#include "record/image.h"
 #include "replay/config.h"
 #include "replay/driver.h"
 #include "scheduling/scheduler.h"
@@ -22,7 +23,6 @@
 #include "study/image_error.h"
 #include "study/report.h"
 #include "tests/test_util.h"
-#include "traces/record/image.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {

@@ -9,11 +9,11 @@
 #include <numeric>
 #include <sstream>
 
+#include "record/recorder.h"
 #include "replay/config.h"
 #include "replay/driver.h"
 #include "replay/replayer.h"
 #include "tests/test_util.h"
-#include "traces/record/recorder.h"
 #include "traces/trace_reader.h"
 #include "traces/trace_regroup.h"
 

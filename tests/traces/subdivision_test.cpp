@@ -11,6 +11,7 @@
 
 #include "base/check.h"
 #include "base/random.h"
+#include "traces/cell_dims.h"
 
 namespace raycell {
 namespace {
@@ -128,6 +129,46 @@ TEST(SubdivisionSpec, ParsesEveryKindAndPrintsItBack) {
   EXPECT_EQ(grid.kind, SubdivisionSpec::Kind::kGrid);
   EXPECT_EQ(grid.grid, (Grid{1, 3, 9}));
   EXPECT_FALSE(grid == ParseSubdivisionSpec("1x3x9", "x"));
+}
+
+TEST(ParseCellDims, ParsesThreePositiveCountsAndNamesTheBadText) {
+  EXPECT_EQ(ParseCellDims("3x3x3"), (std::array<std::uint32_t, 3>{3, 3, 3}));
+  EXPECT_EQ(ParseCellDims("2X4x1"), (std::array<std::uint32_t, 3>{2, 4, 1}));
+  EXPECT_EQ(ParseCellDims("65536x65535x1"), (std::array<std::uint32_t, 3>{65536, 65535, 1}));
+  for (const char* bad : {"0x2x2", "2x2", "axbxc", "2x2x2x2", "", "x2x2", "2x2x", "-1x2x2",
+                          "2x 2x2", "2.5x2x2", "99999999999x1x1", "65536x65536x2", "2x0x2"}) {
+    try {
+      ParseCellDims(bad);
+      ADD_FAILURE() << "accepted \"" << bad << "\"";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("--cells \"" + std::string(bad) + "\""),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
+
+// The limit is the caller's: a subdivision SPEC allows kMaxSubdivisionCells, record's --cells
+// anything that fits 32 bits (the trace's own limit is checked where the grid is made).
+TEST(ParseCellDims, TheCallersLimitAndWhatItSays) {
+  EXPECT_EQ(ParseCellDims("4096x4096x1", "--cells", kMaxSubdivisionCells),
+            (std::array<std::uint32_t, 3>{4096, 4096, 1}));
+  for (const char* bad : {"4096x4096x2", "1x1x16777217", "99999x99999x99999"}) {
+    try {
+      ParseCellDims(bad, "SPEC", kMaxSubdivisionCells);
+      ADD_FAILURE() << "accepted \"" << bad << "\"";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("more than 16777216"), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).rfind("SPEC \"" + std::string(bad) + "\"", 0), 0u)
+          << e.what();
+    }
+  }
+  try {
+    ParseCellDims("0x1x1");
+    ADD_FAILURE() << "accepted 0x1x1";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("out of range"), std::string::npos) << e.what();
+  }
 }
 
 TEST(SubdivisionSpec, BadSpecsNameWhatIsWrong) {

@@ -13,7 +13,7 @@
 // ray per light. Level sets are surfaces: sphere-traced within their narrow band, refined by
 // bisection, and shaded with diffuse light (shadow rays), mirror reflection and Snell
 // refraction with total internal reflection, up to the maximum depth.
-#include "traces/record/renderer.h"
+#include "record/renderer.h"
 
 #include <openvdb/math/Ray.h>
 #include <openvdb/tools/Interpolation.h>
@@ -34,8 +34,8 @@
 #include <thread>
 
 #include "base/check.h"
-#include "traces/record/camera.h"
-#include "traces/record/scene_vdb.h"
+#include "record/camera.h"
+#include "record/scene_vdb.h"
 
 namespace raycell {
 namespace {

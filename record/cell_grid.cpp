@@ -1,4 +1,4 @@
-#include "traces/record/cell_grid.h"
+#include "record/cell_grid.h"
 
 #include <algorithm>
 #include <cfloat>
@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "base/check.h"
-#include "traces/record/vec3.h"
+#include "record/vec3.h"
 
 namespace raycell {
 namespace {
@@ -49,23 +49,6 @@ void KeepBound(double v, double uv, Tighter tighter, double* t, double* u) {
 
 const char* AxisName(int axis) { return axis == 0 ? "x" : axis == 1 ? "y" : "z"; }
 
-[[noreturn]] void BadDims(std::string_view text, const std::string& why) {
-  throw InputError("--cells \"" + std::string(text) +
-                   "\": expected NXxNYxNZ with three positive integers, e.g. \"3x3x3\" (" + why +
-                   ")");
-}
-
-std::uint64_t ParseDim(std::string_view text, std::string_view part) {
-  if (part.empty() || part.size() > 10) BadDims(text, "\"" + std::string(part) + "\"");
-  std::uint64_t v = 0;
-  for (char c : part) {
-    if (c < '0' || c > '9') BadDims(text, "\"" + std::string(part) + "\" is not a number");
-    v = v * 10 + static_cast<std::uint64_t>(c - '0');
-  }
-  if (v == 0) BadDims(text, "each dimension must be at least 1");
-  return v;
-}
-
 void CheckCellCount(const std::array<std::uint64_t, 3>& d, const std::string& what) {
   const std::uint64_t max = std::numeric_limits<std::uint32_t>::max();
   if (d[0] > max || d[1] > max || d[0] * d[1] > max || d[0] * d[1] * d[2] > max)
@@ -81,20 +64,6 @@ std::string ToString(const Vec3d& v) {
 
 std::string Box3d::ToString() const {
   return "[" + raycell::ToString(lo) + " - " + raycell::ToString(hi) + "]";
-}
-
-std::array<std::uint32_t, 3> ParseCellDims(std::string_view text) {
-  std::array<std::uint64_t, 3> d{};
-  std::size_t start = 0;
-  for (int axis = 0; axis < 3; ++axis) {
-    std::size_t end = axis < 2 ? text.find_first_of("xX", start) : text.size();
-    if (end == std::string_view::npos) BadDims(text, "three dimensions needed");
-    d[axis] = ParseDim(text, text.substr(start, end - start));
-    start = end + 1;
-  }
-  CheckCellCount(d, "--cells \"" + std::string(text) + "\"");
-  return {static_cast<std::uint32_t>(d[0]), static_cast<std::uint32_t>(d[1]),
-          static_cast<std::uint32_t>(d[2])};
 }
 
 // ---------------------------------------------------------------------------- CellGrid

@@ -1,4 +1,4 @@
-#include "traces/record/record_flags.h"
+#include "record/record_flags.h"
 
 #include <cmath>
 #include <cstdio>
@@ -7,8 +7,9 @@
 
 #include "base/check.h"
 #include "base/parse.h"
-#include "traces/record/cell_grid.h"
-#include "traces/record/scene.h"
+#include "record/cell_grid.h"
+#include "record/scene.h"
+#include "traces/cell_dims.h"
 
 namespace raycell {
 namespace {

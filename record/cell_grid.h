@@ -65,10 +65,6 @@ struct Box3d {
 // "(x, y, z)" with round-trip precision.
 std::string ToString(const Vec3d& v);
 
-// Parses "NXxNYxNZ" (e.g. "3x3x3"; 'X' also accepted): three positive integers whose product
-// fits a CellId. Throws InputError naming the text otherwise.
-std::array<std::uint32_t, 3> ParseCellDims(std::string_view text);
-
 class CellGrid {
  public:
   // Throws InputError unless lo and hi are finite, lo < hi on every axis, every dim >= 1,

@@ -10,10 +10,10 @@
 #include <functional>
 #include <vector>
 
+#include "record/cell_grid.h"
+#include "record/image.h"
+#include "record/scene.h"
 #include "traces/ray_batch.h"
-#include "traces/record/cell_grid.h"
-#include "traces/record/image.h"
-#include "traces/record/scene.h"
 #include "traces/trace_header.h"
 
 namespace raycell {

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "traces/record/vec3.h"
+#include "record/vec3.h"
 #include "traces/trace_header.h"
 
 namespace raycell {

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "traces/record/recorder.h"
+#include "record/recorder.h"
 
 namespace raycell {
 

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "record/camera.h"
+#include "record/image.h"
+#include "record/scene.h"
 #include "traces/format.h"
-#include "traces/record/camera.h"
-#include "traces/record/image.h"
-#include "traces/record/scene.h"
 #include "traces/trace_header.h"
 
 namespace raycell {

@@ -14,9 +14,9 @@
 
 #include "base/check.h"
 #include "base/parse.h"
-#include "traces/record/cell_grid.h"
-#include "traces/record/scene_vdb.h"
-#include "traces/record/vec3.h"
+#include "record/cell_grid.h"
+#include "record/scene_vdb.h"
+#include "record/vec3.h"
 
 namespace raycell {
 namespace {

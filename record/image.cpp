@@ -1,4 +1,4 @@
-#include "traces/record/image.h"
+#include "record/image.h"
 
 #include <png.h>
 

@@ -1,4 +1,4 @@
-#include "traces/record/recorder.h"
+#include "record/recorder.h"
 
 #include <algorithm>
 #include <chrono>
@@ -13,8 +13,8 @@
 #include "base/format.h"
 #include "base/parse.h"
 #include "base/progress.h"
-#include "traces/record/cell_grid.h"
-#include "traces/record/renderer.h"
+#include "record/cell_grid.h"
+#include "record/renderer.h"
 #include "traces/trace_writer.h"
 
 namespace raycell {

@@ -1,4 +1,4 @@
-#include "traces/record/camera.h"
+#include "record/camera.h"
 
 #include <algorithm>
 #include <cmath>

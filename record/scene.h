@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "traces/record/image.h"
+#include "record/image.h"
 #include "traces/trace_header.h"
 
 namespace raycell {

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "traces/record/scene.h"
+#include "record/scene.h"
 
 namespace raycell {
 
