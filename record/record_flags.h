@@ -12,9 +12,9 @@
 namespace raycell {
 
 struct RecordFlags {
-  RecordFlags() { opt.images_dir = "images"; }
+  RecordFlags() { opt.images_dir = "out/images"; }
   // What the command line sets directly (--scene, --step, --shadow-step, --cutoff, --out,
-  // --images, ...), with record's defaults; images go to "images/" unless told otherwise.
+  // --images, ...), with record's defaults; images go to "out/images/" unless told otherwise.
   RecordOptions opt;
   // What is parsed below: --frames A..B, --cells, --res, --orbit DEGREES or FRAMES:DEGREES,
   // --eye, --target, --up, --precision, --image-encoding, --light (repeatable).

@@ -160,6 +160,9 @@ RecordSummary Record(const RecordOptions& o, std::ostream& log) {
   for (int frame : o.frames) header.cameras.push_back(CameraOf(header.path, frame));
   for (const CameraKey& key : header.cameras) CheckCamera(o.camera, key);
 
+  // The default --out is out/capture.rct (outside every source folder): make its folder.
+  const std::filesystem::path out_dir = std::filesystem::path(o.out).parent_path();
+  if (!out_dir.empty()) std::filesystem::create_directories(out_dir);
   TraceWriter writer = TraceWriter::Create(o.out, header);
   Progress progress(o.progress);
   RecordSummary sum;

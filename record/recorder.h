@@ -39,7 +39,7 @@ struct RecordOptions {
   std::array<std::uint32_t, 3> cells{2, 2, 2};
   RenderSettings settings;
   CameraPathSpec camera;
-  std::string out = "capture.rct";
+  std::string out = "out/capture.rct";  // out/ is git-ignored: never into the sources
   std::string images_dir;  // empty: no images
   // A fine capture that any coarser subdivision can be made of (TraceHeader::regroupable):
   // rays also visit the empty cells they cross, and the header holds each cell's leaves.

@@ -66,6 +66,23 @@ std::string Quote(const std::string& text) {
   return q + "'";
 }
 
+// A plot script's path: beside the running binary (the build copies tools/plot_*.py next to
+// build/tools/raycell), else in its ../share/raycell (an install: cmake --install). The report
+// needs no source tree.
+std::string PlotScript(const std::string& name) {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) throw InputError("plots: cannot find the running binary (/proc/self/exe): " + ec.message());
+  const fs::path dir = exe.parent_path();
+  for (const fs::path& p : {dir / name, dir / ".." / "share" / "raycell" / name}) {
+    if (fs::is_regular_file(p)) return p.lexically_normal().string();
+  }
+  throw InputError("plots: " + name + " is neither beside " + exe.string() + " nor in " +
+                   (dir / ".." / "share" / "raycell").lexically_normal().string() +
+                   " (the build copies it beside the binary; cmake --install puts it in "
+                   "share/raycell)");
+}
+
 // Runs a plot script; InputError naming the command if it fails.
 void RunPlot(const std::string& cmd) {
   if (std::system(cmd.c_str()) != 0) {
@@ -78,7 +95,7 @@ void RunPlot(const std::string& cmd) {
 void Plot(const std::string& out, const std::vector<std::string>& cells, bool processors,
           bool depth, bool subdivisions) {
   std::string cmd =
-      Python() + " " + Quote(RAYCELL_SOURCE_DIR "/tools/plot_study.py") + " " + Quote(out);
+      Python() + " " + Quote(PlotScript("plot_study.py")) + " " + Quote(out);
   if (processors) cmd += " --processors";
   if (depth) cmd += " --depth";
   if (subdivisions) cmd += " --subdivisions";
@@ -518,7 +535,7 @@ std::string StudyReport(const StudyResult& r) {
 }
 
 void PlotAccuracy(const std::string& dir) {
-  RunPlot(Python() + " " + Quote(RAYCELL_SOURCE_DIR "/tools/plot_accuracy.py") + " " + Quote(dir));
+  RunPlot(Python() + " " + Quote(PlotScript("plot_accuracy.py")) + " " + Quote(dir));
   if (!fs::exists(fs::path(dir) / "accuracy.png")) throw InputError("plot missing: accuracy");
 }
 

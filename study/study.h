@@ -23,7 +23,7 @@
 namespace raycell {
 
 struct StudyOptions {
-  std::string scene = "builtin", cells = "2x2x2,3x3x3", res = "256x256", out = "study";
+  std::string scene = "builtin", cells = "2x2x2,3x3x3", res = "256x256", out = "out/study";
   std::string accuracy_res = "128x128";
   std::string frames = "24";                  // a count N (frames 0..N-1) or frame numbers A..B
   int accuracy_frames = 2;                    // 0: no run time against error section

@@ -1,20 +1,38 @@
 #!/usr/bin/env bash
 # Installs what raycell needs on Debian 12 (apt) and builds it into build/.
-# Usage: tools/setup.sh [extra cmake arguments, e.g. -DRAYCELL_SANITIZE=ON]
+#
+# Usage: tools/setup.sh [--tests] [extra cmake arguments, e.g. -DRAYCELL_SANITIZE=ON]
+#   without --tests  the packages the main job needs, then the `raycell` binary alone, its
+#                    libraries compiled as unity builds: the README's first command gives a
+#                    report within minutes (BENCHMARKS.md "First result and build time")
+#   --tests          also the packages of the tests and of CI's extra checks, then every
+#                    target: tests, fuzz corpus runners, benchmarks (the README's test command)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=(
-  build-essential cmake pkg-config git clang-format
-  libopenvdb-dev libopenvdb-tools libboost-iostreams-dev libtbb-dev  # scenes and rendering
-  capnproto libcapnp-dev libzstd-dev zstd                            # the trace file
-  libcli11-dev libpng-dev libboost-graph-dev libtomlplusplus-dev     # CLI, images, graphs, configs
-  libgtest-dev libgmock-dev                                          # tests
-  libglpk-dev                    # the lower bound's integer program (bounds/lower_bound.cpp)
-  python3 python3-matplotlib bc graphviz                             # plots, DOT, benchmarks
-  clang libclang-rt-14-dev  # .ci/run: the ASan/UBSan build and libFuzzer targets (RAYCELL_FUZZ)
-)
+tests=0
+if [ "${1:-}" = "--tests" ]; then
+  tests=1
+  shift
+fi
 
+packages=(
+  build-essential cmake pkg-config
+  libopenvdb-dev libboost-iostreams-dev libtbb-dev                   # scenes and rendering
+  capnproto libcapnp-dev libzstd-dev                                 # the trace file
+  libcli11-dev libpng-dev libboost-graph-dev libtomlplusplus-dev     # CLI, images, graphs, configs
+  libglpk-dev                    # the lower bound's integer program (bounds/lower_bound.cpp)
+  python3 python3-matplotlib                                         # the study's plots
+)
+if ((tests)); then
+  packages+=(
+    git clang-format libgtest-dev libgmock-dev                       # tests, formatting check
+    libopenvdb-tools zstd bc graphviz                                # vdb_render, benchmarks, DOT
+    clang libclang-rt-14-dev  # .ci/run: the ASan/UBSan build and libFuzzer targets (RAYCELL_FUZZ)
+  )
+fi
+
+start=$SECONDS
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -26,6 +44,16 @@ if ((${#missing[@]})); then
   $sudo apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
+echo "setup: packages took $((SECONDS - start)) s"
+start=$SECONDS
 
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "$@"
-cmake --build build -j"$(nproc)"
+# Unity builds compile each library in a few translation units: the first build of `raycell`
+# takes about 0.6 of the time (BENCHMARKS.md "First result and build time"). Tests and fuzz
+# targets are compiled one file each either way.
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DRAYCELL_UNITY_BUILD=ON "$@"
+if ((tests)); then
+  cmake --build build -j"$(nproc)"
+else
+  cmake --build build -j"$(nproc)" --target raycell
+fi
+echo "setup: configure and build took $((SECONDS - start)) s"

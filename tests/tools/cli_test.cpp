@@ -352,19 +352,51 @@ void ExpectProcessorsAsSweepGivesThem(const std::filesystem::path& study,
   EXPECT_GT(std::filesystem::file_size(study / "processors.png"), 1000u);
 }
 
+// `raycell record` with no --out and no --images writes out/capture.rct and out/images/ and
+// nothing else into the folder it runs in (out/ is git-ignored: a run in a clone leaves
+// `git status` clean).
+TEST(Cli, RecordDefaultsWriteOnlyUnderOut) {
+  const auto cwd = Dir() / "record_cwd";
+  std::filesystem::create_directories(cwd);
+  const Result r = Raycell("record --res 8x8 --quiet", true, cwd.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::vector<std::string> top;
+  for (const auto& e : std::filesystem::directory_iterator(cwd)) {
+    top.push_back(e.path().filename().string());
+  }
+  EXPECT_EQ(top, std::vector<std::string>{"out"});
+  EXPECT_GT(std::filesystem::file_size(cwd / "out" / "capture.rct"), 100u);
+  EXPECT_TRUE(std::filesystem::exists(cwd / "out" / "images" / "frame_0000.png"));
+  EXPECT_EQ(Raycell("trace verify out/capture.rct", true, cwd.string()).code, 0);
+}
+
 TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
   // The interpreter the study runs (tools/study_command.cpp: /usr/bin/python3 where it exists).
   const char* python = std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
   if (std::system((std::string(python) + " -c 'import matplotlib' >/dev/null 2>&1").c_str()) != 0) {
     GTEST_SKIP() << "the study's plots need python3 with matplotlib (tools/setup.sh installs it)";
   }
-  const auto out = Dir() / "study";
-  const Result r = Raycell(
-      "study --res 24x24 --frames 3 --cells 2x2x2,1x2x1 --accuracy-frames 1 "
-      "--accuracy-res 16x16 --quiet --out " +
-      out.string());
+  // Run with no --out from a folder of its own, as a user in a clone would: everything goes
+  // to out/study/ and nothing else appears beside it (the plot scripts are found beside the
+  // binary, not in the source tree).
+  const auto cwd = Dir() / "study_cwd";
+  std::filesystem::create_directories(cwd);
+  const auto out = cwd / "out" / "study";
+  const Result r = Raycell("study --res 24x24 --frames 3 --cells 2x2x2,1x2x1 --accuracy-frames 1 "
+                           "--accuracy-res 16x16 --quiet",
+                           true, cwd.string());
   ASSERT_EQ(r.code, 0) << r.out;
-  EXPECT_NE(r.out.find("report: " + (out / "report.md").string()), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("report: out/study/report.md"), std::string::npos) << r.out;
+  std::vector<std::string> top;
+  for (const auto& e : std::filesystem::directory_iterator(cwd)) {
+    top.push_back(e.path().filename().string());
+  }
+  EXPECT_EQ(top, std::vector<std::string>{"out"});
+  std::vector<std::string> in_out;
+  for (const auto& e : std::filesystem::directory_iterator(cwd / "out")) {
+    in_out.push_back(e.path().filename().string());
+  }
+  EXPECT_EQ(in_out, std::vector<std::string>{"study"});
   for (const char* cells : {"2x2x2", "1x2x1"}) {
     for (const std::string f : {"fetches_", "cell_trees_"}) {
       EXPECT_TRUE(std::filesystem::exists(out / (f + cells + ".csv"))) << f << cells;

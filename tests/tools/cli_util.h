@@ -19,10 +19,12 @@ struct Result {
 };
 
 // Runs `raycell ARGS` through the shell; its output is stdout, and stderr too unless
-// `with_stderr` is false.
-inline Result Raycell(const std::string& args, bool with_stderr = true) {
-  const std::string cmd =
-      std::string(RAYCELL_BINARY) + " " + args + (with_stderr ? " 2>&1" : " 2>/dev/null");
+// `with_stderr` is false; in the folder `cwd` when it is given.
+inline Result Raycell(const std::string& args, bool with_stderr = true,
+                      const std::string& cwd = "") {
+  const std::string cmd = (cwd.empty() ? "" : "cd '" + cwd + "' && ") +
+                          std::string(RAYCELL_BINARY) + " " + args +
+                          (with_stderr ? " 2>&1" : " 2>/dev/null");
   FILE* p = popen(cmd.c_str(), "r");
   std::string out;
   std::array<char, 4096> buf;
