@@ -40,7 +40,7 @@ struct RecordOptions {
   RenderSettings settings;
   CameraPathSpec camera;
   std::string out = "out/capture.rct";  // out/ is git-ignored: never into the sources
-  std::string images_dir;  // empty: no images
+  std::string images_dir;               // empty: no images
   // A fine capture that any coarser subdivision can be made of (TraceHeader::regroupable):
   // rays also visit the empty cells they cross, and the header holds each cell's leaves.
   // Sparse footprints of one volume (not a sequence).

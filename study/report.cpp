@@ -72,7 +72,8 @@ std::string Quote(const std::string& text) {
 std::string PlotScript(const std::string& name) {
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (ec) throw InputError("plots: cannot find the running binary (/proc/self/exe): " + ec.message());
+  if (ec)
+    throw InputError("plots: cannot find the running binary (/proc/self/exe): " + ec.message());
   const fs::path dir = exe.parent_path();
   for (const fs::path& p : {dir / name, dir / ".." / "share" / "raycell" / name}) {
     if (fs::is_regular_file(p)) return p.lexically_normal().string();
@@ -94,8 +95,7 @@ void RunPlot(const std::string& cmd) {
 
 void Plot(const std::string& out, const std::vector<std::string>& cells, bool processors,
           bool depth, bool subdivisions) {
-  std::string cmd =
-      Python() + " " + Quote(PlotScript("plot_study.py")) + " " + Quote(out);
+  std::string cmd = Python() + " " + Quote(PlotScript("plot_study.py")) + " " + Quote(out);
   if (processors) cmd += " --processors";
   if (depth) cmd += " --depth";
   if (subdivisions) cmd += " --subdivisions";

@@ -382,9 +382,10 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
   const auto cwd = Dir() / "study_cwd";
   std::filesystem::create_directories(cwd);
   const auto out = cwd / "out" / "study";
-  const Result r = Raycell("study --res 24x24 --frames 3 --cells 2x2x2,1x2x1 --accuracy-frames 1 "
-                           "--accuracy-res 16x16 --quiet",
-                           true, cwd.string());
+  const Result r = Raycell(
+      "study --res 24x24 --frames 3 --cells 2x2x2,1x2x1 --accuracy-frames 1 "
+      "--accuracy-res 16x16 --quiet",
+      true, cwd.string());
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("report: out/study/report.md"), std::string::npos) << r.out;
   std::vector<std::string> top;
