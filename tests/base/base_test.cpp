@@ -61,7 +61,7 @@ TEST(Parse, IntegersAreWholeDecimalNumbersInRange) {
   EXPECT_EQ(v, 42u);
 }
 
-TEST(Parse, FrameRanges) {
+TEST(Parse, FrameRangesListEveryFrameAndBadRangesSayWhy) {
   EXPECT_EQ(ParseFrameRange("3"), std::vector<int>{3});
   EXPECT_EQ(ParseFrameRange("2..4"), (std::vector<int>{2, 3, 4}));
   EXPECT_EQ(ParseFrameRange("2-4"), (std::vector<int>{2, 3, 4}));

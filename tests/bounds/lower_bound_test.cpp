@@ -139,7 +139,7 @@ TEST(LowerBoundTest, GridMustCoverTheCells) {
   EXPECT_NE(error.find("grid 2x2x2"), std::string::npos) << error;
 }
 
-TEST(LowerBoundTest, Deterministic) {
+TEST(LowerBoundTest, SameTreeGivesTheSameBoundTwice) {
   std::mt19937 rng(23);
   const CellTree t = RandomTree(rng, 6, 40, 7);
   const LowerBoundResult a = LowerBound(t), b = LowerBound(t);

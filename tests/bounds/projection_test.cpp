@@ -50,7 +50,7 @@ std::set<CellString> ProjectionReference(const CellTree& t, const std::set<CellI
 
 std::set<CellString> AsSet(const Strings& v) { return {v.begin(), v.end()}; }
 
-TEST(ProjectionTest, SubsequenceBasics) {
+TEST(ProjectionTest, IsSubsequenceKeepsOrderAndCountsRepeats) {
   EXPECT_TRUE(IsSubsequence({}, {A}));
   EXPECT_TRUE(IsSubsequence({A, C}, {A, B, C}));
   EXPECT_TRUE(IsSubsequence({A, A}, {A, B, A}));

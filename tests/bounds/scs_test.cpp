@@ -125,7 +125,7 @@ Strings RandomStrings(std::mt19937& rng, std::uint32_t symbols, int count, int m
   return out;
 }
 
-TEST(ScsTest, SmallCases) {
+TEST(ScsTest, SmallCasesHaveTheirKnownShortestLength) {
   EXPECT_EQ(ShortestCommonSupersequence({}).lower_bound, 0u);
   EXPECT_TRUE(ShortestCommonSupersequence({{}, {}}).exact);
   const ScsResult crossed = ShortestCommonSupersequence({{A, B}, {B, A}});

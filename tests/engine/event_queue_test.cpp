@@ -49,7 +49,7 @@ TYPED_TEST(EventQueueTest, EqualTimesOrderByPriorityThenInsertion) {
   EXPECT_TRUE(q.Empty());
 }
 
-TEST(EventQueue, Names) {
+TEST(EventQueue, EachQueueReportsItsName) {
   EXPECT_EQ(BinaryHeapQueue().Name(), "binary-heap");
   EXPECT_EQ(QuaternaryHeapQueue().Name(), "4-ary-heap");
   EXPECT_EQ(CalendarQueue().Name(), "calendar");

@@ -35,7 +35,7 @@ TEST(StatsTable, FormatsRealsShortestRoundTrip) {
   EXPECT_EQ(FormatValue(-std::numeric_limits<double>::infinity()), "-inf");
 }
 
-TEST(StatsPrinters, Text) {
+TEST(StatsPrinters, TextAlignsValuesAndPrintsStringsAndNumbersExactly) {
   EXPECT_EQ(ToText(Small()),
             "fetches      42\n"
             "utilisation  0.1\n"
@@ -44,7 +44,7 @@ TEST(StatsPrinters, Text) {
             "ratio        1e+300\n");
 }
 
-TEST(StatsPrinters, Json) {
+TEST(StatsPrinters, JsonEscapesQuotesAndPrintsNumbersExactly) {
   EXPECT_EQ(ToJson(Small()),
             "{\n"
             "  \"fetches\": 42,\n"
@@ -55,7 +55,7 @@ TEST(StatsPrinters, Json) {
             "}\n");
 }
 
-TEST(StatsPrinters, Csv) {
+TEST(StatsPrinters, CsvQuotesFieldsWithCommasOrQuotesAndPrintsNumbersExactly) {
   EXPECT_EQ(ToCsv(Small()),
             "fetches,utilisation,scheduler,bytes,ratio\n"
             "42,0.1,\"peel, \"\"greedy\"\"\",18446744073709551615,1e+300\n");

@@ -20,7 +20,7 @@ static_assert(!std::is_convertible_v<int, SimTime>);
 static_assert(!std::is_constructible_v<SimTime, std::uint64_t>);
 static_assert(!std::is_convertible_v<SimTime, std::uint64_t>);
 
-TEST(SimTime, UnitHelpers) {
+TEST(SimTime, UnitConstructorsScaleToPicosecondsAndCompareByValue) {
   EXPECT_EQ(SimTime::Nanoseconds(3).picoseconds(), 3000u);
   EXPECT_EQ(SimTime::Microseconds(3).picoseconds(), 3000'000u);
   EXPECT_EQ(SimTime::Milliseconds(3).picoseconds(), 3000'000'000u);
@@ -31,7 +31,7 @@ TEST(SimTime, UnitHelpers) {
   EXPECT_EQ(SimTime::Nanoseconds(5) - SimTime::Nanoseconds(2), SimTime::Picoseconds(3000));
 }
 
-TEST(SimTime, Prints) {
+TEST(SimTime, PrintsAsWholePicoseconds) {
   EXPECT_EQ(SimTime::Nanoseconds(12).ToString(), "12000ps");
   std::ostringstream s;
   s << SimTime::Picoseconds(7);

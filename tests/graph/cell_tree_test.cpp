@@ -70,7 +70,7 @@ NodeId Find(const CellTree& t, const std::vector<CellId>& path) {
   return n;
 }
 
-TEST(CellTreeTest, EmptyTree) {
+TEST(CellTreeTest, EmptyTreeHasNoNodesNoCellsAndBoundZero) {
   const CellTree t = Build({});
   EXPECT_EQ(t.node_count(), 0u);
   EXPECT_EQ(t.cell_count(), 0u);
@@ -100,7 +100,7 @@ TEST(CellTreeTest, ChainRevisitingACell) {
 }
 
 // Star: one primary ray per cell 0..9; ten children of the root, bound 10.
-TEST(CellTreeTest, Star) {
+TEST(CellTreeTest, DistinctOneCellRaysFormAStarBoundedByTheCellCount) {
   std::vector<TestRay> rays;
   for (CellId c : CellRange(10)) rays.push_back({kNoParent, 0, {c}, {}});
   const CellTree t = Build(rays);

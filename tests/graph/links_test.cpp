@@ -205,7 +205,7 @@ TEST(LinksTest, DependencyGraphHasTreeEdgesWithoutTheRoot) {
   }
 }
 
-TEST(LinksTest, EmptyTree) {
+TEST(LinksTest, EmptyTreeHasNoLinksAndAnEmptySchedule) {
   const CellTree t = FromPaths({});
   EXPECT_TRUE(LinksFeasible(t, {}));
   EXPECT_EQ(ScheduleFromLinks(t, {}), Schedule{});
@@ -267,7 +267,7 @@ TEST(LinksChainTest, LongerChainNeedsEveryLink) {
 // links {A1 A7}, {A1 A9}, {B2 B3}, {C4 C6}, {D5 D8}. Chain A -> B -> C -> A uses {A1 A7},
 // {B2 B3}, {C4 C6}; chain A -> B -> D -> A uses {A1 A9}, {B2 B3}, {D5 D8}. Dropping the
 // shared {B2 B3} breaks both, so 4 of 5 are feasible; dropping any other link leaves a chain.
-TEST(LinksChainTest, SeveralChains) {
+TEST(LinksChainTest, LinksWithNoPairwiseConflictOnSeveralChainsAreInfeasibleTogether) {
   const CellTree two = FromPaths({{A, B}, {B, C}, {C, A}, {D, E}, {E, F}, {F, D}});
   Links disjoint;
   for (CellId x : {A, D}) {
@@ -353,7 +353,7 @@ std::size_t CountNodeLines(const std::string& text) {
   return count;
 }
 
-TEST(LinksDotTest, GoldenOutput) {
+TEST(LinksDotTest, DotOfTwoCrossedPathsAndALinkIsTheGoldenText) {
   const CellTree t = FromPaths({{A, B}, {B, A}});
   std::ostringstream out;
   WriteDot(out, t, {N(2, 3)});

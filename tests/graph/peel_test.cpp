@@ -167,7 +167,7 @@ TEST(PeelTest, LowestReadyCellFirst) {
   EXPECT_TRUE(IsFeasible(t, p.schedule));
 }
 
-TEST(PeelTest, EmptyTree) {
+TEST(PeelTest, EmptyTreeGivesAnEmptyFeasibleSchedule) {
   const CellTree t = FromPaths({});
   EXPECT_TRUE(Peel(t).schedule.empty());
   EXPECT_TRUE(IsFeasible(t, {}));
@@ -262,7 +262,7 @@ TEST(PeelPropertyTest, SwappingAdjacentEntriesMatchesNaiveRun) {
 // A large tree (27 cells, 200k rays) peels feasibly, within the bound plus its split peels.
 // (Peel's running time against tree size is measured by tools/bench/cell_tree_scaling.cpp,
 // see BENCHMARKS.md, not asserted here.)
-TEST(PeelPropertyTest, LargeTree) {
+TEST(PeelPropertyTest, LargeRandomTreeIsFeasibleWithinSplitPeelsOfTheBound) {
   std::mt19937 rng(7);
   const CellTree t = RandomTree(rng, 27, 200000);
   const PeelResult p = Peel(t);

@@ -72,7 +72,7 @@ void ForRandomTrees(int count, Fn fn) {
   }
 }
 
-TEST(ContractTree, HandWorked) {
+TEST(ContractTree, HandWorkedTreeContractsToTheCoarsePathsKeepingRaysAndSamples) {
   // Cells 0 and 1 in coarse cell 0, 2 and 3 in coarse cell 1. Paths 0 1 2, 0 2 3 and 2 0:
   // coarse paths 0 1, 0 1 and 1 0.
   const CellTree t = FromPaths({{0, 1, 2}, {0, 2, 3}, {2, 0}});

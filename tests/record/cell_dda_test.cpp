@@ -54,7 +54,7 @@ std::string Dump(const std::vector<CellSegment>& segs) {
 
 // ------------------------------------------------------------------------------ CellGrid
 
-TEST(CellGridTest, CreateValidates) {
+TEST(CellGridTest, CreateRefusesBadBoundsAndCountsNamingTheAxis) {
   const Vec3d lo{0, 0, 0}, hi{1, 1, 1};
   const double nan = std::nan("");
   EXPECT_THROW(CellGrid::Create(lo, {1, 0, 1}, {2, 2, 2}), InputError);
@@ -77,7 +77,7 @@ TEST(CellGridTest, CreateValidates) {
   EXPECT_NO_THROW(CellGrid::Create(lo, hi, {65536, 65535, 1}));
 }
 
-TEST(CellGridTest, Accessors) {
+TEST(CellGridTest, AccessorsAgreeOnCountsIndicesCoordinatesAndBounds) {
   const auto g = CellGrid::Create({-1, 0, 2}, {1, 3, 6}, {2, 3, 4});
   EXPECT_EQ(g.cell_count(), 24u);
   EXPECT_EQ(g.dims(), (std::array<std::uint32_t, 3>{2, 3, 4}));
@@ -332,7 +332,7 @@ TEST(CellDDATest, ForcedStartCellFarFromTheStartPoint) {
   EXPECT_EQ(TraceCells(g, {p1 - 0.1, p1 - 1e-7, 0.1}, d, 0, kInf, CellId(4)), (Cells{4, 3, 4, 5}));
 }
 
-TEST(CellDDATest, InvalidRays) {
+TEST(CellDDATest, InvalidRaysAreInputErrorsNamingTheProblem) {
   const auto g = UnitGrid(2);
   const double nan = std::nan("");
   EXPECT_THROW(CellDDA(g, {0, 0, 0}, {0, 0, 0}), InputError);

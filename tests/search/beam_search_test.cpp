@@ -51,7 +51,7 @@ TEST(BeamSearchTest, UpperLimitPrunesEverything) {
   EXPECT_EQ(r.schedule.size(), 3u);
 }
 
-TEST(BeamSearchTest, EmptyTree) {
+TEST(BeamSearchTest, EmptyTreeGivesAnEmptySchedule) {
   const BeamResult r = BeamSearch(FromPaths({}));
   EXPECT_TRUE(r.found);
   EXPECT_TRUE(r.schedule.empty());
@@ -70,7 +70,7 @@ TEST(BeamSearchTest, WorkLimitLowersTheWidthButStillFinishes) {
   EXPECT_TRUE(IsFeasible(t, r.schedule));
 }
 
-TEST(BeamSearchTest, ToString) {
+TEST(BeamSearchTest, ToStringCountsWidthEntriesStatesAndChildren) {
   const BeamResult r = BeamSearch(FromPaths({{A}, {B}, {C}}));
   EXPECT_EQ(r.ToString(), "beam 256: 3 entries, 7 states, 12 children");
 }

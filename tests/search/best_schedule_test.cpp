@@ -75,7 +75,7 @@ TEST(BestScheduleTest, ExactSearchProvesTheOptimum) {
   EXPECT_EQ(n.lower, 4u);
 }
 
-TEST(BestScheduleTest, EmptyTree) {
+TEST(BestScheduleTest, EmptyTreeIsOptimalAtLengthZero) {
   const BestScheduleResult r = BestSchedule(FromPaths({}));
   EXPECT_EQ(r.length, 0u);
   EXPECT_TRUE(r.optimal);

@@ -121,7 +121,7 @@ TEST(LocalSearchPropertyTest, LargeWindowShare) {
   EXPECT_TRUE(IsFeasible(t, r.schedule));
 }
 
-TEST(LocalSearchTest, ToString) {
+TEST(LocalSearchTest, ToStringCountsEntriesWindowsAndMoves) {
   LocalSearchOptions o;
   o.max_windows = 0;
   EXPECT_EQ(Improve(FromPaths({{A, B}}), {A, A, B, B}, o).ToString(),

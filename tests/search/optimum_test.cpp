@@ -52,7 +52,7 @@ TEST(OptimumTest, StarIsTheCellCount) {
   ExpectOptimal(t, 10);
 }
 
-TEST(OptimumTest, EmptyTree) {
+TEST(OptimumTest, EmptyTreeHasOptimumZero) {
   const CellTree t = FromPaths({});
   ExpectOptimal(t, 0);
 }
@@ -62,7 +62,7 @@ TEST(OptimumTest, EmptyTree) {
 // (A2 and C1 are not leaves) and A and C have one leaf each: split A removes A1, then
 // completion C (C1, C2), completion A (A2). Schedule A C A D B A, 6 entries: the split took
 // A1 on its own. The optimum A C A D B (the only schedule of length 5) takes A1 with A3.
-TEST(OptimumTest, BeatsPeel) {
+TEST(OptimumTest, ShorterThanPeelWhenPeelMustSplit) {
   const CellTree t = FromPaths({{C, A, D, B}, {A, C, A}});
   EXPECT_EQ(Bound(t), 5u);
   EXPECT_EQ(Peel(t).schedule, (Schedule{A, C, A, D, B, A}));
@@ -85,7 +85,7 @@ TEST(OptimumTest, RotationsNeedTwoNMinusOne) {
   EXPECT_EQ(BruteForceOptimum(t), 9u);
 }
 
-TEST(OptimumTest, ToString) {
+TEST(OptimumTest, ToStringNamesStatusLengthAndSchedule) {
   const OptimumResult r = ExactOptimum(FromPaths({{A, B, C, A}}));
   EXPECT_EQ(r.ToString().substr(0, 29), "optimal 4 (schedule 0 1 2 0; ");
   EXPECT_STREQ(ToString(OptimumResult::kTooLarge), "too large");
@@ -171,7 +171,7 @@ TEST(OptimumPropertyTest, BetweenBoundAndPeelFeasibleAndEqualToBruteForce) {
   EXPECT_GT(below_peel, 0);
 }
 
-TEST(OptimumPropertyTest, Deterministic) {
+TEST(OptimumPropertyTest, SameTreeGivesTheSameScheduleAndStateCount) {
   ForSmallRandomTrees(300, [](const CellTree& t) {
     const OptimumResult a = ExactOptimum(t), b = ExactOptimum(t);
     EXPECT_EQ(a.schedule, b.schedule);

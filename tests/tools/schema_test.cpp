@@ -149,7 +149,7 @@ class SchemaTest : public ::testing::Test {
 std::filesystem::path* SchemaTest::dir_ = nullptr;
 std::string SchemaTest::trace_;
 
-TEST_F(SchemaTest, AnalyzeJson) {
+TEST_F(SchemaTest, AnalyzeJsonHasTheDocumentedKeysTypesAndOrder) {
   for (const std::string options :
        {"--exact", "--exact --timing", "", "--bracket --effort quick"}) {
     const Result r = Raycell("analyze " + trace_ + " --format json --quiet " + options, false);
@@ -161,7 +161,7 @@ TEST_F(SchemaTest, AnalyzeJson) {
   }
 }
 
-TEST_F(SchemaTest, ReplayJson) {
+TEST_F(SchemaTest, ReplayJsonHasTheDocumentedKeysAndTypes) {
   // One processor (the bound holds) and two (it does not: null).
   for (const std::string options : {"", "--set processors.count=2"}) {
     const Result r = Raycell("replay " + trace_ + " --format json --quiet " + options, false);
@@ -172,7 +172,7 @@ TEST_F(SchemaTest, ReplayJson) {
 
 // The timeline: with the default scheduler (celltree: its reasons), with one that gives none,
 // and with prefetch and two processors (prefetch transfers, misses false, idle slices).
-TEST_F(SchemaTest, ReplayTimeline) {
+TEST_F(SchemaTest, ReplayTimelineHasTheDocumentedKeysAndTypes) {
   const std::string file = (*dir_ / "timeline.json").string();
   for (const std::string options :
        {"--scheduler celltree", "--scheduler maxwork",
@@ -225,7 +225,7 @@ bool CsvHasType(const std::string& v, const std::string& type) {
   return base == "string";
 }
 
-TEST_F(SchemaTest, SweepCsv) {
+TEST_F(SchemaTest, SweepCsvHasTheDocumentedCommentColumnsAndTypes) {
   const std::string out = (*dir_ / "sweep.csv").string();
   const Result r = Raycell("sweep " + trace_ +
                                " --vary scheduler=maxwork,peel --vary processors.count=1,2 "
