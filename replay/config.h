@@ -42,7 +42,7 @@ struct LevelConfig {
   // ("same" in files and overrides), the replay's cells; else a SPEC of a regroupable capture's
   // fine grid (traces/subdivision.h, not dynamic) whose cells are unions of the replay's, e.g. a
   // board of 3x3x3 cells for caches of 6x6x6 ones. Only shared levels (not the first); checked
-  // against the trace when a replay starts (TraceReader::CoarserCells).
+  // against the trace when a replay starts (replay/level_units.h CoarserLevelCells).
   std::string cells;
 };
 

@@ -11,6 +11,7 @@
 #include "base/check.h"
 #include "base/checked.h"
 #include "graph/frame_tree.h"
+#include "replay/level_units.h"
 #include "scheduling/scheduler.h"
 
 namespace raycell {
@@ -259,8 +260,7 @@ MemoryUnits LevelUnitsOf(const ReplayConfig& config, const TraceReader& reader) 
   for (std::size_t i = 0; i < config.levels.size(); ++i) {
     const LevelConfig& level = config.levels[i];
     if (level.cells.empty()) continue;
-    TraceReader::CoarseCells coarse =
-        reader.CoarserCells(level.cells, "level." + level.name + ".cells");
+    LevelCells coarse = CoarserLevelCells(reader, level.cells, "level." + level.name + ".cells");
     units[i].unit_of_cell = std::move(coarse.of_cell);
     units[i].bytes = std::move(coarse.bytes);
     any = true;

@@ -99,7 +99,7 @@ ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& head
 
 // What each level of `config` stores and moves on `reader`'s cells (replay/memory.h
 // LevelUnits): empty when every level holds the replay's cells. InputError naming the key
-// (level.NAME.cells) when a level's cells cannot be made (TraceReader::CoarserCells: not a
+// (level.NAME.cells) when a level's cells cannot be made (level_units.h CoarserLevelCells: not a
 // regroupable capture, cells that are not unions of the replay's) or do not nest in the cells
 // of the level below it.
 MemoryUnits LevelUnitsOf(const ReplayConfig& config, const TraceReader& reader);

@@ -15,6 +15,10 @@
 //   "out/a.rct: frame 150 (#3, offset 12345): zstd: Restored data doesn't match checksum".
 // Const methods read with pread and keep no shared state, so several threads may read
 // frames of one TraceReader at once.
+//
+// Its parts, internal to traces/: the file, its zstd frames and their messages
+// (trace_file.h), decoding and checking the header and the frames (trace_decode.h), and a
+// regroupable capture's regrouped view (regrouped_view.h).
 #pragma once
 
 #include <cstddef>
@@ -25,9 +29,21 @@
 #include <vector>
 
 #include "traces/ray_batch.h"
+#include "traces/subdivision.h"
 #include "traces/trace_header.h"
 
 namespace raycell {
+
+// A subdivision of a regroupable capture's stored fine grid, with what a trace knows of it
+// (TraceReader::SubdivideFineGrid).
+struct FineSubdivision {
+  // Its boxes and, per fine cell, the cell holding it.
+  Subdivision subdivision;
+  // Per cell of it, the bytes of its fine cells' leaves, each leaf once (0: an empty cell).
+  std::vector<std::uint64_t> footprints;
+  // Per fine cell, its cell in the reader's view (kNoCell: an empty one); TraceReader::CellMap.
+  std::vector<CellId> view_of_fine;
+};
 
 class TraceReader {
  public:
@@ -61,17 +77,16 @@ class TraceReader {
   // The cells' footprints in frame `frame_index`: a dynamic subdivision's own (its cells are
   // other boxes every frame; header() has each cell's largest), else header().footprints.
   const std::vector<std::uint64_t>& FrameFootprints(std::size_t frame_index) const;
-  // The cells of `cells` (a SPEC, not dynamic) over this view's cells, for a memory level
-  // that holds coarser cells (level.NAME.cells; replay/memory.h LevelUnits): per cell of the
-  // view, the coarse cell holding it (an empty cell, never fetched: 0), and per coarse cell its
-  // footprint (its fine cells' leaves, each once). InputError prefixed with `what` when the
-  // trace is not a regroupable capture (Open), is shown as a dynamic subdivision, `cells` is
-  // a bad SPEC, or a cell of the view is not inside one coarse cell.
-  struct CoarseCells {
-    std::vector<CellId> of_cell;
-    std::vector<std::uint64_t> bytes;
-  };
-  CoarseCells CoarserCells(const std::string& cells, const std::string& what) const;
+  // A subdivision of a regroupable capture's stored fine grid beside this view (Open; what a
+  // replay's levels of coarser cells are made from, docs/design.md §2): the subdivision `spec`
+  // makes of the fine grid (Subdivide with the fine cells' data, as Open with --cells SPEC:
+  // the union footprints of their leaves, every frame's samples for kd:N:work and kd:N:sqrt,
+  // the crossings for grid:N:crossings; dynamic:N: frame 0's), each of its cells' footprint
+  // (its fine cells' leaves, each once) and the view's own fine-to-cell map. Only when
+  // regrouped() and the view's cells stay the same over the frames (header().subdivision is
+  // not dynamic; a RAYCELL_CHECK). InputError (Subdivide's) when the fine grid cannot make
+  // `spec`, the reader's own when a frame read for its weights is damaged.
+  FineSubdivision SubdivideFineGrid(const SubdivisionSpec& spec) const;
   const TraceHeader& header() const;
   // Summaries of the readable frames in file order, with their offset and length.
   const std::vector<FrameSummary>& frames() const;

@@ -318,5 +318,33 @@ TEST_F(RegroupCaptureTest, ABoardOfCoarserCellsThatCannotBeMadeIsRefused) {
   EXPECT_EQ(error(TraceReader::Open(Path("fine.rct"), "6x6x6")), "no error");
 }
 
+// What a level of coarser cells is made from, as trace facts (TraceReader::SubdivideFineGrid):
+// the 3x3x3 subdivision of the 12x12x12 fine grid beside the 6x6x6 view holds each fine cell
+// by its coordinates, with the footprints of the capture recorded on 3x3x3, and the view's map
+// puts each fine cell in its 6x6x6 cell (none for an empty one); kd:8:work, weighed by every
+// frame's samples, is the subdivision --cells kd:8:work shows.
+TEST_F(RegroupCaptureTest, TheFineGridsSubdivisionHasTheDirectCapturesFootprints) {
+  const TraceReader fine = TraceReader::Open(Path("fine.rct"), "6x6x6");
+  const FineSubdivision s = fine.SubdivideFineGrid(ParseSubdivisionSpec("3x3x3", "test"));
+  EXPECT_EQ(s.footprints, TraceReader::Open(Path("direct3.rct")).header().footprints);
+  ASSERT_EQ(s.subdivision.coarse_of_fine.size(), 1728u);
+  ASSERT_EQ(s.view_of_fine.size(), 1728u);
+  int empty = 0;
+  for (std::uint32_t f = 0; f < 1728; ++f) {
+    const std::uint32_t x = f % 12, y = f / 12 % 12, z = f / 144;
+    EXPECT_EQ(s.subdivision.coarse_of_fine[f], CellId(x / 4 + 3 * (y / 4 + 3 * (z / 4)))) << f;
+    const CellId six(x / 2 + 6 * (y / 2 + 6 * (z / 2)));
+    const bool is_empty = fine.header().footprints[six.value()] == 0;
+    empty += is_empty;
+    EXPECT_EQ(s.view_of_fine[f], is_empty ? kNoCell : six) << f;
+  }
+  EXPECT_GT(empty, 0);
+
+  const TraceReader kd = TraceReader::Open(Path("fine.rct"), "kd:8:work");
+  const FineSubdivision k = fine.SubdivideFineGrid(ParseSubdivisionSpec("kd:8:work", "test"));
+  EXPECT_EQ(k.subdivision.boxes, kd.header().subdivision.boxes);
+  EXPECT_EQ(k.footprints, kd.header().footprints);
+}
+
 }  // namespace
 }  // namespace raycell

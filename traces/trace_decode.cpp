@@ -1,0 +1,704 @@
+#include "traces/trace_decode.h"
+
+#include <capnp/message.h>
+#include <capnp/serialize.h>
+
+#include <algorithm>
+#include <cstring>
+#include <iterator>
+#include <utility>
+#include <vector>
+
+#include "base/check.h"
+#include "base/format.h"
+#include "traces/columns.h"
+#include "traces/format.h"
+#include "traces/frame_checksum.h"
+#include "traces/subdivision.h"
+#include "traces/trace.capnp.h"
+
+namespace raycell {
+namespace trace_io {
+namespace {
+
+// ---- Header ------------------------------------------------------------------------------
+
+std::string ToStd(capnp::Text::Reader t) { return std::string(t.begin(), t.size()); }
+
+Vec3d ToVec3(schema::Vec3::Reader v) { return {v.getX(), v.getY(), v.getZ()}; }
+
+RenderSettings ToSettings(schema::Settings::Reader s) {
+  RenderSettings r;
+  r.width = s.getWidth();
+  r.height = s.getHeight();
+  r.spp = s.getSpp();
+  r.max_depth = s.getMaxDepth();
+  r.primary_step = s.getPrimaryStep();
+  r.shadow_step = s.getShadowStep();
+  r.cutoff = s.getCutoff();
+  r.store_t = s.getStoreT();
+  r.single_precision = s.getSinglePrecision();
+  r.zstd_level = s.getZstdLevel();
+  return r;
+}
+
+GridInfo ToGrid(schema::Grid::Reader g) {
+  return {ToStd(g.getName()), ToStd(g.getRole()), ToStd(g.getSource()), g.getVoxelSize(),
+          g.getLeafCount()};
+}
+
+CameraKey ToCamera(schema::Camera::Reader c) {
+  CameraKey k;
+  k.frame = c.getFrame();
+  k.eye = ToVec3(c.getEye());
+  k.target = ToVec3(c.getTarget());
+  k.up = ToVec3(c.getUp());
+  k.fov_deg = c.getFovDeg();
+  return k;
+}
+
+CameraPathInfo ToPath(schema::CameraPath::Reader r) {
+  if (r.getKeys().size() > kTraceMaxFrames) {
+    throw BadData("camera path with " + Str(r.getKeys().size()) + " key frames exceeds the " +
+                  "trace format's limit of " + Str(kTraceMaxFrames) + " (kTraceMaxFrames)");
+  }
+  CameraPathInfo p;
+  p.kind = ToStd(r.getKind());
+  p.first_frame = r.getFirstFrame();
+  p.frame_count = r.getFrameCount();
+  p.eye = ToVec3(r.getEye());
+  p.target = ToVec3(r.getTarget());
+  p.up = ToVec3(r.getUp());
+  p.fov_deg = r.getFovDeg();
+  p.orbit_degrees = r.getOrbitDegrees();
+  for (auto k : r.getKeys()) p.keys.push_back(ToCamera(k));
+  return p;
+}
+
+// The subdivision of a regrouped trace, checked: a SPEC that parses, a fine grid, and per
+// frame boxes that tile it, as many as the cells.
+SubdivisionInfo ToSubdivision(schema::Subdivision::Reader r, const TraceHeader& h) {
+  SubdivisionInfo s;
+  s.spec = ToStd(r.getSpec());
+  if (s.spec.empty()) throw BadData("a subdivision without a SPEC");
+  if (s.spec.size() > kTraceMaxTextBytes) throw BadData("a subdivision SPEC over the text limit");
+  SubdivisionSpec spec;
+  try {
+    spec = ParseSubdivisionSpec(s.spec, "subdivision");
+  } catch (const InputError& e) {
+    throw BadData(e.what());
+  }
+  s.fine = {r.getFineX(), r.getFineY(), r.getFineZ()};
+  const std::string grid = TraceCellGridProblem(s.fine);
+  if (!grid.empty()) throw BadData("the subdivision's fine grid: " + grid);
+  if (r.getBoxes().size() > kTraceMaxBoxes) {
+    throw BadData("a subdivision of " + Str(r.getBoxes().size()) + " boxes exceeds the " +
+                  "limit of " + Str(kTraceMaxBoxes) + " (kTraceMaxBoxes)");
+  }
+  const std::uint64_t cells = TraceCellCount(h.cells);
+  const bool dynamic = spec.kind == SubdivisionSpec::Kind::kDynamic;
+  const std::uint64_t frames = dynamic ? h.cameras.size() : 1;
+  if (r.getBoxes().size() != cells * frames) {
+    throw BadData("a subdivision of " + Str(r.getBoxes().size()) + " boxes for " + Str(cells) +
+                  " cells" + (dynamic ? " and " + Str(frames) + " frames" : std::string()));
+  }
+  if (spec.kind != SubdivisionSpec::Kind::kUniform && (h.cells[1] != 1 || h.cells[2] != 1)) {
+    throw BadData("a subdivision '" + s.spec + "' of a cell grid that is not NX1x1");
+  }
+  std::vector<std::uint8_t> covered;
+  for (std::uint64_t i = 0; i < r.getBoxes().size(); ++i) {
+    if (i % cells == 0) covered.assign(TraceCellCount(s.fine), 0);
+    const auto b = r.getBoxes()[unsigned(i)];
+    FineBox box{{b.getLoX(), b.getLoY(), b.getLoZ()}, {b.getHiX(), b.getHiY(), b.getHiZ()}};
+    for (int a = 0; a < 3; ++a) {
+      if (!(box.lo[a] < box.hi[a] && box.hi[a] <= s.fine[a])) {
+        throw BadData("subdivision box " + Str(i) + " is empty or outside the fine grid");
+      }
+    }
+    for (std::uint32_t z = box.lo[2]; z < box.hi[2]; ++z)
+      for (std::uint32_t y = box.lo[1]; y < box.hi[1]; ++y)
+        for (std::uint32_t x = box.lo[0]; x < box.hi[0]; ++x) {
+          if (covered[x + s.fine[0] * (y + std::uint64_t{s.fine[1]} * z)]++) {
+            throw BadData("subdivision box " + Str(i) + " overlaps another");
+          }
+        }
+    if (i % cells == cells - 1 && std::count(covered.begin(), covered.end(), 0) != 0) {
+      throw BadData("the subdivision's boxes leave fine cells uncovered");
+    }
+    s.boxes.push_back(box);
+  }
+  const auto ff = r.getFrameFootprints();
+  if (ff.size() != (dynamic ? r.getBoxes().size() : 0)) {
+    throw BadData("a subdivision with " + Str(ff.size()) + " frame footprints for " +
+                  Str(r.getBoxes().size()) + " boxes" + (dynamic ? "" : " (not dynamic)"));
+  }
+  for (std::uint64_t f : ff) s.frame_footprints.push_back(f);
+  return s;
+}
+
+// The header's fields as read, checked against the format's limits (footprints not yet:
+// version 2 stores them in the records after the header).
+TraceHeader ToHeader(schema::Header::Reader r, std::uint64_t* leaf_count) {
+  TraceHeader h;
+  h.format_version = r.getFormatVersion();
+  if (h.format_version < 1 || h.format_version > kTraceFormatVersion) {
+    throw BadData("format version " + Str(h.format_version) + " is not supported (this reader " +
+                  "reads 1.." + Str(kTraceFormatVersion) + ")");
+  }
+  // Lists of empty structs cost the message nothing: check their lengths before reading.
+  if (r.getGrids().size() > kTraceMaxGrids) {
+    throw BadData(Str(r.getGrids().size()) + " grids exceed the trace format's limit of " +
+                  Str(kTraceMaxGrids) + " (kTraceMaxGrids)");
+  }
+  if (r.getCameras().size() > kTraceMaxFrames) {
+    throw BadData(Str(r.getCameras().size()) + " cameras (frames) exceed the trace format's " +
+                  "limit of " + Str(kTraceMaxFrames) + " (kTraceMaxFrames)");
+  }
+  h.producer = ToStd(r.getProducer());
+  h.scene = ToStd(r.getScene());
+  for (auto g : r.getGrids()) h.grids.push_back(ToGrid(g));
+  h.box_min = ToVec3(r.getBoxMin());
+  h.box_max = ToVec3(r.getBoxMax());
+  h.cells = {r.getCellsX(), r.getCellsY(), r.getCellsZ()};
+  h.footprint_mode = ToStd(r.getFootprintMode());
+  for (auto c : r.getCameras()) h.cameras.push_back(ToCamera(c));
+  h.settings = ToSettings(r.getSettings());
+  if (h.format_version >= 3) h.path = ToPath(r.getPath());
+  if (h.format_version >= 4) {
+    h.regroupable = r.getRegroupable();
+    if (r.getLeafCount() > kTraceMaxLeaves) {
+      throw BadData(Str(r.getLeafCount()) + " leaves exceed the trace format's limit of " +
+                    Str(kTraceMaxLeaves) + " (kTraceMaxLeaves)");
+    }
+    if (!h.regroupable && r.getLeafCount() != 0)
+      throw BadData("leaves in a capture not regroupable");
+    *leaf_count = r.getLeafCount();
+    if (r.hasSubdivision()) h.subdivision = ToSubdivision(r.getSubdivision(), h);
+  }
+  const std::string problem = TraceHeaderProblem(h);
+  if (!problem.empty()) throw BadData(problem);
+  const auto footprints = r.getFootprints();
+  if (h.format_version >= 2 && footprints.size() != 0) {
+    throw BadData("version 2 header with footprints in it");
+  }
+  if (h.format_version == 1 && footprints.size() != TraceCellCount(h.cells)) {
+    throw BadData(Str(footprints.size()) + " footprints for " + Str(TraceCellCount(h.cells)) +
+                  " cells");
+  }
+  for (std::uint64_t f : footprints) h.footprints.push_back(f);
+  return h;
+}
+
+// Appends the footprints of one `footprints` record (version 2) to `out`, which holds those
+// of the records before it; at most `cells` in all.
+void AppendFootprints(schema::Footprints::Reader r, std::uint64_t cells,
+                      std::vector<std::uint64_t>& out) {
+  if (r.getFirstCell() != out.size()) {
+    throw BadData("footprints record starts at cell " + Str(r.getFirstCell()) + ", expected " +
+                  Str(out.size()));
+  }
+  ColumnReader values(r.getValues(), "footprint values");
+  ColumnReader runs(r.getRuns(), r.getValues().getNarrow().size(), "footprint runs");
+  if (values.AtEnd()) throw BadData("footprints record without runs");
+  while (!values.AtEnd()) {
+    const std::uint64_t value = values.Next(), run = runs.Next();
+    if (run >= cells - out.size())
+      throw BadData("footprints for more than " + Str(cells) + " cells");
+    out.insert(out.end(), run + 1, value);
+  }
+  values.Finish();
+  runs.Finish();
+}
+
+// Appends the leaves per cell of one `cellLeaves` record to `out` (cells < `cells`, leaf
+// numbers < `leaf_count`, increasing within a cell).
+void AppendCellLeaves(schema::CellLeaves::Reader r, std::uint64_t cells, std::uint64_t leaf_count,
+                      CellLeaves& out) {
+  const std::uint64_t first = out.begin.size() - 1;
+  if (r.getFirstCell() != first) {
+    throw BadData("cellLeaves record starts at cell " + Str(r.getFirstCell()) + ", expected " +
+                  Str(first));
+  }
+  ColumnReader counts(r.getCounts(), "leaf counts"), leaves(r.getLeaves(), "cell leaves");
+  if (counts.AtEnd()) throw BadData("cellLeaves record without cells");
+  while (!counts.AtEnd()) {
+    if (out.begin.size() - 1 == cells)
+      throw BadData("leaves for more than " + Str(cells) + " cells");
+    const std::uint64_t n = counts.Next();
+    if (n > leaf_count || out.leaves.size() + n > kTraceMaxLeafRefs) {
+      throw BadData("more (cell, leaf) pairs than the trace format's limit or the leaves");
+    }
+    std::uint64_t leaf = 0;
+    for (std::uint64_t i = 0; i < n; ++i) {
+      const std::uint64_t d = leaves.Next();
+      leaf = i == 0 ? d : leaf + 1 + std::min<std::uint64_t>(d, leaf_count);
+      if (leaf >= leaf_count)
+        throw BadData("a cell's leaf number beyond the " + Str(leaf_count) + " leaves");
+      out.leaves.push_back(std::uint32_t(leaf));
+    }
+    out.begin.push_back(out.leaves.size());
+  }
+  counts.Finish();
+  leaves.Finish();
+}
+
+}  // namespace
+
+TraceHeader ReadHeader(const FileIn& file, std::uint64_t& length) {
+  ZstdFrameReader in(file, 0, file.size());
+  kj::Array<capnp::word> words;
+  if (!ReadMessage(in, words)) throw BadData("empty header frame");
+  TraceHeader header;
+  std::uint64_t leaf_count = 0;
+  {
+    capnp::FlatArrayMessageReader message(words, MessageOptions());
+    const auto record = message.getRoot<schema::Record>();
+    if (record.which() != schema::Record::HEADER) throw BadData("first record is not a header");
+    header = ToHeader(record.getHeader(), &leaf_count);
+  }
+  const std::uint64_t cells = TraceCellCount(header.cells);
+  if (header.regroupable) header.leaves.begin.push_back(0);
+  // Records in order: footprints, then (regroupable) leafBytes, then cellLeaves.
+  while (ReadMessage(in, words)) {
+    if (header.format_version < 2) throw BadData("more than one message in the header frame");
+    capnp::FlatArrayMessageReader message(words, MessageOptions());
+    const auto record = message.getRoot<schema::Record>();
+    const bool footprints_done = header.footprints.size() == cells;
+    const bool leaves_done = header.leaves.bytes.size() == leaf_count;
+    const bool cell_leaves_started = header.leaves.begin.size() > 1;
+    if (record.which() == schema::Record::FOOTPRINTS && header.leaves.bytes.empty() &&
+        !cell_leaves_started) {
+      AppendFootprints(record.getFootprints(), cells, header.footprints);
+    } else if (!header.regroupable) {
+      throw BadData("a record other than footprints after the header");
+    } else if (record.which() == schema::Record::LEAF_BYTES && footprints_done &&
+               !cell_leaves_started) {
+      AppendFootprints(record.getLeafBytes(), leaf_count, header.leaves.bytes);
+    } else if (record.which() == schema::Record::CELL_LEAVES && footprints_done && leaves_done) {
+      AppendCellLeaves(record.getCellLeaves(), cells, leaf_count, header.leaves);
+    } else {
+      throw BadData("a record out of place after the header (expected footprints, then a " +
+                    std::string("regroupable capture's leafBytes and cellLeaves records)"));
+    }
+  }
+  if (header.footprints.size() != cells) {
+    throw BadData(Str(header.footprints.size()) + " footprints for " + Str(cells) + " cells");
+  }
+  const std::vector<std::uint64_t>& ff = header.subdivision.frame_footprints;
+  for (std::uint64_t i = 0; i < ff.size(); ++i) {
+    if (ff[i] > header.footprints[i % cells]) {
+      throw BadData("frame footprint " + Str(i) + " above its cell's footprint");
+    }
+  }
+  if (header.regroupable) {
+    if (header.leaves.bytes.size() != leaf_count || header.leaves.begin.size() != cells + 1) {
+      throw BadData("a regroupable capture's leaves are incomplete");
+    }
+    if (header.footprint_mode != "sparse")
+      throw BadData("a regroupable capture's footprints are not sparse");
+    for (std::uint64_t c = 0; c < cells; ++c) {
+      std::uint64_t sum = 0;
+      for (std::uint64_t i = header.leaves.begin[c]; i < header.leaves.begin[c + 1]; ++i) {
+        sum += header.leaves.bytes[header.leaves.leaves[i]];
+      }
+      if (sum != header.footprints[c]) {
+        throw BadData("cell " + Str(c) + "'s leaves hold " + Str(sum) + " bytes, its footprint " +
+                      Str(header.footprints[c]));
+      }
+    }
+  }
+  length = in.consumed();
+  return header;
+}
+
+namespace {
+
+// ---- Batches -----------------------------------------------------------------------------
+
+struct BatchColumns {
+  capnp::List<std::uint8_t>::Reader heads;
+  ColumnReader head_runs, parents, spawns, pixels, primary_paths, secondary_paths;
+  ZeroRunColumnReader primary_samples, secondary_samples;
+  capnp::List<float>::Reader t_enter, t_exit;
+
+  explicit BatchColumns(schema::Batch::Reader b)
+      : heads(b.getHeads()),
+        head_runs(b.getHeadRuns(), heads.size(), "headRuns"),
+        parents(b.getParents(), "parents"),
+        spawns(b.getSpawns(), "spawns"),
+        pixels(b.getPixels(), "pixels"),
+        primary_paths(b.getPrimaryPaths(), "primaryPaths"),
+        secondary_paths(b.getSecondaryPaths(), "secondaryPaths"),
+        primary_samples(b.getPrimarySamples(), "primarySamples"),
+        secondary_samples(b.getSecondarySamples(), "secondarySamples"),
+        t_enter(b.getTEnter()),
+        t_exit(b.getTExit()) {}
+
+  // The number of rays of the batch (the sum of the head runs), at most kTraceMaxBatchRays.
+  std::size_t RayCount(schema::Batch::Reader b) const {
+    ColumnReader runs(b.getHeadRuns(), "headRuns");
+    std::uint64_t rays = 0;
+    for (unsigned r = 0; r < heads.size(); ++r) {
+      const std::uint64_t run = runs.Next();
+      if (run >= kTraceMaxBatchRays || rays + run + 1 > kTraceMaxBatchRays) {
+        throw BadData("batch has more than " + Str(kTraceMaxBatchRays) + " rays");
+      }
+      rays += run + 1;
+    }
+    return static_cast<std::size_t>(rays);
+  }
+
+  void Finish() const {
+    for (const ColumnReader* c :
+         {&head_runs, &parents, &spawns, &pixels, &primary_paths, &secondary_paths}) {
+      c->Finish();
+    }
+    primary_samples.Finish();
+    secondary_samples.Finish();
+  }
+};
+
+// Decodes the batches of one frame in order, validating them against each other and the
+// header, and accumulates the frame's summary.
+class FrameDecoder {
+ public:
+  FrameDecoder(const TraceHeader& header, std::int32_t frame, const FrameSummary* expected)
+      : header_(header), acc_(frame, header.settings.store_t), frame_(frame), expected_(expected) {}
+
+  void Decode(schema::Batch::Reader b, RayBatch& out) {
+    if (b.getFrame() != frame_) throw BadData("batch of frame " + Str(b.getFrame()));
+    if (b.getFirstId() != acc_.rays()) {
+      throw BadData("batch starts at ray " + Str(b.getFirstId()) + ", expected " +
+                    Str(acc_.rays()));
+    }
+    BatchColumns c(b);
+    CheckTimeLengths(c);
+    const std::size_t rays = c.RayCount(b);
+    out.Clear();
+    out.set_first_id(b.getFirstId());
+    out.Reserve(rays, header_.settings.store_t ? c.t_enter.size() : 0);
+    last_primary_ = kNone;
+    for (auto& starts : group_start_) std::fill(std::begin(starts), std::end(starts), kNone);
+    last_non_shadow_ = kNoParent;
+    prev_x_ = prev_y_ = 0;
+    std::size_t i = 0;
+    for (unsigned r = 0; r < c.heads.size(); ++r) {
+      const std::uint8_t head = c.heads[r];
+      for (std::uint64_t n = c.head_runs.Next() + 1; n > 0; --n) DecodeRay(c, head, i++, out);
+    }
+    c.Finish();
+    if (header_.settings.store_t && c.t_enter.size() != out.visit_count()) {
+      throw BadData("t columns have " + Str(c.t_enter.size()) + " values for " +
+                    Str(out.visit_count()) + " visits");
+    }
+    CheckAgainstExpected();
+  }
+
+  FrameSummary Summary() const { return acc_.Summary(); }
+
+ private:
+  static constexpr std::size_t kNone = ~std::size_t{0};
+
+  void CheckTimeLengths(const BatchColumns& c) const {
+    const bool t = header_.settings.store_t;
+    if (c.t_enter.size() != c.t_exit.size() || (!t && c.t_enter.size() != 0) ||
+        c.t_enter.size() > kTraceMaxBatchVisits) {
+      throw BadData("t columns have bad length");
+    }
+  }
+
+  void DecodeRay(BatchColumns& c, std::uint8_t head, std::size_t i, RayBatch& out) {
+    const RayId id = out.first_id() + i;
+    const auto kind = static_cast<RayKind>(head & kHeadKindMask);
+    const RayId parent = DecodeParent(c, head, id, kind, i, out);
+    const bool sibling = i > 0 && out.parents()[i - 1] == parent;
+    const std::uint32_t spawn = DecodeSpawn(c, head, id, sibling ? out.spawns()[i - 1] : 0);
+    CheckSpawn(id, parent, spawn);
+    if (head & kHeadNewPixel) {
+      prev_x_ = ApplyDelta(prev_x_, c.pixels.Next(), "pixel x");
+      prev_y_ = ApplyDelta(prev_y_, c.pixels.Next(), "pixel y");
+    }
+    const bool primary = parent == kNoParent;
+    const std::size_t ref = ReferenceRay(out, kind, parent, i, sibling);
+    out.BeginRay(kind, parent, spawn, prev_x_, prev_y_);
+    DecodeVisits(c, head, id, primary, ref, out);
+    const std::size_t count = out.visit_end(i) - out.visit_begin(i);
+    Remember(id, static_cast<std::uint32_t>(count));
+    acc_.AddRay(out.ray(i));
+    if (primary) last_primary_ = i;
+    if (kind != RayKind::kShadow) last_non_shadow_ = id;
+  }
+
+  // Index of the reference ray of ray i (see "Column encoding" in trace.capnp), or kNone.
+  // Also records ray i as a group start.
+  std::size_t ReferenceRay(const RayBatch& out, RayKind kind, RayId parent, std::size_t i,
+                           bool sibling) {
+    if (parent == kNoParent) return last_primary_;
+    if (sibling) return i - 1;
+    if (parent < out.first_id()) return kNone;
+    const auto parent_kind = static_cast<int>(out.kinds()[parent - out.first_id()]);
+    return std::exchange(group_start_[static_cast<int>(kind)][parent_kind], i);
+  }
+
+  RayId DecodeParent(BatchColumns& c, std::uint8_t head, RayId id, RayKind kind, std::size_t i,
+                     const RayBatch& out) const {
+    const unsigned code = (head >> kHeadParentShift) & 3;
+    if (kind == RayKind::kPrimary) {
+      if (code != kParentIsLastNonShadow) {
+        throw BadData("ray " + Str(id) + ": primary ray with a parent");
+      }
+      return kNoParent;
+    }
+    RayId parent = kNoParent;
+    if (code == kParentIsLastNonShadow) {
+      parent = last_non_shadow_;
+    } else if (code == kParentOfPreviousRay) {
+      if (i > 0) parent = out.parents()[i - 1];
+    } else if (code == kParentExplicit) {
+      const std::uint64_t delta = c.parents.Next();
+      if (delta != 0 && delta <= id) parent = id - delta;
+    }
+    if (parent == kNoParent) throw BadData("ray " + Str(id) + ": bad parent");
+    return parent;
+  }
+
+  static std::uint32_t DecodeSpawn(BatchColumns& c, std::uint8_t head, RayId id,
+                                   std::uint32_t predicted) {
+    const unsigned code = (head >> kHeadSpawnShift) & 3;
+    const std::uint64_t spawn =
+        code == kSpawnExplicit ? c.spawns.Next() : std::uint64_t{predicted} + code;
+    if (spawn > 0xFFFFFFFF) throw BadData("ray " + Str(id) + ": bad spawn");
+    return static_cast<std::uint32_t>(spawn);
+  }
+
+  void CheckSpawn(RayId id, RayId parent, std::uint32_t spawn) const {
+    if (parent == kNoParent) {
+      if (spawn != 0) throw BadData("ray " + Str(id) + ": primary ray with a spawn index");
+      return;
+    }
+    if (id - parent > kWindow) return;  // too far back to remember; not checked
+    if (spawn >= counts_[parent % kWindow]) {
+      throw BadData("ray " + Str(id) + ": spawn " + Str(spawn) + " >= visit count of parent " +
+                    Str(parent));
+    }
+  }
+
+  // Adds the visits of ray `id` (the last ray of `out`); `ref` is its reference ray.
+  void DecodeVisits(BatchColumns& c, std::uint8_t head, RayId id, bool primary, std::size_t ref,
+                    RayBatch& out) {
+    ColumnReader& paths = primary ? c.primary_paths : c.secondary_paths;
+    ZeroRunColumnReader& samples = primary ? c.primary_samples : c.secondary_samples;
+    const bool new_path = head & kHeadNewPath;
+    if (!new_path && ref == kNone) {
+      throw BadData("ray " + Str(id) + ": repeats the path of a reference ray it does not have");
+    }
+    const std::size_t ref_begin = ref == kNone ? 0 : out.visit_begin(ref);
+    const std::size_t ref_count = ref == kNone ? 0 : out.visit_end(ref) - ref_begin;
+    const std::uint64_t count = new_path ? paths.Next() : ref_count;
+    if (count > kTraceMaxRayVisits || count > kTraceMaxBatchVisits - out.visit_count()) {
+      throw BadData("ray " + Str(id) + ": too many visits");
+    }
+    const bool t = header_.settings.store_t;
+    std::uint32_t cell = 0;
+    for (std::uint64_t v = 0; v < count; ++v) {
+      if (!new_path) {
+        cell = out.cells()[ref_begin + v].value();
+      } else if (v == 0) {
+        const std::uint64_t first = paths.Next();
+        if (first >= header_.cell_count()) throw BadData("ray " + Str(id) + ": bad cell");
+        cell = static_cast<std::uint32_t>(first);
+      } else {
+        cell = ApplyDelta(cell, paths.Next(), "cell");
+        if (cell >= header_.cell_count()) throw BadData("ray " + Str(id) + ": bad cell");
+      }
+      const std::uint64_t code = samples.Next();
+      std::uint64_t n = code;
+      if (v < ref_count) {
+        n = ApplyDelta(out.samples()[ref_begin + v], code, "samples");
+      } else if (code > 0xFFFFFFFF) {
+        throw BadData("ray " + Str(id) + ": bad samples");
+      }
+      const std::size_t k = out.visit_count();
+      if (t && k >= c.t_enter.size()) throw BadData("t columns have bad length");
+      out.AddVisit(CellId(cell), static_cast<std::uint32_t>(n), t ? c.t_enter[k] : 0.f,
+                   t ? c.t_exit[k] : 0.f);
+    }
+  }
+
+  void Remember(RayId id, std::uint32_t visit_count) {
+    if (id < kWindow) {
+      counts_.push_back(visit_count);
+    } else {
+      counts_[id % kWindow] = visit_count;
+    }
+  }
+
+  void CheckAgainstExpected() const {
+    if (!expected_) return;
+    if (acc_.rays() > expected_->rays || acc_.visits() > expected_->visits) {
+      throw BadData("more rays or visits than the index says");
+    }
+  }
+
+  static constexpr RayId kWindow = RayId{1} << 20;  // parents checked this far back
+
+  const TraceHeader& header_;
+  FrameAccumulator acc_;
+  std::int32_t frame_;
+  const FrameSummary* expected_;
+  std::uint32_t prev_x_ = 0, prev_y_ = 0;  // pixel of the previous ray of the batch
+  std::size_t last_primary_ = kNone;       // index in the batch of the last primary ray
+  // Index in the batch of the last group start, by [kind][kind of its parent].
+  std::size_t group_start_[kRayKindCount][kRayKindCount];
+  RayId last_non_shadow_ = kNoParent;  // id of the last ray that is not a shadow ray
+  std::vector<std::uint32_t> counts_;  // visit counts of the last kWindow rays
+};
+
+// ---- Frames ------------------------------------------------------------------------------
+
+FrameSummary ToSummary(schema::FrameEnd::Reader r) {
+  FrameSummary s;
+  s.frame = r.getFrame();
+  s.rays = r.getRays();
+  s.visits = r.getVisits();
+  s.samples = r.getSamples();
+  const auto kinds = r.getRaysByKind();
+  if (kinds.size() != kRayKindCount) throw BadData("frameEnd has bad raysByKind");
+  for (unsigned k = 0; k < kinds.size(); ++k) s.rays_by_kind[k] = kinds[k];
+  s.checksum = r.getChecksum();
+  return s;
+}
+
+std::string Hex(std::uint64_t v) { return "0x" + FormatHex64(v); }
+
+std::string Describe(const FrameSummary& s) {
+  std::string kinds;
+  for (int k = 0; k < kRayKindCount; ++k) {
+    kinds += (k ? ", " : "") + Str(s.rays_by_kind[k]) + " " + ToString(static_cast<RayKind>(k));
+  }
+  return "frame " + std::to_string(s.frame) + ": " + Str(s.rays) + " rays (" + kinds + "), " +
+         Str(s.visits) + " visits, " + Str(s.samples) + " samples";
+}
+
+void CheckSummary(const FrameSummary& stored, const FrameSummary& decoded, const char* source) {
+  if (stored.frame != decoded.frame || stored.rays != decoded.rays ||
+      stored.visits != decoded.visits || stored.samples != decoded.samples ||
+      stored.rays_by_kind != decoded.rays_by_kind) {
+    throw BadData(std::string(source) + " says " + Describe(stored) + "; decoded " +
+                  Describe(decoded));
+  }
+  if (stored.checksum != decoded.checksum) {
+    throw BadData(std::string("checksum mismatch: ") + source + " says " + Hex(stored.checksum) +
+                  ", decoded rays hash to " + Hex(decoded.checksum));
+  }
+}
+
+class FrameReading {
+ public:
+  FrameReading(const FileIn& file, const TraceHeader& header, const FrameSlot& slot)
+      : in_(file, slot.offset, slot.end),
+        header_(header),
+        slot_(slot),
+        batch_(header.settings.store_t) {
+    if (slot.expected) number_ = slot.expected->frame;
+  }
+
+  FrameSummary Run(const BatchFn* fn) {
+    kj::Array<capnp::word> words;
+    while (ReadMessage(in_, words)) {
+      capnp::FlatArrayMessageReader message(words, MessageOptions());
+      const auto record = message.getRoot<schema::Record>();
+      if (record.which() == schema::Record::FRAME_END) return End(record.getFrameEnd());
+      if (record.which() != schema::Record::BATCH) throw BadData("unexpected record in a frame");
+      Batch(record.getBatch(), fn);
+    }
+    throw BadData("the zstd frame ends without a frameEnd record");
+  }
+
+  std::optional<std::int32_t> number() const { return number_; }
+
+ private:
+  FrameDecoder& Decoder(std::int32_t frame) {
+    if (!number_) number_ = frame;
+    if (!decoder_) decoder_.emplace(header_, *number_, slot_.expected);
+    return *decoder_;
+  }
+
+  void Batch(schema::Batch::Reader b, const BatchFn* fn) {
+    Decoder(b.getFrame()).Decode(b, batch_);
+    if (fn) (*fn)(batch_);
+  }
+
+  FrameSummary End(schema::FrameEnd::Reader r) {
+    const FrameSummary stored = ToSummary(r);
+    FrameSummary decoded = Decoder(stored.frame).Summary();
+    CheckSummary(stored, decoded, "frameEnd");
+    char extra;
+    if (in_.Read(&extra, 1) != 0) throw BadData("data after the frameEnd record");
+    decoded.offset = slot_.offset;
+    decoded.length = in_.consumed();
+    if (slot_.expected) CheckSummary(*slot_.expected, decoded, "the index");
+    if (slot_.expected && slot_.expected->length != decoded.length) {
+      throw BadData("the zstd frame is " + Str(decoded.length) + " bytes, the index says " +
+                    Str(slot_.expected->length));
+    }
+    return decoded;
+  }
+
+  ZstdFrameReader in_;
+  const TraceHeader& header_;
+  FrameSlot slot_;
+  std::optional<std::int32_t> number_;
+  std::optional<FrameDecoder> decoder_;
+  RayBatch batch_;
+};
+
+}  // namespace
+
+std::string FrameLabel(const FrameSlot& slot, std::optional<std::int32_t> number) {
+  const std::string where = "offset " + Str(slot.offset);
+  if (!number) return "frame #" + Str(slot.ordinal) + " (" + where + ")";
+  return "frame " + std::to_string(*number) + " (#" + Str(slot.ordinal) + ", " + where + ")";
+}
+
+FrameSummary ReadFrame(const FileIn& file, const std::string& path, const TraceHeader& header,
+                       const FrameSlot& slot, const BatchFn* fn) {
+  std::optional<FrameReading> reading;
+  auto where = [&] { return FrameLabel(slot, reading ? reading->number() : std::nullopt); };
+  return Guarded(path, where, [&] {
+    reading.emplace(file, header, slot);
+    return reading->Run(fn);
+  });
+}
+
+void CheckEncodedFrame(const FileIn& file, const FrameSlot& slot) {
+  ZstdFrameReader in(file, slot.offset, slot.end);
+  ZSTD_frameHeader zh;
+  char head[ZSTD_FRAMEHEADERSIZE_MAX];
+  const std::size_t head_bytes =
+      static_cast<std::size_t>(std::min<std::uint64_t>(sizeof head, slot.end - slot.offset));
+  file.ReadAt(slot.offset, head, head_bytes);
+  if (ZSTD_getFrameHeader(&zh, head, head_bytes) != 0 || !zh.checksumFlag) {
+    throw BadData("the zstd frame has no content checksum");
+  }
+  kj::Array<capnp::word> words;
+  bool ended = false;
+  while (ReadMessage(in, words)) {
+    if (ended) throw BadData("data after the frameEnd record");
+    capnp::FlatArrayMessageReader message(words, MessageOptions());
+    const auto record = message.getRoot<schema::Record>();
+    if (record.which() == schema::Record::BATCH) continue;
+    if (record.which() != schema::Record::FRAME_END) throw BadData("unexpected record in a frame");
+    FrameSummary stored = ToSummary(record.getFrameEnd());
+    CheckSummary(*slot.expected, stored, "the index");
+    ended = true;
+  }
+  if (!ended) throw BadData("the zstd frame ends without a frameEnd record");
+  if (in.consumed() != slot.end - slot.offset) {
+    throw BadData("the zstd frame is " + Str(in.consumed()) + " bytes, the index says " +
+                  Str(slot.end - slot.offset));
+  }
+}
+
+}  // namespace trace_io
+}  // namespace raycell
