@@ -61,10 +61,10 @@ MemoryConfig::AcrossFrames ParseAcrossFrames(std::string_view text, const std::s
   Fail(what, "unknown memory.across_frames '" + std::string(text) + "' (expected warm or cold)");
 }
 
-LevelConfig::Replacement ParseReplacement(std::string_view text, const std::string& what) {
+const ReplacementEntry* ParseReplacement(std::string_view text, const std::string& what) {
   std::vector<std::string> names;
   for (const ReplacementEntry& e : ReplacementRegistry()) {
-    if (text == e.name) return e.kind;
+    if (text == e.name) return &e;
     names.push_back(e.name);
   }
   Fail(what, "unknown replacement '" + std::string(text) + "' (expected " + JoinOr(names) + ")");
@@ -163,8 +163,7 @@ const std::vector<Key<ReplayConfig>>& ConfigKeys() {
        [](const ReplayConfig& c) { return std::string(c.scheduler_name()); }, "celltree",
        "the paper's Cell Tree scheduler"},
       {"seed",
-       "seed of the random scheduler and of the planners' searches (best, celltree-best, "
-       "celltree-union)",
+       "seed of the schedulers whose choices depend on it (" + SeededSchedulerList(", ") + ")",
        TomlKind::kIntegerOrString, "an integer", 0, kMax64,
        [](std::string_view t, const std::string& what, ReplayConfig& c) {
          c.seed = ParseCount(t, what, 0, kMax64);
@@ -180,10 +179,10 @@ const std::vector<Key<ReplayConfig>>& ConfigKeys() {
        },
        [](const ReplayConfig& c) { return std::string(ToString(c.granularity)); }, "auto",
        "exact and as fast as possible"},
-      {"processors.count", "number of block processors, 1..1024", TomlKind::kInteger, "an integer",
-       1, 1024,
+      {"processors.count", "number of block processors, 1.." + std::to_string(kMaxProcessors),
+       TomlKind::kInteger, "an integer", 1, kMaxProcessors,
        [](std::string_view t, const std::string& what, ReplayConfig& c) {
-         c.processors.count = std::uint32_t(ParseCount(t, what, 1, 1024));
+         c.processors.count = std::uint32_t(ParseCount(t, what, 1, kMaxProcessors));
        },
        [](const ReplayConfig& c) { return std::to_string(c.processors.count); }, "1",
        "one block processor, the paper's case"},
@@ -253,7 +252,7 @@ const std::vector<Key<LevelConfig>>& LevelKeys() {
        [](std::string_view t, const std::string& what, LevelConfig& l) {
          l.replacement = ParseReplacement(Trim(t), what);
        },
-       [](const LevelConfig& l) { return std::string(ToString(l.replacement)); }, "", ""},
+       [](const LevelConfig& l) { return std::string(l.replacement->name); }, "", ""},
       {"cells",
        "what the level stores and moves: same (the replay's cells), or a SPEC of a regroupable "
        "capture's fine grid (3x3x3, kd:27:footprint, octree:BYTES...) whose cells are unions of "
@@ -611,7 +610,6 @@ bool operator==(const ReplayConfig& a, const ReplayConfig& b) {
 }
 bool operator!=(const ReplayConfig& a, const ReplayConfig& b) { return !(a == b); }
 
-std::string_view ToString(LevelConfig::Replacement r) { return ReplacementOf(r).name; }
 std::string_view ToString(ReplayConfig::Granularity g) {
   return g == ReplayConfig::Granularity::kRay    ? "ray"
          : g == ReplayConfig::Granularity::kNode ? "node"
@@ -647,9 +645,9 @@ void ValidateConfig(const ReplayConfig& config, const std::string& where) {
                     "': the first level holds the cells the processors work; only a shared "
                     "level may hold coarser ones");
   }
-  if (config.processors.count < 1 || config.processors.count > 1024) {
-    Fail(where,
-         "processors.count must be in 1..1024, got " + std::to_string(config.processors.count));
+  if (config.processors.count < 1 || config.processors.count > kMaxProcessors) {
+    Fail(where, "processors.count must be in 1.." + std::to_string(kMaxProcessors) + ", got " +
+                    std::to_string(config.processors.count));
   }
   if (config.processors.time_per_sample == SimTime::Zero()) {
     Fail(where, "processors.time_per_sample must be greater than zero");

@@ -21,12 +21,16 @@
 
 namespace raycell {
 
-struct SchedulerEntry;  // scheduling/scheduler.h
+struct SchedulerEntry;    // scheduling/scheduler.h
+struct ReplacementEntry;  // replay/replacement.h
+extern const ReplacementEntry kLruReplacement;
+
+// The processor count's range, 1..kMaxProcessors: the one place it is stated (the key's
+// parser and meaning, ValidateConfig, --help and --print-config read it).
+inline constexpr std::uint32_t kMaxProcessors = 1024;
 
 struct LevelConfig {
   enum class CapacityUnit { kBytes, kCells };
-  // The policies of replay/replacement.h ReplacementRegistry(), which names them.
-  enum class Replacement { kLru, kFifo, kMin };
 
   // Unique, [A-Za-z0-9_-]+ (it appears in override keys "level.NAME.KEY").
   std::string name;
@@ -36,8 +40,10 @@ struct LevelConfig {
   // To the level below (the level below the last is host memory, itself unlimited).
   Bandwidth bandwidth_below;
   SimTime latency_below;
-  // A level a file adds without naming its replacement gets LRU.
-  Replacement replacement = Replacement::kLru;
+  // An entry of ReplacementRegistry() (replay/replacement.h), resolved from its name once,
+  // where the configuration is read; a level a file adds without naming its replacement gets
+  // LRU.
+  const ReplacementEntry* replacement = &kLruReplacement;
   // What the level stores and moves (docs/design.md §2 "Levels of coarser cells"): empty
   // ("same" in files and overrides), the replay's cells; else a SPEC of a regroupable capture's
   // fine grid (traces/subdivision.h, not dynamic) whose cells are unions of the replay's, e.g. a
@@ -47,7 +53,7 @@ struct LevelConfig {
 };
 
 struct ProcessorConfig {
-  std::uint32_t count = 0;               // block processors, 1..1024
+  std::uint32_t count = 0;               // block processors, 1..kMaxProcessors
   SimTime time_per_sample;               // > 0
   std::uint64_t queue_record_bytes = 0;  // per queued ray
   bool prefetch = false;  // double buffering: fetch the next scheduled cell while working
@@ -91,10 +97,9 @@ bool operator!=(const ProcessorConfig& a, const ProcessorConfig& b);
 bool operator==(const ReplayConfig& a, const ReplayConfig& b);
 bool operator!=(const ReplayConfig& a, const ReplayConfig& b);
 
-// "lru" | "fifo" | "min" (ReplacementRegistry()); "ray" | "node"; "bytes" | "cells".
-std::string_view ToString(LevelConfig::Replacement r);
+// "ray" | "node" | "auto"; "warm" | "cold"; "bytes" | "cells" (a level's replacement is named by
+// its entry, ReplacementEntry::name).
 std::string_view ToString(ReplayConfig::Granularity g);
-// "warm" | "cold".
 std::string_view ToString(MemoryConfig::AcrossFrames a);
 // The granularity a replay of `config` runs at: kAuto resolved.
 ReplayConfig::Granularity EffectiveGranularity(const ReplayConfig& config);
@@ -113,8 +118,9 @@ ReplayConfig LoadConfig(const std::string& path);
 // The same from text; `source` names it in messages (a path or "<string>").
 ReplayConfig LoadConfigFromString(std::string_view toml, const std::string& source);
 
-// Checks the invariants (at least one level, unique valid names, capacities > 0, 1..1024
-// processors, time per sample > 0, a scheduler). InputError prefixed with `where`.
+// Checks the invariants (at least one level, unique valid names, capacities > 0,
+// 1..kMaxProcessors processors, time per sample > 0, a scheduler). InputError prefixed with
+// `where`.
 void ValidateConfig(const ReplayConfig& config, const std::string& where);
 
 // One override in the --set/--vary style: `key` is dotted ("processors.count",

@@ -13,8 +13,8 @@ CellStore::CellStore(const LevelConfig& level, const std::vector<std::uint64_t>*
                      std::vector<CellId> future)
     : level_(level),
       footprints_(footprints),
-      policy_(
-          MakeReplacement(level.replacement, std::uint32_t(footprints->size()), std::move(future))),
+      policy_(MakeReplacement(*level.replacement, std::uint32_t(footprints->size()),
+                              std::move(future))),
       held_(footprints->size(), false) {}
 
 std::uint64_t CellStore::Size(CellId cell) const {
@@ -121,9 +121,9 @@ MemoryHierarchy::MemoryHierarchy(const ReplayConfig& config,
   }
   for (std::size_t i = 0; i < levels_.size(); ++i) {
     // A policy that needs the future runs as LRU until a run has made the requests.
-    const bool min = ReplacementOf(levels_[i].replacement).needs_future;
+    const bool min = levels_[i].replacement->needs_future;
     LevelConfig level = levels_[i];
-    if (min && futures.empty()) level.replacement = LevelConfig::Replacement::kLru;
+    if (min && futures.empty()) level.replacement = &kLruReplacement;
     const std::uint32_t copies = i == 0 ? config.processors.count : 1;
     stores_.emplace_back();
     for (std::uint32_t k = 0; k < copies; ++k) {

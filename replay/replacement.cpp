@@ -8,36 +8,51 @@
 
 namespace raycell {
 
-const std::vector<ReplacementEntry>& ReplacementRegistry() {
-  static const std::vector<ReplacementEntry> registry = {
-      {LevelConfig::Replacement::kLru, "lru", nullptr, false,
-       [](std::uint32_t cells, std::vector<CellId>) -> std::unique_ptr<ReplacementPolicy> {
-         return std::make_unique<RecencyReplacement>(cells, true);
-       }},
-      {LevelConfig::Replacement::kFifo, "fifo", nullptr, false,
-       [](std::uint32_t cells, std::vector<CellId>) -> std::unique_ptr<ReplacementPolicy> {
-         return std::make_unique<RecencyReplacement>(cells, false);
-       }},
-      {LevelConfig::Replacement::kMin, "min", "Belady's MIN, a bound", true,
-       [](std::uint32_t cells, std::vector<CellId> future) -> std::unique_ptr<ReplacementPolicy> {
-         return std::make_unique<MinReplacement>(cells, std::move(future));
-       }},
+constexpr ReplacementEntry kLruReplacement = [] {
+  ReplacementEntry e;
+  e.name = "lru";
+  e.note = nullptr;
+  e.needs_future = false;
+  e.make = [](std::uint32_t cells, std::vector<CellId>) -> std::unique_ptr<ReplacementPolicy> {
+    return std::make_unique<RecencyReplacement>(cells, true);
   };
+  return e;
+}();
+
+constexpr ReplacementEntry kFifoReplacement = [] {
+  ReplacementEntry e;
+  e.name = "fifo";
+  e.note = nullptr;
+  e.needs_future = false;
+  e.make = [](std::uint32_t cells, std::vector<CellId>) -> std::unique_ptr<ReplacementPolicy> {
+    return std::make_unique<RecencyReplacement>(cells, false);
+  };
+  return e;
+}();
+
+constexpr ReplacementEntry kMinReplacement = [] {
+  ReplacementEntry e;
+  e.name = "min";
+  e.note = "Belady's MIN, a bound";
+  e.needs_future = true;
+  e.make = [](std::uint32_t cells,
+              std::vector<CellId> future) -> std::unique_ptr<ReplacementPolicy> {
+    return std::make_unique<MinReplacement>(cells, std::move(future));
+  };
+  return e;
+}();
+
+const std::vector<std::reference_wrapper<const ReplacementEntry>>& ReplacementRegistry() {
+  // The order of the key's meaning and of its error message.
+  static const std::vector<std::reference_wrapper<const ReplacementEntry>> registry = {
+      kLruReplacement, kFifoReplacement, kMinReplacement};
   return registry;
 }
 
-const ReplacementEntry& ReplacementOf(LevelConfig::Replacement kind) {
-  for (const ReplacementEntry& e : ReplacementRegistry()) {
-    if (e.kind == kind) return e;
-  }
-  RAYCELL_CHECK(false);  // every kind has an entry
-  return ReplacementRegistry().front();
-}
-
-std::unique_ptr<ReplacementPolicy> MakeReplacement(LevelConfig::Replacement kind,
+std::unique_ptr<ReplacementPolicy> MakeReplacement(const ReplacementEntry& entry,
                                                    std::uint32_t cells,
                                                    std::vector<CellId> future) {
-  return ReplacementOf(kind).make(cells, std::move(future));
+  return entry.make(cells, std::move(future));
 }
 
 std::vector<CellId> ReplacementPolicy::EvictionOrder(const std::vector<bool>& held) const {

@@ -5,6 +5,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <functional>
 #include <list>
 #include <memory>
 #include <optional>
@@ -36,28 +38,35 @@ class ReplacementPolicy {
   virtual std::vector<CellId> EvictionOrder(const std::vector<bool>& held) const;
 };
 
-// Every replacement policy: the one list that configurations (parsing, printing, the key's
-// meaning), the factory and the replay's reruns for MIN derive from. A new policy is one
-// entry here and one value of LevelConfig::Replacement.
+// A replacement policy's registry entry, as the schedulers' (scheduling/scheduler.h
+// SchedulerEntry): each is defined in replacement.cpp with every field set by name, and a
+// memory level holds its policy's entry (LevelConfig::replacement), resolved from its name
+// once, where the configuration is read.
 struct ReplacementEntry {
-  LevelConfig::Replacement kind;
-  const char* name;  // as in configs: "lru"
-  const char* note;  // for the key's meaning, or null: "Belady's MIN, a bound"
+  const char* name = nullptr;  // as in configs: "lru"
+  const char* note = nullptr;  // for the key's meaning, or null: "Belady's MIN, a bound"
   // Whether it needs the level's future requests (Belady's MIN): a replay first runs the
   // frame with LRU at that level to learn them (MemoryHierarchy), then again with the policy
   // (ReplayFrame).
-  bool needs_future;
+  bool needs_future = false;
   // The policy for a store of `cells` cells; `future`: the requests a previous run of the
   // same frame made at this store (needs_future only).
-  std::unique_ptr<ReplacementPolicy> (*make)(std::uint32_t cells, std::vector<CellId> future);
+  std::unique_ptr<ReplacementPolicy> (*make)(std::uint32_t cells,
+                                             std::vector<CellId> future) = nullptr;
 };
-const std::vector<ReplacementEntry>& ReplacementRegistry();
-// The entry of `kind`.
-const ReplacementEntry& ReplacementOf(LevelConfig::Replacement kind);
+// Least recently used, first in first out, Belady's MIN.
+extern const ReplacementEntry kLruReplacement;
+extern const ReplacementEntry kFifoReplacement;
+extern const ReplacementEntry kMinReplacement;
 
-// The policy `kind` for a store of `cells` cells (ReplacementOf(kind).make). A policy that
-// needs a future given none is a CHECK failure.
-std::unique_ptr<ReplacementPolicy> MakeReplacement(LevelConfig::Replacement kind,
+// Every replacement policy: the one list that configurations (parsing, printing, the key's
+// meaning and its messages) derive from. A new policy is an entry in replacement.cpp and a
+// line in this list.
+const std::vector<std::reference_wrapper<const ReplacementEntry>>& ReplacementRegistry();
+
+// The policy of `entry` for a store of `cells` cells (entry.make). A policy that needs a
+// future given none is a CHECK failure.
+std::unique_ptr<ReplacementPolicy> MakeReplacement(const ReplacementEntry& entry,
                                                    std::uint32_t cells,
                                                    std::vector<CellId> future = {});
 

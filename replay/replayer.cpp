@@ -315,7 +315,6 @@ class Board {
     for (std::uint32_t c = 0; c < w_.cells; ++c) view_[c] = queued_rays_[c] & open_[c];
     QueueView v = QueueView::Of(view_, processors_[p].cell);
     v.processor = p;
-    v.processors = std::uint32_t(processors_.size());
     v.open = open_.data();
     v.working = working_;
     v.all_queued = queued_rays_.data();
@@ -565,7 +564,7 @@ ReplayResult Board<Units, W>::Result() const {
 // Whether some level's policy needs its future requests (Belady's MIN).
 bool NeedsFuture(const ReplayConfig& config) {
   for (const LevelConfig& l : config.levels) {
-    if (ReplacementOf(l.replacement).needs_future) return true;
+    if (l.replacement->needs_future) return true;
   }
   return false;
 }

@@ -148,7 +148,7 @@ void FinishReadTotals(ReplayResult* t, const std::string& where) {
   }
   const std::uint64_t busy =
       CheckedAdd(CheckedAdd(t->work.picoseconds(), t->stall.picoseconds()), t->idle.picoseconds());
-  if (busy % time != 0 || busy / time == 0 || busy / time > 1024) {
+  if (busy % time != 0 || busy / time == 0 || busy / time > kMaxProcessors) {
     throw InputError(where + ": work + stall + idle (" + std::to_string(busy) +
                      " ps) is not a whole number of processors times the time (" +
                      std::to_string(time) + " ps)");

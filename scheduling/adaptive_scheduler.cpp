@@ -8,6 +8,25 @@
 
 namespace raycell {
 
+constexpr SchedulerEntry kCellTreeAdaptiveEntry = [] {
+  SchedulerEntry e;
+  e.name = "celltree-adaptive";
+  e.meaning =
+      "celltree-union followed node by node as the frame unfolds: work waits for the entry "
+      "its predicted node is due at, work the plan is done with is fetched at once, and the "
+      "rest is planned again by Peel when the plan runs out";
+  e.label = "Cell Tree, adaptive";
+  e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<AdaptiveScheduler>(seed);
+  };
+  e.history = 2;
+  e.seeded = true;
+  e.predicts = true;
+  e.oracle = false;
+  e.studied = true;
+  return e;
+}();
+
 StandIns StandInsOf(const CellTree& tree) {
   StandIns s;
   for (NodeId n : tree.nodes()) {

@@ -55,11 +55,13 @@ StandIns StandInsOf(const CellTree& tree);
 NodeId MatchNode(const CellTree& tree, const StandIns& stand_ins, NodeId parent, CellId parent_cell,
                  CellId cell, bool* stand_in);
 
+// Its registry entry (SchedulerEntry), defined in adaptive_scheduler.cpp.
+extern const SchedulerEntry kCellTreeAdaptiveEntry;
+
 class AdaptiveScheduler : public Scheduler {
  public:
-  explicit AdaptiveScheduler(std::uint64_t seed) : seed_(seed) {}
+  explicit AdaptiveScheduler(std::uint64_t seed) : Scheduler(kCellTreeAdaptiveEntry), seed_(seed) {}
 
-  std::string Name() const override { return "celltree-adaptive"; }
   void BeginFrame(const FrameInfo& frame) override;
   std::optional<CellId> Next(const QueueView& queues) override;
   std::optional<CellId> Peek(const QueueView& queues) const override;

@@ -8,13 +8,170 @@
 
 namespace raycell {
 
-BalancedScheduler::BalancedScheduler(std::string name, BalanceOptions options, std::uint64_t seed)
-    : name_(std::move(name)), options_(options), seed_(seed) {
+constexpr SchedulerEntry kAffinityEntry = [] {
+  SchedulerEntry e;
+  e.name = "affinity";
+  e.meaning =
+      "cell affinity: the cell in the processor's cache if it has work, else Max Work weighted "
+      "to the cells its last cell sends rays to (frame i's tree)";
+  e.label = "cell affinity";
+  e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<BalancedScheduler>(
+        kAffinityEntry, BalanceOptions{false, false, false, true, false, false}, seed);
+  };
+  e.history = 1;
+  e.seeded = false;
+  e.predicts = true;
+  e.oracle = false;
+  e.studied = false;
+  return e;
+}();
+
+constexpr SchedulerEntry kPartitionEntry = [] {
+  SchedulerEntry e;
+  e.name = "partition";
+  e.meaning =
+      "frame i's best schedule split over the processors by list scheduling (each cell on one "
+      "processor), each following its part; Max Work when its cells have no work";
+  e.label = "partitioned plan";
+  e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<BalancedScheduler>(
+        kPartitionEntry, BalanceOptions{true, true, false, false, false, false}, seed);
+  };
+  e.history = 1;
+  e.seeded = true;
+  e.predicts = true;
+  e.oracle = false;
+  e.studied = false;
+  return e;
+}();
+
+constexpr SchedulerEntry kStealEntry = [] {
+  SchedulerEntry e;
+  e.name = "steal";
+  e.meaning =
+      "cells split over the processors by list scheduling, Max Work on one's own; with none "
+      "ready, the largest queue of the processor with the most queued rays (work stealing)";
+  e.label = "work stealing";
+  e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<BalancedScheduler>(
+        kStealEntry, BalanceOptions{false, true, true, false, false, false}, seed);
+  };
+  e.history = 1;
+  e.seeded = false;
+  e.predicts = true;
+  e.oracle = false;
+  e.studied = false;
+  return e;
+}();
+
+constexpr SchedulerEntry kPartitionStealEntry = [] {
+  SchedulerEntry e;
+  e.name = "partition-steal";
+  e.meaning = "the partitioned plan, stealing when a processor's own cells have no work";
+  e.label = "partitioned plan with stealing";
+  e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<BalancedScheduler>(
+        kPartitionStealEntry, BalanceOptions{true, true, true, false, false, false}, seed);
+  };
+  e.history = 1;
+  e.seeded = true;
+  e.predicts = true;
+  e.oracle = false;
+  e.studied = false;
+  return e;
+}();
+
+constexpr SchedulerEntry kShareEntry = [] {
+  SchedulerEntry e;
+  e.name = "share";
+  e.meaning =
+      "Max Work; with no free cell ready, the busy cell with the most queued rays (a "
+      "processor joins a cell another works)";
+  e.label = "Max Work with shared cells";
+  e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<BalancedScheduler>(
+        kShareEntry, BalanceOptions{false, false, false, false, false, true}, seed);
+  };
+  e.history = 1;
+  e.seeded = false;
+  e.predicts = true;
+  e.oracle = false;
+  e.studied = false;
+  return e;
+}();
+
+constexpr SchedulerEntry kBalancedEntry = [] {
+  SchedulerEntry e;
+  e.name = "balanced";
+  e.meaning =
+      "the cached cell if it has work, else celltree-best's plan shared by the processors (busy "
+      "entries deferred, then Max Work); no free cell ready: joins a busy one (affinity-"
+      "weighted; not for under 3 fetches' worth of queued work); on 8+ processors, while all "
+      "others work, a batch under 3 fetches' worth waits";
+  e.label = "balanced (plan, affinity, shared cells, postponing)";
+  e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<BalancedScheduler>(
+        kBalancedEntry, BalanceOptions{true, false, false, true, true, true}, seed);
+  };
+  e.history = 1;
+  e.seeded = true;
+  e.predicts = true;
+  e.oracle = false;
+  e.studied = false;
+  return e;
+}();
+
+constexpr SchedulerEntry kBalancedCriticalEntry = [] {
+  SchedulerEntry e;
+  e.name = "balanced-critical";
+  e.meaning =
+      "balanced, with the free cell whose queued rays start the longest chain in frame i's "
+      "tree first (highest level first, each queued node matched by its cell path) when it is "
+      "longer than the plan's";
+  e.label = "Balanced, critical path first";
+  e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+    BalanceOptions o{true, false, false, true, true, true};
+    o.critical = true;
+    return std::make_unique<BalancedScheduler>(kBalancedCriticalEntry, o, seed);
+  };
+  e.history = 1;
+  e.seeded = true;
+  e.predicts = true;
+  e.oracle = false;
+  e.studied = false;
+  return e;
+}();
+
+constexpr SchedulerEntry kBalancedAdaptiveEntry = [] {
+  SchedulerEntry e;
+  e.name = "balanced-adaptive";
+  e.meaning =
+      "balanced with celltree-adaptive's rule in place of celltree-best's plan: the cached "
+      "cell first, then the adaptive choice, joining busy cells and postponing small batches "
+      "as balanced does";
+  e.label = "Balanced, adaptive";
+  e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<BalancedScheduler>(
+        kBalancedAdaptiveEntry, BalanceOptions{false, false, false, true, true, true, true}, seed);
+  };
+  e.history = 2;
+  e.seeded = true;
+  e.predicts = true;
+  e.oracle = false;
+  e.studied = false;
+  return e;
+}();
+
+BalancedScheduler::BalancedScheduler(const SchedulerEntry& entry, BalanceOptions options,
+                                     std::uint64_t seed)
+    : Scheduler(entry), options_(options), seed_(seed) {
   if (options_.adaptive) adaptive_ = std::make_unique<AdaptiveScheduler>(seed);
 }
 
 void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
   cells_ = frame.cells;
+  processors_ = std::max<std::uint32_t>(frame.processors, 1);
   fetch_samples_ = frame.fetch_samples;
   reason_.clear();
   plan_.clear();
@@ -48,7 +205,7 @@ void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
   }
   // The cells over the processors: list scheduling, largest work first, each to the
   // processor with the least work so far (then the fewest cells, then the lowest number).
-  const std::uint32_t p = options_.partition ? std::max<std::uint32_t>(frame.processors, 1) : 1;
+  const std::uint32_t p = options_.partition ? processors_ : 1;
   owner_.assign(cells_, 0);
   if (p > 1) {
     std::vector<std::uint32_t> order(cells_);
@@ -205,7 +362,7 @@ std::optional<CellId> BalancedScheduler::Choose(const QueueView& queues,
   } else if (options_.plan) {
     // Follower k's next entry with work in view, or Max Work over k's cells.
     const std::optional<CellId> c = followers_[k].Peek(own);
-    if (options_.critical && queues.processors > 1 && previous_ != nullptr) {
+    if (options_.critical && processors_ > 1 && previous_ != nullptr) {
       if (const std::optional<CellId> first = Critical(queues, c)) {
         *critical = true;
         return first;
@@ -264,8 +421,8 @@ std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
   // Postpone only while every other processor is working (at most one waits by choice), and
   // only on boards of kPostponeMinProcessors or more, where one waiting processor is a small
   // part of the whole.
-  if (options_.postpone && queues.processors >= kPostponeMinProcessors &&
-      queues.working + 1 >= queues.processors && TooSmall(queues, *c)) {
+  if (options_.postpone && processors_ >= kPostponeMinProcessors &&
+      queues.working + 1 >= processors_ && TooSmall(queues, *c)) {
     const std::optional<CellId> largest =
         Best(queues, Queued(queues), [](std::uint32_t) { return true; });
     if (largest && !TooSmall(queues, *largest)) {

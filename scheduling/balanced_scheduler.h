@@ -78,10 +78,20 @@ inline constexpr double kPostponeFactor = 3.0;
 // (on the study's capture postponing costs 60% at 2 processors and 17% at 4, saves 16% at 8).
 inline constexpr std::uint32_t kPostponeMinProcessors = 8;
 
+// The registry's entries of this class, one per combination of options (balanced_scheduler.cpp).
+extern const SchedulerEntry kAffinityEntry;
+extern const SchedulerEntry kPartitionEntry;
+extern const SchedulerEntry kStealEntry;
+extern const SchedulerEntry kPartitionStealEntry;
+extern const SchedulerEntry kShareEntry;
+extern const SchedulerEntry kBalancedEntry;
+extern const SchedulerEntry kBalancedCriticalEntry;
+extern const SchedulerEntry kBalancedAdaptiveEntry;
+
 class BalancedScheduler : public Scheduler {
  public:
-  BalancedScheduler(std::string name, BalanceOptions options, std::uint64_t seed);
-  std::string Name() const override { return name_; }
+  // `entry`: the registry entry naming this combination of options.
+  BalancedScheduler(const SchedulerEntry& entry, BalanceOptions options, std::uint64_t seed);
   void BeginFrame(const FrameInfo& frame) override;
   std::optional<CellId> Next(const QueueView& queues) override;
   std::optional<CellId> Peek(const QueueView& queues) const override;
@@ -116,10 +126,10 @@ class BalancedScheduler : public Scheduler {
   // The bytes of the critical rule's state now (DecisionCost::bytes keeps the largest).
   std::uint64_t Bytes() const;
 
-  std::string name_;
   BalanceOptions options_;
   std::uint64_t seed_;
   std::uint32_t cells_ = 0;
+  std::uint32_t processors_ = 1;  // FrameInfo::processors
   std::vector<CellId> plan_;
   const std::vector<double>* fetch_samples_ = nullptr;
   std::vector<double> samples_per_visit_;  // per cell, from frame i-1's tree; 0: unknown

@@ -11,6 +11,72 @@
 
 namespace raycell {
 
+constexpr SchedulerEntry kBestEntry = [] {
+  SchedulerEntry e;
+  e.name = "best";
+  e.meaning = "the best-schedule oracle: each frame follows the best schedule found for its tree";
+  e.label = "best-schedule oracle (the frame's own best schedule)";
+  e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<BestOracleScheduler>(seed);
+  };
+  e.history = 1;
+  e.seeded = true;
+  e.predicts = true;
+  e.oracle = true;
+  e.studied = true;
+  return e;
+}();
+
+constexpr SchedulerEntry kCellTreeBestEntry = [] {
+  SchedulerEntry e;
+  e.name = "celltree-best";
+  e.meaning = "frame i+1 follows the best schedule found for frame i's tree";
+  e.label = "Cell Tree, best schedule of frame i's tree";
+  e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<CellTreeBestScheduler>(seed, false);
+  };
+  e.history = 1;
+  e.seeded = true;
+  e.predicts = true;
+  e.oracle = false;
+  e.studied = true;
+  return e;
+}();
+
+constexpr SchedulerEntry kCellTreeUnionEntry = [] {
+  SchedulerEntry e;
+  e.name = "celltree-union";
+  e.meaning = "frame i+1 follows the best schedule found for the union of frames i and i-1's trees";
+  e.label = "Cell Tree, best schedule of frames i-1 and i together";
+  e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<CellTreeBestScheduler>(seed, true);
+  };
+  e.history = 2;
+  e.seeded = true;
+  e.predicts = true;
+  e.oracle = false;
+  e.studied = true;
+  return e;
+}();
+
+constexpr SchedulerEntry kCellTree2LevelBestEntry = [] {
+  SchedulerEntry e;
+  e.name = "celltree-2level-best";
+  e.meaning =
+      "celltree-2level with the best-schedule search at both levels: the plan for the tree "
+      "contracted to the board's cells, then the plan for each board cell's part";
+  e.label = "Cell Tree, two levels, best schedules";
+  e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<TwoLevelBestScheduler>(seed);
+  };
+  e.history = 1;
+  e.seeded = true;
+  e.predicts = true;
+  e.oracle = false;
+  e.studied = false;
+  return e;
+}();
+
 BestScheduleOptions PlanEffort(std::uint64_t seed) {
   BestScheduleOptions o;
   o.seed = seed;

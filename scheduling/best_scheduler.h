@@ -24,6 +24,12 @@
 
 namespace raycell {
 
+// Its registry entries (SchedulerEntry), defined in best_scheduler.cpp.
+extern const SchedulerEntry kBestEntry;
+extern const SchedulerEntry kCellTreeBestEntry;
+extern const SchedulerEntry kCellTreeUnionEntry;
+extern const SchedulerEntry kCellTree2LevelBestEntry;
+
 // The schedule search budget of the following schedulers.
 BestScheduleOptions PlanEffort(std::uint64_t seed);
 
@@ -35,8 +41,7 @@ std::vector<CellId> PlanFor(const CellTree& tree, std::uint64_t seed);
 
 class BestOracleScheduler : public FollowingScheduler {
  public:
-  explicit BestOracleScheduler(std::uint64_t seed) : seed_(seed) {}
-  std::string Name() const override { return "best"; }
+  explicit BestOracleScheduler(std::uint64_t seed) : FollowingScheduler(kBestEntry), seed_(seed) {}
   // Plans frame.current, which must not be null.
   void BeginFrame(const FrameInfo& frame) override;
 
@@ -48,8 +53,9 @@ class CellTreeBestScheduler : public FollowingScheduler {
  public:
   // union_frames: plan the union of the last two frames' trees rather than the last alone.
   CellTreeBestScheduler(std::uint64_t seed, bool union_frames)
-      : seed_(seed), union_frames_(union_frames) {}
-  std::string Name() const override { return union_frames_ ? "celltree-union" : "celltree-best"; }
+      : FollowingScheduler(union_frames ? kCellTreeUnionEntry : kCellTreeBestEntry),
+        seed_(seed),
+        union_frames_(union_frames) {}
   void BeginFrame(const FrameInfo& frame) override;
 
  private:
@@ -63,8 +69,8 @@ class CellTreeBestScheduler : public FollowingScheduler {
 // cells within each by the plan for each forest (PlanEffort). Frame 0: Max Work.
 class TwoLevelBestScheduler : public FollowingScheduler {
  public:
-  explicit TwoLevelBestScheduler(std::uint64_t seed) : seed_(seed) {}
-  std::string Name() const override { return "celltree-2level-best"; }
+  explicit TwoLevelBestScheduler(std::uint64_t seed)
+      : FollowingScheduler(kCellTree2LevelBestEntry), seed_(seed) {}
   void BeginFrame(const FrameInfo& frame) override;
 
  private:

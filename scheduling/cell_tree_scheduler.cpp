@@ -4,6 +4,40 @@
 
 namespace raycell {
 
+constexpr SchedulerEntry kCellTreeEntry = [] {
+  SchedulerEntry e;
+  e.name = "celltree";
+  e.meaning = "the paper's Cell Tree scheduling: frame i+1 follows frame i's Peel schedule";
+  e.label = "Cell Tree scheduling (Peel of frame i's tree)";
+  e.make = [](std::uint64_t) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<CellTreeScheduler>();
+  };
+  e.history = 1;
+  e.seeded = false;
+  e.predicts = true;
+  e.oracle = false;
+  e.studied = true;
+  return e;
+}();
+
+constexpr SchedulerEntry kCellTree2LevelEntry = [] {
+  SchedulerEntry e;
+  e.name = "celltree-2level";
+  e.meaning =
+      "frame i+1 follows a two-level plan of frame i's tree: Peel of the tree contracted to "
+      "the board's cells (level.NAME.cells) orders them, Peel orders the cells within each";
+  e.label = "Cell Tree, two levels (board cells, then cache cells)";
+  e.make = [](std::uint64_t) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<TwoLevelScheduler>();
+  };
+  e.history = 1;
+  e.seeded = false;
+  e.predicts = true;
+  e.oracle = false;
+  e.studied = false;
+  return e;
+}();
+
 void CellTreeScheduler::BeginFrame(const FrameInfo& frame) {
   follower_.Reset(frame.previous ? Peel(*frame.previous).schedule : std::vector<CellId>{},
                   frame.cells);

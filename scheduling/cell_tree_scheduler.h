@@ -8,9 +8,13 @@
 
 namespace raycell {
 
+// Its registry entries (SchedulerEntry), defined in cell_tree_scheduler.cpp.
+extern const SchedulerEntry kCellTreeEntry;
+extern const SchedulerEntry kCellTree2LevelEntry;
+
 class CellTreeScheduler : public FollowingScheduler {
  public:
-  std::string Name() const override { return "celltree"; }
+  CellTreeScheduler() : FollowingScheduler(kCellTreeEntry) {}
   // Computes Peel of frame.previous; a null previous (frame 0) means Max Work all frame.
   void BeginFrame(const FrameInfo& frame) override;
 };
@@ -22,7 +26,7 @@ class CellTreeScheduler : public FollowingScheduler {
 // (Peel), but for entries that process nothing. Frame 0: Max Work.
 class TwoLevelScheduler : public FollowingScheduler {
  public:
-  std::string Name() const override { return "celltree-2level"; }
+  TwoLevelScheduler() : FollowingScheduler(kCellTree2LevelEntry) {}
   void BeginFrame(const FrameInfo& frame) override;
 };
 

@@ -2,6 +2,22 @@
 
 namespace raycell {
 
+constexpr SchedulerEntry kMaxWorkEntry = [] {
+  SchedulerEntry e;
+  e.name = "maxwork";
+  e.meaning = "Max Work: the cell with the most queued rays";
+  e.label = "Max Work";
+  e.make = [](std::uint64_t) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<MaxWorkScheduler>();
+  };
+  e.history = 1;
+  e.seeded = false;
+  e.predicts = true;
+  e.oracle = false;
+  e.studied = true;
+  return e;
+}();
+
 std::optional<CellId> MaxWorkScheduler::Next(const QueueView& queues) {
   return MostQueuedCell(queues);
 }

@@ -6,9 +6,12 @@
 
 namespace raycell {
 
+// Its registry entry (SchedulerEntry), defined in max_work.cpp.
+extern const SchedulerEntry kMaxWorkEntry;
+
 class MaxWorkScheduler : public Scheduler {
  public:
-  std::string Name() const override { return "maxwork"; }
+  MaxWorkScheduler() : Scheduler(kMaxWorkEntry) {}
   void BeginFrame(const FrameInfo&) override {}
   std::optional<CellId> Next(const QueueView& queues) override;
 };

@@ -5,6 +5,22 @@
 
 namespace raycell {
 
+constexpr SchedulerEntry kPeelEntry = [] {
+  SchedulerEntry e;
+  e.name = "peel";
+  e.meaning = "the Peel oracle: each frame follows its own tree's Peel schedule";
+  e.label = "Peel oracle (the frame's own Peel schedule)";
+  e.make = [](std::uint64_t) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<PeelOracleScheduler>();
+  };
+  e.history = 1;
+  e.seeded = false;
+  e.predicts = true;
+  e.oracle = true;
+  e.studied = true;
+  return e;
+}();
+
 void PeelOracleScheduler::BeginFrame(const FrameInfo& frame) {
   RAYCELL_CHECK(frame.current != nullptr);
   follower_.Reset(Peel(*frame.current).schedule, frame.cells);

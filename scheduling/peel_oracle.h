@@ -9,9 +9,12 @@
 
 namespace raycell {
 
+// Its registry entry (SchedulerEntry), defined in peel_oracle.cpp.
+extern const SchedulerEntry kPeelEntry;
+
 class PeelOracleScheduler : public FollowingScheduler {
  public:
-  std::string Name() const override { return "peel"; }
+  PeelOracleScheduler() : FollowingScheduler(kPeelEntry) {}
   // Computes Peel of frame.current, which must not be null.
   void BeginFrame(const FrameInfo& frame) override;
 };

@@ -2,6 +2,22 @@
 
 namespace raycell {
 
+constexpr SchedulerEntry kRandomEntry = [] {
+  SchedulerEntry e;
+  e.name = "random";
+  e.meaning = "a seeded random cell with work (a baseline)";
+  e.label = "Random";
+  e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<RandomScheduler>(seed);
+  };
+  e.history = 1;
+  e.seeded = true;
+  e.predicts = false;
+  e.oracle = false;
+  e.studied = false;
+  return e;
+}();
+
 namespace {
 std::uint64_t Rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
 }  // namespace

@@ -27,10 +27,13 @@ class Xoshiro256 {
   std::uint64_t s_[4];
 };
 
+// Its registry entry (SchedulerEntry), defined in random_scheduler.cpp.
+extern const SchedulerEntry kRandomEntry;
+
 class RandomScheduler : public Scheduler {
  public:
-  explicit RandomScheduler(std::uint64_t seed) : seed_(seed), rng_(FrameSeed(seed, 0)) {}
-  std::string Name() const override { return "random"; }
+  explicit RandomScheduler(std::uint64_t seed)
+      : Scheduler(kRandomEntry), seed_(seed), rng_(FrameSeed(seed, 0)) {}
   void BeginFrame(const FrameInfo& frame) override;
   std::optional<CellId> Next(const QueueView& queues) override;
   // A random choice cannot be foretold without drawing it: no prediction, no prefetch.

@@ -2,6 +2,22 @@
 
 namespace raycell {
 
+constexpr SchedulerEntry kRoundRobinEntry = [] {
+  SchedulerEntry e;
+  e.name = "roundrobin";
+  e.meaning = "Round Robin: the next cell with work after the last one (a baseline)";
+  e.label = "Round Robin";
+  e.make = [](std::uint64_t) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<RoundRobinScheduler>();
+  };
+  e.history = 1;
+  e.seeded = false;
+  e.predicts = true;
+  e.oracle = false;
+  e.studied = false;
+  return e;
+}();
+
 std::optional<CellId> RoundRobinScheduler::Peek(const QueueView& queues) const {
   for (std::uint32_t i = 0; i < queues.cells; ++i) {
     const CellId c(static_cast<std::uint32_t>((std::uint64_t{start_} + i) % queues.cells));

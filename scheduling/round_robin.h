@@ -6,9 +6,12 @@
 
 namespace raycell {
 
+// Its registry entry (SchedulerEntry), defined in round_robin.cpp.
+extern const SchedulerEntry kRoundRobinEntry;
+
 class RoundRobinScheduler : public Scheduler {
  public:
-  std::string Name() const override { return "roundrobin"; }
+  RoundRobinScheduler() : Scheduler(kRoundRobinEntry) {}
   void BeginFrame(const FrameInfo&) override { start_ = 0; }
   std::optional<CellId> Next(const QueueView& queues) override;
   std::optional<CellId> Peek(const QueueView& queues) const override;

@@ -106,139 +106,32 @@ std::string ScheduleFollower::Reason() const {
   return r;
 }
 
-template <bool kPlan, bool kPartition, bool kSteal, bool kAffinity, bool kPostpone, bool kShare>
-std::unique_ptr<Scheduler> MakeBalanced(std::uint64_t seed);
-
-const std::vector<SchedulerEntry>& SchedulerRegistry() {
-  static const std::vector<SchedulerEntry> registry = {
-      {"maxwork", "Max Work: the cell with the most queued rays", "Max Work",
-       [](std::uint64_t) -> std::unique_ptr<Scheduler> {
-         return std::make_unique<MaxWorkScheduler>();
-       }},
-      {"roundrobin", "Round Robin: the next cell with work after the last one (a baseline)",
-       "Round Robin",
-       [](std::uint64_t) -> std::unique_ptr<Scheduler> {
-         return std::make_unique<RoundRobinScheduler>();
-       },
-       1, false, true, false, false},
-      {"random", "a seeded random cell with work (a baseline)", "Random",
-       [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
-         return std::make_unique<RandomScheduler>(seed);
-       },
-       1, true, false, false, false},
-      {"peel", "the Peel oracle: each frame follows its own tree's Peel schedule",
-       "Peel oracle (the frame's own Peel schedule)",
-       [](std::uint64_t) -> std::unique_ptr<Scheduler> {
-         return std::make_unique<PeelOracleScheduler>();
-       },
-       1, false, true, true},
-      {"celltree", "the paper's Cell Tree scheduling: frame i+1 follows frame i's Peel schedule",
-       "Cell Tree scheduling (Peel of frame i's tree)",
-       [](std::uint64_t) -> std::unique_ptr<Scheduler> {
-         return std::make_unique<CellTreeScheduler>();
-       }},
-      {"best", "the best-schedule oracle: each frame follows the best schedule found for its tree",
-       "best-schedule oracle (the frame's own best schedule)",
-       [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
-         return std::make_unique<BestOracleScheduler>(seed);
-       },
-       1, true, true, true},
-      {"celltree-best", "frame i+1 follows the best schedule found for frame i's tree",
-       "Cell Tree, best schedule of frame i's tree",
-       [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
-         return std::make_unique<CellTreeBestScheduler>(seed, false);
-       },
-       1, true},
-      {"celltree-union",
-       "frame i+1 follows the best schedule found for the union of frames i and i-1's trees",
-       "Cell Tree, best schedule of frames i-1 and i together",
-       [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
-         return std::make_unique<CellTreeBestScheduler>(seed, true);
-       },
-       2, true},
-      // Several processors (balanced_scheduler.h): (a) cell affinity, (b) a partitioned plan,
-      // (c) work stealing, (d) combinations. With one processor `partition`,
-      // `partition-steal` and `balanced` choose exactly as celltree-best.
-      {"affinity",
-       "cell affinity: the cell in the processor's cache if it has work, else Max Work weighted "
-       "to the cells its last cell sends rays to (frame i's tree)",
-       "cell affinity", MakeBalanced<false, false, false, true, false, false>, 1, false, true,
-       false, false},
-      {"partition",
-       "frame i's best schedule split over the processors by list scheduling (each cell on one "
-       "processor), each following its part; Max Work when its cells have no work",
-       "partitioned plan", MakeBalanced<true, true, false, false, false, false>, 1, true, true,
-       false, false},
-      {"steal",
-       "cells split over the processors by list scheduling, Max Work on one's own; with none "
-       "ready, the largest queue of the processor with the most queued rays (work stealing)",
-       "work stealing", MakeBalanced<false, true, true, false, false, false>, 1, false, true, false,
-       false},
-      {"partition-steal",
-       "the partitioned plan, stealing when a processor's own cells have no work",
-       "partitioned plan with stealing", MakeBalanced<true, true, true, false, false, false>, 1,
-       true, true, false, false},
-      {"share",
-       "Max Work; with no free cell ready, the busy cell with the most queued rays (a "
-       "processor joins a cell another works)",
-       "Max Work with shared cells", MakeBalanced<false, false, false, false, false, true>, 1,
-       false, true, false, false},
-      {"balanced",
-       "the cached cell if it has work, else celltree-best's plan shared by the processors (busy "
-       "entries deferred, then Max Work); no free cell ready: joins a busy one (affinity-"
-       "weighted; not for under 3 fetches' worth of queued work); on 8+ processors, while all "
-       "others work, a batch under 3 fetches' worth waits",
-       "balanced (plan, affinity, shared cells, postponing)",
-       MakeBalanced<true, false, false, true, true, true>, 1, true, true, false, false},
-      // Two memory levels (issue 23): a board of coarser cells (level.NAME.cells).
-      {"celltree-2level",
-       "frame i+1 follows a two-level plan of frame i's tree: Peel of the tree contracted to "
-       "the board's cells (level.NAME.cells) orders them, Peel orders the cells within each",
-       "Cell Tree, two levels (board cells, then cache cells)",
-       [](std::uint64_t) -> std::unique_ptr<Scheduler> {
-         return std::make_unique<TwoLevelScheduler>();
-       },
-       1, false, true, false, false},
-      {"celltree-2level-best",
-       "celltree-2level with the best-schedule search at both levels: the plan for the tree "
-       "contracted to the board's cells, then the plan for each board cell's part",
-       "Cell Tree, two levels, best schedules",
-       [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
-         return std::make_unique<TwoLevelBestScheduler>(seed);
-       },
-       1, true, true, false, false},
-      // Adaptive scheduling (adaptive_scheduler.h): they watch the frame unfold.
-      {"balanced-critical",
-       "balanced, with the free cell whose queued rays start the longest chain in frame i's "
-       "tree first (highest level first, each queued node matched by its cell path) when it is "
-       "longer than the plan's",
-       "Balanced, critical path first",
-       [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
-         BalanceOptions o{true, false, false, true, true, true};
-         o.critical = true;
-         return std::make_unique<BalancedScheduler>("balanced-critical", o, seed);
-       },
-       1, true, true, false, false},
-      {"balanced-adaptive",
-       "balanced with celltree-adaptive's rule in place of celltree-best's plan: the cached "
-       "cell first, then the adaptive choice, joining busy cells and postponing small batches "
-       "as balanced does",
-       "Balanced, adaptive",
-       [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
-         return std::make_unique<BalancedScheduler>(
-             "balanced-adaptive", BalanceOptions{false, false, false, true, true, true, true},
-             seed);
-       },
-       2, true, true, false, false},
-      {"celltree-adaptive",
-       "celltree-union followed node by node as the frame unfolds: work waits for the entry "
-       "its predicted node is due at, work the plan is done with is fetched at once, and the "
-       "rest is planned again by Peel when the plan runs out",
-       "Cell Tree, adaptive",
-       [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
-         return std::make_unique<AdaptiveScheduler>(seed);
-       },
-       2, true},
+const std::vector<std::reference_wrapper<const SchedulerEntry>>& SchedulerRegistry() {
+  // Each entry is defined in its scheduler's file; the order here is the order of --help, sweeps
+  // and the study's tables.
+  static const std::vector<std::reference_wrapper<const SchedulerEntry>> registry = {
+      kMaxWorkEntry,
+      kRoundRobinEntry,
+      kRandomEntry,
+      kPeelEntry,
+      kCellTreeEntry,
+      kBestEntry,
+      kCellTreeBestEntry,
+      kCellTreeUnionEntry,
+      // Several processors (balanced_scheduler.h).
+      kAffinityEntry,
+      kPartitionEntry,
+      kStealEntry,
+      kPartitionStealEntry,
+      kShareEntry,
+      kBalancedEntry,
+      // Two memory levels (cell_tree_scheduler.h, best_scheduler.h).
+      kCellTree2LevelEntry,
+      kCellTree2LevelBestEntry,
+      // Adaptive scheduling: they watch the frame unfold.
+      kBalancedCriticalEntry,
+      kBalancedAdaptiveEntry,
+      kCellTreeAdaptiveEntry,
   };
   return registry;
 }
@@ -248,20 +141,6 @@ std::vector<CellId> BoardCellOf(const FrameInfo& frame) {
   std::vector<CellId> own;
   for (const CellId c : CellRange(frame.previous->cell_count())) own.push_back(c);
   return own;
-}
-
-// The entry's name, found by its factory (each registry entry has its own).
-template <bool kPlan, bool kPartition, bool kSteal, bool kAffinity, bool kPostpone, bool kShare>
-std::unique_ptr<Scheduler> MakeBalanced(std::uint64_t seed) {
-  const auto make = &MakeBalanced<kPlan, kPartition, kSteal, kAffinity, kPostpone, kShare>;
-  for (const SchedulerEntry& e : SchedulerRegistry()) {
-    if (e.make == make) {
-      return std::make_unique<BalancedScheduler>(
-          e.name, BalanceOptions{kPlan, kPartition, kSteal, kAffinity, kPostpone, kShare}, seed);
-    }
-  }
-  RAYCELL_CHECK(false);  // only the registry names these factories
-  return nullptr;
 }
 
 const std::vector<std::string>& SchedulerNames() {
@@ -276,6 +155,14 @@ const std::vector<std::string>& SchedulerNames() {
 std::string SchedulerNameList(const char* separator) {
   std::string out;
   for (const std::string& n : SchedulerNames()) out += (out.empty() ? "" : separator) + n;
+  return out;
+}
+
+std::string SeededSchedulerList(const char* separator) {
+  std::string out;
+  for (const SchedulerEntry& e : SchedulerRegistry()) {
+    if (e.seeded) out += (out.empty() ? "" : separator) + std::string(e.name);
+  }
   return out;
 }
 

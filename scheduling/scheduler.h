@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -22,10 +23,10 @@ struct QueueView {
   const std::uint64_t* queued_rays = nullptr;  // queued_rays[c] for c < cells
   std::uint32_t cells = 0;
   std::optional<CellId> loaded;
-  // Several processors (docs/design.md §2): the one asking, their number, and the cells the
-  // others are working (open[c] == 0: busy, its queued rays masked out of queued_rays; null:
-  // none is).
-  std::uint32_t processor = 0, processors = 1;
+  // Several processors (docs/design.md §2): the one asking (their number is
+  // FrameInfo::processors), and the cells the others are working (open[c] == 0: busy, its
+  // queued rays masked out of queued_rays; null: none is).
+  std::uint32_t processor = 0;
   const std::uint64_t* open = nullptr;
   // Processors other than the one asking that are working a cell now. While some are, a
   // scheduler may postpone (Scheduler::Next).
@@ -59,7 +60,9 @@ struct FrameInfo {
   // first link's latency + footprint / bandwidth), in units of one sample's work; null when
   // unknown (a scheduler asked outside a replay).
   const std::vector<double>* fetch_samples = nullptr;
-  std::uint32_t processors = 1;  // block processors of the replay
+  // Block processors of the replay (1..kMaxProcessors, replay/config.h): told once per frame,
+  // here; a scheduler that needs the count while choosing keeps it from BeginFrame.
+  std::uint32_t processors = 1;
   // The board's cells, when a shared memory level holds coarser cells than the replay's
   // (level.NAME.cells; the nearest such level): per cell of the grid, the board cell holding
   // it; null when every level holds the grid's cells.
@@ -68,6 +71,32 @@ struct FrameInfo {
 // The board cell of every cell of frame.previous (not null): FrameInfo::board_cell_of, or
 // each cell its own when every level holds the grid's cells.
 std::vector<CellId> BoardCellOf(const FrameInfo& frame);
+
+class Scheduler;
+
+// A scheduler's registry entry (ChampSim-style, CONTRIBUTING.md): each scheduler's own file
+// defines its entry (or entries, one per name) with every field set by name, and declares it in
+// its header (kMaxWorkEntry in max_work.h, ...); SchedulerRegistry() lists them. The entry is
+// where a scheduler's name is written: Scheduler::Name() reads it. A name is looked up once
+// (SchedulerByName, where a configuration is read); configurations then hold the entry.
+struct SchedulerEntry {
+  const char* name = nullptr;     // as in configs and --scheduler: "maxwork"
+  const char* meaning = nullptr;  // one line for --help and the configuration's comments
+  const char* label = nullptr;    // as raycell study's tables name it: "Max Work"
+  // A new scheduler of this kind; `seed` matters to the seeded ones.
+  std::unique_ptr<Scheduler> (*make)(std::uint64_t seed) = nullptr;
+  // Earlier frames' trees it reads: 1 (FrameInfo::previous) or 2 (also before_previous).
+  std::uint32_t history = 1;
+  // Whether its choices depend on the seed (random, and the planners' seeded searches).
+  bool seeded = false;
+  // Whether Peek predicts its next choice (what prefetch fetches); without a prediction,
+  // prefetch changes nothing.
+  bool predicts = true;
+  // An oracle knows the frame being replayed (its own tree); the others only earlier frames.
+  bool oracle = false;
+  // Whether raycell study replays it: all but the naive baselines (Round Robin, Random).
+  bool studied = true;
+};
 
 // A scheduling policy. Per frame: BeginFrame once, then Next once per fetch.
 //
@@ -87,9 +116,12 @@ std::vector<CellId> BoardCellOf(const FrameInfo& frame);
 // the idle processors woken by work released into cells that others are working.
 class Scheduler {
  public:
+  // `entry`: the registry entry this scheduler is made by (static storage, outlives it).
+  explicit Scheduler(const SchedulerEntry& entry) : entry_(&entry) {}
   virtual ~Scheduler() = default;
-  // The name MakeScheduler knows it by: "maxwork", "roundrobin", ...
-  virtual std::string Name() const = 0;
+  const SchedulerEntry& entry() const { return *entry_; }
+  // The name MakeScheduler knows it by, its entry's: "maxwork", "roundrobin", ...
+  std::string Name() const { return entry_->name; }
   virtual void BeginFrame(const FrameInfo& frame) = 0;
   virtual std::optional<CellId> Next(const QueueView& queues) = 0;
   // What Next would choose for these queues, without choosing it (no state changes): the
@@ -127,6 +159,9 @@ class Scheduler {
     std::uint64_t decisions = 0, steps = 0, peak_bytes = 0;
   };
   virtual DecisionCost Cost() const { return {}; }
+
+ private:
+  const SchedulerEntry* entry_;
 };
 
 // Max Work's choice: the cell with the most queued rays, lowest number on ties; nullopt when
@@ -179,31 +214,17 @@ class ScheduleFollower {
   std::size_t last_skipped_ = 0;
 };
 
-// Every scheduler by name: the one list that MakeScheduler, the configuration's validation
-// and messages, --help and raycell study's tables are derived from. A new scheduler is one
-// entry here. A name is looked up once (SchedulerByName, where a configuration is read);
-// configurations then hold the entry.
-struct SchedulerEntry {
-  const char* name;     // as in configs and --scheduler: "maxwork"
-  const char* meaning;  // one line for --help and the configuration's comments
-  const char* label;    // as raycell study's tables name it: "Max Work"
-  std::unique_ptr<Scheduler> (*make)(std::uint64_t seed);  // seed: random and planners
-  // Earlier frames' trees it reads: 1 (FrameInfo::previous) or 2 (also before_previous).
-  std::uint32_t history = 1;
-  // Whether its choices depend on the seed (random, and the planners' seeded searches).
-  bool seeded = false;
-  // Whether Peek predicts its next choice (what prefetch fetches); without a prediction,
-  // prefetch changes nothing.
-  bool predicts = true;
-  // An oracle knows the frame being replayed (its own tree); the others only earlier frames.
-  bool oracle = false;
-  // Whether raycell study replays it: all but the naive baselines (Round Robin, Random).
-  bool studied = true;
-};
-const std::vector<SchedulerEntry>& SchedulerRegistry();
+// Every scheduler, in the order of --help, sweeps and raycell study's tables: the one list that
+// MakeScheduler, the configuration's validation and messages, --help and the study's tables
+// are derived from. A new scheduler is an entry in its own file and a line here
+// (scheduling/scheduler.cpp lists the entries by reference, so no linker drops one).
+const std::vector<std::reference_wrapper<const SchedulerEntry>>& SchedulerRegistry();
 // The registry's names, in its order; and joined by `separator` ("maxwork | roundrobin ...").
 const std::vector<std::string>& SchedulerNames();
 std::string SchedulerNameList(const char* separator);
+// The names of the entries whose choices depend on the seed (SchedulerEntry::seeded), in the
+// registry's order, joined by `separator`.
+std::string SeededSchedulerList(const char* separator);
 // The entry named `name`: the one lookup by name. InputError "WHAT: unknown scheduler 'x'
 // (expected maxwork, roundrobin, ... or celltree-union)" for any other name.
 const SchedulerEntry& SchedulerByName(std::string_view name, const std::string& what);
@@ -217,6 +238,7 @@ std::unique_ptr<Scheduler> MakeScheduler(std::string_view name, std::uint64_t se
 // tree's Peel schedule they follow.
 class FollowingScheduler : public Scheduler {
  public:
+  explicit FollowingScheduler(const SchedulerEntry& entry) : Scheduler(entry) {}
   std::optional<CellId> Next(const QueueView& queues) override { return follower_.Next(queues); }
   std::optional<CellId> Peek(const QueueView& queues) const override {
     return follower_.Peek(queues);

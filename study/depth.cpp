@@ -5,6 +5,8 @@
 #include "base/check.h"
 #include "replay/config.h"
 #include "replay/driver.h"
+#include "scheduling/cell_tree_scheduler.h"
+#include "scheduling/max_work.h"
 #include "scheduling/scheduler.h"
 #include "traces/trace_reader.h"
 
@@ -23,9 +25,9 @@ DepthRow MeasureCapture(const AccuracyOptions& o, const AccuracyKnob& k) {
     for (int kind = 0; kind < kRayKindCount; ++kind) row.rays_by_kind[kind] += f.rays_by_kind[kind];
   }
   std::vector<ReplayConfig> configs;
-  for (const char* name : {"maxwork", "celltree"}) {
+  for (const SchedulerEntry* scheduler : {&kMaxWorkEntry, &kCellTreeEntry}) {
     ReplayConfig config = DefaultConfig();
-    config.scheduler = &SchedulerByName(name, "the study's depth section");
+    config.scheduler = scheduler;
     config.granularity = ReplayConfig::Granularity::kNode;  // exact with a one-cell cache
     configs.push_back(config);
   }

@@ -11,6 +11,10 @@
 #include "base/check.h"
 #include "base/file.h"
 #include "base/format.h"
+#include "scheduling/balanced_scheduler.h"
+#include "scheduling/best_scheduler.h"
+#include "scheduling/cell_tree_scheduler.h"
+#include "scheduling/max_work.h"
 
 namespace raycell {
 namespace {
@@ -162,8 +166,8 @@ std::string BalancedAgainstMaxWork(const GridStudy& g, std::uint32_t p) {
   const ProcessorsReplay *mw = nullptr, *b = nullptr;
   for (const ProcessorsReplay& r : g.processors) {
     if (r.processors != p) continue;
-    if (std::string(r.scheduler->name) == "maxwork") mw = &r;
-    if (std::string(r.scheduler->name) == "balanced") b = &r;
+    if (r.scheduler == &kMaxWorkEntry) mw = &r;
+    if (r.scheduler == &kBalancedEntry) b = &r;
   }
   if (!mw || !b) return "";
   std::ostringstream s;
@@ -213,7 +217,7 @@ std::string FetchesCsv(const GridStudy& g) {
 std::string GridReport(const GridStudy& g) {
   std::ostringstream s;
   const auto& tr = g.trees;
-  const std::uint64_t mw = g.replay("maxwork").total.fetches;
+  const std::uint64_t mw = g.replay(kMaxWorkEntry).total.fetches;
   std::uint64_t bound = 0, peel = 0, lower = 0, best = 0, proved = 0;
   for (const FrameAnalysis& t : tr) {
     bound += t.bound, peel += t.peel_length(), lower += *t.lower_bound, best += *t.best_length;
@@ -235,10 +239,10 @@ std::string GridReport(const GridStudy& g) {
   s << "| maxGen bound (summed) | " << bound << " |\n";
   for (const SchedulerReplay& r : g.replays) {
     const SchedulerEntry& k = *r.scheduler;
-    if (k.oracle || std::string(k.name) == "maxwork") continue;
+    if (k.oracle || &k == &kMaxWorkEntry) continue;
     const double f = double(r.replay.total.fetches);
     s << "| " << k.label << " against Max Work"
-      << (std::string(k.name) == "celltree" ? " (the paper: 30% fewer)" : "") << " | "
+      << (&k == &kCellTreeEntry ? " (the paper: 30% fewer)" : "") << " | "
       << Percent(f - double(mw), double(mw)) << " |\n";
   }
   // Online against the oracle (issue 24): the fewest fetches of a scheduler that knows only
@@ -248,7 +252,7 @@ std::string GridReport(const GridStudy& g) {
   for (const SchedulerReplay& r : g.replays) {
     if (!r.scheduler->oracle) {
       if (online == nullptr || r.replay.total.fetches < online->replay.total.fetches) online = &r;
-    } else if (std::string(r.scheduler->name) == "best") {
+    } else if (r.scheduler == &kBestEntry) {
       oracle = &r;
     }
   }

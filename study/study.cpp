@@ -18,6 +18,9 @@
 #include "record/scene.h"
 #include "replay/config.h"
 #include "replay/replayer.h"
+#include "scheduling/balanced_scheduler.h"
+#include "scheduling/cell_tree_scheduler.h"
+#include "scheduling/max_work.h"
 #include "traces/cell_dims.h"
 #include "traces/format.h"
 #include "traces/trace_reader.h"
@@ -280,11 +283,7 @@ std::vector<const SchedulerEntry*> StudySchedulers() {
 }
 
 std::vector<const SchedulerEntry*> ProcessorsSchedulers() {
-  std::vector<const SchedulerEntry*> out;
-  for (const char* name : {"maxwork", "celltree", "balanced"}) {
-    out.push_back(&SchedulerByName(name, "the study's several processors section"));
-  }
-  return out;
+  return {&kMaxWorkEntry, &kCellTreeEntry, &kBalancedEntry};
 }
 
 const std::vector<std::uint32_t>& StudyProcessorCounts() {
@@ -292,9 +291,9 @@ const std::vector<std::uint32_t>& StudyProcessorCounts() {
   return counts;
 }
 
-const TraceReplay& GridStudy::replay(std::string_view name) const {
+const TraceReplay& GridStudy::replay(const SchedulerEntry& scheduler) const {
   for (const SchedulerReplay& r : replays) {
-    if (r.scheduler->name == name) return r.replay;
+    if (r.scheduler == &scheduler) return r.replay;
   }
   RAYCELL_CHECK(false && "scheduler not studied");
   return replays.front().replay;

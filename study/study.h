@@ -78,8 +78,8 @@ struct GridStudy {
   // on the study's finest grid (the last one studied) only, empty on the others.
   std::vector<ProcessorsReplay> processors;
 
-  // The replay under the scheduler named `name`; CHECK-fails if it was not studied.
-  const TraceReplay& replay(std::string_view name) const;
+  // The replay under `scheduler` (a registry entry); CHECK-fails if it was not studied.
+  const TraceReplay& replay(const SchedulerEntry& scheduler) const;
 };
 
 struct StudyResult {

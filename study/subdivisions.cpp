@@ -13,6 +13,8 @@
 #include "replay/config.h"
 #include "replay/driver.h"
 #include "replay/replayer.h"
+#include "scheduling/cell_tree_scheduler.h"
+#include "scheduling/max_work.h"
 #include "study/accuracy.h"
 #include "traces/trace_reader.h"
 
@@ -79,9 +81,9 @@ SubdivisionStudy MeasureSubdivisions(const SubdivisionOptions& o) {
     const std::vector<std::uint64_t> f = NonEmpty(reader.header().footprints);
     std::vector<std::size_t> frames(reader.frames().size());
     std::iota(frames.begin(), frames.end(), std::size_t{0});
-    for (const char* scheduler : {"maxwork", "celltree"}) {
+    for (const SchedulerEntry* scheduler : {&kMaxWorkEntry, &kCellTreeEntry}) {
       ReplayConfig config = DefaultConfig();
-      ApplyOverride(config, "scheduler", scheduler, "the subdivision section");
+      config.scheduler = scheduler;
       ApplyOverride(config, "level.cache.capacity", std::to_string(study.cache_bytes) + "B",
                     "the subdivision section");
       ValidateConfig(config, "the subdivision section's configuration");
@@ -89,7 +91,7 @@ SubdivisionStudy MeasureSubdivisions(const SubdivisionOptions& o) {
       const ReplayResult t = ReplayTrace(reader, frames, config, {}, 1).total;
       SubdivisionRow row;
       row.spec = spec;
-      row.scheduler = scheduler;
+      row.scheduler = scheduler->name;
       row.cells = std::uint32_t(f.size());
       row.footprint_min = f.front(), row.footprint_median = Median(f), row.footprint_max = f.back();
       row.fetches = t.fetches;

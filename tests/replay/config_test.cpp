@@ -8,6 +8,7 @@
 #include <string>
 
 #include "base/check.h"
+#include "replay/replacement.h"
 #include "scheduling/scheduler.h"
 #include "tests/test_util.h"
 
@@ -35,7 +36,7 @@ TEST(DefaultConfig, ModelsTheGiCubeBoard) {
   EXPECT_EQ(cache.capacity, 1u);
   EXPECT_EQ(cache.bandwidth_below, ParseBandwidth("1.6GB/s", "t"));
   EXPECT_EQ(cache.latency_below, SimTime::Nanoseconds(40));
-  EXPECT_EQ(cache.replacement, LevelConfig::Replacement::kLru);
+  EXPECT_EQ(cache.replacement, &kLruReplacement);
   const LevelConfig& board = c.levels[1];
   EXPECT_EQ(board.name, "board");
   EXPECT_EQ(board.capacity_unit, LevelConfig::CapacityUnit::kBytes);
@@ -112,12 +113,12 @@ replacement = "min"
   EXPECT_EQ(c.levels[0].capacity, 4u);
   EXPECT_EQ(c.levels[0].bandwidth_below, Bandwidth::BytesPerSecond(3200000000));
   EXPECT_EQ(c.levels[0].latency_below, SimTime::Nanoseconds(20));
-  EXPECT_EQ(c.levels[0].replacement, LevelConfig::Replacement::kFifo);
+  EXPECT_EQ(c.levels[0].replacement, &kFifoReplacement);
   EXPECT_EQ(c.levels[1].capacity_unit, LevelConfig::CapacityUnit::kBytes);
   EXPECT_EQ(c.levels[1].capacity, std::uint64_t(1) << 30);
   EXPECT_EQ(c.levels[1].bandwidth_below, Bandwidth::BitsPerSecond(10000000000));
   EXPECT_EQ(c.levels[1].latency_below, SimTime::Nanoseconds(500));
-  EXPECT_EQ(c.levels[1].replacement, LevelConfig::Replacement::kMin);
+  EXPECT_EQ(c.levels[1].replacement, &kMinReplacement);
   std::remove(path.c_str());
 }
 
@@ -142,7 +143,7 @@ latency = "0ns"
   EXPECT_EQ(c.levels[0].capacity, 65536u);
   EXPECT_TRUE(c.levels[0].bandwidth_below.unlimited());
   EXPECT_EQ(c.levels[0].latency_below, SimTime::Zero());
-  EXPECT_EQ(c.levels[0].replacement, LevelConfig::Replacement::kLru);
+  EXPECT_EQ(c.levels[0].replacement, &kLruReplacement);
   EXPECT_EQ(c.processors, DefaultConfig().processors);
 }
 
@@ -278,7 +279,7 @@ ReplayConfig Unusual() {
   c.processors.queue_record_bytes = std::numeric_limits<std::uint64_t>::max();
   c.processors.prefetch = true;
   c.levels[0].capacity = 3;
-  c.levels[0].replacement = LevelConfig::Replacement::kMin;
+  c.levels[0].replacement = &kMinReplacement;
   c.levels[1].bandwidth_below = Bandwidth::BitsPerSecond(10000000001);
   c.levels[1].latency_below = SimTime::Zero();
   LevelConfig l3;
@@ -287,7 +288,7 @@ ReplayConfig Unusual() {
   l3.capacity = 123456789;
   l3.bandwidth_below = Bandwidth::Unlimited();
   l3.latency_below = SimTime::Max();
-  l3.replacement = LevelConfig::Replacement::kFifo;
+  l3.replacement = &kFifoReplacement;
   l3.cells = "kd:budget:1MiB";
   c.levels[1].cells = "3x3x3";
   c.levels.push_back(l3);
@@ -364,7 +365,7 @@ TEST(ApplyOverride, SetsTypedValues) {
   EXPECT_EQ(c.levels[1].capacity, std::uint64_t(1) << 30);
   EXPECT_EQ(c.levels[1].bandwidth_below, Bandwidth::BytesPerSecond(266000000));
   EXPECT_EQ(c.levels[0].latency_below, SimTime::Zero());
-  EXPECT_EQ(c.levels[1].replacement, LevelConfig::Replacement::kMin);
+  EXPECT_EQ(c.levels[1].replacement, &kMinReplacement);
   EXPECT_STREQ(c.scheduler_name(), "peel");
   EXPECT_EQ(c.granularity, ReplayConfig::Granularity::kNode);
   EXPECT_EQ(c.seed, std::numeric_limits<std::uint64_t>::max());

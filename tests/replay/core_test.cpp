@@ -41,14 +41,14 @@ const char* const kSchedulers[] = {
     "partition",        "steal",      "partition-steal", "share", "balanced", "balanced-critical",
     "celltree-adaptive"};
 
-LevelConfig::Replacement RandomReplacement(std::mt19937& rng) {
+const ReplacementEntry* RandomReplacement(std::mt19937& rng) {
   switch (rng() % 4) {
     case 0:
-      return LevelConfig::Replacement::kFifo;
+      return &kFifoReplacement;
     case 1:
-      return LevelConfig::Replacement::kMin;
+      return &kMinReplacement;
     default:
-      return LevelConfig::Replacement::kLru;
+      return &kLruReplacement;
   }
 }
 

@@ -120,7 +120,6 @@ class Board : public Component {
     }
     QueueView v = QueueView::Of(view_, processors_[p].cell);
     v.processor = p;
-    v.processors = std::uint32_t(processors_.size());
     v.open = open_.data();
     v.working = std::accumulate(locked_.begin(), locked_.end(), 0u);
     v.all_queued = queued_rays_.data();
@@ -274,7 +273,7 @@ namespace {
 
 bool UsesMin(const ReplayConfig& config) {
   for (const LevelConfig& l : config.levels) {
-    if (l.replacement == LevelConfig::Replacement::kMin) return true;
+    if (l.replacement == &kMinReplacement) return true;
   }
   return false;
 }

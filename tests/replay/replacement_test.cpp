@@ -11,7 +11,7 @@
 namespace raycell {
 namespace {
 
-LevelConfig Cells(std::uint64_t capacity, LevelConfig::Replacement r) {
+LevelConfig Cells(std::uint64_t capacity, const ReplacementEntry* r) {
   LevelConfig l;
   l.name = "cache";
   l.capacity_unit = LevelConfig::CapacityUnit::kCells;
@@ -30,7 +30,7 @@ bool Access(CellStore& s, CellId cell) {
 const std::vector<std::uint64_t> kFootprints(8, 100);
 
 TEST(Replacement, LruEvictsTheLeastRecentlyUsed) {
-  CellStore s(Cells(2, LevelConfig::Replacement::kLru), &kFootprints);
+  CellStore s(Cells(2, &kLruReplacement), &kFootprints);
   Access(s, CellId(0)), Access(s, CellId(1));
   EXPECT_TRUE(Access(s, CellId(0)));   // 0 is now the most recent
   EXPECT_FALSE(Access(s, CellId(2)));  // evicts 1
@@ -40,7 +40,7 @@ TEST(Replacement, LruEvictsTheLeastRecentlyUsed) {
 }
 
 TEST(Replacement, FifoEvictsTheOldestArrivalWhateverTheHits) {
-  CellStore s(Cells(2, LevelConfig::Replacement::kFifo), &kFootprints);
+  CellStore s(Cells(2, &kFifoReplacement), &kFootprints);
   Access(s, CellId(0)), Access(s, CellId(1));
   EXPECT_TRUE(Access(s, CellId(0)));   // a hit does not refresh 0
   EXPECT_FALSE(Access(s, CellId(2)));  // evicts 0, the first in
@@ -49,12 +49,12 @@ TEST(Replacement, FifoEvictsTheOldestArrivalWhateverTheHits) {
 }
 
 TEST(Replacement, PinnedCellsAreNeverEvicted) {
-  CellStore s(Cells(2, LevelConfig::Replacement::kLru), &kFootprints);
+  CellStore s(Cells(2, &kLruReplacement), &kFootprints);
   Access(s, CellId(0)), Access(s, CellId(1));
   EXPECT_TRUE(s.Insert(CellId(2), CellId{0}));  // 0 is the least recent but pinned: 1 goes
   EXPECT_TRUE(s.Contains(CellId(0)));
   EXPECT_FALSE(s.Contains(CellId(1)));
-  CellStore one(Cells(1, LevelConfig::Replacement::kLru), &kFootprints);
+  CellStore one(Cells(1, &kLruReplacement), &kFootprints);
   Access(one, CellId(3));
   EXPECT_FALSE(one.Insert(CellId(4), CellId{3}));  // no room beside the pinned cell
   EXPECT_TRUE(one.Contains(CellId(3)));
@@ -65,8 +65,8 @@ TEST(Replacement, MinEvictsTheCellUsedFarthestAhead) {
   // 4, so 1 goes; at 3, 0 is next used at 6 and 2 never again, so 2 goes. Hits: 0 (at 3),
   // 0 (at 6): 5 misses, where LRU misses on all 7.
   const testing::CellList requests = {0, 1, 2, 0, 1, 3, 0};
-  CellStore min(Cells(2, LevelConfig::Replacement::kMin), &kFootprints, requests);
-  CellStore lru(Cells(2, LevelConfig::Replacement::kLru), &kFootprints);
+  CellStore min(Cells(2, &kMinReplacement), &kFootprints, requests);
+  CellStore lru(Cells(2, &kLruReplacement), &kFootprints);
   int min_misses = 0, lru_misses = 0;
   for (CellId c : requests) {
     min_misses += !Access(min, c);
@@ -79,7 +79,7 @@ TEST(Replacement, MinEvictsTheCellUsedFarthestAhead) {
 
 TEST(Replacement, MinTiesGoToTheLowestCellAndStrayingIsReported) {
   // Neither 0 nor 1 is requested again: the lowest, 0, is evicted.
-  CellStore s(Cells(2, LevelConfig::Replacement::kMin), &kFootprints, testing::CellList{0, 1, 2});
+  CellStore s(Cells(2, &kMinReplacement), &kFootprints, testing::CellList{0, 1, 2});
   Access(s, CellId(0)), Access(s, CellId(1)), Access(s, CellId(2));
   EXPECT_FALSE(s.Contains(CellId(0)));
   EXPECT_TRUE(s.Contains(CellId(1)));
@@ -90,7 +90,7 @@ TEST(Replacement, MinTiesGoToTheLowestCellAndStrayingIsReported) {
 
 TEST(Replacement, BytesCapacityEvictsUntilTheCellFits) {
   const std::vector<std::uint64_t> sizes = {40, 40, 70};
-  LevelConfig l = Cells(100, LevelConfig::Replacement::kLru);
+  LevelConfig l = Cells(100, &kLruReplacement);
   l.capacity_unit = LevelConfig::CapacityUnit::kBytes;
   CellStore s(l, &sizes);
   Access(s, CellId(0)), Access(s, CellId(1));
@@ -102,24 +102,23 @@ TEST(Replacement, BytesCapacityEvictsUntilTheCellFits) {
   EXPECT_EQ(s.used(), 70u);
 }
 
-// The registry is the one list of policies: each kind has one entry and a distinct name that
-// configurations parse and print back; only MIN needs its future requests.
+// The registry is the one list of policies, in the order the key's meaning names them: each
+// entry once, with a distinct name that configurations parse to the entry and print back; only
+// MIN needs its future requests.
 TEST(ReplacementRegistry, EachPolicyOnceByNameThroughTheConfiguration) {
-  const std::vector<std::pair<LevelConfig::Replacement, std::string>> expected = {
-      {LevelConfig::Replacement::kLru, "lru"},
-      {LevelConfig::Replacement::kFifo, "fifo"},
-      {LevelConfig::Replacement::kMin, "min"}};
+  const std::vector<std::pair<const ReplacementEntry*, std::string>> expected = {
+      {&kLruReplacement, "lru"}, {&kFifoReplacement, "fifo"}, {&kMinReplacement, "min"}};
   ASSERT_EQ(ReplacementRegistry().size(), expected.size());
-  for (const auto& [kind, name] : expected) {
-    const ReplacementEntry& e = ReplacementOf(kind);
-    EXPECT_EQ(e.kind, kind);
-    EXPECT_EQ(e.name, name);
-    EXPECT_EQ(e.needs_future, kind == LevelConfig::Replacement::kMin) << name;
-    EXPECT_EQ(ToString(kind), name);
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    const auto& [entry, name] = expected[i];
+    EXPECT_EQ(&ReplacementRegistry()[i].get(), entry) << name;
+    EXPECT_EQ(entry->name, name);
+    EXPECT_EQ(entry->needs_future, entry == &kMinReplacement) << name;
     ReplayConfig c = DefaultConfig();
     ApplyOverride(c, "level.board.replacement", name);
-    EXPECT_EQ(c.levels[1].replacement, kind) << name;
-    EXPECT_NE(MakeReplacement(kind, 4, testing::CellList{0, 1}), nullptr);
+    EXPECT_EQ(c.levels[1].replacement, entry) << name;
+    EXPECT_NE(ToToml(c).find("replacement = \"" + name + "\""), std::string::npos) << name;
+    EXPECT_NE(MakeReplacement(*entry, 4, testing::CellList{0, 1}), nullptr);
   }
   ReplayConfig c = DefaultConfig();
   try {

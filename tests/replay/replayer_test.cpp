@@ -163,13 +163,12 @@ TEST(Replay, MinNeverFetchesMoreThanLruOrFifo) {
     const RayBatch f = RandomReplayFrame(rng, cells);
     std::uint64_t fetches[3];
     int k = 0;
-    for (auto policy : {LevelConfig::Replacement::kLru, LevelConfig::Replacement::kFifo,
-                        LevelConfig::Replacement::kMin}) {
+    for (auto policy : {&kLruReplacement, &kFifoReplacement, &kMinReplacement}) {
       ReplayConfig config = DefaultConfig();
       config.levels[0].capacity = 2;
       config.levels[0].replacement = policy;
       const Outcome r = Replay(f, "maxwork", config, nullptr, cells);
-      if (policy == LevelConfig::Replacement::kMin) {
+      if (policy == &kMinReplacement) {
         EXPECT_TRUE(r.result.min_converged);
         EXPECT_EQ(r.result.passes, 2u);
       }

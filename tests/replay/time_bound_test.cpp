@@ -277,9 +277,8 @@ ReplayConfig RandomBoard(std::mt19937& rng, std::uint32_t processors,
   c.granularity =
       rng() % 3 == 0 ? ReplayConfig::Granularity::kNode : ReplayConfig::Granularity::kRay;
   const char* bandwidths[] = {"unlimited", "1MB/s", "133MB/s", "1.6GB/s", "100GB/s"};
-  const LevelConfig::Replacement replacements[] = {LevelConfig::Replacement::kLru,
-                                                   LevelConfig::Replacement::kFifo,
-                                                   LevelConfig::Replacement::kMin};
+  const ReplacementEntry* const replacements[] = {&kLruReplacement, &kFifoReplacement,
+                                                  &kMinReplacement};
   c.levels.resize(2 + rng() % 2);
   for (std::size_t i = 0; i < c.levels.size(); ++i) {
     LevelConfig& l = c.levels[i];

@@ -310,10 +310,10 @@ TEST(Timeline, AddsUpToTheReplaySeveralProcessorsPerNode) {
 TEST(Timeline, OnlyTheLastRunOfAFrameWithMinReplacement) {
   const Frames f = RandomFrames(5, 3, 8);
   ReplayConfig c = Config(2, G::kRay, false, 2, "maxwork");
-  c.levels[0].replacement = LevelConfig::Replacement::kMin;
+  c.levels[0].replacement = &kMinReplacement;
   c.levels[1].capacity_unit = LevelConfig::CapacityUnit::kCells;
   c.levels[1].capacity = 3;
-  c.levels[1].replacement = LevelConfig::Replacement::kMin;
+  c.levels[1].replacement = &kMinReplacement;
   const Replayed r = Replay(f, c);
   EXPECT_GT(r.results[0].passes, 1u);
   CheckTimeline(r, c);

@@ -89,7 +89,7 @@ TEST(WarmMemory, HandWorkedFetchCountsWithASmallBoard) {
   EXPECT_EQ(warm.levels[0].fetches, 3u);
   EXPECT_EQ(warm.levels[1].fetches, 3u);
   // FIFO keeps the order cells came in: the board holds C then A as with LRU here.
-  config.levels[1].replacement = LevelConfig::Replacement::kFifo;
+  config.levels[1].replacement = &kFifoReplacement;
   EXPECT_EQ(SecondFrame(config).levels[1].fetches, 3u);
 }
 

@@ -235,7 +235,7 @@ class FrameMaker {
 // oracle's fetches are exactly the useful entries of the Peel schedule, so within
 // [bound, Peel length]. The frames must also exercise the interesting cases: the oracle
 // skipping Peel entries, Max Work missing the bound, Cell Tree scheduling beating Max Work.
-TEST(FetchReferenceTest, RandomFrames) {
+TEST(FetchReferenceTest, EverySchedulerConservesWorkAndFetchesFeasiblyOnRandomFrames) {
   std::size_t frames = 0, oracle_skips = 0, max_work_above_bound = 0, cell_tree_wins = 0;
   for (std::uint32_t cells : {2u, 3u, 4u, 8u}) {
     FrameMaker maker(1000 + cells, cells);

@@ -211,7 +211,6 @@ TEST(ScheduleFollowerTest, EntriesOfBusyCellsAreDeferredNotLost) {
   std::vector<std::uint64_t> open = {0, ~std::uint64_t{0}, ~std::uint64_t{0}};
   const auto view = [&](const Queues& q) {
     QueueView v = QueueView::Of(q);
-    v.processors = 2;
     v.open = open.data();
     return v;
   };
@@ -393,6 +392,63 @@ TEST(MakeSchedulerTest, EveryNameRoundTrips) {
   EXPECT_EQ(SchedulerNames().size(), 19u);
   EXPECT_NE(dynamic_cast<RandomScheduler*>(MakeScheduler("random", 99).get()), nullptr);
   EXPECT_EQ(dynamic_cast<RandomScheduler&>(*MakeScheduler("random", 99)).seed(), 99u);
+}
+
+// Each scheduler's file declares its entry; the registry lists them in the order --help,
+// sweeps and the study show. Every entry's flags, as the replay, prefetch, the seed key's help
+// and the study read them (history, seeded, predicts, oracle, studied), and every scheduler an
+// entry makes is named by that entry.
+TEST(SchedulerRegistryTest, EntriesKeepTheirFlagsAndNameWhatTheyMake) {
+  struct Flags {
+    const char* name;
+    std::uint32_t history;
+    bool seeded, predicts, oracle, studied;
+  };
+  const Flags expected[] = {
+      {"maxwork", 1, false, true, false, true},
+      {"roundrobin", 1, false, true, false, false},
+      {"random", 1, true, false, false, false},
+      {"peel", 1, false, true, true, true},
+      {"celltree", 1, false, true, false, true},
+      {"best", 1, true, true, true, true},
+      {"celltree-best", 1, true, true, false, true},
+      {"celltree-union", 2, true, true, false, true},
+      {"affinity", 1, false, true, false, false},
+      {"partition", 1, true, true, false, false},
+      {"steal", 1, false, true, false, false},
+      {"partition-steal", 1, true, true, false, false},
+      {"share", 1, false, true, false, false},
+      {"balanced", 1, true, true, false, false},
+      {"celltree-2level", 1, false, true, false, false},
+      {"celltree-2level-best", 1, true, true, false, false},
+      {"balanced-critical", 1, true, true, false, false},
+      {"balanced-adaptive", 2, true, true, false, false},
+      {"celltree-adaptive", 2, true, true, false, true},
+  };
+  ASSERT_EQ(SchedulerRegistry().size(), std::size(expected));
+  for (std::size_t i = 0; i < std::size(expected); ++i) {
+    const SchedulerEntry& e = SchedulerRegistry()[i];
+    const Flags& f = expected[i];
+    EXPECT_STREQ(e.name, f.name);
+    EXPECT_EQ(e.history, f.history) << f.name;
+    EXPECT_EQ(e.seeded, f.seeded) << f.name;
+    EXPECT_EQ(e.predicts, f.predicts) << f.name;
+    EXPECT_EQ(e.oracle, f.oracle) << f.name;
+    EXPECT_EQ(e.studied, f.studied) << f.name;
+    EXPECT_NE(std::string(e.meaning), "") << f.name;
+    EXPECT_NE(std::string(e.label), "") << f.name;
+    EXPECT_EQ(&SchedulerByName(f.name, "test"), &e);
+    const std::unique_ptr<Scheduler> s = MakeScheduler(e, 1);
+    EXPECT_EQ(&s->entry(), &e) << f.name;
+    EXPECT_EQ(s->Name(), f.name);
+  }
+  // The entries by their variables, as the study names them.
+  EXPECT_EQ(&SchedulerByName("maxwork", "test"), &kMaxWorkEntry);
+  EXPECT_EQ(&SchedulerByName("celltree", "test"), &kCellTreeEntry);
+  EXPECT_EQ(&SchedulerByName("celltree-union", "test"), &kCellTreeUnionEntry);
+  EXPECT_EQ(SeededSchedulerList(", "),
+            "random, best, celltree-best, celltree-union, partition, partition-steal, balanced, "
+            "celltree-2level-best, balanced-critical, balanced-adaptive, celltree-adaptive");
 }
 
 TEST(MakeSchedulerTest, UnknownNameListsTheValidOnes) {

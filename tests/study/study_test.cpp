@@ -284,7 +284,7 @@ TEST(Study, EverySchedulerReplaysTheWholeCaptureOfEachGrid) {
     for (std::size_t k = 0; k < schedulers.size(); ++k) {
       const SchedulerReplay& r = g.replays[k];
       EXPECT_EQ(r.scheduler, schedulers[k]) << g.cells;
-      EXPECT_EQ(&g.replay(r.scheduler->name), &r.replay);
+      EXPECT_EQ(&g.replay(*r.scheduler), &r.replay);
       ASSERT_EQ(r.replay.frames.size(), reader.frames().size())
           << g.cells << " " << r.scheduler->name;
       EXPECT_EQ(r.replay.total.rays, rays) << g.cells << " " << r.scheduler->name;
@@ -354,8 +354,8 @@ TEST(Study, TheFinestGridIsReplayedOnSeveralProcessors) {
     EXPECT_EQ(t.utilisation, alone.utilisation) << what;
     // With one processor the default granularity is per node, as the study's own replays.
     if (p == 1 && name != "balanced") {
-      EXPECT_EQ(t.fetches, g.replay(name).total.fetches) << what;
-      EXPECT_EQ(t.time, g.replay(name).total.time) << what;
+      EXPECT_EQ(t.fetches, g.replay(*r.scheduler).total.fetches) << what;
+      EXPECT_EQ(t.time, g.replay(*r.scheduler).total.time) << what;
     }
   }
 }

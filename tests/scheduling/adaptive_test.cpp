@@ -24,10 +24,10 @@ namespace {
 // arrivals, queues taken) and what it chose ("out ...").
 class Logged : public Scheduler {
  public:
-  explicit Logged(std::unique_ptr<Scheduler> s) : s_(std::move(s)) {}
+  // Named as the scheduler it forwards to (its registry entry).
+  explicit Logged(std::unique_ptr<Scheduler> s) : Scheduler(s->entry()), s_(std::move(s)) {}
   std::vector<std::string> log;
 
-  std::string Name() const override { return s_->Name(); }
   void BeginFrame(const FrameInfo& frame) override {
     log.push_back("in begin");
     s_->BeginFrame(frame);
@@ -150,7 +150,6 @@ TEST(Adaptive, FrameZeroTakesTheShallowestWorkFirstHandWorked) {
     s->Arrived({4, 0, D, 9});
     std::vector<std::uint64_t> queued = {100, 5, 0, 9};
     QueueView v = QueueView::Of(queued);
-    v.processors = p;
     EXPECT_EQ(MostQueuedCell(v), A);  // what Max Work takes
     EXPECT_EQ(s->Peek(v), D) << p;
     EXPECT_EQ(s->Next(v), D) << p;

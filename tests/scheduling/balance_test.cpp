@@ -222,7 +222,6 @@ TEST(Balance, BalancedJoinsABusyCellOnlyForThreeFetchesOfWork) {
       s->BeginFrame(info);
       const std::vector<std::uint64_t> all = {0, queued};
       QueueView v = QueueView::Of(view, A);
-      v.processors = 2;
       v.working = 1;
       v.open = open.data();
       v.all_queued = all.data();
@@ -253,7 +252,6 @@ TEST(Balance, CriticalStartsTheLongestPredictedChainHandWorked) {
       s->Arrived({1, 0, A, 10});
       s->Arrived({2, 0, B, 1});
       QueueView v = QueueView::Of(queued);
-      v.processors = p;
       const bool critical = p > 1 && std::string(name) == "balanced-critical";
       EXPECT_EQ(s->Next(v), critical ? B : A) << name << " P" << p;
       EXPECT_EQ(s->Reason() == "critical path first", critical) << name << " P" << p;
@@ -264,7 +262,6 @@ TEST(Balance, CriticalStartsTheLongestPredictedChainHandWorked) {
         s->Arrived({3, 1, B, 1});
         std::vector<std::uint64_t> left = {10, 1, 0, 0};
         QueueView w = QueueView::Of(left);
-        w.processors = p;
         EXPECT_EQ(s->Next(w), A);
         EXPECT_GT(s->Cost().decisions, 0u);
       }
