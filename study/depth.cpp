@@ -4,7 +4,7 @@
 
 #include "base/check.h"
 #include "replay/config.h"
-#include "replay/driver.h"
+#include "runner/driver.h"
 #include "scheduling/scheduler.h"
 #include "traces/trace_reader.h"
 

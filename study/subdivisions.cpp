@@ -11,8 +11,8 @@
 #include "record/record_flags.h"
 #include "record/recorder.h"
 #include "replay/config.h"
-#include "replay/driver.h"
 #include "replay/replayer.h"
+#include "runner/driver.h"
 #include "study/accuracy.h"
 #include "traces/trace_reader.h"
 
