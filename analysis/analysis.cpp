@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <exception>
-#include <thread>
 #include <utility>
 
 #include "base/check.h"
+#include "base/parallel.h"
 #include "graph/peel.h"
 #include "graph/schedule.h"
 #include "search/late_bound.h"
@@ -69,25 +69,18 @@ std::pair<LowerBoundResult, BestScheduleResult> BoundAndSearch(const CellTree& t
   }
   LateBound late;
   LowerBoundResult lb;
-  std::exception_ptr error;
-  std::thread bound([&] {
+  Background bound([&] {
     try {
       lb = LowerBound(tree, options.lower);
     } catch (...) {
-      error = std::current_exception();
+      late.Publish(0);
+      throw;
     }
-    late.Publish(error ? 0 : lb.value);
+    late.Publish(lb.value);
   });
   best.late_lower_bound = &late;
-  BestScheduleResult b;
-  try {
-    b = BestSchedule(tree, best);
-  } catch (...) {
-    bound.join();
-    throw;
-  }
-  bound.join();
-  if (error) std::rethrow_exception(error);
+  BestScheduleResult b = BestSchedule(tree, best);  // on a throw, ~Background joins the bound
+  bound.Join();                                     // rethrows the bound's exception
   return {std::move(lb), std::move(b)};
 }
 

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 
 #include "base/check.h"
 
@@ -51,6 +52,13 @@ void WriteFileAtomically(const std::string& path, const std::function<void(std::
   }
   RenameFile(tmp.path(), path, what);
   tmp.Release();
+}
+
+bool ReadFile(const std::string& path, std::string* bytes) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  bytes->assign(std::istreambuf_iterator<char>(in), {});
+  return true;
 }
 
 void RenameFile(const std::string& from, const std::string& to, const std::string& what) {

@@ -19,6 +19,9 @@ void WriteFileAtomically(const std::string& path, std::string_view bytes,
 // temporary is removed and the exception propagates.
 void WriteFileAtomically(const std::string& path, const std::function<void(std::ostream&)>& write,
                          const std::string& what = {});
+// Reads the whole of `path` (binary) into `bytes`; false, with `bytes` untouched, when it cannot
+// be opened (e.g. absent: a sweep's .partial or .checkpoint on a first run).
+bool ReadFile(const std::string& path, std::string* bytes);
 // Renames a finished temporary `from` to `to`; InputError naming `what` and the system's
 // reason on failure. `from` is kept then: a streaming writer's temporary (a capture, a sweep)
 // may hold hours of work that the user can still rename by hand.

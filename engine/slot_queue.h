@@ -4,11 +4,11 @@
 // order; every event here has priority 0). The replay's batch core runs on it
 // (replay/replayer.cpp: a block processor's call for a cell, the end of its fetch or of its
 // unit); a model whose components may have several pending events, or priorities, uses the
-// general EventQueue and Simulator (engine/simulator.h).
+// general EventQueue and Simulator (tests/oracle/simulator.h).
 //
 // Schedule numbers every event it is given, as the Simulator does, so the same events are
 // handled in the same order on either (tests/engine/slot_queue_test.cpp; the replay checks it
-// field by field against tests/replay/reference_replayer.cpp).
+// field by field against tests/oracle/reference_replayer.cpp).
 //
 // Each tree node holds its winner's key and nothing else: (time, seq << shift | slot), in two
 // arrays of 64-bit words (a node's index is a scaled address, no multiply). Updating a slot

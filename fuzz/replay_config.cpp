@@ -14,7 +14,7 @@
 #include "base/check.h"
 #include "base/parse.h"
 #include "replay/config.h"
-#include "replay/sweep.h"
+#include "runner/sweep.h"
 
 namespace raycell {
 namespace {

@@ -31,9 +31,9 @@
 #include <memory>
 #include <mutex>
 #include <optional>
-#include <thread>
 
 #include "base/check.h"
+#include "base/parallel.h"
 #include "record/camera.h"
 #include "record/scene_vdb.h"
 
@@ -781,7 +781,7 @@ bool RenderFrameIn(const RenderJob& job, Image* image, FrameStats* stats) {
   RowPool pool(2 * tokens, set.store_t);
   std::exception_ptr sink_error;  // the sink's first exception (e.g. a full disk)
   std::atomic<bool> sink_failed{false};
-  std::thread writer([&] {
+  Background writer([&] {
     while (Row* row = pool.Pop()) {
       if (!sink_failed.load()) {
         try {
@@ -831,7 +831,7 @@ bool RenderFrameIn(const RenderJob& job, Image* image, FrameStats* stats) {
     trace_error = std::current_exception();
   }
   pool.Push(nullptr);
-  writer.join();
+  writer.Join();
   if (trace_error) std::rethrow_exception(trace_error);
   if (sink_error) std::rethrow_exception(sink_error);
   return !cancelled;

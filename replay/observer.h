@@ -1,5 +1,5 @@
 // What a replay did, moment by moment, for whoever wants to watch it (the timeline writer,
-// replay/timeline.h). The replay core (replay/replayer.h) and the memory levels
+// runner/timeline.h). The replay core (replay/replayer.h) and the memory levels
 // (replay/memory.h) call a ReplayObserver when one is given; they hold a null pointer
 // otherwise, and every call is behind a test of that pointer, so a replay without an
 // observer does no observer work, and a replay with one gives the same results byte for byte.

@@ -6,8 +6,8 @@
 
 #include "base/check.h"
 #include "base/checked.h"
-#include "engine/simulator.h"  // SimulationStalled
 #include "engine/slot_queue.h"
+#include "engine/watchdog.h"
 #include "replay/time_bound.h"
 
 namespace raycell {
@@ -285,8 +285,6 @@ class Board {
   std::uint64_t events() const { return events_; }
 
  private:
-  // The engine's watchdog (SimulatorOptions::watchdog_events).
-  static constexpr std::uint64_t kWatchdogEvents = 10'000'000;
   // How far ahead in a worklist the units' successors are prefetched.
   static constexpr std::size_t kPrefetch = 16;
   // Worked units at the front of a worklist before they may be dropped; longer empty
@@ -681,13 +679,18 @@ void CheckModelSize(const ReplayConfig& config, std::uint64_t cells) {
   }
 }
 
+void CheckReplay(const ReplayConfig& config, std::uint64_t cells) {
+  CheckReplayable(config);
+  CheckModelSize(config, cells);
+}
+
 ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                          const ReplayConfig& config, Scheduler& scheduler, const FrameInfo& frame,
                          std::uint64_t bound, ReplayObserver* observer, MemoryState* memory,
                          const MemoryUnits* units) {
   RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
-  CheckReplayable(config);
-  CheckModelSize(config, work.cells);
+  // The caller ran CheckReplay (its bound on the memory model's size, as an invariant here).
+  RAYCELL_CHECK_LE(std::uint64_t{config.processors.count} * work.cells, kMaxProcessorCells);
   if (work.compact.units != 0) {
     return Replay(work, CompactUnits{work.compact.stream.data(), &work.compact}, footprints, config,
                   scheduler, frame, bound, observer, memory, units);

@@ -6,8 +6,9 @@
 // The events (a processor's call for a cell, the end of its fetch, the end of each unit) run
 // on the engine's SlotQueue (engine/slot_queue.h), one slot per processor since a processor
 // has at most one pending event, in the engine's order: the results are those of the same
-// events on engine/simulator.h (tests/replay/reference_replayer.cpp, checked equal field by
-// field, `events` included). A cell's queue (a flat array of units, each carrying its samples
+// events on the independent oracle, a general event engine (tests/oracle/simulator.h) and the
+// reference replayer on it (tests/oracle/reference_replayer.cpp), checked equal field by
+// field, `events` included. A cell's queue (a flat array of units, each carrying its samples
 // and where its successors are) is handed to the processor whole, to be worked through in its
 // own loop: a batch per fetch.
 #pragma once
@@ -48,7 +49,8 @@ struct ReplayResult {
   bool min_converged = true;  // MIN's last run made exactly the requests it was told
 };
 
-// Replays one frame; calls scheduler.BeginFrame(frame) itself. `bound` is the frame's maxGen
+// Replays one frame; calls scheduler.BeginFrame(frame) itself. `config` has passed
+// CheckReplay for `work.cells` cells. `bound` is the frame's maxGen
 // bound (reported only where it holds).
 //
 // Belady's MIN needs each level's future requests. A level with MIN first runs LRU to learn
@@ -82,8 +84,7 @@ std::vector<double> FetchSamples(const ReplayConfig& config,
 bool BoundHolds(const ReplayConfig& config);
 
 // InputError when `config` cannot be replayed though it is valid as a configuration:
-// prefetch with a cache of fewer than two cells. ReplayFrame checks it; sweeps check every
-// combination before any work.
+// prefetch with a cache of fewer than two cells. Part of CheckReplay.
 void CheckReplayable(const ReplayConfig& config);
 
 // Largest processors x cells of a replay. The memory model keeps, per processor and cell, an
@@ -92,8 +93,14 @@ void CheckReplayable(const ReplayConfig& config);
 inline constexpr std::uint64_t kMaxProcessorCells = std::uint64_t{1} << 27;
 
 // InputError naming processors.count, the cell count and the limit when `config` on a trace
-// of `cells` cells exceeds kMaxProcessorCells. `replay` checks it when the trace is opened,
-// `sweep` for every combination, both before any frame is read; ReplayFrame checks it too.
+// of `cells` cells exceeds kMaxProcessorCells. Part of CheckReplay.
 void CheckModelSize(const ReplayConfig& config, std::uint64_t cells);
+
+// What the model needs of a configuration before it replays a trace of `cells` cells:
+// CheckReplayable, then CheckModelSize. The runner calls it once per configuration when it
+// opens a trace for replay (runner/driver.h ReplayFrames; a sweep for every combination
+// before its first block), before any frame is read; ReplayFrame takes a checked
+// configuration and does not repeat it.
+void CheckReplay(const ReplayConfig& config, std::uint64_t cells);
 
 }  // namespace raycell

@@ -129,7 +129,7 @@ class Scheduler {
   // Default: Max Work's choice.
   virtual std::optional<CellId> Peek(const QueueView& queues) const;
   // Why the last Next chose its cell, in a few words for people reading a replay's timeline
-  // (replay/timeline.h): "followed", "max work (skipped 2)". Empty (the default) when the
+  // (runner/timeline.h): "followed", "max work (skipped 2)". Empty (the default) when the
   // policy has nothing to say beyond its name. Read only when asked: never on the replay's
   // path unless a timeline is written.
   virtual std::string Reason() const { return {}; }

@@ -1,11 +1,10 @@
 #include "search/best_schedule.h"
 
 #include <algorithm>
-#include <atomic>
 #include <sstream>
-#include <thread>
 
 #include "base/check.h"
+#include "base/parallel.h"
 #include "graph/forest.h"
 #include "graph/peel.h"
 #include "graph/schedule.h"
@@ -56,21 +55,13 @@ LocalSearchOptions ChainOptions(const BestScheduleOptions& o, std::size_t i) {
 std::vector<LocalSearchResult> RunChains(const CellForest& forest, const std::vector<CellId>& start,
                                          const BestScheduleOptions& o) {
   std::vector<LocalSearchResult> results(o.chains);
-  std::atomic<std::size_t> next{0};
-  auto worker = [&] {
-    for (std::size_t i; (i = next++) < o.chains;) {
-      LocalSearchOptions lo = ChainOptions(o, i);
-      lo.lower_bound = std::max(lo.lower_bound, o.lower_bound);
-      lo.late_lower_bound = o.late_lower_bound;
-      results[i] = ImproveSchedule(forest, start, lo);
-    }
-  };
-  std::size_t threads = o.threads ? o.threads : std::max(1u, std::thread::hardware_concurrency());
-  threads = std::min(threads, o.chains);
-  std::vector<std::thread> pool;
-  for (std::size_t t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& t : pool) t.join();
+  const unsigned threads = o.threads ? unsigned(std::min(o.threads, o.chains)) : HardwareThreads();
+  ParallelFor(o.chains, threads, [&](std::size_t i) {
+    LocalSearchOptions lo = ChainOptions(o, i);
+    lo.lower_bound = std::max(lo.lower_bound, o.lower_bound);
+    lo.late_lower_bound = o.late_lower_bound;
+    results[i] = ImproveSchedule(forest, start, lo);
+  });
   return results;
 }
 

@@ -13,8 +13,8 @@
 #include "record/recorder.h"
 #include "record/scene.h"
 #include "replay/config.h"
-#include "replay/driver.h"
 #include "replay/replayer.h"
+#include "runner/driver.h"
 #include "study/image_error.h"
 #include "traces/trace_reader.h"
 

@@ -4,7 +4,7 @@
 
 #include "base/check.h"
 #include "replay/config.h"
-#include "replay/driver.h"
+#include "runner/driver.h"
 #include "scheduling/cell_tree_scheduler.h"
 #include "scheduling/max_work.h"
 #include "scheduling/scheduler.h"

@@ -1,16 +1,15 @@
 #include "study/study.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <mutex>
 #include <sstream>
-#include <thread>
 
 #include "base/check.h"
 #include "base/format.h"
+#include "base/parallel.h"
 #include "base/parse.h"
 #include "base/progress.h"
 #include "record/cell_grid.h"
@@ -91,7 +90,7 @@ std::string Dims(const TraceHeader& h) {
 }
 
 // The threads the study's parallel work runs on: the machine's, at most 8.
-unsigned StudyThreads() { return std::max(1u, std::min(std::thread::hardware_concurrency(), 8u)); }
+unsigned StudyThreads() { return std::min(HardwareThreads(), 8u); }
 
 // Brackets the optimum of every tree (AnalyzeTree with --bracket), frames in parallel on the
 // study's threads; each frame's result depends only on its tree, so on no thread count.
@@ -99,22 +98,16 @@ std::vector<FrameAnalysis> AnalyzeTrees(const std::vector<CellTree>& trees,
                                         const AnalyzeOptions& options, const std::string& label,
                                         bool quiet) {
   std::vector<FrameAnalysis> out(trees.size());
-  std::atomic<std::size_t> next{0}, done{0};
+  std::size_t done = 0;
   std::mutex mutex;
   Progress progress(!quiet);
-  const auto work = [&] {
-    for (std::size_t i; (i = next++) < trees.size();) {
-      out[i] = AnalyzeTree(trees[i], options);
-      std::lock_guard<std::mutex> lock(mutex);
-      progress.Update(double(++done) / double(trees.size()),
-                      label + ": bracketing the optimum, " + std::to_string(done) + "/" +
-                          std::to_string(trees.size()) + " frames");
-    }
-  };
-  std::vector<std::thread> threads;
-  for (unsigned t = 1; t < StudyThreads(); ++t) threads.emplace_back(work);
-  work();
-  for (std::thread& t : threads) t.join();
+  ParallelFor(trees.size(), StudyThreads(), [&](std::size_t i) {
+    out[i] = AnalyzeTree(trees[i], options);
+    std::lock_guard<std::mutex> lock(mutex);
+    progress.Update(double(++done) / double(trees.size()),
+                    label + ": bracketing the optimum, " + std::to_string(done) + "/" +
+                        std::to_string(trees.size()) + " frames");
+  });
   progress.Done();
   return out;
 }

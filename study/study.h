@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "analysis/analysis.h"
-#include "replay/driver.h"
+#include "runner/driver.h"
 #include "scheduling/scheduler.h"
 #include "study/accuracy.h"
 #include "study/depth.h"

@@ -10,11 +10,11 @@
 #include "base/check.h"
 #include "base/file.h"
 #include "base/progress.h"
-#include "engine/stats.h"
+#include "base/table.h"
 #include "replay/config.h"
-#include "replay/driver.h"
-#include "replay/result_table.h"
-#include "replay/timeline.h"
+#include "runner/driver.h"
+#include "runner/result_table.h"
+#include "runner/timeline.h"
 #include "scheduling/scheduler.h"
 #include "tools/commands.h"
 #include "tools/frames.h"
@@ -31,7 +31,7 @@ struct ReplayArgs {
   bool print_config = false, quiet = false;
 };
 
-// Every output below prints the result's StatsTable (replay/result_table.h).
+// Every output below prints the result's StatsTable (runner/result_table.h).
 
 StatsTable FrameTable(const ReplayResult& r, const ResultColumns& columns) {
   StatsTable t;
@@ -139,7 +139,6 @@ void Run(const ReplayArgs& a) {
   }
   if (a.sample < 1) throw InputError("--sample: must be at least 1");
   const TraceReader reader = TraceReader::Open(a.trace, a.cells);
-  CheckModelSize(config, reader.header().cell_count());
   if (!reader.warning().empty()) std::cerr << "raycell: warning: " << reader.warning() << "\n";
   Progress progress(!a.quiet);
   if (!a.timeline.empty() && a.sample > 1) {

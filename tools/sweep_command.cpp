@@ -1,14 +1,14 @@
 // raycell sweep: one replay per combination of varied configuration keys, one CSV row each
-// (replay/sweep.h), and `raycell sweep merge` to join the files of sharded runs.
+// (runner/sweep.h), and `raycell sweep merge` to join the files of sharded runs.
 #include <algorithm>
 #include <iostream>
 #include <memory>
-#include <thread>
 
 #include "base/check.h"
+#include "base/parallel.h"
 #include "base/progress.h"
 #include "replay/config.h"
-#include "replay/sweep.h"
+#include "runner/sweep.h"
 #include "tools/commands.h"
 #include "tools/frames.h"
 #include "traces/trace_reader.h"
@@ -19,7 +19,7 @@ namespace {
 struct SweepArgs {
   std::string trace, config, frames, shard, out, cells;
   std::vector<std::string> varies;
-  unsigned jobs = std::max(1u, std::thread::hardware_concurrency());
+  unsigned jobs = HardwareThreads();
   bool quiet = false;
   std::string merge_out;
   std::vector<std::string> merge_shards;

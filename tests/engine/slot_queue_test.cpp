@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "base/random.h"
-#include "engine/event_queue.h"
+#include "tests/oracle/event_queue.h"
 
 namespace raycell {
 namespace {

@@ -16,7 +16,7 @@
 #include "graph/cell_tree.h"
 #include "graph/frame_tree.h"
 #include "replay/config.h"
-#include "replay/driver.h"
+#include "runner/driver.h"
 #include "tests/record/record_test_util.h"
 #include "traces/trace_reader.h"
 #include "traces/trace_regroup.h"

@@ -1,5 +1,5 @@
 // The batch replay core (replay/replayer.cpp) against the reference replay it replaced
-// (tests/replay/reference_replayer.cpp, one engine event per unit through the Simulator's
+// (tests/oracle/reference_replayer.cpp, one engine event per unit through the Simulator's
 // event queue): every field of the result equal, `events` included, on random frames under
 // every scheduler, granularity and a wide range of configurations, ties in time included.
 #include <gtest/gtest.h>
@@ -14,8 +14,8 @@
 #include "replay/work.h"
 #include "scheduling/scheduler.h"
 #include "tests/graph/test_trees.h"
+#include "tests/oracle/reference_replayer.h"
 #include "tests/replay/random_frame.h"
-#include "tests/replay/reference_replayer.h"
 
 namespace raycell {
 namespace {

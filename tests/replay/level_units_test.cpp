@@ -6,10 +6,10 @@
 
 #include <random>
 
-#include "replay/driver.h"
 #include "replay/memory.h"
 #include "replay/replayer.h"
 #include "replay/time_bound.h"
+#include "runner/driver.h"
 #include "scheduling/scheduler.h"
 #include "tests/graph/test_trees.h"
 #include "tests/replay/random_frame.h"

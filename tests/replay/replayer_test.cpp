@@ -34,6 +34,7 @@ struct Outcome {
 Outcome Replay(const RayBatch& rays, const std::string& scheduler, ReplayConfig config,
                const CellTree* previous = nullptr, std::uint32_t cells = 3) {
   config.scheduler = &SchedulerByName(scheduler, "test");
+  CheckReplay(config, cells);  // as the runner does when it opens a trace
   const CellTree tree = TreeOf(rays);
   auto s = MakeScheduler(scheduler, config.seed);
   const FrameInfo info{previous ? 1u : 0u, &tree, previous, cells};

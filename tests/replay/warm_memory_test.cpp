@@ -8,8 +8,8 @@
 #include <random>
 #include <set>
 
-#include "replay/driver.h"
 #include "replay/replayer.h"
+#include "runner/driver.h"
 #include "scheduling/scheduler.h"
 #include "tests/graph/test_trees.h"
 #include "tests/replay/random_frame.h"

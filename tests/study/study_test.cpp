@@ -16,7 +16,7 @@
 #include "graph/frame_tree.h"
 #include "record/image.h"
 #include "replay/config.h"
-#include "replay/driver.h"
+#include "runner/driver.h"
 #include "scheduling/scheduler.h"
 #include "study/accuracy.h"
 #include "study/depth.h"

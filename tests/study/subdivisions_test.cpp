@@ -11,8 +11,8 @@
 
 #include "record/recorder.h"
 #include "replay/config.h"
-#include "replay/driver.h"
 #include "replay/replayer.h"
+#include "runner/driver.h"
 #include "tests/test_util.h"
 #include "traces/trace_reader.h"
 #include "traces/trace_regroup.h"

@@ -21,7 +21,7 @@ CASES = [
     ("tools/t.cpp", "record/scene.h", True),
     ("tools/t.cpp", "study/study.h", True),
     ("study/s.cpp", "record/recorder.h", True),
-    ("study/s.cpp", "replay/driver.h", True),
+    ("study/s.cpp", "runner/driver.h", True),
     ("study/s.h", "analysis/analysis.h", True),
     ("graph/g.h", "search/optimum.h", False),       # the core above the searches
     ("graph/g.cpp", "bounds/scs.h", False),
@@ -36,6 +36,16 @@ CASES = [
     ("engine/e.h", "graph/cell_tree.h", False),
     ("replay/r.cpp", "record/scene.h", False),
     ("replay/r.cpp", "study/study.h", False),  # the study stands on replay and analysis
+    ("runner/r.cpp", "replay/replayer.h", True),
+    ("tools/t.cpp", "runner/sweep.h", True),
+    ("replay/r.cpp", "runner/driver.h", False),  # the model sees no runner
+    ("replay/r.h", "runner/result_table.h", False),
+    ("runner/r.cpp", "analysis/analysis.h", False),  # would link GLPK
+    ("runner/r.cpp", "study/study.h", False),
+    ("tools/bench/b.cpp", "tests/oracle/simulator.h", True),  # a benchmark against the oracle
+    ("tools/t.cpp", "tests/oracle/simulator.h", False),
+    ("replay/r.cpp", "tests/oracle/simulator.h", False),
+    ("tools/bench/b.cpp", "tests/test_util.h", False),
     ("analysis/a.h", "study/report.h", False),
     ("record/r.cpp", "study/accuracy.h", False),
     ("study/s.cpp", "tools/commands.h", False),

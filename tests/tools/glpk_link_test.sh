@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # GLPK is linked only where the lower bounds are (bounds/ and what stands on it): the link
-# lines of programs that use graph/, search/, scheduling/ or replay/ alone name no GLPK, and
-# that of a bounds/ test does (so that this test sees link lines at all). Reads the Makefile
+# lines of programs that use graph/, search/, scheduling/, replay/ or runner/ alone name no
+# GLPK, and that of a bounds/ test does (so that this test sees link lines at all). Reads the Makefile
 # generator's link.txt files; skipped (exit 77) under another generator.
 # Usage: tests/tools/glpk_link_test.sh BUILD_DIR
 set -euo pipefail
@@ -14,7 +14,7 @@ fi
 fail=0
 line bounds lower_bound_test | grep -q glpk || { echo "FAIL: lower_bound_test links no GLPK"; fail=1; }
 for t in graph/cell_tree_test search/best_schedule_test scheduling/schedulers_test \
-  replay/replay_core_test replay/replay_sweep_test; do
+  replay/replay_core_test runner/runner_sweep_test; do
   if line "${t%/*}" "${t#*/}" | grep -q glpk; then
     echo "FAIL: ${t#*/} links GLPK: $(line "${t%/*}" "${t#*/}" | grep -o '[^ ]*glpk[^ ]*')"
     fail=1

@@ -26,10 +26,10 @@
 #include "base/check.h"
 #include "base/cpu_time.h"
 #include "base/random.h"
-#include "engine/calendar_queue.h"
-#include "engine/event_queue.h"
-#include "engine/simulator.h"
 #include "engine/slot_queue.h"
+#include "tests/oracle/calendar_queue.h"
+#include "tests/oracle/event_queue.h"
+#include "tests/oracle/simulator.h"
 
 namespace raycell {
 namespace {

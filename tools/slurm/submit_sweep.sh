@@ -77,7 +77,7 @@ record=$(
 )
 claim_outdir sweep "$record" shards
 
-# The first line of a sweep file names the sweep exactly (replay/sweep.h): trace, config and
+# The first line of a sweep file names the sweep exactly (runner/sweep.h): trace, config and
 # its hash, varies, frames, shard. Shard files left by an earlier run must name this sweep, so
 # that a configuration file edited since is not merged with old rows.
 name=$(head -n 1 "$check/check.csv")

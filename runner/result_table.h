@@ -1,9 +1,9 @@
 // One printer per replay result: every output of a ReplayResult (`raycell replay` as a
 // table, JSON and CSV, and `raycell sweep`'s rows) is the StatsTable built here, printed by
-// engine/stats.h, so a statistic is named, ordered and formatted in one place.
+// base/table.h, so a statistic is named, ordered and formatted in one place.
 #pragma once
 
-#include "engine/stats.h"
+#include "base/table.h"
 #include "replay/replayer.h"
 
 namespace raycell {

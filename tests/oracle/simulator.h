@@ -13,24 +13,22 @@
 
 #include "base/check.h"
 #include "base/checked.h"
-#include "engine/calendar_queue.h"
-#include "engine/component.h"
-#include "engine/event_queue.h"
 #include "engine/time.h"
+#include "engine/watchdog.h"
+#include "tests/oracle/calendar_queue.h"
+#include "tests/oracle/component.h"
+#include "tests/oracle/event_queue.h"
 
 namespace raycell {
 
-// Thrown by Simulator::Run when the watchdog fires. The message names the reason, the time,
-// the queue size and every component's Name(), HasWork() and DumpState().
-class SimulationStalled : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+// Simulator::Run throws SimulationStalled (engine/watchdog.h) when the watchdog fires; the
+// message names the reason, the time, the queue size and every component's Name(),
+// HasWork() and DumpState().
 
 struct SimulatorOptions {
   // The watchdog fires after this many consecutive events with no NoteProgress() call.
   // 0 disables this check (the empty-queue-with-work check always runs).
-  std::uint64_t watchdog_events = 10'000'000;
+  std::uint64_t watchdog_events = kWatchdogEvents;  // the replay's (engine/watchdog.h)
 };
 
 enum class RunStatus {

@@ -1,5 +1,5 @@
 // Per-segment replay speed: the batch core (replay/replayer.cpp) against the reference it
-// replaced (tests/replay/reference_replayer.cpp: one engine event per unit through the
+// replaced (tests/oracle/reference_replayer.cpp: one engine event per unit through the
 // Simulator's event queue), on the frames of a capture, for configurations that replay per
 // ray segment (more than one processor). Each frame is decoded and its work graph built
 // once, untimed; only ReplayFrame is timed, in CPU time of this thread (which a loaded,
@@ -7,14 +7,14 @@
 // frame, REPS times; the median of the per-rep totals is printed, and the results of the two
 // are checked equal.
 //
-// It lives with the reference it measures against (test-only code), and is built with the
-// tests but not run by them.
+// It compiles the reference it measures against from the replay's oracle (tests/oracle/:
+// test-only code, which tools/bench/ alone may include); not run by the tests.
 //
 // With --core-only the reference is not run: each frame is replayed REPS times in a row, as a
 // sweep replays its configurations on a frame it decoded once, and between the replays the
 // frame's records stay warm in the caches, where alternating with the reference evicts them.
 //
-// Usage: build/tests/replay/bench_replay_core TRACE [FRAMES=all] [REPS=3] [CASE=all|-1]
+// Usage: build/tools/bench_replay_core TRACE [FRAMES=all] [REPS=3] [CASE=all|-1]
 //            [--core-only]
 #include <algorithm>
 #include <cstdio>
@@ -32,7 +32,7 @@
 #include "replay/replayer.h"
 #include "replay/work.h"
 #include "scheduling/scheduler.h"
-#include "tests/replay/reference_replayer.h"
+#include "tests/oracle/reference_replayer.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {

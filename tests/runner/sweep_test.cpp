@@ -3,7 +3,7 @@
 // for any --jobs, shards of combinations and of frames merged into the unsharded file,
 // resuming after an interruption at any row or frame, and configurations shared only where
 // no result can differ.
-#include "replay/sweep.h"
+#include "runner/sweep.h"
 
 #include <gtest/gtest.h>
 
@@ -17,7 +17,7 @@
 #include "base/check.h"
 #include "base/format.h"
 #include "base/parse.h"
-#include "replay/driver.h"
+#include "runner/driver.h"
 #include "tests/cell_list.h"
 #include "tests/test_util.h"
 #include "traces/trace_writer.h"

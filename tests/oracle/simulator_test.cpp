@@ -1,4 +1,4 @@
-#include "engine/simulator.h"
+#include "tests/oracle/simulator.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "engine/event_queue.h"
+#include "tests/oracle/event_queue.h"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "replay/timeline.h"
+#include "runner/timeline.h"
 
 #include <ostream>
 

@@ -1,4 +1,4 @@
-#include "replay/result_table.h"
+#include "runner/result_table.h"
 
 namespace raycell {
 

@@ -1,8 +1,8 @@
-// The frame walk under every replay (replay/driver.h): each frame's result equals ReplayFrame
+// The frame walk under every replay (runner/driver.h): each frame's result equals ReplayFrame
 // on that frame's own work graph, tree and previous frame's tree built by hand, for
 // contiguous and skipping frame lists, sampled frames, both granularities and many
 // configurations at once on several threads; totals add up as documented.
-#include "replay/driver.h"
+#include "runner/driver.h"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // The per-segment replay as it was before the batch core (replay/replayer.cpp): a Board
 // component on the engine's Simulator, one event per unit through the general event queue.
 // Test-only: the reference the fast core must equal exactly (tests/replay/core_test.cpp).
-#include "tests/replay/reference_replayer.h"
+#include "tests/oracle/reference_replayer.h"
 
 #include <algorithm>
 #include <deque>
@@ -11,8 +11,8 @@
 
 #include "base/check.h"
 #include "base/checked.h"
-#include "engine/simulator.h"
 #include "replay/replayer.h"
+#include "tests/oracle/simulator.h"
 
 namespace raycell {
 namespace {

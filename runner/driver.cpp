@@ -1,101 +1,17 @@
-#include "replay/driver.h"
+#include "runner/driver.h"
 
 #include <algorithm>
-#include <atomic>
-#include <condition_variable>
-#include <exception>
 #include <map>
-#include <mutex>
-#include <thread>
 
 #include "base/check.h"
 #include "base/checked.h"
+#include "base/parallel.h"
 #include "graph/frame_tree.h"
 #include "replay/level_units.h"
 #include "scheduling/scheduler.h"
 
 namespace raycell {
 namespace {
-
-// Runs f(0) .. f(n - 1) on `threads` threads, the calling one among them; the first
-// exception any call throws is rethrown once all have stopped. The threads live as long as
-// the pool, so a frame's replays cost no thread creation.
-class WorkerPool {
- public:
-  explicit WorkerPool(unsigned threads) {
-    for (unsigned i = 1; i < threads; ++i) workers_.emplace_back([this] { Loop(); });
-  }
-  ~WorkerPool() {
-    {
-      std::lock_guard<std::mutex> lock(mu_);
-      quit_ = true;
-      ++generation_;
-    }
-    start_.notify_all();
-    for (std::thread& t : workers_) t.join();
-  }
-  WorkerPool(const WorkerPool&) = delete;
-  WorkerPool& operator=(const WorkerPool&) = delete;
-
-  void ParallelFor(std::size_t n, const std::function<void(std::size_t)>& f) {
-    {
-      std::lock_guard<std::mutex> lock(mu_);
-      job_ = &f;
-      n_ = n;
-      next_ = 0;
-      error_ = nullptr;
-      busy_ = workers_.size();
-      ++generation_;
-    }
-    start_.notify_all();
-    Work();
-    std::unique_lock<std::mutex> lock(mu_);
-    done_.wait(lock, [this] { return busy_ == 0; });
-    job_ = nullptr;
-    if (error_) std::rethrow_exception(error_);
-  }
-
- private:
-  void Loop() {
-    std::uint64_t seen = 0;
-    for (;;) {
-      {
-        std::unique_lock<std::mutex> lock(mu_);
-        start_.wait(lock, [&] { return generation_ != seen; });
-        seen = generation_;
-        if (quit_) return;
-      }
-      Work();
-      {
-        std::lock_guard<std::mutex> lock(mu_);
-        --busy_;
-      }
-      done_.notify_one();
-    }
-  }
-
-  void Work() {
-    for (std::size_t i; (i = next_++) < n_;) {
-      try {
-        (*job_)(i);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(mu_);
-        if (!error_) error_ = std::current_exception();
-        next_ = n_;  // the others stop after their current call
-      }
-    }
-  }
-
-  std::vector<std::thread> workers_;
-  std::mutex mu_;
-  std::condition_variable start_, done_;
-  std::uint64_t generation_ = 0;
-  bool quit_ = false;
-  const std::function<void(std::size_t)>* job_ = nullptr;
-  std::size_t n_ = 0, busy_ = 0;
-  std::atomic<std::size_t> next_{0};
-  std::exception_ptr error_;
-};
 
 std::unique_ptr<CellTree> TreeOf(const RayBatch& rays) {
   CellTreeBuilder builder;
@@ -313,7 +229,7 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
   std::vector<std::size_t> which(configs.size());
   std::map<std::string, std::size_t> seen;
   for (std::size_t i = 0; i < configs.size(); ++i) {
-    CheckReplayable(configs[i]);
+    if (!options.checked) CheckReplay(configs[i], reader.header().cell_count());
     ReplayConfig c = CanonicalConfig(configs[i]);
     const auto it = seen.emplace(ToToml(c), distinct.size()).first;
     if (it->second == distinct.size()) distinct.push_back(std::move(c));

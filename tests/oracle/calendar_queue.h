@@ -32,7 +32,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/event_queue.h"
+#include "tests/oracle/event_queue.h"
 
 namespace raycell {
 

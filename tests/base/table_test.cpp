@@ -1,4 +1,4 @@
-#include "engine/stats.h"
+#include "base/table.h"
 
 #include <gtest/gtest.h>
 

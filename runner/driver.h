@@ -122,6 +122,9 @@ struct ReplayFramesOptions {
   ReplayObserver* observer = nullptr;
   // Frames of more visits replay per segment from the Compact form (see FrameWalker).
   std::uint64_t compact_above_visits = kCompactAboveVisits;
+  // The caller ran CheckReplay on every configuration for this trace (a sweep, for all its
+  // combinations before its first block); else ReplayFrames runs it, once per configuration.
+  bool checked = false;
 };
 
 struct ReplayFramesStats {
@@ -139,7 +142,8 @@ struct ReplayFramesStats {
 // each frame, calls on_frame(frame, results) with the result of every configuration, in
 // the order of `configs`, on the calling thread; it returns false to stop there. The
 // results are those of ReplayTrace for each configuration alone, whatever `jobs`.
-// InputError (CheckReplayable) before any work.
+// InputError (CheckReplay, LevelUnitsOf) before any frame is read: the one check of each
+// configuration against the trace.
 using FrameResults = std::function<bool(const LoadedFrame&, const std::vector<ReplayResult>&)>;
 ReplayFramesStats ReplayFrames(const TraceReader& reader,
                                const std::vector<std::size_t>& frame_indices,

@@ -1,8 +1,8 @@
-// The replay's timeline (replay/timeline.h) against the replay's results: valid JSON; each
+// The replay's timeline (runner/timeline.h) against the replay's results: valid JSON; each
 // processor's track tiled without gaps or overlaps, its slices adding up exactly to the
 // reported work, stall and idle; fetches, transfers, bytes and frames as reported; the results
 // the same with and without a timeline.
-#include "replay/timeline.h"
+#include "runner/timeline.h"
 
 #include <gtest/gtest.h>
 
@@ -14,8 +14,8 @@
 #include "graph/cell_tree.h"
 #include "replay/config.h"
 #include "replay/replayer.h"
-#include "replay/result_table.h"
 #include "replay/work.h"
+#include "runner/result_table.h"
 #include "scheduling/scheduler.h"
 #include "tests/graph/test_trees.h"
 #include "tests/replay/random_frame.h"

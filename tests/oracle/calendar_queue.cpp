@@ -1,4 +1,4 @@
-#include "engine/calendar_queue.h"
+#include "tests/oracle/calendar_queue.h"
 
 #include <algorithm>
 

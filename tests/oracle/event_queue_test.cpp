@@ -1,4 +1,4 @@
-#include "engine/event_queue.h"
+#include "tests/oracle/event_queue.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "engine/calendar_queue.h"
+#include "tests/oracle/calendar_queue.h"
 
 namespace raycell {
 namespace {

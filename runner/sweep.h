@@ -15,7 +15,7 @@
 //   0,maxwork,1,...
 //
 // Values are totals over the selected frames, as `raycell replay` prints them
-// (replay/result_table.h); `bound` is empty where it does not hold. Rows are written in index
+// (runner/result_table.h); `bound` is empty where it does not hold. Rows are written in index
 // order, so the file is byte-identical for any --jobs.
 //
 // Decode once, replay many: the shard's combinations are taken in blocks of up to
@@ -89,9 +89,9 @@ std::vector<std::string> CombinationValues(const std::vector<Vary>& varies, std:
 // `base` with combination `index` applied (InputError from ApplyOverride).
 ReplayConfig CombinationConfig(const ReplayConfig& base, const std::vector<Vary>& varies,
                                std::size_t index);
-// Applies every value alone, then every combination, to `base`, so that a bad --vary fails
-// before any work: InputError naming the option, key and value. Also rejects a key varied
-// twice.
+// Applies every value alone to `base`, so that a bad --vary fails before the trace is opened:
+// InputError naming the option, key and value. Also rejects a key varied twice. What the
+// combinations need of the trace (CheckReplay, the levels' cells) RunSweep checks.
 void ValidateVaries(const ReplayConfig& base, const std::vector<Vary>& varies);
 
 struct SweepSpec {
@@ -138,14 +138,15 @@ struct SweepOutcome {
 std::string SweepComment(const SweepSpec& spec);
 std::string SweepHeader(const std::vector<Vary>& varies);
 // One row (with '\n'): index, the combination's values (one per Vary), the totals' columns
-// (replay/result_table.h, kSweepColumns).
+// (runner/result_table.h, kSweepColumns).
 std::string SweepRow(std::size_t index, const std::vector<Vary>& varies,
                      const std::vector<std::string>& values, const ReplayResult& total);
 // The combination indices `shard` owns, increasing.
 std::vector<std::size_t> ShardIndices(std::size_t combinations, const Shard& shard);
 
 // Runs the sweep into `out` (via out + ".partial" and out + ".checkpoint", resumed when
-// present). Validates the varies and checks every combination replayable first.
+// present). Validates the varies, then checks every combination against the trace once
+// (CheckReplay, LevelUnitsOf), before any frame is read; the replays do not check again.
 // InputError on bad input or a .partial or .checkpoint from another sweep.
 SweepOutcome RunSweep(const TraceReader& reader, const SweepSpec& spec, const std::string& out,
                       const SweepOptions& options = {});
