@@ -54,4 +54,40 @@ LevelCells CoarserLevelCells(const TraceReader& reader, const std::string& cells
   return out;
 }
 
+MemoryUnits LevelUnitsOf(const ReplayConfig& config, const TraceReader& reader) {
+  MemoryUnits units(config.levels.size());
+  bool any = false;
+  for (std::size_t i = 0; i < config.levels.size(); ++i) {
+    const LevelConfig& level = config.levels[i];
+    if (level.cells.empty()) continue;
+    LevelCells coarse = CoarserLevelCells(reader, level.cells, "level." + level.name + ".cells");
+    units[i].unit_of_cell = std::move(coarse.of_cell);
+    units[i].bytes = std::move(coarse.bytes);
+    any = true;
+  }
+  // Each level's units lie in one unit of the level below it (a fetch that misses brings the
+  // missing level's unit from the one below, which must hold all of it).
+  const std::uint32_t cells = std::uint32_t(reader.header().cell_count());
+  const auto unit = [&](std::size_t i, std::uint32_t c) {
+    return units[i].identity() ? c : units[i].unit_of_cell[c].value();
+  };
+  for (std::size_t i = 2; any && i < config.levels.size(); ++i) {
+    std::vector<std::uint32_t> below(UnitCount(&units, i - 1, cells), UINT32_MAX);
+    for (std::uint32_t c = 0; c < cells; ++c) {
+      std::uint32_t& b = below[unit(i - 1, c)];
+      if (b != UINT32_MAX && b != unit(i, c)) {
+        const LevelConfig &above = config.levels[i - 1], &level = config.levels[i];
+        throw InputError("level." + level.name + ".cells: '" +
+                         (level.cells.empty() ? "same" : level.cells) + "' splits cell " +
+                         std::to_string(unit(i - 1, c)) + " of level." + above.name + ".cells '" +
+                         above.cells +
+                         "': a level's cells must be unions of the cells of the level above it");
+      }
+      b = unit(i, c);
+    }
+  }
+  if (!any) units.clear();
+  return units;
+}
+
 }  // namespace raycell

@@ -1,5 +1,5 @@
-// The cells a memory level of coarser cells holds (level.NAME.cells; docs/design.md §2 "Levels
-// of coarser cells"), made from a regroupable capture's stored fine grid
+// The cells a memory level of coarser cells holds, and every level's units (level.NAME.cells;
+// docs/design.md §2 "Levels of coarser cells"), made from a regroupable capture's stored fine grid
 // (TraceReader::SubdivideFineGrid): the units of replay/memory.h LevelUnits.
 #pragma once
 
@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "replay/config.h"
+#include "replay/memory.h"
 #include "traces/cell_id.h"
 #include "traces/trace_reader.h"
 
@@ -29,5 +31,12 @@ struct LevelCells {
 // coarse cell.
 LevelCells CoarserLevelCells(const TraceReader& reader, const std::string& cells,
                              const std::string& what);
+
+// What each level of `config` stores and moves on `reader`'s cells (replay/memory.h
+// LevelUnits): empty when every level holds the replay's cells. InputError naming the key
+// (level.NAME.cells) when a level's cells cannot be made (level_units.h CoarserLevelCells: not a
+// regroupable capture, cells that are not unions of the replay's) or do not nest in the cells
+// of the level below it.
+MemoryUnits LevelUnitsOf(const ReplayConfig& config, const TraceReader& reader);
 
 }  // namespace raycell

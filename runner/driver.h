@@ -15,6 +15,7 @@
 
 #include "graph/cell_tree.h"
 #include "replay/config.h"
+#include "replay/level_units.h"
 #include "replay/replayer.h"
 #include "replay/work.h"
 #include "traces/trace_reader.h"
@@ -96,13 +97,6 @@ ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& head
                                const ReplayConfig& config, Scheduler& scheduler,
                                std::uint32_t sample_every = 1, ReplayObserver* observer = nullptr,
                                MemoryState* memory = nullptr, const MemoryUnits* units = nullptr);
-
-// What each level of `config` stores and moves on `reader`'s cells (replay/memory.h
-// LevelUnits): empty when every level holds the replay's cells. InputError naming the key
-// (level.NAME.cells) when a level's cells cannot be made (level_units.h CoarserLevelCells: not a
-// regroupable capture, cells that are not unions of the replay's) or do not nest in the cells
-// of the level below it.
-MemoryUnits LevelUnitsOf(const ReplayConfig& config, const TraceReader& reader);
 
 // What a frame's result cannot depend on, removed: granularity resolved (EffectiveGranularity),
 // the seed unless the scheduler uses it (SchedulerEntry::seeded: random and the planners),
