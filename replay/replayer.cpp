@@ -571,25 +571,13 @@ bool NeedsFuture(const ReplayConfig& config) {
 template <typename Units, typename W, typename MakeWatch>
 ReplayResult Replay(const WorkGraph& work, Units graph_units,
                     const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
-                    Scheduler& scheduler, const FrameInfo& frame, std::uint64_t bound,
+                    Scheduler& scheduler, const FrameTrees& frame, std::uint64_t bound,
                     ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units,
                     MakeWatch make_watch) {
   static const MemoryState kEmpty;
   const MemoryState& start = memory ? *memory : kEmpty;
   const std::vector<double> fetch_samples = FetchSamples(config, footprints);
-  FrameInfo info = frame;
-  info.fetch_samples = &fetch_samples;
-  info.processors = config.processors.count;
-  // A scheduler that watches the frame unfold learns it only from what is queued.
-  if (scheduler.Watches()) info.current = nullptr;
-  if (units != nullptr) {
-    for (const LevelUnits& level : *units) {
-      if (!level.identity()) {
-        info.board_cell_of = &level.unit_of_cell;
-        break;
-      }
-    }
-  }
+  const FrameInfo info = MakeFrameInfo(frame, config, fetch_samples, units, scheduler);
   const bool min = NeedsFuture(config);
   const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
   MemoryHierarchy::Requests futures;
@@ -627,7 +615,7 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
 template <typename Units>
 ReplayResult Replay(const WorkGraph& work, Units graph_units,
                     const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
-                    Scheduler& scheduler, const FrameInfo& frame, std::uint64_t bound,
+                    Scheduler& scheduler, const FrameTrees& frame, std::uint64_t bound,
                     ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units) {
   if (!scheduler.Watches()) {
     return Replay<Units, NoWatch>(work, graph_units, footprints, config, scheduler, frame, bound,
@@ -639,6 +627,29 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
 }
 
 }  // namespace
+
+FrameInfo MakeFrameInfo(const FrameTrees& frame, const ReplayConfig& config,
+                        const std::vector<double>& fetch_samples, const MemoryUnits* units,
+                        const Scheduler& scheduler) {
+  FrameInfo info;
+  info.frame_index = frame.frame_index;
+  // A scheduler that watches the frame unfold learns it only from what is queued.
+  info.current = scheduler.Watches() ? nullptr : frame.current;
+  info.previous = frame.previous;
+  info.cells = frame.cells;
+  info.before_previous = frame.before_previous;
+  info.fetch_samples = &fetch_samples;
+  info.processors = config.processors.count;
+  if (units != nullptr) {
+    for (const LevelUnits& level : *units) {
+      if (!level.identity()) {
+        info.board_cell_of = &level.unit_of_cell;
+        break;
+      }
+    }
+  }
+  return info;
+}
 
 std::vector<double> FetchSamples(const ReplayConfig& config,
                                  const std::vector<std::uint64_t>& footprints) {
@@ -685,7 +696,7 @@ void CheckReplay(const ReplayConfig& config, std::uint64_t cells) {
 }
 
 ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
-                         const ReplayConfig& config, Scheduler& scheduler, const FrameInfo& frame,
+                         const ReplayConfig& config, Scheduler& scheduler, const FrameTrees& frame,
                          std::uint64_t bound, ReplayObserver* observer, MemoryState* memory,
                          const MemoryUnits* units) {
   RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));

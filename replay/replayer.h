@@ -13,6 +13,7 @@
 // own loop: a batch per fetch.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -49,9 +50,28 @@ struct ReplayResult {
   bool min_converged = true;  // MIN's last run made exactly the requests it was told
 };
 
-// Replays one frame; calls scheduler.BeginFrame(frame) itself. `config` has passed
-// CheckReplay for `work.cells` cells. `bound` is the frame's maxGen
-// bound (reported only where it holds).
+// What the caller knows of a frame: its index and trees (the leading fields of FrameInfo, in
+// the same order). The replay makes the FrameInfo the scheduler is told from it (MakeFrameInfo).
+struct FrameTrees {
+  std::size_t frame_index = 0;
+  const CellTree* current = nullptr;   // this frame's tree
+  const CellTree* previous = nullptr;  // the previous frame's tree; null for frame 0
+  std::uint32_t cells = 0;             // cells of the grid; every tree's cell_count() <= cells
+  const CellTree* before_previous = nullptr;  // frame i-2's tree, for history 2; else null
+};
+
+// The FrameInfo a replay tells `scheduler` (BeginFrame), made here and nowhere else: `frame`'s
+// index and trees, `fetch_samples` (FetchSamples; must outlive the result), the processor
+// count, no current tree for a scheduler that watches the frame unfold (it learns the frame
+// only from what is queued), and the board's cells from the nearest level of `units` that
+// holds coarser cells (null: none).
+FrameInfo MakeFrameInfo(const FrameTrees& frame, const ReplayConfig& config,
+                        const std::vector<double>& fetch_samples, const MemoryUnits* units,
+                        const Scheduler& scheduler);
+
+// Replays one frame; calls scheduler.BeginFrame(MakeFrameInfo(frame, ...)) itself. `config` has
+// passed CheckReplay for `work.cells` cells. `bound` is the frame's maxGen bound (reported only
+// where it holds).
 //
 // Belady's MIN needs each level's future requests. A level with MIN first runs LRU to learn
 // them; the frame is then replayed with MIN on those requests, again on the requests that run
@@ -71,7 +91,7 @@ struct ReplayResult {
 // (level.NAME.cells; replay/memory.h LevelUnits), as LevelUnitsOf makes them; the scheduler is
 // told the nearest such level's map (FrameInfo::board_cell_of).
 ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
-                         const ReplayConfig& config, Scheduler& scheduler, const FrameInfo& frame,
+                         const ReplayConfig& config, Scheduler& scheduler, const FrameTrees& frame,
                          std::uint64_t bound, ReplayObserver* observer = nullptr,
                          MemoryState* memory = nullptr, const MemoryUnits* units = nullptr);
 

@@ -161,8 +161,8 @@ ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& head
   const bool per_ray = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay;
   const WorkGraph* work = per_ray ? frame.segments.get() : frame.nodes.get();
   RAYCELL_CHECK(work != nullptr);  // the walker was asked for this granularity
-  const FrameInfo info{frame.index, frame.tree.get(), frame.previous.get(), header.cell_count(),
-                       frame.before_previous.get()};
+  const FrameTrees info{frame.index, frame.tree.get(), frame.previous.get(), header.cell_count(),
+                        frame.before_previous.get()};
   ReplayResult r = ReplayFrame(*work, frame.footprints ? *frame.footprints : header.footprints,
                                config, scheduler, info, frame.bound, observer, memory, units);
   ScaleBack(r, sample_every, config.processors.count);

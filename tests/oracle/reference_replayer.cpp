@@ -283,7 +283,7 @@ bool UsesMin(const ReplayConfig& config) {
 ReplayResult ReferenceReplayFrame(const WorkGraph& work,
                                   const std::vector<std::uint64_t>& footprints,
                                   const ReplayConfig& config, Scheduler& scheduler,
-                                  const FrameInfo& frame, std::uint64_t bound) {
+                                  const FrameTrees& frame, std::uint64_t bound) {
   RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
   CheckReplayable(config);
   const bool min = UsesMin(config);
@@ -291,10 +291,8 @@ ReplayResult ReferenceReplayFrame(const WorkGraph& work,
   MemoryHierarchy::Requests futures;
   // What the core tells the schedulers a fetch costs (not what this reference checks).
   const std::vector<double> fetch_samples = FetchSamples(config, footprints);
-  FrameInfo info = frame;
-  info.fetch_samples = &fetch_samples;
-  info.processors = config.processors.count;
-  if (scheduler.Watches()) info.current = nullptr;  // it sees the frame only as it is queued
+  // What the core tells the scheduler (MakeFrameInfo; a watching one sees no current tree).
+  const FrameInfo info = MakeFrameInfo(frame, config, fetch_samples, nullptr, scheduler);
   for (std::uint32_t pass = 1;; ++pass) {
     scheduler.BeginFrame(info);
     Board board(work, footprints, config, scheduler, futures);

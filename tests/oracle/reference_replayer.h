@@ -11,6 +11,6 @@ namespace raycell {
 ReplayResult ReferenceReplayFrame(const WorkGraph& work,
                                   const std::vector<std::uint64_t>& footprints,
                                   const ReplayConfig& config, Scheduler& scheduler,
-                                  const FrameInfo& frame, std::uint64_t bound);
+                                  const FrameTrees& frame, std::uint64_t bound);
 
 }  // namespace raycell

@@ -98,7 +98,7 @@ TEST(ReplayCore, EqualsTheReferenceOnRandomFramesAndConfigs) {
     std::vector<std::uint64_t> footprints(cells);
     for (auto& f : footprints) f = 1 + rng() % 200'000;
     const ReplayConfig base = RandomConfig(rng, footprints);
-    const FrameInfo info{std::size_t(trial % 3), &tree, trial % 2 ? &previous : nullptr, cells};
+    const FrameTrees info{std::size_t(trial % 3), &tree, trial % 2 ? &previous : nullptr, cells};
     for (const char* name : kSchedulers) {
       ReplayConfig config = base;
       config.scheduler = &SchedulerByName(name, "test");
@@ -135,7 +135,7 @@ TEST(ReplayCore, EqualsTheReferenceWhenEventsTie) {
       l.bandwidth_below = ParseBandwidth("unlimited", "test");
       l.latency_below = SimTime::Zero();
     }
-    const FrameInfo info{0, &tree, nullptr, cells};
+    const FrameTrees info{0, &tree, nullptr, cells};
     for (const char* name : kSchedulers) {
       config.scheduler = &SchedulerByName(name, "test");
       const WorkGraph w = RaySegmentWork(rays, cells);
@@ -164,7 +164,7 @@ TEST(ReplayCore, EqualsTheReferenceOnTheColumns) {
                       : NodeWork(tree, cells);
     ASSERT_FALSE(w.packed.empty());
     w.packed.clear();
-    const FrameInfo info{0, &tree, nullptr, cells};
+    const FrameTrees info{0, &tree, nullptr, cells};
     auto a = MakeScheduler(*config.scheduler, config.seed);
     auto b = MakeScheduler(*config.scheduler, config.seed);
     ASSERT_EQ(Describe(ReplayFrame(w, footprints, config, *a, info, Bound(tree))),
@@ -225,7 +225,7 @@ TEST(ReplayCore, EqualsTheReferenceOnTheCompactForm) {
     const WorkGraph compact = testing::CompactWork(rng, rays, cells, 1 + rng() % 20);
     ASSERT_TRUE(compact.packed.empty() && compact.cell.empty());
     ASSERT_EQ(compact.size(), columns.size());
-    const FrameInfo info{0, &tree, nullptr, cells};
+    const FrameTrees info{0, &tree, nullptr, cells};
     auto a = MakeScheduler(*config.scheduler, config.seed);
     auto b = MakeScheduler(*config.scheduler, config.seed);
     ASSERT_EQ(Describe(ReplayFrame(compact, footprints, config, *a, info, Bound(tree))),
@@ -244,7 +244,7 @@ TEST(ReplayCore, EqualsTheReferenceOnLongWorklists) {
   ASSERT_GT(rays.size(), 250'000u);  // 283,850 rays: batches of more than 2^16 units
   const CellTree tree = testing::TreeOf(rays);
   const std::vector<std::uint64_t> footprints(cells, 4096);
-  const FrameInfo info{0, &tree, nullptr, cells};
+  const FrameTrees info{0, &tree, nullptr, cells};
   const WorkGraph packed = RaySegmentWork(rays, cells);
   const WorkGraph compact = testing::CompactWork(rng, rays, cells, 70'000);
   for (std::uint32_t processors : {1u, 3u}) {
@@ -287,7 +287,7 @@ TEST(ReplayCore, UnitsBeyondThirtyTwoBitsAreReadFromTheColumns) {
   const CellTree big = testing::TreeOf(two);
   const WorkGraph wide = NodeWork(big, 1);
   EXPECT_TRUE(wide.packed.empty());
-  const FrameInfo info{0, &big, nullptr, 1};
+  const FrameTrees info{0, &big, nullptr, 1};
   auto s = MakeScheduler("maxwork", 1);
   const ReplayResult r = ReplayFrame(wide, {4096}, DefaultConfig(), *s, info, Bound(big));
   EXPECT_EQ(r.samples, 8'000'000'000u);

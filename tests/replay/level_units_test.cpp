@@ -145,7 +145,7 @@ TEST(LevelUnits, TheTimeBoundNeverExceedsAReplaysTime) {
       auto s = MakeScheduler(entry, 1 + trial);
       MemoryState memory;
       for (int frame = 0; frame < 2; ++frame) {  // cold, then warm from the first
-        const FrameInfo info{std::size_t(frame), &tree, &tree, cells, &tree};
+        const FrameTrees info{std::size_t(frame), &tree, &tree, cells, &tree};
         const ReplayResult r =
             ReplayFrame(w, footprints, config, *s, info, Bound(tree), nullptr, &memory, &units);
         ASSERT_LE(r.time_bound, r.time)

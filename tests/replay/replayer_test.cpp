@@ -37,7 +37,7 @@ Outcome Replay(const RayBatch& rays, const std::string& scheduler, ReplayConfig 
   CheckReplay(config, cells);  // as the runner does when it opens a trace
   const CellTree tree = TreeOf(rays);
   auto s = MakeScheduler(scheduler, config.seed);
-  const FrameInfo info{previous ? 1u : 0u, &tree, previous, cells};
+  const FrameTrees info{previous ? 1u : 0u, &tree, previous, cells};
   const WorkGraph w = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay
                           ? RaySegmentWork(rays, cells)
                           : NodeWork(tree, cells);

@@ -165,7 +165,7 @@ TEST(TimeBound, BusyBindsWhenFetchesStallTheProcessors) {
   const WorkGraph w = RaySegmentWork(f, 4);
   EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(200, 100, 100, 300));
   const CellTree tree = testing::TreeOf(f);
-  const FrameInfo info{0, &tree, nullptr, 4};
+  const FrameTrees info{0, &tree, nullptr, 4};
   auto s = MakeScheduler("maxwork", 1);
   const ReplayResult r = ReplayFrame(w, footprints, config, *s, info, 0);
   EXPECT_EQ(r.time, Ps(300));
@@ -185,7 +185,7 @@ TEST(TimeBound, PrefetchOverlapsFetchesWithWork) {
   const std::vector<std::uint64_t> footprints(2, 4096);
   const WorkGraph w = RaySegmentWork(f, 2);
   const CellTree tree = testing::TreeOf(f);
-  const FrameInfo info{0, &tree, nullptr, 2};
+  const FrameTrees info{0, &tree, nullptr, 2};
   auto s = MakeScheduler("maxwork", 1);
   EXPECT_EQ(TimeLowerBoundTerms(w, footprints, config).ToString(), Terms(200, 200, 100, 400));
   EXPECT_EQ(ReplayFrame(w, footprints, config, *s, info, 0).time, Ps(400));
@@ -248,7 +248,7 @@ TEST(TimeBound, APrefetchFromASharedLevelWaitsForTheCellToArrive) {
   const std::vector<std::uint64_t> footprints(3, 4096);
   const WorkGraph w = RaySegmentWork(f, 3);
   const CellTree tree = testing::TreeOf(f);
-  const FrameInfo info{0, &tree, nullptr, 3};
+  const FrameTrees info{0, &tree, nullptr, 3};
   auto s = MakeScheduler("maxwork", 1);
   const ReplayResult on = ReplayFrame(w, footprints, config, *s, info, 0);
   EXPECT_EQ(on.time, Ps(3020));
@@ -317,7 +317,7 @@ TEST(TimeBound, NeverAboveTheReplaysTimeUnderAnyScheduler) {
     const ReplayConfig base = RandomBoard(rng, processor_counts[trial % 5], footprints);
     prefetching += base.processors.prefetch;
     unlimited += base.levels[1].bandwidth_below.unlimited();
-    const FrameInfo info{1, &tree, &previous, cells, &previous};
+    const FrameTrees info{1, &tree, &previous, cells, &previous};
     const WorkGraph w = EffectiveGranularity(base) == ReplayConfig::Granularity::kRay
                             ? RaySegmentWork(rays, cells)
                             : NodeWork(tree, cells);

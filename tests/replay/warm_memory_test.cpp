@@ -40,11 +40,12 @@ ReplayResult SecondFrame(ReplayConfig config, const std::string& scheduler = "ma
   auto s = MakeScheduler(*config.scheduler, config.seed);
   const bool warm = config.memory.across_frames == kWarm;
   MemoryState memory;
-  const ReplayResult first = ReplayFrame(w, footprints, config, *s, FrameInfo{0, &tree, nullptr, 3},
-                                         Bound(tree), nullptr, warm ? &memory : nullptr);
+  const ReplayResult first =
+      ReplayFrame(w, footprints, config, *s, FrameTrees{0, &tree, nullptr, 3}, Bound(tree), nullptr,
+                  warm ? &memory : nullptr);
   EXPECT_EQ(first.fetches, scheduler == "maxwork" ? 4u : 3u);  // a cold start either way
-  return ReplayFrame(w, footprints, config, *s, FrameInfo{1, &tree, &tree, 3}, Bound(tree), nullptr,
-                     warm ? &memory : nullptr);
+  return ReplayFrame(w, footprints, config, *s, FrameTrees{1, &tree, &tree, 3}, Bound(tree),
+                     nullptr, warm ? &memory : nullptr);
 }
 
 // The board holds all three cells. Cold, frame 2 is frame 1 again: 4 cache fetches, 3 over

@@ -68,8 +68,8 @@ class DriverTest : public ::testing::Test {
                             : NodeWork(tree, h.cell_count());
     auto s = MakeScheduler(*config.scheduler, config.seed);
     const bool two = config.scheduler->history == 2 && i > 1;
-    const FrameInfo info{i, &tree, i > 0 ? &previous : nullptr, h.cell_count(),
-                         two ? &before : nullptr};
+    const FrameTrees info{i, &tree, i > 0 ? &previous : nullptr, h.cell_count(),
+                          two ? &before : nullptr};
     ReplayResult r = ReplayFrame(w, h.footprints, config, *s, info, Bound(tree), nullptr, memory);
     r.frame = reader_->frames()[i].frame;
     if (k > 1) {  // as ReplayTrace scales a sample back

@@ -81,7 +81,7 @@ Replayed Replay(const Frames& f, const ReplayConfig& config) {
   auto watched = MakeScheduler(*config.scheduler, config.seed);
   auto plain = MakeScheduler(*config.scheduler, config.seed);
   for (std::size_t i = 0; i < f.rays.size(); ++i) {
-    const FrameInfo info{i, &f.trees[i], i > 0 ? &f.trees[i - 1] : nullptr, f.cells};
+    const FrameTrees info{i, &f.trees[i], i > 0 ? &f.trees[i - 1] : nullptr, f.cells};
     const WorkGraph w = WorkOf(f, i, config);
     for (std::uint64_t q : w.queued_rays) out.queued_rays += q;
     const std::uint64_t bound = Bound(f.trees[i]);
@@ -361,7 +361,7 @@ TEST(Timeline, RefusesToGrowPastItsLimit) {
                             {"t.rct", FrameNumbers(f.rays.size()), limit, "--timeline x.json"});
       auto s = MakeScheduler(*c.scheduler, c.seed);
       for (std::size_t i = 0; i < f.rays.size(); ++i) {
-        const FrameInfo info{i, &f.trees[i], i > 0 ? &f.trees[i - 1] : nullptr, f.cells};
+        const FrameTrees info{i, &f.trees[i], i > 0 ? &f.trees[i - 1] : nullptr, f.cells};
         ReplayFrame(WorkOf(f, i, c), f.footprints, c, *s, info, 0, &writer);
       }
       writer.Finish();
@@ -378,7 +378,7 @@ TEST(Timeline, RefusesToGrowPastItsLimit) {
                         {"t.rct", FrameNumbers(f.rays.size()), whole.size(), "--timeline"});
   auto s = MakeScheduler(*c.scheduler, c.seed);
   for (std::size_t i = 0; i < f.rays.size(); ++i) {
-    const FrameInfo info{i, &f.trees[i], i > 0 ? &f.trees[i - 1] : nullptr, f.cells};
+    const FrameTrees info{i, &f.trees[i], i > 0 ? &f.trees[i - 1] : nullptr, f.cells};
     ReplayFrame(WorkOf(f, i, c), f.footprints, c, *s, info, Bound(f.trees[i]), &writer);
   }
   writer.Finish();

@@ -29,6 +29,8 @@ class Logged : public Scheduler {
   std::vector<std::string> log;
 
   void BeginFrame(const FrameInfo& frame) override {
+    // The replay offers every frame's tree (RunLogged); one that watches must not be told it.
+    if (s_->Watches()) EXPECT_EQ(frame.current, nullptr) << "a watching scheduler got the tree";
     log.push_back("in begin");
     s_->BeginFrame(frame);
   }
@@ -78,13 +80,13 @@ RayBatch WithOneMoreVisit(const RayBatch& rays, std::size_t r, std::uint32_t cel
 }
 
 std::vector<std::string> RunLogged(const RayBatch& rays, const ReplayConfig& config,
-                                   const FrameInfo& base, std::uint32_t cells) {
+                                   const FrameTrees& base, std::uint32_t cells) {
   const CellTree tree = testing::TreeOf(rays);
   const WorkGraph w = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay
                           ? RaySegmentWork(rays, cells)
                           : NodeWork(tree, cells);
   Logged s(MakeScheduler(*config.scheduler, config.seed));
-  FrameInfo info = base;
+  FrameTrees info = base;
   info.current = &tree;  // offered, as to every scheduler; a watching one must not get it
   const std::vector<std::uint64_t> footprints(cells, 50'000);
   ReplayFrame(w, footprints, config, s, info, Bound(tree));
@@ -111,9 +113,9 @@ TEST(Adaptive, DecidesOnlyOnWhatTheFrameHasShown) {
         &SchedulerByName(critical ? "balanced-critical" : "celltree-adaptive", "test");
     config.processors.count = critical ? 2 + rng() % 7 : 1 + rng() % 4;
     if (trial % 2 == 1) config.granularity = ReplayConfig::Granularity::kNode;
-    FrameInfo info{2, nullptr, &previous, cells};
+    FrameTrees info{2, nullptr, &previous, cells};
     if (trial % 3 != 0) info.before_previous = &before;
-    if (trial % 8 == 4) info = FrameInfo{0, nullptr, nullptr, cells};  // frame 0: no history
+    if (trial % 8 == 4) info = FrameTrees{0, nullptr, nullptr, cells};  // frame 0: no history
     const std::vector<std::string> la = RunLogged(a, config, info, cells),
                                    lb = RunLogged(b, config, info, cells);
     std::size_t i = 0;
@@ -184,7 +186,7 @@ TEST(Adaptive, AFrameThatRepeatsItsPredecessorCostsNoMoreThanItsBestSchedule) {
                             : NodeWork(tree, cells);
     const std::vector<std::uint64_t> footprints(cells, 50'000);
     // The predecessor is the frame itself; the one before it too, or none.
-    const FrameInfo info{2, &tree, &tree, cells, trial % 3 == 0 ? nullptr : &tree};
+    const FrameTrees info{2, &tree, &tree, cells, trial % 3 == 0 ? nullptr : &tree};
     config.scheduler = &SchedulerByName("celltree-best", "test");
     auto best = MakeScheduler(*config.scheduler, config.seed);
     const ReplayResult follow = ReplayFrame(w, footprints, config, *best, info, Bound(tree));
@@ -244,7 +246,7 @@ TEST(Adaptive, PlansAgainWhenThePredictionRunsOutAndIsDeterministic) {
     config.processors.count = 1 + rng() % 3;
     const WorkGraph w = RaySegmentWork(rays, cells);
     const std::vector<std::uint64_t> footprints(cells, 50'000);
-    const FrameInfo info{1, &tree, &previous, cells};
+    const FrameTrees info{1, &tree, &previous, cells};
     AdaptiveScheduler s1(config.seed), s2(config.seed);
     const ReplayResult a = ReplayFrame(w, footprints, config, s1, info, Bound(tree));
     const ReplayResult b = ReplayFrame(w, footprints, config, s2, info, Bound(tree));

@@ -71,7 +71,7 @@ TEST(Balance, EveryRaySegmentAndSampleOnceForOneToSixteenProcessors) {
                                 ? RaySegmentWork(rays, cells)
                                 : NodeWork(tree, cells);
         auto s = MakeScheduler(*config.scheduler, config.seed);
-        const FrameInfo info{1, &tree, trial % 3 == 0 ? nullptr : &previous, cells};
+        const FrameTrees info{1, &tree, trial % 3 == 0 ? nullptr : &previous, cells};
         const ReplayResult r = ReplayFrame(w, footprints, config, *s, info, Bound(tree));
         EXPECT_EQ(r.rays, expected.rays) << name << " P" << p << " trial " << trial;
         EXPECT_EQ(r.segments, expected.segments) << name << " P" << p;
@@ -101,8 +101,8 @@ TEST(Balance, OneProcessorFollowsThePlanAsCellTreeBest) {
     config.granularity =
         trial % 2 ? ReplayConfig::Granularity::kRay : ReplayConfig::Granularity::kNode;
     const WorkGraph w = trial % 2 ? RaySegmentWork(rays, cells) : NodeWork(tree, cells);
-    const FrameInfo info{std::size_t(trial % 2), &tree, trial % 4 == 0 ? nullptr : &previous,
-                         cells};
+    const FrameTrees info{std::size_t(trial % 2), &tree, trial % 4 == 0 ? nullptr : &previous,
+                          cells};
     const auto replay = [&](const char* name) {
       config.scheduler = &SchedulerByName(name, "test");
       auto s = MakeScheduler(*config.scheduler, 1);
@@ -131,7 +131,7 @@ ReplayResult ReplayOnProcessors(const std::vector<testing::TestRay>& paths, std:
   config.levels[1].latency_below = SimTime::Zero();
   config.scheduler = &SchedulerByName(name, "test");
   auto s = MakeScheduler(*config.scheduler, 1);
-  return ReplayFrame(w, footprints, config, *s, FrameInfo{0, &tree, nullptr, cells}, Bound(tree));
+  return ReplayFrame(w, footprints, config, *s, FrameTrees{0, &tree, nullptr, cells}, Bound(tree));
 }
 
 // Two processors, per ray segment; 40 rays A B and one ray C, 2 us a visit; a fetch into a

@@ -123,7 +123,7 @@ int main(int argc, char** argv) {
       // (the frame's records stay warm in the caches), else the reference before each core.
       std::vector<double> ref_s(reps, 0.0), core_s(reps, 0.0);
       for (const Frame& f : loaded) {
-        const FrameInfo info{f.index, f.tree.get(), f.previous.get(), h.cell_count()};
+        const FrameTrees info{f.index, f.tree.get(), f.previous.get(), h.cell_count()};
         for (int r = 0; r < reps; ++r) {
           auto a = core_only ? nullptr : MakeScheduler(*c.config.scheduler, c.config.seed);
           auto b = MakeScheduler(*c.config.scheduler, c.config.seed);
