@@ -104,7 +104,8 @@ std::vector<FrameAnalysis> AnalyzeTrees(const std::vector<CellTree>& trees,
   ParallelFor(trees.size(), StudyThreads(), [&](std::size_t i) {
     out[i] = AnalyzeTree(trees[i], options);
     std::lock_guard<std::mutex> lock(mutex);
-    progress.Update(double(++done) / double(trees.size()),
+    ++done;
+    progress.Update(double(done) / double(trees.size()),
                     label + ": bracketing the optimum, " + std::to_string(done) + "/" +
                         std::to_string(trees.size()) + " frames");
   });

@@ -291,8 +291,17 @@ ReplayResult ReferenceReplayFrame(const WorkGraph& work,
   MemoryHierarchy::Requests futures;
   // What the core tells the schedulers a fetch costs (not what this reference checks).
   const std::vector<double> fetch_samples = FetchSamples(config, footprints);
-  // What the core tells the scheduler (MakeFrameInfo; a watching one sees no current tree).
-  const FrameInfo info = MakeFrameInfo(frame, config, fetch_samples, nullptr, scheduler);
+  // What the scheduler is told, made here from the design (§5: the frame's trees, the fetch
+  // costs, the processors; a scheduler that watches sees no current tree; every level holds
+  // the cells), not by the core's MakeFrameInfo: the oracle stays a second implementation.
+  FrameInfo info;
+  info.frame_index = frame.frame_index;
+  info.current = scheduler.Watches() ? nullptr : frame.current;
+  info.previous = frame.previous;
+  info.cells = frame.cells;
+  info.before_previous = frame.before_previous;
+  info.fetch_samples = &fetch_samples;
+  info.processors = config.processors.count;
   for (std::uint32_t pass = 1;; ++pass) {
     scheduler.BeginFrame(info);
     Board board(work, footprints, config, scheduler, futures);
