@@ -44,9 +44,19 @@ bool ParseSize(const std::string& s, std::size_t* out) {
 }
 
 std::string ConfigHash(const ReplayConfig& config) {
+  // The configuration, not its documentation: the printed TOML without its comment lines, so
+  // that a better help text changes no sweep file (nor stops a sweep from resuming).
   const std::string toml = ToToml(config);
+  std::string values;
+  for (std::size_t start = 0; start < toml.size();) {
+    std::size_t end = toml.find('\n', start);
+    end = end == std::string::npos ? toml.size() : end + 1;
+    const std::size_t first = toml.find_first_not_of(" \t", start);
+    if (first >= end || toml[first] != '#') values.append(toml, start, end - start);
+    start = end;
+  }
   Hash64 h;
-  h.AddBytes(toml.data(), toml.size());
+  h.AddBytes(values.data(), values.size());
   return FormatHex64(h.Finish());
 }
 

@@ -24,7 +24,7 @@ inline constexpr std::size_t kResultColumns = 13;
 
 // Whole decimal number, or false.
 bool ParseSize(const std::string& s, std::size_t* out);
-// The hash of the configuration's TOML, as the comment line gives it.
+// The hash of the configuration: its TOML without the comment lines (docs/schemas.md).
 std::string ConfigHash(const ReplayConfig& config);
 // The lines of `text` (which ends with '\n' or is empty), without their '\n'.
 std::vector<std::string> Lines(const std::string& text);

@@ -16,8 +16,10 @@
 
 #include "base/check.h"
 #include "base/format.h"
+#include "base/hash.h"
 #include "base/parse.h"
 #include "runner/driver.h"
+#include "runner/sweep_file.h"
 #include "tests/cell_list.h"
 #include "tests/test_util.h"
 #include "traces/trace_writer.h"
@@ -227,6 +229,27 @@ std::string* SweepTest::trace_path_ = nullptr;
 TraceReader* SweepTest::reader_ = nullptr;
 
 using testing::ErrorOf;
+
+// The sweep file's config_hash identifies the configuration, not its documentation: it is the
+// hash of --print-config's TOML with the comment lines left out (so a better help text changes
+// no sweep file and stops no sweep from resuming), and any value changes it.
+TEST(ConfigHash, HashesTheValuesAndNotTheComments) {
+  const ReplayConfig base = DefaultConfig();
+  const std::string toml = ToToml(base);
+  ASSERT_NE(toml.find("\n#"), std::string::npos) << "the printed configuration has comments";
+  std::string values;
+  std::istringstream lines(toml);
+  for (std::string line; std::getline(lines, line);) {
+    const std::size_t first = line.find_first_not_of(" \t");
+    if (first == std::string::npos || line[first] != '#') values += line + "\n";
+  }
+  Hash64 h;
+  h.AddBytes(values.data(), values.size());
+  EXPECT_EQ(sweep_file::ConfigHash(base), FormatHex64(h.Finish()));
+  ReplayConfig other = base;
+  other.seed = base.seed + 1;
+  EXPECT_NE(sweep_file::ConfigHash(other), sweep_file::ConfigHash(base));
+}
 
 TEST(Vary, ParsesValuesWithSpaces) {
   const Vary v = Vary::Parse("level.cache.capacity=1 cell,2 cells, 64MiB");

@@ -30,7 +30,9 @@ class Logged : public Scheduler {
 
   void BeginFrame(const FrameInfo& frame) override {
     // The replay offers every frame's tree (RunLogged); one that watches must not be told it.
-    if (s_->Watches()) EXPECT_EQ(frame.current, nullptr) << "a watching scheduler got the tree";
+    if (s_->Watches()) {
+      EXPECT_EQ(frame.current, nullptr) << "a watching scheduler got the tree";
+    }
     log.push_back("in begin");
     s_->BeginFrame(frame);
   }
