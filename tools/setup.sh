@@ -17,7 +17,7 @@ if [ "${1:-}" = "--tests" ]; then
 fi
 
 packages=(
-  build-essential cmake pkg-config
+  build-essential cmake ninja-build pkg-config
   libopenvdb-dev libboost-iostreams-dev libtbb-dev                   # scenes and rendering
   capnproto libcapnp-dev libzstd-dev                                 # the trace file
   libcli11-dev libpng-dev libboost-graph-dev libtomlplusplus-dev     # CLI, images, graphs, configs
@@ -50,7 +50,11 @@ start=$SECONDS
 # Unity builds compile each library in a few translation units: the first build of `raycell`
 # takes about 0.6 of the time (BENCHMARKS.md "First result and build time"). Tests and fuzz
 # targets are compiled one file each either way.
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DRAYCELL_UNITY_BUILD=ON "$@"
+# Ninja schedules the two cores better than Make here (BENCHMARKS.md "First result and build
+# time"); a build/ configured before keeps its generator.
+generator=(-G Ninja)
+if [ -f build/CMakeCache.txt ]; then generator=(); fi
+cmake -S . -B build "${generator[@]}" -DCMAKE_BUILD_TYPE=Release -DRAYCELL_UNITY_BUILD=ON "$@"
 if ((tests)); then
   cmake --build build -j"$(nproc)"
 else

@@ -1,14 +1,18 @@
 #!/usr/bin/env bash
 # GLPK is linked only where the lower bounds are (bounds/ and what stands on it): the link
 # lines of programs that use graph/, search/, scheduling/, replay/ or runner/ alone name no
-# GLPK, and that of a bounds/ test does (so that this test sees link lines at all). Reads the Makefile
-# generator's link.txt files; skipped (exit 77) under another generator.
+# GLPK, and that of a bounds/ test does (so that this test sees link lines at all). Reads the
+# Makefile generator's link.txt files, or Ninja's commands (`ninja -t commands`); skipped
+# (exit 77) under another generator.
 # Usage: tests/tools/glpk_link_test.sh BUILD_DIR
 set -euo pipefail
 build=${1:?usage: glpk_link_test.sh BUILD_DIR}
-line() { cat "$build/tests/$1/CMakeFiles/$2.dir/link.txt"; }
-if [ ! -f "$build/tests/bounds/CMakeFiles/lower_bound_test.dir/link.txt" ]; then
-  echo "glpk_link_test: no link.txt (not the Makefile generator): skipped"
+if [ -f "$build/tests/bounds/CMakeFiles/lower_bound_test.dir/link.txt" ]; then
+  line() { cat "$build/tests/$1/CMakeFiles/$2.dir/link.txt"; }
+elif [ -f "$build/build.ninja" ] && command -v ninja > /dev/null; then
+  line() { ninja -C "$build" -t commands "tests/$1/$2" | tail -n 1; }  # the last: its link
+else
+  echo "glpk_link_test: neither link.txt nor build.ninja (another generator): skipped"
   exit 77
 fi
 fail=0
