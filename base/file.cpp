@@ -3,8 +3,10 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <utility>
 
 #include "base/check.h"
 
@@ -55,9 +57,13 @@ void WriteFileAtomically(const std::string& path, const std::function<void(std::
 }
 
 bool ReadFile(const std::string& path, std::string* bytes) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return false;  // opens, but reads nothing
   std::ifstream in(path, std::ios::binary);
   if (!in) return false;
-  bytes->assign(std::istreambuf_iterator<char>(in), {});
+  std::string read(std::istreambuf_iterator<char>(in), {});
+  if (in.bad()) return false;
+  *bytes = std::move(read);
   return true;
 }
 

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <optional>
@@ -13,6 +12,7 @@
 #include <sstream>
 
 #include "base/check.h"
+#include "base/file.h"
 #include "base/parse.h"
 #include "replay/replacement.h"
 #include "scheduling/scheduler.h"
@@ -666,12 +666,9 @@ ReplayConfig LoadConfigFromString(std::string_view text, const std::string& sour
 }
 
 ReplayConfig LoadConfig(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open the replay configuration");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw InputError(path + ": cannot read the replay configuration");
-  return LoadConfigFromString(text.str(), path);
+  std::string text;  // through base/file.h: the model does no file I/O of its own
+  if (!ReadFile(path, &text)) throw InputError(path + ": cannot open the replay configuration");
+  return LoadConfigFromString(text, path);
 }
 
 std::vector<std::string> OverrideKeys(const ReplayConfig& config) {

@@ -267,6 +267,10 @@ TEST(LoadConfig, SyntaxErrorsAndMissingFiles) {
   EXPECT_EQ(e.rfind("replay.toml:1:", 0), 0u) << e;
   const std::string m = ErrorOf([] { LoadConfig("/nonexistent/replay.toml"); });
   EXPECT_EQ(m, "/nonexistent/replay.toml: cannot open the replay configuration");
+  // A folder opens as a stream that reads nothing: it must not pass for an empty (all
+  // defaults) configuration.
+  const std::string d = ErrorOf([] { LoadConfig("/tmp"); });
+  EXPECT_EQ(d, "/tmp: cannot open the replay configuration");
 }
 
 ReplayConfig Unusual() {
