@@ -145,7 +145,6 @@ Replayed ReplayKnob(const std::string& trace, const std::string& granularity,
   ApplyOverride(config, "granularity", granularity, "--granularity");
   ValidateConfig(config, "the configuration");
   const TraceReader reader = TraceReader::Open(trace);
-  CheckModelSize(config, reader.header().cell_count());
   std::vector<std::size_t> frames(reader.frames().size());
   std::iota(frames.begin(), frames.end(), std::size_t{0});
   const TraceReplay t = ReplayTrace(reader, frames, config, {}, sample);

@@ -87,7 +87,6 @@ SubdivisionStudy MeasureSubdivisions(const SubdivisionOptions& o) {
       ApplyOverride(config, "level.cache.capacity", std::to_string(study.cache_bytes) + "B",
                     "the subdivision section");
       ValidateConfig(config, "the subdivision section's configuration");
-      CheckModelSize(config, reader.header().cell_count());
       const ReplayResult t = ReplayTrace(reader, frames, config, {}, 1).total;
       SubdivisionRow row;
       row.spec = spec;
