@@ -133,14 +133,12 @@ void CheckTimeline(const Replayed& r, const ReplayConfig& config) {
 
   ReplayResult total;
   total.levels.resize(config.levels.size());
-  std::uint64_t prefetches = 0;
   for (const ReplayResult& f : r.results) {
     total.time = total.time + f.time;
     total.work = total.work + f.work;
     total.stall = total.stall + f.stall;
     total.idle = total.idle + f.idle;
     total.samples += f.samples;
-    prefetches += f.prefetches;
     total.peak_queued_rays = std::max(total.peak_queued_rays, f.peak_queued_rays);
     for (std::size_t i = 0; i < f.levels.size(); ++i) {
       total.levels[i].fetches += f.levels[i].fetches;
