@@ -21,9 +21,6 @@ constexpr SchedulerEntry kCellTreeAdaptiveEntry = [] {
   };
   e.history = 2;
   e.seeded = true;
-  e.predicts = true;
-  e.oracle = false;
-  e.studied = true;
   return e;
 }();
 

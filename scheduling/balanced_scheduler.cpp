@@ -19,10 +19,6 @@ constexpr SchedulerEntry kAffinityEntry = [] {
     return std::make_unique<BalancedScheduler>(
         kAffinityEntry, BalanceOptions{false, false, false, true, false, false}, seed);
   };
-  e.history = 1;
-  e.seeded = false;
-  e.predicts = true;
-  e.oracle = false;
   e.studied = false;
   return e;
 }();
@@ -38,10 +34,7 @@ constexpr SchedulerEntry kPartitionEntry = [] {
     return std::make_unique<BalancedScheduler>(
         kPartitionEntry, BalanceOptions{true, true, false, false, false, false}, seed);
   };
-  e.history = 1;
   e.seeded = true;
-  e.predicts = true;
-  e.oracle = false;
   e.studied = false;
   return e;
 }();
@@ -57,10 +50,6 @@ constexpr SchedulerEntry kStealEntry = [] {
     return std::make_unique<BalancedScheduler>(
         kStealEntry, BalanceOptions{false, true, true, false, false, false}, seed);
   };
-  e.history = 1;
-  e.seeded = false;
-  e.predicts = true;
-  e.oracle = false;
   e.studied = false;
   return e;
 }();
@@ -74,10 +63,7 @@ constexpr SchedulerEntry kPartitionStealEntry = [] {
     return std::make_unique<BalancedScheduler>(
         kPartitionStealEntry, BalanceOptions{true, true, true, false, false, false}, seed);
   };
-  e.history = 1;
   e.seeded = true;
-  e.predicts = true;
-  e.oracle = false;
   e.studied = false;
   return e;
 }();
@@ -93,10 +79,6 @@ constexpr SchedulerEntry kShareEntry = [] {
     return std::make_unique<BalancedScheduler>(
         kShareEntry, BalanceOptions{false, false, false, false, false, true}, seed);
   };
-  e.history = 1;
-  e.seeded = false;
-  e.predicts = true;
-  e.oracle = false;
   e.studied = false;
   return e;
 }();
@@ -114,10 +96,7 @@ constexpr SchedulerEntry kBalancedEntry = [] {
     return std::make_unique<BalancedScheduler>(
         kBalancedEntry, BalanceOptions{true, false, false, true, true, true}, seed);
   };
-  e.history = 1;
   e.seeded = true;
-  e.predicts = true;
-  e.oracle = false;
   e.studied = false;
   return e;
 }();
@@ -135,10 +114,7 @@ constexpr SchedulerEntry kBalancedCriticalEntry = [] {
     o.critical = true;
     return std::make_unique<BalancedScheduler>(kBalancedCriticalEntry, o, seed);
   };
-  e.history = 1;
   e.seeded = true;
-  e.predicts = true;
-  e.oracle = false;
   e.studied = false;
   return e;
 }();
@@ -157,8 +133,6 @@ constexpr SchedulerEntry kBalancedAdaptiveEntry = [] {
   };
   e.history = 2;
   e.seeded = true;
-  e.predicts = true;
-  e.oracle = false;
   e.studied = false;
   return e;
 }();

@@ -19,11 +19,8 @@ constexpr SchedulerEntry kBestEntry = [] {
   e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
     return std::make_unique<BestOracleScheduler>(seed);
   };
-  e.history = 1;
   e.seeded = true;
-  e.predicts = true;
   e.oracle = true;
-  e.studied = true;
   return e;
 }();
 
@@ -35,11 +32,7 @@ constexpr SchedulerEntry kCellTreeBestEntry = [] {
   e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
     return std::make_unique<CellTreeBestScheduler>(seed, false);
   };
-  e.history = 1;
   e.seeded = true;
-  e.predicts = true;
-  e.oracle = false;
-  e.studied = true;
   return e;
 }();
 
@@ -53,9 +46,6 @@ constexpr SchedulerEntry kCellTreeUnionEntry = [] {
   };
   e.history = 2;
   e.seeded = true;
-  e.predicts = true;
-  e.oracle = false;
-  e.studied = true;
   return e;
 }();
 
@@ -69,10 +59,7 @@ constexpr SchedulerEntry kCellTree2LevelBestEntry = [] {
   e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
     return std::make_unique<TwoLevelBestScheduler>(seed);
   };
-  e.history = 1;
   e.seeded = true;
-  e.predicts = true;
-  e.oracle = false;
   e.studied = false;
   return e;
 }();

@@ -12,11 +12,6 @@ constexpr SchedulerEntry kCellTreeEntry = [] {
   e.make = [](std::uint64_t) -> std::unique_ptr<Scheduler> {
     return std::make_unique<CellTreeScheduler>();
   };
-  e.history = 1;
-  e.seeded = false;
-  e.predicts = true;
-  e.oracle = false;
-  e.studied = true;
   return e;
 }();
 
@@ -30,10 +25,6 @@ constexpr SchedulerEntry kCellTree2LevelEntry = [] {
   e.make = [](std::uint64_t) -> std::unique_ptr<Scheduler> {
     return std::make_unique<TwoLevelScheduler>();
   };
-  e.history = 1;
-  e.seeded = false;
-  e.predicts = true;
-  e.oracle = false;
   e.studied = false;
   return e;
 }();

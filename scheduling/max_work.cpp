@@ -10,11 +10,6 @@ constexpr SchedulerEntry kMaxWorkEntry = [] {
   e.make = [](std::uint64_t) -> std::unique_ptr<Scheduler> {
     return std::make_unique<MaxWorkScheduler>();
   };
-  e.history = 1;
-  e.seeded = false;
-  e.predicts = true;
-  e.oracle = false;
-  e.studied = true;
   return e;
 }();
 

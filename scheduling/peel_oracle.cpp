@@ -13,11 +13,7 @@ constexpr SchedulerEntry kPeelEntry = [] {
   e.make = [](std::uint64_t) -> std::unique_ptr<Scheduler> {
     return std::make_unique<PeelOracleScheduler>();
   };
-  e.history = 1;
-  e.seeded = false;
-  e.predicts = true;
   e.oracle = true;
-  e.studied = true;
   return e;
 }();
 

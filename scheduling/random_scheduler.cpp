@@ -10,10 +10,8 @@ constexpr SchedulerEntry kRandomEntry = [] {
   e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
     return std::make_unique<RandomScheduler>(seed);
   };
-  e.history = 1;
   e.seeded = true;
   e.predicts = false;
-  e.oracle = false;
   e.studied = false;
   return e;
 }();

@@ -10,10 +10,6 @@ constexpr SchedulerEntry kRoundRobinEntry = [] {
   e.make = [](std::uint64_t) -> std::unique_ptr<Scheduler> {
     return std::make_unique<RoundRobinScheduler>();
   };
-  e.history = 1;
-  e.seeded = false;
-  e.predicts = true;
-  e.oracle = false;
   e.studied = false;
   return e;
 }();

@@ -75,10 +75,11 @@ std::vector<CellId> BoardCellOf(const FrameInfo& frame);
 class Scheduler;
 
 // A scheduler's registry entry (ChampSim-style, CONTRIBUTING.md): each scheduler's own file
-// defines its entry (or entries, one per name) with every field set by name, and declares it in
-// its header (kMaxWorkEntry in max_work.h, ...); SchedulerRegistry() lists them. The entry is
-// where a scheduler's name is written: Scheduler::Name() reads it. A name is looked up once
-// (SchedulerByName, where a configuration is read); configurations then hold the entry.
+// defines its entry (or entries, one per name) with each field it sets named (a flag left out keeps
+// the default stated here), and declares it in its header (kMaxWorkEntry in max_work.h, ...);
+// SchedulerRegistry() lists them. The entry is where a scheduler's name is written:
+// Scheduler::Name() reads it. A name is looked up once (SchedulerByName, where a configuration is
+// read); configurations then hold the entry.
 struct SchedulerEntry {
   const char* name = nullptr;     // as in configs and --scheduler: "maxwork"
   const char* meaning = nullptr;  // one line for --help and the configuration's comments
