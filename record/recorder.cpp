@@ -161,8 +161,11 @@ RecordSummary Record(const RecordOptions& o, std::ostream& log) {
   for (const CameraKey& key : header.cameras) CheckCamera(o.camera, key);
 
   // The default --out is out/capture.rct (outside every source folder): make its folder.
+  // A folder that cannot be made is left to TraceWriter::Create, whose InputError names the
+  // file (exit 2), rather than a filesystem_error here.
   const std::filesystem::path out_dir = std::filesystem::path(o.out).parent_path();
-  if (!out_dir.empty()) std::filesystem::create_directories(out_dir);
+  std::error_code ignored;
+  if (!out_dir.empty()) std::filesystem::create_directories(out_dir, ignored);
   TraceWriter writer = TraceWriter::Create(o.out, header);
   Progress progress(o.progress);
   RecordSummary sum;

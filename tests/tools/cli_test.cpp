@@ -368,6 +368,13 @@ TEST(Cli, RecordDefaultsWriteOnlyUnderOut) {
   EXPECT_GT(std::filesystem::file_size(cwd / "out" / "capture.rct"), 100u);
   EXPECT_TRUE(std::filesystem::exists(cwd / "out" / "images" / "frame_0000.png"));
   EXPECT_EQ(Raycell("trace verify out/capture.rct", true, cwd.string()).code, 0);
+  // --out's folder is made when missing; one that cannot be made (under a file) is bad input
+  // naming the file, exit 2, as any unwritable --out.
+  std::ofstream(cwd / "a_file") << "x";
+  const Result bad =
+      Raycell("record --res 8x8 --quiet --no-images --out a_file/x.rct", true, cwd.string());
+  EXPECT_EQ(bad.code, 2) << bad.out;
+  EXPECT_NE(bad.out.find("a_file/x.rct"), std::string::npos) << bad.out;
 }
 
 TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
