@@ -9,7 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "analysis/character.h"
 #include "base/check.h"
+#include "base/parallel.h"
 #include "base/parse.h"
 #include "replay/units.h"
 #include "tools/commands.h"
@@ -26,7 +28,7 @@ namespace {
 
 struct TraceArgs {
   std::string file, cells;
-  bool cameras = false;
+  bool cameras = false, no_character = false;
   std::optional<int> frame;
   std::string format = "jsonl";
 };
@@ -301,7 +303,10 @@ void AddTraceCommand(CLI::App& app) {
 
   auto info = std::make_shared<TraceArgs>();
   CLI::App* i = trace->add_subcommand(
-      "info", "Header, frames, rays by kind, visits, samples, bytes per visit and compression.");
+      "info",
+      "Header, frames, rays by kind, visits, samples, bytes per visit and compression, then the "
+      "capture's character: rays per pixel, the share of secondary rays, and the mean and "
+      "largest maxGen per cell (every frame's Cell Tree built once).");
   i->add_option("FILE", info->file, "trace file (.rct; an interrupted capture's .tmp reads too)")
       ->required();
   i->add_option("--cells", info->cells,
@@ -310,10 +315,17 @@ void AddTraceCommand(CLI::App& app) {
   i->add_flag("--cameras", info->cameras,
               "also print each frame's camera as 'camera FRAME eye X,Y,Z target X,Y,Z fov F' "
               "(e.g. to render the same views with vdb_render -translate/-lookat/-fov)");
+  i->add_flag("--no-character", info->no_character,
+              "skip the character (which reads every frame): only what the header and the "
+              "frame index hold, at once whatever the capture's size");
   i->callback([info] {
     // As stored, unless asked for a regroupable capture's subdivision.
     const TraceReader r = OpenWithWarning(info->file, info->cells, info->cells.empty());
     PrintInfo(r, info->file, std::cout);
+    if (!info->no_character) {
+      std::cout << "\n";
+      PrintCharacter(Characterize(r, HardwareThreads()), std::cout);
+    }
     if (info->cameras) PrintCameras(r.header(), std::cout);
   });
 
