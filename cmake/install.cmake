@@ -11,9 +11,14 @@ set(RAYCELL_INSTALL_INCLUDEDIR ${CMAKE_INSTALL_INCLUDEDIR}/raycell)
 set(RAYCELL_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/raycell)
 
 install(TARGETS raycell RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-# `raycell study` looks for them next to its binary, then in <bindir>/../share/raycell.
-install(PROGRAMS tools/plot_study.py tools/plot_accuracy.py
+# `raycell study` and `raycell suite` look for them next to its binary, then in
+# <bindir>/../share/raycell; the suite's scene files likewise in share/raycell/scenes.
+install(PROGRAMS tools/plot_study.py tools/plot_accuracy.py tools/plot_suite.py
         DESTINATION ${CMAKE_INSTALL_DATADIR}/raycell)
+if(EXISTS ${PROJECT_SOURCE_DIR}/scenes)
+  install(DIRECTORY scenes/ DESTINATION ${CMAKE_INSTALL_DATADIR}/raycell/scenes
+          FILES_MATCHING PATTERN "*.toml")
+endif()
 
 # The headers keep the paths they include each other by ("traces/ray_batch.h",
 # "base/typed_id.h"), under include/raycell. Every header of traces/ (columns.h includes the

@@ -11,6 +11,7 @@ void AddTraceCommand(CLI::App& app);
 void AddAnalyzeCommand(CLI::App& app);
 void AddReplayCommand(CLI::App& app);
 void AddStudyCommand(CLI::App& app);
+void AddSuiteCommand(CLI::App& app);
 void AddSweepCommand(CLI::App& app);
 
 // The help of `--cells SPEC` for the commands that read a regroupable capture regrouped

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "raycell 0.1.0");
   raycell::AddStudyCommand(app);
+  raycell::AddSuiteCommand(app);
   raycell::AddRecordCommand(app);
   raycell::AddTraceCommand(app);
   raycell::AddAnalyzeCommand(app);
