@@ -302,6 +302,12 @@ SuiteSceneResult RunSuiteScene(const SuiteOptions& o, const SuiteScene& s) {
   if (!o.quiet) std::cerr << "suite: " << s.name << " (" << s.file << ")\n";
   const SceneCapture c = RecordScene(o, s);
   r.record_seconds = c.seconds;
+  if (!o.quiet) {
+    std::cerr << "suite: " << s.name << ": "
+              << (c.seconds > 0 ? "recorded in " + FormatFixed(c.seconds, 1) + " s"
+                                : std::string("capture reused"))
+              << "\n";
+  }
   const TraceReader reader =
       c.fine ? TraceReader::Open(c.path, o.cells) : TraceReader::Open(c.path);
   r.character = Characterize(reader, HardwareThreads());
@@ -354,8 +360,7 @@ std::string SuiteSceneCsv(const SuiteSceneResult& r) {
       << "," << c.visits << "," << c.samples;
   for (std::uint64_t k : c.rays_by_kind) out << "," << k;
   out << "," << c.busy_cells << "," << c.max_gen_sum << "," << c.max_gen_largest << "\n"
-      << "# record_seconds," << FormatReal(r.record_seconds) << "\n# cache_capacity,"
-      << r.cache_capacity << "\n"
+      << "# cache_capacity," << r.cache_capacity << "\n"
       << "kind,name,scheduler,processors,fetches,cache_bytes,time_ps,time_after_first_ps\n";
   for (const SuiteRow& row : r.rows) {
     out << row.kind << "," << Field(row.name) << "," << row.scheduler << "," << row.processors
@@ -434,8 +439,6 @@ SuiteSceneResult ReadSuiteSceneCsv(const std::string& path) {
         c.busy_cells = number(f[6 + kRayKindCount]);
         c.max_gen_sum = number(f[7 + kRayKindCount]);
         c.max_gen_largest = std::uint32_t(number(f[8 + kRayKindCount]));
-      } else if (f[0] == "record_seconds" && f.size() == 2) {
-        r.record_seconds = std::stod(f[1]);
       } else if (f[0] == "cache_capacity" && f.size() == 2) {
         r.cache_capacity = number(f[1]);
       } else {
@@ -472,6 +475,10 @@ void RunSuite(const SuiteOptions& o) {
     throw InputError("--processors " + std::to_string(o.processors) + ": must be in [2, 64]");
   }
   const std::vector<SuiteScene> scenes = SuiteScenes(o);
+  if (o.list) {
+    for (const SuiteScene& s : scenes) std::cout << s.name << "\t" << s.file << "\n";
+    return;
+  }
   std::vector<SuiteSceneResult> results;
   if (!o.only.empty()) {
     for (const SuiteScene& s : scenes) {

@@ -24,6 +24,7 @@ struct SuiteOptions {
   std::uint32_t processors = 8;  // the board of several processors (and 1)
   std::string only;              // one scene by name: its file only, no report (a Slurm task)
   bool report_only = false;      // the report from OUT/scenes/*.csv, nothing replayed
+  bool list = false;             // print each scene's name and file (tab-separated), nothing else
   int threads = 0;               // recording threads (0: all cores); replays use the cores too
   bool quiet = false;
 };
@@ -48,8 +49,8 @@ struct SuiteRow {
 
 struct SuiteSceneResult {
   SuiteScene scene;
-  CaptureCharacter character;        // of the capture in --cells
-  double record_seconds = 0;         // 0 when the capture was reused
+  CaptureCharacter character;  // of the capture in --cells
+  double record_seconds = 0;   // 0 when reused; not in the files, which every machine writes alike
   std::uint64_t cache_capacity = 0;  // the subdivision rows' cache: 3x3x3's median footprint
   std::vector<SuiteRow> rows;
 };

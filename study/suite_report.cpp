@@ -68,15 +68,14 @@ std::string Ms(std::uint64_t ps) { return FormatFixed(double(ps) / 1e9, 1); }
 std::string CharacterTable(const std::vector<SuiteSceneResult>& scenes) {
   std::ostringstream s;
   s << "| scene | what it stands for | frames | rays per pixel | secondary rays | visits per ray "
-       "| maxGen mean | maxGen largest | recorded in |\n"
-       "|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
+       "| maxGen mean | maxGen largest |\n"
+       "|---|---|---:|---:|---:|---:|---:|---:|\n";
   for (const SuiteSceneResult& r : scenes) {
     const CaptureCharacter& c = r.character;
     s << "| " << r.scene.name << " | " << r.scene.about << " | " << c.frames << " | "
       << FormatFixed(c.rays_per_pixel(), 2) << " | " << FormatFixed(100 * c.secondary_share(), 1)
       << "% | " << FormatFixed(c.visits_per_ray(), 2) << " | " << FormatFixed(c.mean_max_gen(), 2)
-      << " | " << c.max_gen_largest << " | "
-      << (r.record_seconds > 0 ? FormatFixed(r.record_seconds, 1) + " s" : "reused") << " |\n";
+      << " | " << c.max_gen_largest << " |\n";
   }
   return s.str();
 }

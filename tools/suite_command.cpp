@@ -66,12 +66,14 @@ void AddSuiteCommand(CLI::App& app) {
                   "no report (a cluster's array task)");
   cmd->add_flag("--report", args->report_only,
                 "only the report, from every scene's OUT/scenes/NAME.csv (after --only runs)");
+  cmd->add_flag("--list", args->list,
+                "print the scenes, one per line: NAME, a tab, FILE; nothing is recorded");
   cmd->add_option("--threads", args->threads, "rendering threads, 0 = all cores")
       ->capture_default_str();
   cmd->add_flag("--quiet", args->quiet, "no progress");
   cmd->callback([args] {
     RunSuite(*args);
-    if (args->only.empty()) std::cout << "report: " << args->out << "/report.md\n";
+    if (args->only.empty() && !args->list) std::cout << "report: " << args->out << "/report.md\n";
   });
 }
 
