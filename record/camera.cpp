@@ -115,6 +115,14 @@ Vec3d PinholeCamera::Direction(double x, double y) const {
   return Normalize(forward_ + right_ * u + up_ * v);
 }
 
+std::vector<CameraKey> ReadKeyframeFile(const std::string& path, Vec3d up) {
+  std::vector<CameraKey> keys;
+  for (const Keyframe& k : ReadKeyframes(path)) {
+    keys.push_back(CameraKey{k.frame, k.eye, k.target, up, k.fov});
+  }
+  return keys;
+}
+
 void ValidateCameraSpec(const CameraPathSpec& spec) {
   if (!(spec.fov_deg > 0 && spec.fov_deg < 180)) {
     throw InputError("--fov " + Num(spec.fov_deg) +
@@ -185,11 +193,15 @@ CameraPathInfo MakeCameraPathInfo(const CameraPathSpec& spec, const std::vector<
                                   Vec3d lo, Vec3d hi) {
   RAYCELL_CHECK(!frames.empty());
   CameraPathInfo path;
-  if (!spec.keyframes_file.empty()) {
+  if (!spec.keyframes_file.empty() || !spec.keys.empty()) {
     path.kind = "keyframes";
     path.up = spec.up;
-    for (const Keyframe& k : ReadKeyframes(spec.keyframes_file)) {
-      path.keys.push_back(CameraKey{k.frame, k.eye, k.target, spec.up, k.fov});
+    if (!spec.keyframes_file.empty()) {
+      path.keys = ReadKeyframeFile(spec.keyframes_file, spec.up);
+    } else {
+      for (const CameraKey& k : spec.keys) {
+        path.keys.push_back(CameraKey{k.frame, k.eye, k.target, spec.up, k.fov_deg});
+      }
     }
     return path;
   }

@@ -35,7 +35,13 @@ struct CameraPathSpec {
   int orbit_first = 0;
   int orbit_frames = 0;
   std::string keyframes_file;  // if set: lines "frame ex ey ez tx ty tz fov", interpolated
+  // Key frames given inline (a scene file's [[camera.key]]), used as the file's would be when
+  // no file is set; their `up` is ignored (spec.up is every key's).
+  std::vector<CameraKey> keys;
 };
+
+// The key frames of a --keyframes file, each with `up`. InputError naming FILE:LINE.
+std::vector<CameraKey> ReadKeyframeFile(const std::string& path, Vec3d up);
 
 // Checks the camera options before the scene is known: --fov in (0, 180) degrees, --up
 // finite and not zero, --eye and --target finite (where given) and distinct. InputError

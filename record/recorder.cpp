@@ -23,7 +23,7 @@ namespace {
 // The scene box over all frames (sequences may move) and, per cell, the largest footprint
 // of any frame (header.footprints; each frame also uses its own to decide emptiness).
 void ScanScene(const RecordOptions& o, const Scene* first, TraceHeader* h) {
-  const bool seq = IsSequencePattern(o.scene.source);
+  const bool seq = VolumeChanges(o.scene);
   Vec3d lo = first->box_lo(), hi = first->box_hi();
   for (std::size_t i = 1; seq && i < o.frames.size(); ++i) {
     const auto s = Scene::Load(o.scene, o.frames[i]);
@@ -128,10 +128,10 @@ void ValidateRecordOptions(const RecordOptions& o) {
         "--regroupable needs sparse footprints (--footprint sparse): a union of "
         "cells counts each leaf once, and dense footprints have no leaves");
   }
-  if (o.regroupable && IsSequencePattern(o.scene.source)) {
+  if (o.regroupable && VolumeChanges(o.scene)) {
     throw InputError(
-        "--regroupable: a sequence's leaves change from frame to frame; record "
-        "one volume (a .vdb file or the built-in scene)");
+        "--regroupable: a sequence's (or an animated scene's) leaves change from frame to "
+        "frame; record one volume (a .vdb file, a still scene file or the built-in scene)");
   }
   ValidateCameraSpec(o.camera);
   CheckOrbitFrames(o.camera, o.frames);
@@ -140,12 +140,11 @@ void ValidateRecordOptions(const RecordOptions& o) {
 RecordSummary Record(const RecordOptions& o, std::ostream& log) {
   ValidateRecordOptions(o);
   const auto t_start = std::chrono::steady_clock::now();
-  if (!o.images_dir.empty()) std::filesystem::create_directories(o.images_dir);
   std::unique_ptr<Scene> scene = Scene::Load(o.scene, o.frames.front());
 
   TraceHeader header;
   header.producer = "raycell 0.1.0";
-  header.scene = o.scene.source;
+  header.scene = SceneLabel(o.scene);
   header.grids = scene->grids();
   header.cells = o.cells;
   header.footprint_mode = o.scene.footprint_mode;
@@ -167,9 +166,12 @@ RecordSummary Record(const RecordOptions& o, std::ostream& log) {
   std::error_code ignored;
   if (!out_dir.empty()) std::filesystem::create_directories(out_dir, ignored);
   TraceWriter writer = TraceWriter::Create(o.out, header);
+  // Made once every frame's scene was built and the trace could be created: a bad scene
+  // leaves no folder behind.
+  if (!o.images_dir.empty()) std::filesystem::create_directories(o.images_dir);
   Progress progress(o.progress);
   RecordSummary sum;
-  const bool seq = IsSequencePattern(o.scene.source);
+  const bool seq = VolumeChanges(o.scene);
   auto interrupt = [&] {
     progress.Done();
     sum.interrupted = true;

@@ -1,10 +1,12 @@
-// Scene loading, the built-in scene and cell footprints. One of the two translation units
-// that include OpenVDB (with renderer.cpp).
+// Scene loading, scene files' grids (record/scene_file.h) and cell footprints. One of the two
+// translation units that include OpenVDB (with renderer.cpp).
 #include <openvdb/io/File.h>
 #include <openvdb/tools/Composite.h>
 #include <openvdb/tools/LevelSetPlatonic.h>
 #include <openvdb/tools/LevelSetSphere.h>
 #include <openvdb/tools/LevelSetUtil.h>
+#include <openvdb/tools/MeshToVolume.h>
+#include <openvdb/tools/Prune.h>
 
 #include <algorithm>
 #include <cmath>
@@ -15,98 +17,12 @@
 #include "base/check.h"
 #include "base/parse.h"
 #include "record/cell_grid.h"
+#include "record/scene_file.h"
 #include "record/scene_vdb.h"
 #include "record/vec3.h"
 
 namespace raycell {
 namespace {
-
-double ParseNumber(const std::string& text, const std::string& what) {
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || !std::isfinite(v)) {
-    throw InputError(what + ": '" + text + "' is not a finite number");
-  }
-  return v;
-}
-
-Vec3d ParseTriple(const std::string& text, const std::string& what) {
-  const auto parts = Split(text, ',');
-  if (parts.size() != 3) throw InputError(what + ": expected X,Y,Z, got '" + text + "'");
-  return {ParseNumber(parts[0], what), ParseNumber(parts[1], what), ParseNumber(parts[2], what)};
-}
-
-Rgb ParseRgb(const std::string& text, const std::string& what) {
-  // One number means grey.
-  if (text.find(',') == std::string::npos) {
-    const double v = ParseNumber(text, what);
-    return {v, v, v};
-  }
-  const Vec3d v = ParseTriple(text, what);
-  return {v.x, v.y, v.z};
-}
-
-void RequireNonNegative(const Rgb& c, const std::string& what) {
-  if (c.r < 0 || c.g < 0 || c.b < 0) throw InputError(what + ": must not be negative");
-}
-
-void RequireAtMost(const Rgb& c, double limit, const std::string& what, const char* why) {
-  if (c.r > limit || c.g > limit || c.b > limit) {
-    std::ostringstream s;
-    s << what << ": must be at most " << limit << " (" << why << ")";
-    throw InputError(s.str());
-  }
-}
-
-// Light colours are bounded so that radiance fits a float in the single-precision marcher
-// (it never exceeds the sum of the lights: surface colours and albedos are at most 1).
-constexpr double kMaxLight = 1e30;
-
-double ParseFraction(const std::string& text, const std::string& what) {
-  const double v = ParseNumber(text, what);
-  if (v < 0 || v > 1) throw InputError(what + ": must be in [0, 1], got " + text);
-  return v;
-}
-
-void ApplyFogKey(FogMaterial& m, const std::string& key, const std::string& value,
-                 const std::string& what) {
-  if (key == "absorb") {
-    m.absorption = ParseRgb(value, what);
-    RequireNonNegative(m.absorption, what);
-  } else if (key == "scatter") {
-    m.scattering = ParseRgb(value, what);
-    RequireNonNegative(m.scattering, what);
-  } else if (key == "gain") {
-    m.shadow_gain = ParseNumber(value, what);
-    if (m.shadow_gain < 0) throw InputError(what + ": must not be negative");
-  } else {
-    throw InputError(what + ": unknown fog material key (known: absorb, scatter, gain)");
-  }
-}
-
-void ApplySurfaceKey(SurfaceMaterial& m, const std::string& key, const std::string& value,
-                     const std::string& what) {
-  if (key == "color") {
-    m.color = ParseRgb(value, what);
-    RequireNonNegative(m.color, what);
-    RequireAtMost(m.color, 1.0, what, "a surface reflects at most the light it gets");
-  } else if (key == "reflect") {
-    m.reflectivity = ParseFraction(value, what);
-  } else if (key == "transparency") {
-    m.transparency = ParseFraction(value, what);
-  } else if (key == "ior") {
-    m.ior = ParseNumber(value, what);
-    if (!(m.ior >= 1.0 && m.ior <= 10.0)) throw InputError(what + ": must be in [1, 10]");
-  } else {
-    throw InputError(what +
-                     ": unknown surface material key (known: color, reflect, transparency, ior)");
-  }
-}
 
 void ApplyMaterial(Scene::Impl& s, const std::string& text, const std::string& source) {
   const auto fields = Split(text, ':');
@@ -132,11 +48,10 @@ void ApplyMaterial(Scene::Impl& s, const std::string& text, const std::string& s
     if (eq == std::string::npos) throw InputError(what + ": '" + fields[i] + "' is not key=value");
     const std::string key = fields[i].substr(0, eq), value = fields[i].substr(eq + 1);
     const std::string kwhat = what + " key '" + key + "'";
-    fog ? ApplyFogKey(*fog, key, value, kwhat) : ApplySurfaceKey(*surface, key, value, kwhat);
+    const std::vector<double> v = ParseMaterialValues(value, kwhat);
+    fog ? SetFogKey(*fog, key, v, kwhat) : SetSurfaceKey(*surface, key, v, kwhat);
   }
-  if (surface && surface->reflectivity + surface->transparency > 1.0) {
-    throw InputError(what + ": reflect + transparency must not exceed 1");
-  }
+  if (surface) CheckSurfaceMaterial(*surface, what);
 }
 
 openvdb::BBoxd WorldBox(const openvdb::FloatGrid& grid, openvdb::Vec3d ilo, openvdb::Vec3d ihi) {
@@ -175,8 +90,9 @@ void CheckFinite(const openvdb::FloatGrid& grid, const std::string& source) {
   }
 }
 
-void AddGrid(Scene::Impl& s, openvdb::FloatGrid::Ptr grid, const std::string& source) {
-  if (grid->empty() || grid->activeVoxelCount() == 0) return;
+// Adds a non-empty grid as a surface (a level set) or fog; false for an empty one.
+bool AddGrid(Scene::Impl& s, openvdb::FloatGrid::Ptr grid, const std::string& source) {
+  if (grid->empty() || grid->activeVoxelCount() == 0) return false;
   CheckFinite(*grid, source);
   if (!grid->hasUniformVoxels() || !grid->transform().isLinear()) {
     throw InputError(source + ": grid '" + grid->getName() +
@@ -190,6 +106,7 @@ void AddGrid(Scene::Impl& s, openvdb::FloatGrid::Ptr grid, const std::string& so
     s.fogs.push_back({grid, FogMaterial{}});
     s.infos.push_back(MakeInfo(*grid, "fog", source));
   }
+  return true;
 }
 
 void InitOpenVdb() {
@@ -258,10 +175,11 @@ void LoadFile(Scene::Impl& s, const std::string& path, const SceneSpec& spec) {
   }
 }
 
-// Keeps only the chosen grids of the built-in scene.
-void SelectBuiltin(Scene::Impl& s, const SceneSpec& spec) {
+// Keeps only the grids of a scene file chosen by spec.grids / spec.all_grids (by default all
+// of them, as vdb_render renders every grid of a scene it builds).
+void SelectGrids(Scene::Impl& s, const SceneSpec& spec) {
   for (const auto& g : s.infos) s.float_grids.push_back(g.name);
-  const auto chosen = ChooseGrids(s.float_grids, spec, "builtin", true);
+  const auto chosen = ChooseGrids(s.float_grids, spec, spec.source, true);
   auto keep = [&](const auto& layer) {
     return std::find(chosen.begin(), chosen.end(), layer.grid->getName()) != chosen.end();
   };
@@ -280,45 +198,158 @@ void SelectBuiltin(Scene::Impl& s, const SceneSpec& spec) {
                 s.infos.end());
 }
 
-openvdb::FloatGrid::Ptr Named(openvdb::FloatGrid::Ptr g, const std::string& name) {
-  g->setName(name);
-  return g;
+int PlatonicFaces(const std::string& type) {
+  if (type == "tetrahedron") return 4;
+  if (type == "cube") return 6;
+  if (type == "octahedron") return 8;
+  if (type == "dodecahedron") return 12;
+  RAYCELL_CHECK(type == "icosahedron");
+  return 20;
 }
 
-// The built-in scene, made with OpenVDB itself: a fog cloud of three blobs, a mirror sphere
-// and a glass icosahedron, lit by one directional light, so that reflection, refraction and
-// shadow rays all occur.
-void BuildBuiltin(Scene::Impl& s) {
-  using openvdb::Vec3f;
-  const float vs = 0.025f, band = 3.0f;
-  auto cloud =
-      openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(0.75f, Vec3f(0, 0, 0), vs, band);
-  auto blob2 = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
-      0.5f, Vec3f(0.6f, 0.35f, -0.2f), vs, band);
-  auto blob3 = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
-      0.45f, Vec3f(-0.55f, 0.25f, 0.25f), vs, band);
-  openvdb::tools::csgUnion(*cloud, *blob2);
-  openvdb::tools::csgUnion(*cloud, *blob3);
-  openvdb::tools::sdfToFogVolume(*cloud, 0.45f);  // density ramps up over 0.45 units
-  cloud->setName("cloud");
-  AddGrid(s, cloud, "builtin");
-  s.fogs.back().material = FogMaterial{{0.004, 0.006, 0.008}, {0.03, 0.03, 0.03}, 0.2};
+openvdb::Vec3f ToVec3f(Vec3d v) { return openvdb::Vec3f(float(v.x), float(v.y), float(v.z)); }
 
-  AddGrid(s,
-          Named(openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
-                    0.5f, Vec3f(1.35f, -0.35f, 0.45f), vs, band),
-                "mirror"),
-          "builtin");
-  s.surfaces.back().material = SurfaceMaterial{{0.9, 0.9, 0.95}, 0.85, 0.0, 1.5};
+// One shape's level set, made by OpenVDB's own tools at the grid's voxel size and band.
+openvdb::FloatGrid::Ptr MakeShape(const ShapeDesc& shape, const GridDesc& g) {
+  const float vs = float(g.voxel), band = float(g.band);
+  if (shape.type == "sphere") {
+    return openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+        float(shape.radius), ToVec3f(shape.center), vs, band);
+  }
+  if (shape.type == "box") {
+    // The spheres' and solids' transform: a linear one of the float voxel size.
+    const auto xform = openvdb::math::Transform::createLinearTransform(double(vs));
+    const openvdb::math::BBox<openvdb::Vec3s> box(ToVec3f(shape.min), ToVec3f(shape.max));
+    return openvdb::tools::createLevelSetBox<openvdb::FloatGrid>(box, *xform, band);
+  }
+  return openvdb::tools::createLevelSetPlatonic<openvdb::FloatGrid>(
+      PlatonicFaces(shape.type), float(shape.scale), ToVec3f(shape.center), vs, band);
+}
 
-  auto glass = openvdb::tools::createLevelSetIcosahedron<openvdb::FloatGrid>(
-      0.9f, Vec3f(-1.3f, -0.3f, 0.6f), vs, band);
-  AddGrid(s, Named(glass, "glass"), "builtin");
-  s.surfaces.back().material = SurfaceMaterial{{0.85, 1.0, 0.9}, 0.05, 0.85, 1.5};
+// The shapes joined in order: ((s1 op2 s2) op3 s3) ...
+openvdb::FloatGrid::Ptr MakeShapes(const GridDesc& g, int frame) {
+  const std::vector<ShapeDesc> shapes = ShapesAtFrame(g, frame);
+  openvdb::FloatGrid::Ptr grid = MakeShape(shapes.front(), g);
+  for (std::size_t i = 1; i < shapes.size(); ++i) {
+    openvdb::FloatGrid::Ptr next = MakeShape(shapes[i], g);
+    switch (shapes[i].op) {
+      case ShapeDesc::Op::kUnion:
+        openvdb::tools::csgUnion(*grid, *next);
+        break;
+      case ShapeDesc::Op::kDifference:
+        openvdb::tools::csgDifference(*grid, *next);
+        break;
+      case ShapeDesc::Op::kIntersection:
+        openvdb::tools::csgIntersection(*grid, *next);
+        break;
+    }
+  }
+  return grid;
+}
 
-  s.lights.push_back(Light{Light::Type::kDirectional, {0.4, 0.8, 0.45}, {1.0, 0.95, 0.85}});
-  s.sky_top = {0.30, 0.42, 0.65};
-  s.sky_bottom = {0.06, 0.06, 0.08};
+// The float grid `name` of a VDB file (empty: the first float grid, in the order vdb_render
+// lists them).
+openvdb::FloatGrid::Ptr ReadFileGrid(const std::string& path, const std::string& name,
+                                     const std::string& what) {
+  try {
+    openvdb::io::File file(path);
+    file.open();
+    openvdb::io::File::NameIterator it = file.beginName();
+    const openvdb::GridPtrVecPtr metas = file.readAllGridMetadata();
+    std::vector<std::string> floats;
+    for (std::size_t i = 0; i < metas->size(); ++i, ++it) {
+      if ((*metas)[i]->isType<openvdb::FloatGrid>()) floats.push_back(*it);
+    }
+    if (floats.empty()) throw InputError(what + ": " + path + " has no float grid");
+    const std::string chosen = name.empty() ? floats.front() : name;
+    if (std::find(floats.begin(), floats.end(), chosen) == floats.end()) {
+      throw InputError(what + ": " + path + " has no float grid '" + chosen +
+                       "' (float grids: " + Join(floats, ", ") + ")");
+    }
+    auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid(chosen));
+    file.close();
+    return grid;
+  } catch (const openvdb::Exception& e) {
+    throw InputError(what + ": " + path + ": cannot read as an OpenVDB file: " + e.what());
+  }
+}
+
+// Multiplies every active voxel's density by the noise factor; voxels it zeroes become
+// inactive, and leaves left with none are freed (empty space between the clouds).
+void ApplyNoise(openvdb::FloatGrid& grid, const NoiseDesc& noise) {
+  grid.tree().voxelizeActiveTiles();
+  for (auto it = grid.beginValueOn(); it; ++it) {
+    const openvdb::Coord c = it.getCoord();
+    const double f = NoiseFactor(noise, c.x(), c.y(), c.z());
+    if (f == 0) {
+      it.setValue(0.0f);
+      it.setValueOff();
+    } else {
+      it.setValue(float(double(*it) * f));
+    }
+  }
+  openvdb::tools::pruneInactive(grid.tree());
+}
+
+// Scale, then rotation about the axis, then translation, on top of the grid's own transform;
+// the frame's animation added. Nothing is changed when all of it is the identity.
+void ApplyTransform(openvdb::FloatGrid& grid, const GridDesc& g, int frame) {
+  const Vec3d t = g.translate + g.animate.translate * double(frame);
+  const double degrees = g.degrees + g.animate.rotate * double(frame);
+  openvdb::math::Transform& xf = grid.transform();
+  if (g.scale != 1) xf.postScale(g.scale);
+  if (degrees != 0) {
+    const Vec3d a = Normalize(g.axis);
+    xf.postMult(openvdb::math::rotation<openvdb::Mat4d>(openvdb::Vec3d(a.x, a.y, a.z),
+                                                        degrees * 3.14159265358979323846 / 180));
+  }
+  if (t.x != 0 || t.y != 0 || t.z != 0) xf.postTranslate(openvdb::Vec3d(t.x, t.y, t.z));
+}
+
+// The grid `g` of a scene file at frame `frame`, made or read, and added with its material.
+void AddSceneGrid(Scene::Impl& s, const SceneDescription& d, const GridDesc& g, int frame) {
+  const std::string what = d.name + ": grid '" + g.name + "'";
+  openvdb::FloatGrid::Ptr grid;
+  if (g.from_file()) {
+    const std::string path = FrameFile(g.file, frame);
+    grid = ReadFileGrid(path, g.vdb_grid, what);
+    if (!g.fog && grid->getGridClass() != openvdb::GRID_LEVEL_SET) {
+      throw InputError(what + ": role = \"surface\" needs a level set; " + path + "'s grid '" +
+                       grid->getName() + "' is not one (give role = \"fog\")");
+    }
+    CheckFinite(*grid, path);
+  } else {
+    try {
+      grid = MakeShapes(g, frame);
+    } catch (const InputError& e) {
+      throw InputError(d.name + ": " + e.what());
+    }
+  }
+  if (g.fog && grid->getGridClass() == openvdb::GRID_LEVEL_SET) {
+    // Density ramps up over `ramp` world units inside the surface (0: the interior band).
+    g.ramp > 0 ? openvdb::tools::sdfToFogVolume(*grid, float(g.ramp))
+               : openvdb::tools::sdfToFogVolume(*grid);
+  }
+  if (g.noise.on) ApplyNoise(*grid, g.noise);
+  ApplyTransform(*grid, g, frame);
+  grid->setName(g.name);
+  if (!AddGrid(s, grid, g.from_file() ? g.file : d.name)) {
+    throw InputError(what + " is empty at frame " + std::to_string(frame) +
+                     " (no active voxel: shapes that do not meet, or noise above every voxel)");
+  }
+  if (g.fog) {
+    s.fogs.back().material = g.fog_material;
+  } else {
+    s.surfaces.back().material = g.surface_material;
+  }
+}
+
+// A scene file's grids, lights and sky at one frame.
+void BuildDescription(Scene::Impl& s, const SceneDescription& d, int frame) {
+  for (const GridDesc& g : d.grids) AddSceneGrid(s, d, g, frame);
+  s.lights = d.lights;
+  s.sky_top = d.sky_top;
+  s.sky_bottom = d.sky_bottom;
 }
 
 void ComputeBox(Scene::Impl& s) {
@@ -397,53 +428,18 @@ void AddDense(const openvdb::FloatGrid& grid, const CellGrid& cells,
 
 }  // namespace
 
-void ValidateLight(const Light& l, const std::string& what) {
-  if (!IsFinite(l.v)) throw InputError(what + ": position or direction must be finite");
-  if (!(std::isfinite(l.color.r) && std::isfinite(l.color.g) && std::isfinite(l.color.b))) {
-    throw InputError(what + ": colour must be finite");
-  }
-  RequireNonNegative(l.color, what);
-  RequireAtMost(l.color, kMaxLight, what, "radiance must fit a float");
-  if (l.type == Light::Type::kDirectional && !(Length(l.v) > 0)) {
-    throw InputError(what + ": direction must not be zero");
-  }
-}
-
-Light ParseLight(const std::string& text) {
-  const auto f = Split(text, ':');
-  const std::string what = "--light '" + text + "'";
-  if (f.size() < 2 || f.size() > 3 || (f[0] != "dir" && f[0] != "point")) {
-    throw InputError(what + ": expected dir:X,Y,Z[:R,G,B] or point:X,Y,Z[:R,G,B]");
-  }
-  Light l;
-  l.type = f[0] == "dir" ? Light::Type::kDirectional : Light::Type::kPoint;
-  l.v = ParseTriple(f[1], what);
-  if (f.size() == 3) {
-    l.color = ParseRgb(f[2], what);
-  }
-  ValidateLight(l, what);
-  return l;
-}
-
-bool IsSequencePattern(const std::string& source) { return source.find('%') != std::string::npos; }
-
-std::string FrameFile(const std::string& source, int frame) {
-  if (!IsSequencePattern(source)) return source;
-  char buf[4096];
-  const int n = std::snprintf(buf, sizeof buf, source.c_str(), frame);
-  if (n < 0 || n >= int(sizeof buf)) throw InputError("--scene '" + source + "': bad pattern");
-  return buf;
-}
-
 Scene::Scene(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Scene::~Scene() = default;
 
 std::unique_ptr<Scene> Scene::Load(const SceneSpec& spec, int frame) {
   InitOpenVdb();
   auto s = std::make_unique<Impl>();
-  if (spec.source == "builtin") {
-    BuildBuiltin(*s);
-    SelectBuiltin(*s, spec);
+  if (spec.description) {
+    BuildDescription(*s, *spec.description, frame);
+    SelectGrids(*s, spec);
+  } else if (IsSceneFile(spec.source)) {
+    BuildDescription(*s, LoadSceneDescription(spec.source), frame);
+    SelectGrids(*s, spec);
   } else {
     LoadFile(*s, FrameFile(spec.source, frame), spec);
     s->lights.push_back(Light{});

@@ -34,10 +34,15 @@ struct Light {
   Rgb color{0.7, 0.7, 0.7};  // vdb_render's default light
 };
 
+struct SceneDescription;  // record/scene_file.h
+
 struct SceneSpec {
-  // "builtin", one .vdb file, or a printf pattern such as fluid_data_%04d.vdb (one file per
-  // frame number).
+  // "builtin" (the embedded scenes/builtin.toml), a scene file (.toml), one .vdb file, or a
+  // printf pattern such as fluid_data_%04d.vdb (one file per frame number).
   std::string source = "builtin";
+  // The scene file read and resolved (ToRecordOptions: the flags applied); null: Load reads
+  // `source` itself, and applies the fields below to it.
+  std::shared_ptr<const SceneDescription> description;
   // The grids rendered, by name. Empty: vdb_render's choice, the first float grid of the file
   // (every grid of the built-in scene). Each named grid must be a float grid of the file.
   std::vector<std::string> grids;
@@ -55,6 +60,13 @@ Light ParseLight(const std::string& text);
 // float). InputError naming `what` otherwise.
 void ValidateLight(const Light& l, const std::string& what);
 bool IsSequencePattern(const std::string& source);
+// Whether the volume changes from frame to frame: a sequence pattern, or an animated scene
+// file (a grid with `animate`, or read from a pattern of files). Loads the description when
+// `spec` has none.
+bool VolumeChanges(const SceneSpec& spec);
+// The trace header's scene: the description's name, followed by "@%d" when the scene is
+// animated (so TraceHeader::volume_changes holds, as for a sequence pattern), or the source.
+std::string SceneLabel(const SceneSpec& spec);
 // The file of one frame: the pattern formatted with the frame number, or the file itself.
 std::string FrameFile(const std::string& source, int frame);
 

@@ -13,6 +13,7 @@
 #include "base/parse.h"
 #include "base/progress.h"
 #include "record/cell_grid.h"
+#include "record/record_flags.h"
 #include "record/recorder.h"
 #include "record/scene.h"
 #include "replay/config.h"
@@ -66,17 +67,19 @@ std::vector<std::string> SplitList(const std::string& text) {
 
 TraceReader RecordGrid(const StudyOptions& a, const std::vector<int>& frames,
                        const std::string& cells) {
-  RecordOptions o;
-  o.scene.source = a.scene;
-  o.frames = frames;
-  o.camera.orbit_degrees = a.orbit_degrees();
-  o.cells = ParseCellDims(cells);
-  const auto wh = ParseResolution(a.res);
-  o.settings.width = wh[0], o.settings.height = wh[1];
-  o.out = (fs::path(a.out) / ("capture_" + cells + ".rct")).string();
-  o.images_dir = (fs::path(a.out) / ("images_" + cells)).string();
-  o.threads = a.threads;
-  o.progress = !a.quiet;
+  // As `raycell record` with these flags records it (RecordFlags): a scene file's camera,
+  // lights and materials hold, its path turned by the study's orbit over the frames.
+  RecordFlags flags;
+  flags.opt.scene.source = a.scene;
+  flags.frames = FormatFrameRange(frames.front(), frames.back());
+  flags.orbit = FormatReal(a.orbit_degrees());
+  flags.cells = cells;
+  flags.res = a.res;
+  flags.opt.out = (fs::path(a.out) / ("capture_" + cells + ".rct")).string();
+  flags.opt.images_dir = (fs::path(a.out) / ("images_" + cells)).string();
+  flags.opt.threads = a.threads;
+  flags.quiet = a.quiet;
+  const RecordOptions o = ToRecordOptions(flags);
   std::ostringstream log;
   const RecordSummary s = Record(o, log);
   std::cerr << "recorded " << s.frames << " frames in " << cells << " cells (" << s.rays

@@ -5,8 +5,10 @@
 #include <iostream>
 #include <memory>
 
+#include "base/check.h"
 #include "record/record_flags.h"
 #include "record/recorder.h"
+#include "record/scene_file.h"
 #include "tools/commands.h"
 
 namespace raycell {
@@ -16,8 +18,16 @@ std::atomic<bool> g_cancel{false};
 
 extern "C" void OnSignal(int) { g_cancel.store(true); }
 
-void Run(const RecordFlags& a) {
+void Run(const RecordFlags& a, bool print_scene) {
   RecordOptions o = ToRecordOptions(a);
+  if (print_scene) {
+    if (!o.scene.description) {
+      throw InputError("--print-scene: --scene '" + o.scene.source +
+                       "' is not a scene file (builtin or FILE.toml)");
+    }
+    std::cout << PrintSceneDescription(*o.scene.description);
+    return;
+  }
   o.cancel = &g_cancel;
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
@@ -51,11 +61,24 @@ void AddRecordCommand(CLI::App& app) {
       "  raycell record --orbit 30:360 --frames 10..19 --out part2.rct   # join the parts\n"
       "                                              # with `raycell trace concat`\n"
       "  raycell record --scene 'fluid_data_%04d.vdb' --frames 150..155 --out fluid.rct\n"
-      "  raycell record --material cloud:absorb=0.01:scatter=0.05 --light point:0,3,0");
+      "  raycell record --material cloud:absorb=0.01:scatter=0.05 --light point:0,3,0\n"
+      "  raycell record --scene scenes/glass.toml --res 128x128 --cells 3x3x3\n"
+      "  raycell record --scene scenes/glass.toml --orbit 4:30 --print-scene > mine.toml\n\n"
+      "Scene files (docs/scenes.md): grids from VDB files or made with OpenVDB's tools\n"
+      "(spheres, boxes, platonic solids, CSG, fog from a level set, seeded noise, animation),\n"
+      "materials, lights, sky, camera path and frames. The flags override the file:\n"
+      "--grid/--all-grids choose its grids, --material changes a grid's keys, --light\n"
+      "(any) replaces its lights, --eye/--target/--up/--fov its camera, --orbit or\n"
+      "--keyframes its camera path, --frames its frames.");
   cmd->add_option("--scene", o.scene.source,
-                  "builtin, a .vdb file (fog volumes and level sets), or a printf pattern of "
-                  "one file per frame, e.g. fluid_data_%04d.vdb with --frames 150..155")
+                  "builtin (scenes/builtin.toml, compiled in), a scene file FILE.toml, a .vdb "
+                  "file (fog volumes and level sets), or a printf pattern of one file per "
+                  "frame, e.g. fluid_data_%04d.vdb with --frames 150..155")
       ->capture_default_str();
+  auto print_scene = std::make_shared<bool>(false);
+  cmd->add_flag("--print-scene", *print_scene,
+                "write the resolved scene file (defaults filled in, the flags applied) to "
+                "stdout and exit: recording it gives the same trace");
   cmd->add_option("--grid", o.scene.grids,
                   "render this float grid of the file, repeatable; default: the first float "
                   "grid (as vdb_render and its -name), every grid of the built-in scene");
@@ -109,11 +132,12 @@ void AddRecordCommand(CLI::App& app) {
                   "vdb_render's dir:0.3,0.3,0:0.7,0.7,0.7)");
   cmd->add_option("--eye", args->eye, "camera position X,Y,Z (default: frames the scene box)");
   cmd->add_option("--target", args->target, "point the camera looks at (default: box centre)");
-  cmd->add_option("--up", args->up, "camera up vector")->capture_default_str();
-  cmd->add_option("--fov", o.camera.fov_deg,
-                  "vertical field of view, degrees in (0, 180) (vdb_render's -fov is the "
-                  "horizontal one: equal for square images)")
-      ->capture_default_str();
+  cmd->add_option("--up", args->up, "camera up vector (default 0,1,0, or the scene file's)");
+  CLI::Option* fov =
+      cmd->add_option("--fov", o.camera.fov_deg,
+                      "vertical field of view, degrees in (0, 180) (vdb_render's -fov is the "
+                      "horizontal one: equal for square images)")
+          ->capture_default_str();
   cmd->add_option("--orbit", args->orbit,
                   "camera path: FRAMES:DEGREES turns DEGREES about the up axis over frames "
                   "0..FRAMES-1 and records them, or the range --frames A..B of them (e.g. "
@@ -148,7 +172,10 @@ void AddRecordCommand(CLI::App& app) {
                   "same byte for byte whatever this is)")
       ->capture_default_str();
   cmd->add_flag("--quiet", args->quiet, "no progress bar");
-  cmd->callback([args] { Run(*args); });
+  cmd->callback([args, fov, print_scene] {
+    args->fov_given = fov->count() > 0;
+    Run(*args, *print_scene);
+  });
 }
 
 }  // namespace raycell

@@ -54,8 +54,10 @@ void AddStudyCommand(CLI::App& app) {
       "  raycell study --trace smoke.rct --trace fluid.rct --accuracy-frames 0");
   std::vector<CLI::Option*> recording = {
       cmd->add_option("--scene", args->scene,
-                      "builtin, a .vdb file, or a printf pattern of one file per frame (see "
-                      "record), e.g. fluid_data_%04d.vdb with --frames 150..155")
+                      "builtin, a scene file FILE.toml (docs/scenes.md: its camera, lights and "
+                      "materials, turned by --orbit), a .vdb file, or a printf pattern of one "
+                      "file per frame (see record), e.g. fluid_data_%04d.vdb with --frames "
+                      "150..155")
           ->capture_default_str(),
       cmd->add_option("--cells", args->cells, "cell grids, comma-separated")->capture_default_str(),
       cmd->add_option("--frames", args->frames,

@@ -10,7 +10,7 @@ fuzz/corpus/NAME/.
 
 Modules: the top-level CMakeLists.txt's add_subdirectory list minus tests and fuzz is exactly
 the module folders of the layout block of docs/design.md §4 (its lines `NAME/ ...`, minus the
-folders that are not modules: tests, fuzz, docs, cmake) and the keys of tools/check_deps.py's DEPS;
+folders that are not modules: tests, fuzz, docs, cmake, scenes) and the keys of tools/check_deps.py's DEPS;
 every folder of the layout block exists.
 
 Then it plants drift in a copy of those files (a name dropped from each list, an extra
@@ -26,7 +26,7 @@ import sys
 import tempfile
 
 NOT_BUILT_AS_MODULES = {"tests", "fuzz"}  # add_subdirectory'd, but not modules
-NOT_MODULES_IN_LAYOUT = {"tests", "fuzz", "docs", "cmake"}  # folders of the layout block
+NOT_MODULES_IN_LAYOUT = {"tests", "fuzz", "docs", "cmake", "scenes"}  # folders of the layout block
 FILES = ["CMakeLists.txt", "fuzz/CMakeLists.txt", ".ci/run", "docs/design.md",
          "CONTRIBUTING.md", "tools/check_deps.py"]
 LIST_START = "One libFuzzer target per parser of untrusted input"
