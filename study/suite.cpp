@@ -37,7 +37,7 @@ bool Registered(const std::string& name) {
   return false;
 }
 
-// The comment block at the top of a scene file, its '#' and spaces removed, lines joined.
+// What a scene file stands for: the first sentence of the comment block at its top.
 std::string About(const std::string& path) {
   std::string text;
   if (!ReadFile(path, &text)) throw InputError("suite scene '" + path + "': cannot read it");
@@ -49,6 +49,10 @@ std::string About(const std::string& path) {
     if (i == std::string::npos) continue;
     about += (about.empty() ? "" : " ") + line.substr(i);
   }
+  // Its first sentence, without a leading "Character:".
+  if (about.rfind("Character:", 0) == 0) about = Trim(about.substr(10));
+  const std::size_t stop = about.find(". ");
+  if (stop != std::string::npos) about = about.substr(0, stop + 1);
   return about;
 }
 

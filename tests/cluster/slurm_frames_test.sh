@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # A recording and an analysis run on a real Slurm cluster as job arrays of frame ranges, through
-# tools/slurm/submit_record.sh and submit_analyze.sh, give the same bytes as `raycell record`
-# and `raycell analyze` on one machine.
+# tools/slurm/submit_record.sh and submit_analyze.sh, and a suite run one scene per task
+# (submit_suite.sh), give the same bytes as `raycell record`, `raycell analyze` and `raycell
+# suite` on one machine.
 #
 #   tests/cluster/slurm_frames_test.sh RAYCELL SOURCE_DIR      (ctest -R slurm_frames)
 #
@@ -16,7 +17,9 @@
 #     the same command again runs task 2 alone, then the merge, and analysis.json equals the
 #     one-shot run;
 #  4. the same OUTDIR with other arguments, an OUTDIR holding another kind of job, and invalid
-#     analyze or record arguments are refused before anything is queued.
+#     analyze or record arguments are refused before anything is queued;
+#  5. `raycell suite` of two scene files, one per task (tools/slurm/submit_suite.sh), then the
+#     report job: report.md, suite.csv and the scenes' files equal a one-shot suite's.
 # Every wait is bounded; every process of the cluster is stopped on exit. Needs root,
 # slurm-wlm and munge (exit 77 without them, unless RAYCELL_REQUIRE_SLURM=1).
 set -euo pipefail
@@ -108,4 +111,20 @@ grep -q "the record arguments are invalid" <<<"$msg" || fail "unexpected refusal
 [[ ! -e badrec ]] || fail "an invalid recording left its OUTDIR"
 [[ -z $(squeue -h 2>/dev/null) ]] || fail "a refused submission queued jobs: $(squeue -h)"
 
-echo "$(elapsed): PASS: record and analyze as 4-task Slurm arrays, joined byte-identical to one run"
+# ---- 5. a suite, one scene per task
+suite=(--scenes "$src/scenes/dense_fog.toml" --scenes "$src/scenes/animated.toml" --res 16x16
+  --frames 2 --fine 6x6x6)
+t0=$(now)
+"$raycell" suite "${suite[@]}" --quiet --out suite-oneshot >/dev/null || fail "raycell suite failed"
+suite_oneshot=$(seconds "$t0" "$(now)")
+run_array submit_suite.sh suite -- "${suite[@]}"
+got=$(state "$array")
+[[ $got == "0=COMPLETED 1=COMPLETED" ]] || fail "suite array tasks: got '$got'"
+[[ $(state "$join") == "-=COMPLETED" ]] || fail "suite report job: got '$(state "$join")'"
+for f in report.md suite.csv scenes/dense_fog.csv scenes/animated.csv; do
+  cmp "suite-oneshot/$f" "suite/$f" || fail "suite/$f (a task per scene on Slurm) differs from the one-shot suite's"
+done
+[[ -f suite/suite.png ]] || fail "the report job drew no suite/suite.png"
+echo "$(elapsed): suite of 2 scenes: 2 tasks and the report ${took} s wall; one-shot ${suite_oneshot} s"
+
+echo "$(elapsed): PASS: record, analyze and a suite as Slurm arrays, joined byte-identical to one run"
