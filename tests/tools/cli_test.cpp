@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "base/file.h"
 #include "study/accuracy.h"
 #include "tests/test_util.h"
 #include "tests/tools/cli_util.h"
@@ -804,3 +805,70 @@ TEST(Cli, TimelinePastItsLimitIsRefusedAndLeavesNothing) {
 }
 
 }  // namespace timeline
+
+namespace {
+
+// Rows of a suite scene file (study/suite.h): the lines after its rows' header.
+std::vector<std::string> SuiteRows(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::vector<std::string> rows;
+  bool past = false;
+  for (std::string line; std::getline(in, line);) {
+    if (past) rows.push_back(line);
+    if (line.rfind("kind,", 0) == 0) past = true;
+  }
+  return rows;
+}
+
+}  // namespace
+
+// raycell suite end to end on one scene file of the shipped suite (found beside the binary,
+// where the build copies it): every comparison has its rows, a second run reuses the capture
+// and writes the same bytes, and bad options fail at once, naming the option, leaving nothing.
+TEST(Cli, SuiteReplaysEveryComparisonReusesItsCaptureAndRefusesBadOptions) {
+  const auto d = Dir() / "suite";
+  const std::string scene =
+      (std::filesystem::path(RAYCELL_BINARY).parent_path() / "scenes" / "dense_fog.toml").string();
+  const std::string args = "suite --quiet --scenes " + scene +
+                           " --res 16x16 --frames 2 --fine 6x6x6 --out " + d.string();
+  Result r = Raycell(args);
+  ASSERT_EQ(r.code, 0) << r.out;
+  const std::vector<std::string> rows = SuiteRows(d / "scenes" / "dense_fog.csv");
+  std::map<std::string, int> kinds;
+  for (const std::string& row : rows) {
+    ++kinds[row.substr(0, row.find(','))];
+    EXPECT_EQ(row.find(",0,"), std::string::npos) << "a replay without fetches or time: " << row;
+  }
+  EXPECT_GE(kinds["scheduler"], 8) << "1 and 8 processors, four schedulers each at least";
+  EXPECT_GE(kinds["cells"], 10) << "five subdivisions at least, under two schedulers";
+  std::string report, csv;
+  ASSERT_TRUE(raycell::ReadFile((d / "report.md").string(), &report));
+  ASSERT_TRUE(raycell::ReadFile((d / "suite.csv").string(), &csv));
+  EXPECT_NE(report.find("| dense_fog | dense fog with early termination."), std::string::npos)
+      << report;
+  EXPECT_TRUE(std::filesystem::exists(d / "suite.png"));
+  r = Raycell(args.substr(0, args.find(" --quiet")) + args.substr(args.find(" --quiet") + 8));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("dense_fog: capture reused"), std::string::npos) << r.out;
+  std::string again;
+  ASSERT_TRUE(raycell::ReadFile((d / "report.md").string(), &again));
+  EXPECT_EQ(again, report);
+
+  const auto bad = Dir() / "suite-bad";
+  for (const auto& [options, named] :
+       std::vector<std::pair<std::string, std::string>>{{"--frames 1", "--frames 1"},
+                                                        {"--processors 65", "--processors 65"},
+                                                        {"--res 16x", "16x"},
+                                                        {"--only nowhere", "--only 'nowhere'"},
+                                                        {"--report", "dense_fog.csv"}}) {
+    r = Raycell("suite --quiet --scenes " + scene + " " + options + " --out " + bad.string());
+    EXPECT_EQ(r.code, 2) << options << ": " << r.out;
+    EXPECT_NE(r.out.find(named), std::string::npos) << options << ": " << r.out;
+    EXPECT_FALSE(std::filesystem::exists(bad / "report.md")) << options;
+    EXPECT_FALSE(std::filesystem::exists(bad / "captures")) << options;
+  }
+  r = Raycell("suite --quiet --scenes " + (Dir() / "missing.toml").string() + " --out " +
+              bad.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("missing.toml"), std::string::npos) << r.out;
+}
