@@ -17,6 +17,7 @@
 #include "record/scene.h"
 #include "tests/test_util.h"
 #include "tests/tools/cli_util.h"
+#include "traces/trace_reader.h"
 
 namespace raycell {
 namespace {
@@ -199,7 +200,33 @@ max = [0.2, 0.2, 1]
     ASSERT_EQ(Raycell("record --scene " + printed.string() + common + b.string()).code, 0);
     EXPECT_EQ(testing::ReadBytes(a.string()), testing::ReadBytes(b.string()));
     EXPECT_GT(testing::ReadBytes(a.string()).size(), 1000u);
+    // An animated scene is recorded as a sequence is: its volume changes every frame.
+    const TraceHeader h = TraceReader::Open(a.string()).header();
+    EXPECT_EQ(h.volume_changes(), scene != "builtin") << h.scene;
+    EXPECT_EQ(h.scene, scene == "builtin" ? "builtin" : animated + "@%d");
   }
+}
+
+// A grid read from a VDB file (path relative to the scene file) renders the rays the file
+// renders as --scene: the same `trace cat` output; role = "surface" on a fog grid is refused.
+TEST(SceneFile, FileGridRendersAsTheFileDoes) {
+  const fs::path vdb = fs::path(RAYCELL_SHARED_DATA) / "mj_smoke.vdb";
+  if (!fs::exists(vdb)) GTEST_SKIP() << vdb << " absent";
+  const std::string rel = fs::relative(fs::absolute(vdb), Dir()).string();
+  const fs::path scene =
+      Write("smoke.toml", "[[grid]]\nname = \"smoke\"\nrole = \"fog\"\nfile = \"" + rel + "\"\n");
+  const std::string common = " --res 16x16 --orbit 2:30 --cells 3x3x3 --no-images --quiet --out ";
+  const fs::path a = Dir() / "vdb.rct", b = Dir() / "toml.rct";
+  ASSERT_EQ(Raycell("record --scene " + vdb.string() + common + a.string()).code, 0);
+  ASSERT_EQ(Raycell("record --scene " + scene.string() + common + b.string()).code, 0);
+  const auto ca = Raycell("trace cat " + a.string()), cb = Raycell("trace cat " + b.string());
+  EXPECT_GT(ca.out.size(), 1000u);
+  EXPECT_EQ(ca.out, cb.out);
+  const fs::path bad =
+      Write("surface.toml", "[[grid]]\nname = \"s\"\nrole = \"surface\"\nfile = \"" + rel + "\"\n");
+  const auto r = Raycell("record --scene " + bad.string() + common + (Dir() / "bad.rct").string());
+  EXPECT_EQ(r.code, 2);
+  ExpectHas(r.out, "role = \"surface\" needs a level set");
 }
 
 // The flags override the file, and the printed scene shows it.
