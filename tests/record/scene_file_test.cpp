@@ -129,6 +129,8 @@ TEST(SceneFile, CommandRefusesBadScenesBeforeAnyOutput) {
   negative.replace(negative.find("radius = 1"), 10, "radius = -1");
   std::string nan = kSphere;
   nan.replace(nan.find("radius = 1"), 10, "radius = nan");
+  std::string zero = kSphere;
+  zero.replace(zero.find("voxel = 0.1"), 11, "voxel = 0");
   std::string huge = kSphere;
   huge.replace(huge.find("voxel = 0.1"), 11, "voxel = 0.0001");
   // Grown to a negative radius at frame 2: found when frame 2's grid is built.
@@ -139,6 +141,7 @@ TEST(SceneFile, CommandRefusesBadScenesBeforeAnyOutput) {
       {(Dir() / "absent.toml").string(), "absent.toml: cannot read the scene file"},
       {Write("negative.toml", negative).string(), "radius: must be in (0, 1e+06], got -1"},
       {Write("nan.toml", nan).string(), "radius: must be a finite number, got nan"},
+      {Write("zero.toml", zero).string(), "zero.toml:4:9: grid 'ball' voxel: must be in (0, 1000]"},
       {Write("huge.toml", huge).string(), "exceeds the limit of"},
       {Write("empty.toml", "name = \"nothing\"\n").string(), "the scene has no grid"},
       {Write("shrinks.toml", shrinks).string(), "at frame 2 shape sphere"},
