@@ -232,6 +232,26 @@ TEST(SceneFile, FileGridRendersAsTheFileDoes) {
   ExpectHas(r.out, "role = \"surface\" needs a level set");
 }
 
+// Inline key frames make the camera path a --keyframes file with the same keys makes.
+TEST(SceneFile, InlineKeyFramesAreTheKeyframesFilesPath) {
+  const SceneDescription d = ParseSceneDescription(
+      "[camera]\nup = [0, 0, 1]\nfov = 30\n"
+      "[[camera.key]]\nframe = 0\neye = [0, -5, 1]\ntarget = [0, 0, 0]\n"
+      "[[camera.key]]\nframe = 10\neye = [5, 0, 1]\ntarget = [0, 0, 0.5]\nfov = 45\n" +
+          kSphere,
+      "k.toml", ".");
+  CameraPathSpec file;
+  file.up = {0, 0, 1};
+  file.keyframes_file = Write("keys.txt", "0 0 -5 1 0 0 0 30\n10 5 0 1 0 0 0.5 45\n").string();
+  const std::vector<int> frames = {0, 5, 10};
+  const CameraPathInfo a = MakeCameraPathInfo(d.camera, frames, {-1, -1, -1}, {1, 1, 1});
+  const CameraPathInfo b = MakeCameraPathInfo(file, frames, {-1, -1, -1}, {1, 1, 1});
+  EXPECT_EQ(a.kind, "keyframes");
+  EXPECT_TRUE(a == b);
+  EXPECT_TRUE(CameraOf(a, 5) == CameraOf(b, 5));
+  EXPECT_EQ(CameraOf(a, 5).fov_deg, 37.5);  // halfway between 30 and 45
+}
+
 // The flags override the file, and the printed scene shows it.
 TEST(SceneFile, FlagsOverrideTheFile) {
   RecordFlags f;
