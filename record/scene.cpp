@@ -276,7 +276,14 @@ openvdb::FloatGrid::Ptr ReadFileGrid(const std::string& path, const std::string&
 
 // Multiplies every active voxel's density by the noise factor; voxels it zeroes become
 // inactive, and leaves left with none are freed (empty space between the clouds).
-void ApplyNoise(openvdb::FloatGrid& grid, const NoiseDesc& noise) {
+void ApplyNoise(openvdb::FloatGrid& grid, const NoiseDesc& noise, const std::string& what) {
+  // Noise is per voxel: the active tiles become voxels, so a grid with more active voxels
+  // than a made grid may hold (a file's large tiles) is refused before they are made.
+  const double voxels = double(grid.activeVoxelCount());
+  if (voxels > kMaxGridVoxels) {
+    throw InputError(what + ": noise would make its " + std::to_string(grid.activeVoxelCount()) +
+                     " active voxels into leaves, beyond the limit of 2^27");
+  }
   grid.tree().voxelizeActiveTiles();
   for (auto it = grid.beginValueOn(); it; ++it) {
     const openvdb::Coord c = it.getCoord();
@@ -330,7 +337,7 @@ void AddSceneGrid(Scene::Impl& s, const SceneDescription& d, const GridDesc& g, 
     g.ramp > 0 ? openvdb::tools::sdfToFogVolume(*grid, float(g.ramp))
                : openvdb::tools::sdfToFogVolume(*grid);
   }
-  if (g.noise.on) ApplyNoise(*grid, g.noise);
+  if (g.noise.on) ApplyNoise(*grid, g.noise, what);
   ApplyTransform(*grid, g, frame);
   grid->setName(g.name);
   if (!AddGrid(s, grid, g.from_file() ? g.file : d.name)) {

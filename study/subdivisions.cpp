@@ -53,6 +53,13 @@ SubdivisionStudy MeasureSubdivisions(const SubdivisionOptions& o) {
   if (o.frames <= 0) return study;
   study.not_measured = SceneNotLoadable(o.scene);
   if (!study.not_measured.empty()) return study;
+  SceneSpec spec;
+  spec.source = o.scene;
+  if (VolumeChanges(spec)) {  // an animated scene file: its leaves change every frame
+    study.not_measured =
+        "the scene `" + o.scene + "` is animated: a regroupable capture needs one volume";
+    return study;
+  }
   if (!o.quiet) {
     std::cerr << "measuring subdivisions: " << o.frames << " frame(s) of `" << o.scene << "` at "
               << o.res << ", one capture on " << o.fine << " cells regrouped, in " << o.out

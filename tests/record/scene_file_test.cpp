@@ -17,6 +17,7 @@
 #include "record/scene.h"
 #include "tests/test_util.h"
 #include "tests/tools/cli_util.h"
+#include "traces/trace_reader.h"
 
 namespace raycell {
 namespace {
@@ -128,6 +129,8 @@ TEST(SceneFile, CommandRefusesBadScenesBeforeAnyOutput) {
   negative.replace(negative.find("radius = 1"), 10, "radius = -1");
   std::string nan = kSphere;
   nan.replace(nan.find("radius = 1"), 10, "radius = nan");
+  std::string zero = kSphere;
+  zero.replace(zero.find("voxel = 0.1"), 11, "voxel = 0");
   std::string huge = kSphere;
   huge.replace(huge.find("voxel = 0.1"), 11, "voxel = 0.0001");
   // Grown to a negative radius at frame 2: found when frame 2's grid is built.
@@ -138,6 +141,7 @@ TEST(SceneFile, CommandRefusesBadScenesBeforeAnyOutput) {
       {(Dir() / "absent.toml").string(), "absent.toml: cannot read the scene file"},
       {Write("negative.toml", negative).string(), "radius: must be in (0, 1e+06], got -1"},
       {Write("nan.toml", nan).string(), "radius: must be a finite number, got nan"},
+      {Write("zero.toml", zero).string(), "zero.toml:4:9: grid 'ball' voxel: must be in (0, 1000]"},
       {Write("huge.toml", huge).string(), "exceeds the limit of"},
       {Write("empty.toml", "name = \"nothing\"\n").string(), "the scene has no grid"},
       {Write("shrinks.toml", shrinks).string(), "at frame 2 shape sphere"},
@@ -199,7 +203,53 @@ max = [0.2, 0.2, 1]
     ASSERT_EQ(Raycell("record --scene " + printed.string() + common + b.string()).code, 0);
     EXPECT_EQ(testing::ReadBytes(a.string()), testing::ReadBytes(b.string()));
     EXPECT_GT(testing::ReadBytes(a.string()).size(), 1000u);
+    // An animated scene is recorded as a sequence is: its volume changes every frame.
+    const TraceHeader h = TraceReader::Open(a.string()).header();
+    EXPECT_EQ(h.volume_changes(), scene != "builtin") << h.scene;
+    EXPECT_EQ(h.scene, scene == "builtin" ? "builtin" : animated + "@%d");
   }
+}
+
+// A grid read from a VDB file (path relative to the scene file) renders the rays the file
+// renders as --scene: the same `trace cat` output; role = "surface" on a fog grid is refused.
+TEST(SceneFile, FileGridRendersAsTheFileDoes) {
+  const fs::path vdb = fs::path(RAYCELL_SHARED_DATA) / "mj_smoke.vdb";
+  if (!fs::exists(vdb)) GTEST_SKIP() << vdb << " absent";
+  const std::string rel = fs::relative(fs::absolute(vdb), Dir()).string();
+  const fs::path scene =
+      Write("smoke.toml", "[[grid]]\nname = \"smoke\"\nrole = \"fog\"\nfile = \"" + rel + "\"\n");
+  const std::string common = " --res 16x16 --orbit 2:30 --cells 3x3x3 --no-images --quiet --out ";
+  const fs::path a = Dir() / "vdb.rct", b = Dir() / "toml.rct";
+  ASSERT_EQ(Raycell("record --scene " + vdb.string() + common + a.string()).code, 0);
+  ASSERT_EQ(Raycell("record --scene " + scene.string() + common + b.string()).code, 0);
+  const auto ca = Raycell("trace cat " + a.string()), cb = Raycell("trace cat " + b.string());
+  EXPECT_GT(ca.out.size(), 1000u);
+  EXPECT_EQ(ca.out, cb.out);
+  const fs::path bad =
+      Write("surface.toml", "[[grid]]\nname = \"s\"\nrole = \"surface\"\nfile = \"" + rel + "\"\n");
+  const auto r = Raycell("record --scene " + bad.string() + common + (Dir() / "bad.rct").string());
+  EXPECT_EQ(r.code, 2);
+  ExpectHas(r.out, "role = \"surface\" needs a level set");
+}
+
+// Inline key frames make the camera path a --keyframes file with the same keys makes.
+TEST(SceneFile, InlineKeyFramesAreTheKeyframesFilesPath) {
+  const SceneDescription d = ParseSceneDescription(
+      "[camera]\nup = [0, 0, 1]\nfov = 30\n"
+      "[[camera.key]]\nframe = 0\neye = [0, -5, 1]\ntarget = [0, 0, 0]\n"
+      "[[camera.key]]\nframe = 10\neye = [5, 0, 1]\ntarget = [0, 0, 0.5]\nfov = 45\n" +
+          kSphere,
+      "k.toml", ".");
+  CameraPathSpec file;
+  file.up = {0, 0, 1};
+  file.keyframes_file = Write("keys.txt", "0 0 -5 1 0 0 0 30\n10 5 0 1 0 0 0.5 45\n").string();
+  const std::vector<int> frames = {0, 5, 10};
+  const CameraPathInfo a = MakeCameraPathInfo(d.camera, frames, {-1, -1, -1}, {1, 1, 1});
+  const CameraPathInfo b = MakeCameraPathInfo(file, frames, {-1, -1, -1}, {1, 1, 1});
+  EXPECT_EQ(a.kind, "keyframes");
+  EXPECT_TRUE(a == b);
+  EXPECT_TRUE(CameraOf(a, 5) == CameraOf(b, 5));
+  EXPECT_EQ(CameraOf(a, 5).fov_deg, 37.5);  // halfway between 30 and 45
 }
 
 // The flags override the file, and the printed scene shows it.
