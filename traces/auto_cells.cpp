@@ -1,0 +1,302 @@
+#include "traces/auto_cells.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "base/check.h"
+
+namespace raycell {
+
+void CellPaths::Add(const RayBatch& coarse) {
+  RAYCELL_CHECK_EQ(coarse.first_id(), RayId(rays()));
+  for (std::size_t r = 0; r < coarse.size(); ++r) {
+    const RayId parent = coarse.parents()[r];
+    RAYCELL_CHECK(parent == kNoParent || parent < RayId(rays()));
+    parent_.push_back(parent);
+    spawn_.push_back(coarse.spawns()[r]);
+    for (std::size_t v = coarse.visit_begin(r); v < coarse.visit_end(r); ++v) {
+      const std::uint32_t c = coarse.cells()[v].value();
+      cell_.push_back(c);
+      cells_ = std::max(cells_, c + 1);
+    }
+    begin_.push_back(cell_.size());
+  }
+}
+
+double CellPaths::MaxWorkBytes(const std::vector<std::uint64_t>& fp, std::uint64_t capacity) const {
+  RAYCELL_CHECK(fp.size() >= cells_);
+  const std::size_t n = rays();
+  // Each ray's children, ordered by their spawn visit (then id).
+  std::vector<std::uint64_t> child_begin(n + 1, 0);
+  for (std::size_t r = 0; r < n; ++r) {
+    if (parent_[r] != kNoParent) ++child_begin[parent_[r] + 1];
+  }
+  for (std::size_t r = 0; r < n; ++r) child_begin[r + 1] += child_begin[r];
+  std::vector<std::uint32_t> child(child_begin[n]);
+  {
+    std::vector<std::uint64_t> at(child_begin.begin(), child_begin.end() - 1);
+    for (std::size_t r = 0; r < n; ++r) {
+      if (parent_[r] != kNoParent) child[at[parent_[r]]++] = std::uint32_t(r);
+    }
+  }
+  for (std::size_t r = 0; r < n; ++r) {
+    std::stable_sort(child.begin() + std::ptrdiff_t(child_begin[r]),
+                     child.begin() + std::ptrdiff_t(child_begin[r + 1]),
+                     [&](std::uint32_t a, std::uint32_t b) { return spawn_[a] < spawn_[b]; });
+  }
+  std::vector<std::uint64_t> next_child(child_begin.begin(), child_begin.end() - 1);
+  // Per cell, the rays queued to enter it: (ray, visit).
+  std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> queue(cells_);
+  for (std::size_t r = 0; r < n; ++r) {
+    if (parent_[r] == kNoParent && begin_[r] < begin_[r + 1]) {
+      queue[cell_[begin_[r]]].push_back({std::uint32_t(r), 0});
+    }
+  }
+  // The LRU cache: per cell whether held and when last used.
+  std::vector<std::uint8_t> held(cells_, 0);
+  std::vector<std::uint64_t> used(cells_, 0);
+  std::uint64_t held_bytes = 0, clock = 0;
+  double bytes = 0;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> work;
+  for (;;) {
+    std::uint32_t c = 0;
+    for (std::uint32_t k = 1; k < cells_; ++k) {
+      if (queue[k].size() > queue[c].size()) c = k;
+    }
+    if (cells_ == 0 || queue[c].empty()) break;
+    if (!held[c]) {
+      bytes += double(fp[c]);
+      if (fp[c] <= capacity) {
+        while (held_bytes + fp[c] > capacity) {
+          std::uint32_t victim = cells_;
+          for (std::uint32_t k = 0; k < cells_; ++k) {
+            if (held[k] && (victim == cells_ || used[k] < used[victim])) victim = k;
+          }
+          held[victim] = 0;
+          held_bytes -= fp[victim];
+        }
+        held[c] = 1;
+        held_bytes += fp[c];
+      }
+    }
+    used[c] = ++clock;
+    work.swap(queue[c]);
+    while (!work.empty()) {
+      const auto [r, v] = work.back();
+      work.pop_back();
+      while (next_child[r] < child_begin[r + 1] && spawn_[child[next_child[r]]] <= v) {
+        work.push_back({child[next_child[r]++], 0});
+      }
+      if (begin_[r] + v + 1 < begin_[r + 1]) {
+        queue[cell_[begin_[r] + v + 1]].push_back({r, v + 1});
+      }
+    }
+  }
+  return bytes;
+}
+
+double CellPaths::TreeBytes(const std::vector<std::uint64_t>& fp) const {
+  RAYCELL_CHECK(fp.size() >= cells_);
+  std::vector<std::uint32_t> max_gen(cells_, 0), count(cells_, 0);
+  std::vector<std::uint32_t> touched;
+  // (ray, last visit walked) from the ray up to its primary ray.
+  std::vector<std::pair<std::size_t, std::uint64_t>> chain;
+  for (std::size_t r = 0; r < rays(); ++r) {
+    if (begin_[r] == begin_[r + 1]) continue;
+    chain.clear();
+    std::size_t at = r;
+    std::uint64_t last = begin_[r + 1] - begin_[r] - 1;
+    for (;;) {
+      chain.push_back({at, last});
+      if (parent_[at] == kNoParent) break;
+      last = spawn_[at];
+      at = std::size_t(parent_[at]);
+    }
+    // From the primary ray down: a node per visit, but a spawned ray's first visit, which is
+    // its parent's node of the spawn visit.
+    for (std::size_t k = chain.size(); k-- > 0;) {
+      const auto [ray, upto] = chain[k];
+      for (std::uint64_t v = parent_[ray] == kNoParent ? 0 : 1; v <= upto; ++v) {
+        const std::uint32_t c = cell_[begin_[ray] + v];
+        if (count[c]++ == 0) touched.push_back(c);
+        if (k == 0) max_gen[c] = std::max(max_gen[c], count[c]);
+      }
+    }
+    for (std::uint32_t c : touched) count[c] = 0;
+    touched.clear();
+  }
+  double bytes = 0;
+  for (std::uint32_t c = 0; c < cells_; ++c) bytes += double(max_gen[c]) * double(fp[c]);
+  return bytes;
+}
+
+namespace {
+
+// Per fine cell, its cell in `sub`, kNoCell where that cell is empty (fp 0): the map a
+// RayRegrouper takes, as the regrouped view's.
+std::vector<CellId> NonEmptyMap(const Subdivision& sub, const std::vector<std::uint64_t>& fp) {
+  std::vector<CellId> m(sub.coarse_of_fine.size());
+  for (std::size_t f = 0; f < m.size(); ++f) {
+    const CellId c = sub.coarse_of_fine[f];
+    m[f] = fp[c.value()] == 0 ? kNoCell : c;
+  }
+  return m;
+}
+
+}  // namespace
+
+struct AutoCells::Rule {
+  std::string name;
+  bool has = false;  // whether it has cells for the next frame
+  Subdivision sub;
+  std::vector<std::uint64_t> fp;
+  std::unique_ptr<RayRegrouper> regrouper;
+  CellPaths paths;
+  // Per frame given: its ratio to the baseline's estimate, NaN where it had no cells.
+  std::vector<double> ratio;
+};
+
+AutoCells::AutoCells(std::uint32_t cells, FineCells fine, const std::string& what)
+    : cells_(cells), fine_(std::move(fine)), what_(what) {
+  RAYCELL_CHECK(fine_.union_footprint != nullptr);
+  if (cells_ > fine_.count()) {
+    throw InputError(what_ + ": " + std::to_string(cells_) + " cells from " +
+                     std::to_string(fine_.count()) + " fine cells");
+  }
+  fine_fp_.resize(fine_.count());
+  for (std::uint32_t f = 0; f < fine_.count(); ++f) fine_fp_[f] = fine_.union_footprint({f});
+  for (const char* name :
+       {"uniform", "kd:footprint", "kd:sqrt:first", "kd:sqrt:seen", "grid:crossings:seen"}) {
+    rules_.push_back(std::make_unique<Rule>());
+    rules_.back()->name = name;
+  }
+  Prepare();
+  std::vector<std::uint64_t> full;
+  for (std::uint64_t b : rules_[0]->fp) {
+    if (b != 0) full.push_back(b);
+  }
+  std::sort(full.begin(), full.end());
+  capacity_ = full.empty() ? 0 : full[(full.size() - 1) / 2];
+}
+
+AutoCells::~AutoCells() = default;
+
+const Subdivision& AutoCells::next() const { return rules_[chosen_]->sub; }
+
+void AutoCells::Prepare() {
+  const std::size_t k = samples_.size();  // the next frame
+  const auto spec = [&](const std::string& text) { return ParseSubdivisionSpec(text, what_); };
+  const std::string n = std::to_string(cells_);
+  for (auto& rule : rules_) {
+    FineCells f;
+    f.grid = fine_.grid;
+    f.union_footprint = fine_.union_footprint;
+    std::optional<SubdivisionSpec> s;
+    if (rule->name == "uniform") {
+      const auto g = CubicGrid(cells_, fine_.grid, what_);
+      s = spec("grid:" + std::to_string(g[0]) + "x" + std::to_string(g[1]) + "x" +
+               std::to_string(g[2]));
+    } else if (rule->name == "kd:footprint") {
+      s = spec("kd:" + n + ":footprint");
+    } else if (k > 0 && rule->name == "kd:sqrt:first") {
+      s = spec("kd:" + n + ":sqrt");
+      f.samples = samples_[0];
+    } else if (k > 0 && rule->name == "kd:sqrt:seen") {
+      s = spec("kd:" + n + ":sqrt");
+      f.samples.assign(fine_.count(), 0);
+      for (const auto& frame : samples_) {
+        for (std::size_t c = 0; c < frame.size(); ++c) f.samples[c] += frame[c];
+      }
+    } else if (k > 0 && rule->name == "grid:crossings:seen") {
+      f.crossings = crossings_;
+      f.has_crossings = true;
+      // Only grids within the fine one: a count that no grid makes keeps the rule out.
+      try {
+        rule->sub = Subdivide(spec("grid:" + n + ":crossings"), f);
+        s = spec("grid:" + n + ":crossings");
+      } catch (const InputError&) {
+        s.reset();
+      }
+    }
+    rule->has = s.has_value();
+    if (!rule->has) continue;
+    const bool again = (rule->name == "uniform" || rule->name == "kd:footprint" ? k > 0 : k > 1) &&
+                       rule->name != "kd:sqrt:seen" && rule->name != "grid:crossings:seen";
+    if (!again) {
+      rule->sub = Subdivide(*s, f);
+      rule->fp.assign(rule->sub.cells(), 0);
+      for (std::uint32_t c = 0; c < rule->sub.cells(); ++c) {
+        rule->fp[c] = fine_.union_footprint(FineCellsOf(rule->sub.boxes[c], fine_.grid));
+      }
+    }
+    rule->regrouper = std::make_unique<RayRegrouper>(NonEmptyMap(rule->sub, rule->fp));
+    rule->paths = CellPaths();
+  }
+  // The rule for frame k: the baseline unless a candidate's estimates on the frames seen beat
+  // it by more than their own change from one frame to the next.
+  const std::size_t current = chosen_;
+  chosen_ = 0;
+  double best = 1.0;
+  for (std::size_t i = 1; i < rules_.size(); ++i) {
+    const Rule& rule = *rules_[i];
+    if (!rule.has || k < 2) continue;
+    const double last = rule.ratio[k - 1], before = rule.ratio[k - 2];
+    if (std::isnan(last) || std::isnan(before)) continue;
+    const double score = std::max(last, before) + std::abs(last - before);
+    if (score >= 1.0) continue;
+    if (i == current) {  // a candidate still winning is kept: cells that stay put
+      chosen_ = i;
+      break;
+    }
+    if (score < best) best = score, chosen_ = i;
+  }
+}
+
+void AutoCells::AddBatch(const RayBatch& fine) {
+  if (frame_samples_.empty()) frame_samples_.assign(fine_.count(), 0);
+  const auto g = fine_.grid;
+  for (std::size_t r = 0; r < fine.size(); ++r) {
+    std::optional<std::array<std::uint32_t, 3>> last;
+    for (std::size_t v = fine.visit_begin(r); v < fine.visit_end(r); ++v) {
+      const std::uint32_t c = fine.cells()[v].value();
+      RAYCELL_CHECK_LT(c, fine_.count());
+      frame_samples_[c] += fine.samples()[v];
+      if (fine_fp_[c] == 0) continue;
+      const std::array<std::uint32_t, 3> now{c % g[0], c / g[0] % g[1], c / g[0] / g[1]};
+      for (int a = 0; last && a < 3; ++a) {
+        crossings_[a] += now[a] > (*last)[a] ? now[a] - (*last)[a] : (*last)[a] - now[a];
+      }
+      last = now;
+    }
+  }
+  for (auto& rule : rules_) {
+    if (rule->has) rule->paths.Add(rule->regrouper->Regroup(fine));
+  }
+}
+
+void AutoCells::EndFrame() {
+  Frame out;
+  out.rule = rules_[chosen_]->name;
+  const Rule& base = *rules_[0];
+  const double base_mw = base.paths.MaxWorkBytes(base.fp, capacity_);
+  const double base_tree = base.paths.TreeBytes(base.fp);
+  for (auto& rule : rules_) {
+    double q = std::numeric_limits<double>::quiet_NaN();
+    if (rule->has) {
+      const double mw = rule->paths.MaxWorkBytes(rule->fp, capacity_);
+      const double tree = rule->paths.TreeBytes(rule->fp);
+      q = std::max(base_mw > 0 ? mw / base_mw : 1.0, base_tree > 0 ? tree / base_tree : 1.0);
+      out.ratios.push_back({rule->name, q});
+    }
+    rule->ratio.push_back(q);
+  }
+  frames_.push_back(std::move(out));
+  if (frame_samples_.empty()) frame_samples_.assign(fine_.count(), 0);
+  samples_.push_back(std::move(frame_samples_));
+  frame_samples_.clear();
+  Prepare();
+}
+
+}  // namespace raycell
