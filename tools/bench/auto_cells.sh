@@ -9,7 +9,10 @@
 # mean of the ratios and the worst capture. Schedulers that the raycell binary does not know
 # (`auto` until it exists) are skipped, saying so.
 #
-# Usage: tools/bench/auto_cells.sh CAPTURE...
+# Usage: tools/bench/auto_cells.sh [CAPTURE...]
+# With no CAPTURE, records the built-in scene and ../shared/data/mj_smoke.vdb (when present) at
+# 128x128, 12x12x12 fine, 8 frames of an orbit of 3.75 degrees a frame (as subdivisions.sh), and
+# measures those (about 2 minutes on one core).
 # Environment: RAYCELL (build/tools/raycell), BASE (3x3x3), SPECS ("auto:27 kd:27:footprint
 #   kd:27:sqrt dynamic:27:sqrt grid:27:crossings"), SCHEDULERS ("maxwork celltree-best auto").
 set -euo pipefail
@@ -25,7 +28,18 @@ for s in $schedulers; do
     tr ',' '\n' | tr -d ' ' | grep -qx -- "$s"; then known+=("$s"); else
     echo "scheduler '$s' unknown to $raycell: skipped" >&2; fi
 done
-for capture in "$@"; do
+captures=("$@")
+if ((${#captures[@]} == 0)); then
+  data=$(dirname "$0")/../../../shared/data
+  for scene in builtin "$data/mj_smoke.vdb"; do
+    [[ $scene == builtin || -f $scene ]] || continue
+    name=$(basename "$scene" .vdb)
+    "$raycell" record --scene "$scene" --res 128x128 --cells 12x12x12 --regroupable \
+      --orbit 8:30 --no-images --quiet --out "$work/$name.rct" >&2
+    captures+=("$work/$name.rct")
+  done
+fi
+for capture in "${captures[@]}"; do
   median=$("$raycell" trace info "$capture" --cells "$base" |
     sed -n 's/^footprint spread: [0-9]* non-empty cells, min [0-9]*, median \([0-9]*\), .*/\1/p')
   for spec in "$base" $specs; do
