@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <tuple>
 #include <utility>
 
 #include "base/check.h"
@@ -148,7 +149,12 @@ std::vector<CellId> NonEmptyMap(const Subdivision& sub, const std::vector<std::u
 }  // namespace
 
 struct AutoCells::Rule {
-  std::string name;
+  // What a rule's cells are made from: nothing but the footprints, frame 0's samples, the
+  // samples and steps of every frame seen, or the last frame's samples.
+  enum class Data { kNone, kFirst, kSeen, kLast };
+  std::string name;  // "uniform", or the SPEC and its data ("kd:27:sqrt@seen")
+  std::string spec;
+  Data data = Data::kNone;
   bool has = false;  // whether it has cells for the next frame
   Subdivision sub;
   std::vector<std::uint64_t> fp;
@@ -167,10 +173,23 @@ AutoCells::AutoCells(std::uint32_t cells, FineCells fine, const std::string& wha
   }
   fine_fp_.resize(fine_.count());
   for (std::uint32_t f = 0; f < fine_.count(); ++f) fine_fp_[f] = fine_.union_footprint({f});
-  for (const char* name :
-       {"uniform", "kd:footprint", "kd:sqrt:first", "kd:sqrt:seen", "grid:crossings:seen"}) {
+  const std::array<std::uint32_t, 3> g = CubicGrid(cells_, fine_.grid, what_);
+  const std::string n = std::to_string(cells_);
+  using Data = Rule::Data;
+  const std::vector<std::tuple<std::string, std::string, Data>> rules = {
+      {"uniform",
+       "grid:" + std::to_string(g[0]) + "x" + std::to_string(g[1]) + "x" + std::to_string(g[2]),
+       Data::kNone},
+      {"kd:" + n + ":footprint", "kd:" + n + ":footprint", Data::kNone},
+      {"kd:" + n + ":sqrt@0", "kd:" + n + ":sqrt", Data::kFirst},
+      {"kd:" + n + ":sqrt@seen", "kd:" + n + ":sqrt", Data::kSeen},
+      {"grid:" + n + ":crossings@seen", "grid:" + n + ":crossings", Data::kSeen},
+  };
+  for (const auto& [name, spec, data] : rules) {
     rules_.push_back(std::make_unique<Rule>());
     rules_.back()->name = name;
+    rules_.back()->spec = spec;
+    rules_.back()->data = data;
   }
   Prepare();
   std::vector<std::uint64_t> full;
@@ -186,46 +205,29 @@ AutoCells::~AutoCells() = default;
 const Subdivision& AutoCells::next() const { return rules_[chosen_]->sub; }
 
 void AutoCells::Prepare() {
+  using Data = Rule::Data;
   const std::size_t k = samples_.size();  // the next frame
-  const auto spec = [&](const std::string& text) { return ParseSubdivisionSpec(text, what_); };
-  const std::string n = std::to_string(cells_);
   for (auto& rule : rules_) {
-    FineCells f;
-    f.grid = fine_.grid;
-    f.union_footprint = fine_.union_footprint;
-    std::optional<SubdivisionSpec> s;
-    if (rule->name == "uniform") {
-      const auto g = CubicGrid(cells_, fine_.grid, what_);
-      s = spec("grid:" + std::to_string(g[0]) + "x" + std::to_string(g[1]) + "x" +
-               std::to_string(g[2]));
-    } else if (rule->name == "kd:footprint") {
-      s = spec("kd:" + n + ":footprint");
-    } else if (k > 0 && rule->name == "kd:sqrt:first") {
-      s = spec("kd:" + n + ":sqrt");
-      f.samples = samples_[0];
-    } else if (k > 0 && rule->name == "kd:sqrt:seen") {
-      s = spec("kd:" + n + ":sqrt");
-      f.samples.assign(fine_.count(), 0);
-      for (const auto& frame : samples_) {
-        for (std::size_t c = 0; c < frame.size(); ++c) f.samples[c] += frame[c];
-      }
-    } else if (k > 0 && rule->name == "grid:crossings:seen") {
-      f.crossings = crossings_;
-      f.has_crossings = true;
-      // Only grids within the fine one: a count that no grid makes keeps the rule out.
-      try {
-        rule->sub = Subdivide(spec("grid:" + n + ":crossings"), f);
-        s = spec("grid:" + n + ":crossings");
-      } catch (const InputError&) {
-        s.reset();
-      }
-    }
-    rule->has = s.has_value();
+    rule->has = rule->data == Data::kNone || k > 0;
     if (!rule->has) continue;
-    const bool again = (rule->name == "uniform" || rule->name == "kd:footprint" ? k > 0 : k > 1) &&
-                       rule->name != "kd:sqrt:seen" && rule->name != "grid:crossings:seen";
-    if (!again) {
-      rule->sub = Subdivide(*s, f);
+    const bool remake = rule->data == Data::kNone    ? k == 0
+                        : rule->data == Data::kFirst ? k == 1
+                                                     : true;
+    if (remake) {
+      FineCells f;
+      f.grid = fine_.grid;
+      f.union_footprint = fine_.union_footprint;
+      if (rule->data == Data::kFirst || rule->data == Data::kLast) {
+        f.samples = samples_[rule->data == Data::kFirst ? 0 : k - 1];
+      } else if (rule->data == Data::kSeen) {
+        f.samples.assign(fine_.count(), 0);
+        for (const auto& frame : samples_) {
+          for (std::size_t c = 0; c < frame.size(); ++c) f.samples[c] += frame[c];
+        }
+        f.crossings = crossings_;
+        f.has_crossings = true;
+      }
+      rule->sub = Subdivide(ParseSubdivisionSpec(rule->spec, what_), f);
       rule->fp.assign(rule->sub.cells(), 0);
       for (std::uint32_t c = 0; c < rule->sub.cells(); ++c) {
         rule->fp[c] = fine_.union_footprint(FineCellsOf(rule->sub.boxes[c], fine_.grid));

@@ -49,9 +49,11 @@ class CellPaths {
 
 class AutoCells {
  public:
-  // What auto:N decided for one frame: the rule its cells come from ("uniform" the baseline)
-  // and, per rule evaluated on that frame, the ratio of its estimate to the baseline's (the
-  // larger of the two estimates' ratios).
+  // What auto:N decided for one frame: the rule its cells come from ("uniform": the baseline;
+  // else a SPEC and what it was made from: "kd:27:footprint", "kd:27:sqrt@0" on frame 0's
+  // samples, "kd:27:sqrt@seen" and "grid:27:crossings@seen" on every frame seen) and, per rule
+  // evaluated on that frame, the ratio of its estimate to the baseline's (the larger of the
+  // two estimates' ratios).
   struct Frame {
     std::string rule;
     std::vector<std::pair<std::string, double>> ratios;
