@@ -171,20 +171,30 @@ AutoCells::AutoCells(std::uint32_t cells, FineCells fine, const std::string& wha
     throw InputError(what_ + ": " + std::to_string(cells_) + " cells from " +
                      std::to_string(fine_.count()) + " fine cells");
   }
-  fine_fp_.resize(fine_.count());
-  for (std::uint32_t f = 0; f < fine_.count(); ++f) fine_fp_[f] = fine_.union_footprint({f});
   const std::array<std::uint32_t, 3> g = CubicGrid(cells_, fine_.grid, what_);
   const std::string n = std::to_string(cells_);
   using Data = Rule::Data;
-  const std::vector<std::tuple<std::string, std::string, Data>> rules = {
+  std::vector<std::tuple<std::string, std::string, Data>> rules = {
       {"uniform",
        "grid:" + std::to_string(g[0]) + "x" + std::to_string(g[1]) + "x" + std::to_string(g[2]),
        Data::kNone},
       {"kd:" + n + ":footprint", "kd:" + n + ":footprint", Data::kNone},
       {"kd:" + n + ":sqrt@0", "kd:" + n + ":sqrt", Data::kFirst},
       {"kd:" + n + ":sqrt@seen", "kd:" + n + ":sqrt", Data::kSeen},
-      {"grid:" + n + ":crossings@seen", "grid:" + n + ":crossings", Data::kSeen},
   };
+  // Every other grid of N cells within the fine one, static (grid:N:crossings picks among
+  // these by a proxy; here the estimates themselves compare them).
+  for (std::uint32_t x = 1; x <= std::min(cells_, fine_.grid[0]); ++x) {
+    if (cells_ % x != 0) continue;
+    for (std::uint32_t y = 1; y <= std::min(cells_ / x, fine_.grid[1]); ++y) {
+      if (cells_ / x % y != 0 || cells_ / x / y > fine_.grid[2]) continue;
+      const std::array<std::uint32_t, 3> other{x, y, cells_ / x / y};
+      if (other == g) continue;
+      const std::string grid = "grid:" + std::to_string(x) + "x" + std::to_string(y) + "x" +
+                               std::to_string(cells_ / x / y);
+      rules.push_back({grid, grid, Data::kNone});
+    }
+  }
   for (const auto& [name, spec, data] : rules) {
     rules_.push_back(std::make_unique<Rule>());
     rules_.back()->name = name;
@@ -224,8 +234,6 @@ void AutoCells::Prepare() {
         for (const auto& frame : samples_) {
           for (std::size_t c = 0; c < frame.size(); ++c) f.samples[c] += frame[c];
         }
-        f.crossings = crossings_;
-        f.has_crossings = true;
       }
       rule->sub = Subdivide(ParseSubdivisionSpec(rule->spec, what_), f);
       rule->fp.assign(rule->sub.cells(), 0);
@@ -258,20 +266,10 @@ void AutoCells::Prepare() {
 
 void AutoCells::AddBatch(const RayBatch& fine) {
   if (frame_samples_.empty()) frame_samples_.assign(fine_.count(), 0);
-  const auto g = fine_.grid;
-  for (std::size_t r = 0; r < fine.size(); ++r) {
-    std::optional<std::array<std::uint32_t, 3>> last;
-    for (std::size_t v = fine.visit_begin(r); v < fine.visit_end(r); ++v) {
-      const std::uint32_t c = fine.cells()[v].value();
-      RAYCELL_CHECK_LT(c, fine_.count());
-      frame_samples_[c] += fine.samples()[v];
-      if (fine_fp_[c] == 0) continue;
-      const std::array<std::uint32_t, 3> now{c % g[0], c / g[0] % g[1], c / g[0] / g[1]};
-      for (int a = 0; last && a < 3; ++a) {
-        crossings_[a] += now[a] > (*last)[a] ? now[a] - (*last)[a] : (*last)[a] - now[a];
-      }
-      last = now;
-    }
+  for (std::size_t v = 0; v < fine.visit_count(); ++v) {
+    const std::uint32_t c = fine.cells()[v].value();
+    RAYCELL_CHECK_LT(c, fine_.count());
+    frame_samples_[c] += fine.samples()[v];
   }
   for (auto& rule : rules_) {
     if (rule->has) rule->paths.Add(rule->regrouper->Regroup(fine));

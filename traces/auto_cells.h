@@ -7,11 +7,10 @@
 // machine, and frame i's cells do not depend on the frames after it.
 #pragma once
 
-#include <array>
 #include <cstdint>
 #include <memory>
-#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "traces/cell_id.h"
@@ -50,16 +49,16 @@ class CellPaths {
 class AutoCells {
  public:
   // What auto:N decided for one frame: the rule its cells come from ("uniform": the baseline;
-  // else a SPEC and what it was made from: "kd:27:footprint", "kd:27:sqrt@0" on frame 0's
-  // samples, "kd:27:sqrt@seen" and "grid:27:crossings@seen" on every frame seen) and, per rule
-  // evaluated on that frame, the ratio of its estimate to the baseline's (the larger of the
-  // two estimates' ratios).
+  // else a SPEC and what it was made from: "kd:27:footprint" and "grid:1x3x9" from nothing
+  // but the footprints, "kd:27:sqrt@0" from frame 0's samples, "kd:27:sqrt@seen" from every
+  // frame seen) and, per rule evaluated on that frame, the ratio of its estimate to the
+  // baseline's (the larger of the two estimates' ratios).
   struct Frame {
     std::string rule;
     std::vector<std::pair<std::string, double>> ratios;
   };
 
-  // auto:`cells` on the fine grid `fine` (its union_footprint; samples and crossings unused).
+  // auto:`cells` on the fine grid `fine` (its grid and union_footprint; the rest unused).
   // InputError "WHAT: ..." when no grid of `cells` cells fits the fine grid or there are more
   // cells than fine cells.
   AutoCells(std::uint32_t cells, FineCells fine, const std::string& what);
@@ -81,15 +80,13 @@ class AutoCells {
   std::uint32_t cells_;
   FineCells fine_;
   std::string what_;
-  std::vector<std::uint64_t> fine_fp_;  // per fine cell, its footprint
-  std::uint64_t capacity_ = 0;          // the baseline's median non-empty footprint
+  std::uint64_t capacity_ = 0;  // the baseline's median non-empty footprint
   std::vector<std::unique_ptr<Rule>> rules_;
   std::size_t chosen_ = 0;  // the rule whose cells next() gives
-  // The frames given: per frame the samples per fine cell; the steps between non-empty fine
-  // cells by axis, summed.
+  // The frames given: per frame the samples per fine cell.
   std::vector<std::vector<std::uint64_t>> samples_;
   std::vector<std::uint64_t> frame_samples_;
-  std::array<std::uint64_t, 3> crossings_{};
+
   std::vector<Frame> frames_;
 };
 
