@@ -15,7 +15,8 @@ void CellPaths::Add(const RayBatch& coarse) {
   for (std::size_t r = 0; r < coarse.size(); ++r) {
     const RayId parent = coarse.parents()[r];
     RAYCELL_CHECK(parent == kNoParent || parent < RayId(rays()));
-    parent_.push_back(parent);
+    RAYCELL_CHECK_LT(rays(), std::size_t{kNone});  // ray numbers fit 32 bits
+    parent_.push_back(parent == kNoParent ? kNone : std::uint32_t(parent));
     spawn_.push_back(coarse.spawns()[r]);
     for (std::size_t v = coarse.visit_begin(r); v < coarse.visit_end(r); ++v) {
       const std::uint32_t c = coarse.cells()[v].value();
@@ -32,14 +33,14 @@ double CellPaths::MaxWorkBytes(const std::vector<std::uint64_t>& fp, std::uint64
   // Each ray's children, ordered by their spawn visit (then id).
   std::vector<std::uint64_t> child_begin(n + 1, 0);
   for (std::size_t r = 0; r < n; ++r) {
-    if (parent_[r] != kNoParent) ++child_begin[parent_[r] + 1];
+    if (parent_[r] != kNone) ++child_begin[parent_[r] + 1];
   }
   for (std::size_t r = 0; r < n; ++r) child_begin[r + 1] += child_begin[r];
   std::vector<std::uint32_t> child(child_begin[n]);
   {
     std::vector<std::uint64_t> at(child_begin.begin(), child_begin.end() - 1);
     for (std::size_t r = 0; r < n; ++r) {
-      if (parent_[r] != kNoParent) child[at[parent_[r]]++] = std::uint32_t(r);
+      if (parent_[r] != kNone) child[at[parent_[r]]++] = std::uint32_t(r);
     }
   }
   for (std::size_t r = 0; r < n; ++r) {
@@ -51,7 +52,7 @@ double CellPaths::MaxWorkBytes(const std::vector<std::uint64_t>& fp, std::uint64
   // Per cell, the rays queued to enter it: (ray, visit).
   std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> queue(cells_);
   for (std::size_t r = 0; r < n; ++r) {
-    if (parent_[r] == kNoParent && begin_[r] < begin_[r + 1]) {
+    if (parent_[r] == kNone && begin_[r] < begin_[r + 1]) {
       queue[cell_[begin_[r]]].push_back({std::uint32_t(r), 0});
     }
   }
@@ -111,7 +112,7 @@ double CellPaths::TreeBytes(const std::vector<std::uint64_t>& fp) const {
     std::uint64_t last = begin_[r + 1] - begin_[r] - 1;
     for (;;) {
       chain.push_back({at, last});
-      if (parent_[at] == kNoParent) break;
+      if (parent_[at] == kNone) break;
       last = spawn_[at];
       at = std::size_t(parent_[at]);
     }
@@ -119,7 +120,7 @@ double CellPaths::TreeBytes(const std::vector<std::uint64_t>& fp) const {
     // its parent's node of the spawn visit.
     for (std::size_t k = chain.size(); k-- > 0;) {
       const auto [ray, upto] = chain[k];
-      for (std::uint64_t v = parent_[ray] == kNoParent ? 0 : 1; v <= upto; ++v) {
+      for (std::uint64_t v = parent_[ray] == kNone ? 0 : 1; v <= upto; ++v) {
         const std::uint32_t c = cell_[begin_[ray] + v];
         if (count[c]++ == 0) touched.push_back(c);
         if (k == 0) max_gen[c] = std::max(max_gen[c], count[c]);
@@ -182,17 +183,27 @@ AutoCells::AutoCells(std::uint32_t cells, FineCells fine, const std::string& wha
       {"kd:" + n + ":sqrt@0", "kd:" + n + ":sqrt", Data::kFirst},
       {"kd:" + n + ":sqrt@seen", "kd:" + n + ":sqrt", Data::kSeen},
   };
-  // Every other grid of N cells within the fine one, static (grid:N:crossings picks among
-  // these by a proxy; here the estimates themselves compare them).
-  for (std::uint32_t x = 1; x <= std::min(cells_, fine_.grid[0]); ++x) {
-    if (cells_ % x != 0) continue;
-    for (std::uint32_t y = 1; y <= std::min(cells_ / x, fine_.grid[1]); ++y) {
-      if (cells_ / x % y != 0 || cells_ / x / y > fine_.grid[2]) continue;
-      const std::array<std::uint32_t, 3> other{x, y, cells_ / x / y};
-      if (other == g) continue;
-      const std::string grid = "grid:" + std::to_string(x) + "x" + std::to_string(y) + "x" +
-                               std::to_string(cells_ / x / y);
-      rules.push_back({grid, grid, Data::kNone});
+  // The grids one prime factor away from the baseline: a factor p of one axis's count moved to
+  // another axis (3x3x3 -> the six 1x3x9, 8x8x8 -> the six 4x8x16), within the fine grid;
+  // static. (grid:N:crossings picks among grids by a proxy; the estimates compare them here.)
+  std::vector<std::array<std::uint32_t, 3>> near;
+  for (int from = 0; from < 3; ++from) {
+    for (int to = 0; to < 3; ++to) {
+      if (from == to) continue;
+      for (std::uint32_t p = 2; p <= g[from]; ++p) {
+        bool prime = g[from] % p == 0;
+        for (std::uint32_t d = 2; prime && d * d <= p; ++d) prime = p % d != 0;
+        if (!prime) continue;
+        std::array<std::uint32_t, 3> other = g;
+        other[from] /= p;
+        other[to] *= p;
+        if (other[to] > fine_.grid[to]) continue;
+        if (std::find(near.begin(), near.end(), other) != near.end()) continue;
+        near.push_back(other);
+        const std::string grid = "grid:" + std::to_string(other[0]) + "x" +
+                                 std::to_string(other[1]) + "x" + std::to_string(other[2]);
+        rules.push_back({grid, grid, Data::kNone});
+      }
     }
   }
   for (const auto& [name, spec, data] : rules) {

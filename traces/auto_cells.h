@@ -41,8 +41,9 @@ class CellPaths {
  private:
   std::vector<std::uint64_t> begin_{0};  // per ray, where its visits start in cell_
   std::vector<std::uint32_t> cell_;
-  std::vector<RayId> parent_;
+  std::vector<std::uint32_t> parent_;  // kNone for a primary ray
   std::vector<std::uint32_t> spawn_;
+  static constexpr std::uint32_t kNone = ~std::uint32_t{0};
   std::uint32_t cells_ = 0;  // 1 + the largest cell seen
 };
 
