@@ -150,9 +150,9 @@ std::vector<CellId> NonEmptyMap(const Subdivision& sub, const std::vector<std::u
 }  // namespace
 
 struct AutoCells::Rule {
-  // What a rule's cells are made from: nothing but the footprints, frame 0's samples, the
-  // samples and steps of every frame seen, or the last frame's samples.
-  enum class Data { kNone, kFirst, kSeen, kLast };
+  // What a rule's cells are made from: nothing but the footprints, frame 0's samples, or the
+  // samples of every frame seen.
+  enum class Data { kNone, kFirst, kSeen };
   std::string name;  // "uniform", or the SPEC and its data ("kd:27:sqrt@seen")
   std::string spec;
   Data data = Data::kNone;
@@ -238,8 +238,8 @@ void AutoCells::Prepare() {
       FineCells f;
       f.grid = fine_.grid;
       f.union_footprint = fine_.union_footprint;
-      if (rule->data == Data::kFirst || rule->data == Data::kLast) {
-        f.samples = samples_[rule->data == Data::kFirst ? 0 : k - 1];
+      if (rule->data == Data::kFirst) {
+        f.samples = samples_[0];
       } else if (rule->data == Data::kSeen) {
         f.samples.assign(fine_.count(), 0);
         for (const auto& frame : samples_) {
@@ -255,8 +255,9 @@ void AutoCells::Prepare() {
     rule->regrouper = std::make_unique<RayRegrouper>(NonEmptyMap(rule->sub, rule->fp));
     rule->paths = CellPaths();
   }
-  // The rule for frame k: the baseline unless a candidate's estimates on the frames seen beat
-  // it by more than their own change from one frame to the next.
+  // The rule for frame k (docs/design.md §1 "auto:N", the fallback rule): the baseline unless
+  // a candidate beat it on the last two frames seen by more than its ratio moved between them;
+  // of those, the one chosen for frame k-1 if it is one, else the least score.
   const std::size_t current = chosen_;
   chosen_ = 0;
   double best = 1.0;
