@@ -263,7 +263,7 @@ const std::vector<Key<LevelConfig>>& LevelKeys() {
          if (l.cells == "same") l.cells.clear();
          if (l.cells.empty()) return;
          const SubdivisionSpec spec = ParseSubdivisionSpec(l.cells, what);
-         if (spec.kind == SubdivisionSpec::Kind::kDynamic) {
+         if (spec.per_frame()) {
            Fail(what, "'" + l.cells +
                           "': a memory level's cells stay the same over the frames; "
                           "dynamic subdivisions are for --cells");

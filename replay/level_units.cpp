@@ -15,13 +15,13 @@ LevelCells CoarserLevelCells(const TraceReader& reader, const std::string& cells
                      reader.path() + " cannot tell");
   }
   const std::string& shown = reader.header().subdivision.spec;  // the view's cells
-  if (shown.rfind("dynamic:", 0) == 0) {
+  if (reader.header().subdivision.dynamic()) {
     throw InputError(what + ": '" + cells + "' cannot hold the cells of " + reader.path() +
                      " shown as a dynamic subdivision (--cells " + shown +
                      "): they are other boxes every frame");
   }
   const SubdivisionSpec spec = ParseSubdivisionSpec(cells, what);
-  if (spec.kind == SubdivisionSpec::Kind::kDynamic) {
+  if (spec.per_frame()) {
     throw InputError(what + ": '" + cells + "': a memory level's cells stay the same over the " +
                      "frames");
   }

@@ -19,6 +19,7 @@ void AddSweepCommand(CLI::App& app);
 inline constexpr const char* kCellsSpecHelp =
     "a regroupable capture (`record --regroupable`) regrouped into this subdivision: NXxNYxNZ, "
     "grid:NXxNYxNZ, grid:N:crossings, kd:N:footprint, kd:N:work, kd:N:sqrt, kd:budget:BYTES, "
-    "octree:BYTES, dynamic:N[:sqrt] (see `raycell trace regroup --help`); default: its own grid";
+    "octree:BYTES, dynamic:N[:sqrt], auto:N (see `raycell trace regroup --help`); default: its own "
+    "grid";
 
 }  // namespace raycell

@@ -1,7 +1,9 @@
 // raycell record: render a scene's frames and write their trace (and images).
+#include <array>
 #include <atomic>
 #include <csignal>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
@@ -10,6 +12,8 @@
 #include "record/recorder.h"
 #include "record/scene_file.h"
 #include "tools/commands.h"
+#include "traces/subdivision.h"
+#include "traces/trace_regroup.h"
 
 namespace raycell {
 namespace {
@@ -18,7 +22,23 @@ std::atomic<bool> g_cancel{false};
 
 extern "C" void OnSignal(int) { g_cancel.store(true); }
 
-void Run(const RecordFlags& a, bool print_scene) {
+// --cells auto:N (docs/design.md §1 "auto:N"): recorded on the fine grid of 4 x 4 x 4 fine
+// cells per cell of its baseline (12x12x12 for auto:27) as a regroupable capture beside OUT,
+// then written to OUT with each frame in the cells auto:N chooses for it from the frames before
+// it (trace regroup), the fine capture removed. Empty: not auto:N.
+std::string AutoCells(RecordFlags* a) {
+  if (a->cells.rfind("auto:", 0) != 0) return "";
+  const SubdivisionSpec spec = ParseSubdivisionSpec(a->cells, "--cells");
+  const std::uint32_t most = kMaxCaptureCells;
+  const std::array<std::uint32_t, 3> g = CubicGrid(spec.cells, {most, most, most}, "--cells");
+  a->cells =
+      std::to_string(4 * g[0]) + "x" + std::to_string(4 * g[1]) + "x" + std::to_string(4 * g[2]);
+  a->opt.regroupable = true;
+  return spec.ToString();
+}
+
+void Run(RecordFlags a, bool print_scene) {
+  const std::string auto_spec = print_scene ? std::string() : AutoCells(&a);
   RecordOptions o = ToRecordOptions(a);
   if (print_scene) {
     if (!o.scene.description) {
@@ -28,11 +48,23 @@ void Run(const RecordFlags& a, bool print_scene) {
     std::cout << PrintSceneDescription(*o.scene.description);
     return;
   }
+  const std::string out = o.out;
+  if (!auto_spec.empty()) o.out = out + ".fine";
   o.cancel = &g_cancel;
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   const RecordSummary s = Record(o, std::cerr);
   if (s.interrupted) std::exit(130);
+  if (!auto_spec.empty()) {
+    try {
+      RegroupTrace(o.out, auto_spec, out);
+    } catch (...) {
+      std::filesystem::remove(o.out);
+      throw;
+    }
+    std::filesystem::remove(o.out);
+    o.out = out;
+  }
   std::cerr << "recorded " << s.frames << " frame(s), " << s.rays << " rays, " << s.visits
             << " visits in " << s.seconds << " s -> " << o.out
             << (o.images_dir.empty() ? "" : ", images in " + o.images_dir + "/") << "\n";
@@ -92,7 +124,10 @@ void AddRecordCommand(CLI::App& app) {
                       "camera a capture of the whole path gives it");
   cmd->add_option("--cells", args->cells,
                   "cell grid NXxNYxNZ splitting the scene box; at most " +
-                      std::to_string(kMaxCaptureCells) + " cells")
+                      std::to_string(kMaxCaptureCells) +
+                      " cells; or auto:N, the recommended N cells, per frame from the frames "
+                      "before it (recorded on 4x4x4 fine cells per cell of its baseline grid, "
+                      "then regrouped: docs/design.md §1 \"auto:N\")")
       ->capture_default_str();
   cmd->add_option("--res", args->res,
                   "image size WxH (the paper: 256x256); at most " + std::to_string(kMaxPixels) +

@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "base/check.h"
+#include "traces/auto_cells.h"
 #include "traces/format.h"
 #include "traces/frame_checksum.h"
 
@@ -40,7 +41,9 @@ RegroupedView::RegroupedView(const std::string& path, const TraceHeader& stored,
     const std::string what = "--cells '" + cells + "'";
     const SubdivisionSpec spec = ParseSubdivisionSpec(cells, what);
     FineCells fine = Fine(spec);
-    const bool dynamic = spec.kind == SubdivisionSpec::Kind::kDynamic;
+    const bool dynamic = spec.per_frame();
+    std::optional<AutoCells> auto_cells;
+    if (spec.kind == SubdivisionSpec::Kind::kAuto) auto_cells.emplace(spec.cells, fine, what);
     header_.subdivision.spec = spec.ToString();
     header_.subdivision.fine = h.cells;
     header_.footprints.clear();
@@ -52,8 +55,19 @@ RegroupedView::RegroupedView(const std::string& path, const TraceHeader& stored,
                        std::to_string(kTraceMaxBoxes) + " boxes (kTraceMaxBoxes)");
     }
     for (std::size_t i = 0; i < std::max<std::size_t>(subdivisions, 1); ++i) {
-      if (dynamic && i > 0) fine.samples = FineSamples(i - 1);
-      const Subdivision sub = Subdivide(spec, fine);
+      if (spec.kind == SubdivisionSpec::Kind::kDynamic && i > 0) fine.samples = FineSamples(i - 1);
+      const Subdivision sub = auto_cells ? auto_cells->next() : Subdivide(spec, fine);
+      if (auto_cells && i < frames.size()) {  // auto:N learns frame i for the frames after it
+        read_(i, [&](const RayBatch& b) {
+          try {
+            auto_cells->AddBatch(b);
+          } catch (const InputError& e) {
+            throw InputError(path_ + ": frame " + std::to_string(frames[i].frame) +
+                             ": cannot regroup: " + e.what());
+          }
+        });
+        auto_cells->EndFrame();
+      }
       const std::vector<std::uint64_t> fp = Footprints(sub);
       maps_.push_back(ViewMapOf(&sub, fp, fine_cells));
       if (dynamic) {
@@ -95,7 +109,7 @@ void RegroupedView::ForEachBatch(std::size_t i, const BatchFn& fn) const {
 }
 
 FineSubdivision RegroupedView::SubdivideFineGrid(const SubdivisionSpec& spec) const {
-  RAYCELL_CHECK(maps_.size() == 1 && header_.subdivision.spec.rfind("dynamic:", 0) != 0);
+  RAYCELL_CHECK(maps_.size() == 1 && !header_.subdivision.dynamic());
   FineSubdivision out;
   out.subdivision = Subdivide(spec, Fine(spec));
   out.footprints = Footprints(out.subdivision);

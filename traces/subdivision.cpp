@@ -175,6 +175,8 @@ std::string SubdivisionSpec::ToString() const {
       return "octree:" + Bytes(budget).ToString();
     case Kind::kDynamic:
       return "dynamic:" + std::to_string(cells) + (sqrt ? ":sqrt" : "");
+    case Kind::kAuto:
+      return "auto:" + std::to_string(cells);
   }
   RAYCELL_CHECK(false);
   return {};
@@ -185,7 +187,7 @@ SubdivisionSpec ParseSubdivisionSpec(std::string_view text, const std::string& w
   const std::vector<std::string> parts = Split(t, ':');
   const std::string expected =
       " (expected NXxNYxNZ, grid:NXxNYxNZ, grid:N:crossings, kd:N:footprint, kd:N:work, "
-      "kd:N:sqrt, kd:budget:BYTES, octree:BYTES, dynamic:N or dynamic:N:sqrt)";
+      "kd:N:sqrt, kd:budget:BYTES, octree:BYTES, dynamic:N, dynamic:N:sqrt or auto:N)";
   SubdivisionSpec s;
   const bool grid = parts.size() == 2 && parts[0] == "grid";
   if (parts.size() == 1 || grid) {
@@ -232,6 +234,9 @@ SubdivisionSpec ParseSubdivisionSpec(std::string_view text, const std::string& w
                        "not '" + parts[2] + "'");
     }
     s.sqrt = parts.size() == 3;
+  } else if (kind == "auto" && parts.size() == 2) {
+    s.kind = SubdivisionSpec::Kind::kAuto;
+    s.cells = ParseCount(parts[1], what, "auto cell count");
   } else {
     throw InputError(what + ": '" + t + "' is not a cell subdivision" + expected);
   }
@@ -306,6 +311,29 @@ std::vector<FineBox> GridBoxes(const std::array<std::uint32_t, 3>& counts,
 
 }  // namespace
 
+std::array<std::uint32_t, 3> CubicGrid(std::uint32_t n, const std::array<std::uint32_t, 3>& fine,
+                                       const std::string& what) {
+  std::optional<std::array<std::uint32_t, 3>> best;
+  const auto key = [](const std::array<std::uint32_t, 3>& g) {
+    const auto [lo, hi] = std::minmax({g[0], g[1], g[2]});
+    return std::pair<std::uint32_t, std::uint32_t>(hi, std::uint32_t(-1) - lo);
+  };
+  for (std::uint32_t x = 1; x <= std::min(n, fine[0]); ++x) {
+    if (n % x != 0) continue;
+    for (std::uint32_t y = 1; y <= std::min(n / x, fine[1]); ++y) {
+      if (n / x % y != 0 || n / x / y > fine[2]) continue;
+      const std::array<std::uint32_t, 3> g{x, y, n / x / y};
+      if (!best || key(g) < key(*best)) best = g;
+    }
+  }
+  if (!best) {
+    throw InputError(what + ": no grid of " + std::to_string(n) + " cells (NX NY NZ = " +
+                     std::to_string(n) + ") fits the fine grid " + std::to_string(fine[0]) + "x" +
+                     std::to_string(fine[1]) + "x" + std::to_string(fine[2]));
+  }
+  return *best;
+}
+
 Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
   using Kind = SubdivisionSpec::Kind;
   const std::uint32_t n = fine.count();
@@ -319,8 +347,8 @@ Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
     throw InputError(what + ": needs the samples of each of the " + std::to_string(n) +
                      " fine cells");
   }
-  const bool grid =
-      spec.kind == Kind::kUniform || spec.kind == Kind::kGrid || spec.kind == Kind::kGridCrossings;
+  const bool grid = spec.kind == Kind::kUniform || spec.kind == Kind::kGrid ||
+                    spec.kind == Kind::kGridCrossings || spec.kind == Kind::kAuto;
   if (!by_work && !grid) RAYCELL_CHECK(fine.union_footprint != nullptr);
   const Weigher weigh(fine, by_work   ? Weigher::By::kWork
                             : by_sqrt ? Weigher::By::kSqrt
@@ -344,6 +372,9 @@ Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine) {
       break;
     case Kind::kGridCrossings:
       out.boxes = GridBoxes(GridByCrossings(spec.cells, fine, what), fine.grid, what);
+      break;
+    case Kind::kAuto:
+      out.boxes = GridBoxes(CubicGrid(spec.cells, fine.grid, what), fine.grid, what);
       break;
     case Kind::kKdFootprint:
     case Kind::kKdWork:

@@ -35,6 +35,10 @@
 //   dynamic:N           kd:N:work on the previous frame's samples, recomputed per frame (frame 0:
 //                       kd:N:footprint).
 //   dynamic:N:sqrt      the same with kd:N:sqrt on the previous frame's samples.
+//   auto:N              the recommended subdivision into N cells (traces/auto_cells.h): per
+//                       frame, from the frames before it only, the uniform grid of N cells
+//                       nearest a cube (CubicGrid) or an adaptive candidate when the frames
+//                       seen show it cheaper by a margin; frame 0 (and Subdivide): that grid.
 // Splits are deterministic (ties: the lowest cell, axis x before y before z, the lowest
 // boundary), so the same fine data gives the same subdivision on every machine.
 #pragma once
@@ -60,14 +64,17 @@ struct SubdivisionSpec {
     kKdSqrt,
     kKdBudget,
     kOctree,
-    kDynamic
+    kDynamic,
+    kAuto
   };
   Kind kind = Kind::kUniform;
   std::array<std::uint32_t, 3> grid{1, 1, 1};  // kUniform, kGrid
-  std::uint32_t cells = 0;   // kd:N:footprint, kd:N:work, kd:N:sqrt, dynamic:N, grid:N:crossings
-  std::uint64_t budget = 0;  // kd:budget:BYTES, octree:BYTES (bytes, > 0)
-  bool sqrt = false;         // kDynamic: dynamic:N:sqrt, each frame balanced as kd:N:sqrt
+  std::uint32_t cells = 0;                     // kd:N:*, dynamic:N, grid:N:crossings, auto:N
+  std::uint64_t budget = 0;                    // kd:budget:BYTES, octree:BYTES (bytes, > 0)
+  bool sqrt = false;  // kDynamic: dynamic:N:sqrt, each frame balanced as kd:N:sqrt
 
+  // Whether each frame has its own cells (dynamic:N, auto:N).
+  bool per_frame() const { return kind == Kind::kDynamic || kind == Kind::kAuto; }
   // The canonical SPEC ("3x3x3", "kd:27:footprint", "octree:256KiB"); parses back equal.
   std::string ToString() const;
   friend bool operator==(const SubdivisionSpec& a, const SubdivisionSpec& b) {
@@ -128,10 +135,17 @@ struct Subdivision {
   std::uint32_t cells() const { return std::uint32_t(boxes.size()); }
 };
 
-// The subdivision `spec` gives on `fine`. InputError when it cannot be made: a uniform grid
-// whose counts do not divide the fine grid's, a grid: with more cells along an axis than the
-// fine grid, a grid:N:crossings that no grid within the fine one makes or without crossings,
-// more kd cells than fine cells, kd:N:work or dynamic beyond frame 0 without samples.
+// auto:N's baseline: the counts NX NY NZ = n, each at most the fine grid's, nearest a cube
+// (the smallest largest count, then the largest smallest; ties to the lowest NX, then NY):
+// 3x3x3 for 27, 2x2x3 for 12. InputError "WHAT: ..." when no such counts fit the fine grid.
+std::array<std::uint32_t, 3> CubicGrid(std::uint32_t n, const std::array<std::uint32_t, 3>& fine,
+                                       const std::string& what);
+
+// The subdivision `spec` gives on `fine` (auto:N: its frame 0's, the grid:CubicGrid). InputError
+// when it cannot be made: a uniform grid whose counts do not divide the fine grid's, a grid: with
+// more cells along an axis than the fine grid, a grid:N:crossings that no grid within the fine one
+// makes or without crossings, more kd cells than fine cells, kd:N:work or dynamic beyond frame 0
+// without samples.
 Subdivision Subdivide(const SubdivisionSpec& spec, const FineCells& fine);
 
 }  // namespace raycell

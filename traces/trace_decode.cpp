@@ -96,7 +96,7 @@ SubdivisionInfo ToSubdivision(schema::Subdivision::Reader r, const TraceHeader& 
                   "limit of " + Str(kTraceMaxBoxes) + " (kTraceMaxBoxes)");
   }
   const std::uint64_t cells = TraceCellCount(h.cells);
-  const bool dynamic = spec.kind == SubdivisionSpec::Kind::kDynamic;
+  const bool dynamic = spec.per_frame();
   const std::uint64_t frames = dynamic ? h.cameras.size() : 1;
   if (r.getBoxes().size() != cells * frames) {
     throw BadData("a subdivision of " + Str(r.getBoxes().size()) + " boxes for " + Str(cells) +

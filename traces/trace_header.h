@@ -117,8 +117,8 @@ struct SubdivisionInfo {
   // cell's largest over the frames); empty otherwise.
   std::vector<std::uint64_t> frame_footprints;
   bool empty() const { return spec.empty(); }
-  // Whether each frame has its own boxes (`dynamic:N`).
-  bool dynamic() const { return spec.rfind("dynamic:", 0) == 0; }
+  // Whether each frame has its own boxes (`dynamic:N`, `auto:N`).
+  bool dynamic() const { return spec.rfind("dynamic:", 0) == 0 || spec.rfind("auto:", 0) == 0; }
   // Per fine cell, its cell in frame `frame` (an index into the trace's frames) of a trace of
   // `cells` cells each frame: the boxes of that frame (`dynamic:N`) or the only ones.
   std::vector<CellId> CellOfFine(std::size_t frame, std::uint32_t cells) const;

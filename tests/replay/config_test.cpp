@@ -316,6 +316,9 @@ TEST(LoadConfig, LevelCellsAreASpecOfASharedLevel) {
   EXPECT_EQ(ErrorOf([&] { ApplyOverride(c, "level.board.cells", "dynamic:8"); }),
             "override 'level.board.cells': 'dynamic:8': a memory level's cells stay the same "
             "over the frames; dynamic subdivisions are for --cells");
+  EXPECT_EQ(ErrorOf([&] { ApplyOverride(c, "level.board.cells", "auto:27"); }),
+            "override 'level.board.cells': 'auto:27': a memory level's cells stay the same "
+            "over the frames; dynamic subdivisions are for --cells");
   EXPECT_EQ(ErrorOf([&] {
               ApplyOverride(c, "level.board.cells", "3x3");
             }).rfind("override 'level.board.cells': ", 0),

@@ -201,3 +201,38 @@ TEST(TraceRegroupCommand, CellsSpecOfTheReadingCommandsEqualsTheRegroupedFile) {
 
 }  // namespace
 }  // namespace raycell
+
+namespace raycell {
+namespace {
+
+// `record --cells auto:N` records on 4x4x4 fine cells per cell of auto:N's baseline grid and
+// writes each frame in the cells auto:N chooses from the frames before it: the same trace,
+// byte for byte, as the fine capture recorded on its own and regrouped by `trace regroup
+// --cells auto:N`, and the same frames, visit for visit, as that capture read with --cells
+// auto:N. Nothing but OUT is left.
+TEST(TraceRegroupCommand, AutoRecordedDirectlyEqualsTheFineCaptureRegrouped) {
+  const std::string dir = testing::TempDir("record_auto").string();
+  const std::string direct = dir + "/direct.rct", fine = dir + "/fine.rct";
+  const std::string common = "record --res 32x32 --orbit 4:20 --no-images --quiet ";
+  Result r = Raycell(common + "--cells auto:8 --out " + direct);
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = Raycell(common + "--cells 8x8x8 --regroupable --out " + fine);
+  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(Raycell("trace regroup " + fine + " --cells auto:8 --out " + dir + "/re.rct").code, 0);
+  EXPECT_EQ(testing::ReadBytes(direct), testing::ReadBytes(dir + "/re.rct"));
+  const TraceReader a = TraceReader::Open(direct);
+  const TraceReader b = TraceReader::Open(fine, "auto:8");
+  EXPECT_EQ(a.header().subdivision, b.header().subdivision);
+  EXPECT_EQ(a.header().subdivision.spec, "auto:8");
+  ASSERT_EQ(a.frames().size(), 4u);
+  for (std::size_t f = 0; f < 4; ++f) {
+    EXPECT_EQ(a.frames()[f], b.frames()[f]);
+    EXPECT_EQ(a.LoadFrame(f), b.LoadFrame(f));
+  }
+  std::size_t files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) files += e.is_regular_file();
+  EXPECT_EQ(files, 3u);  // direct, fine and re: the fine capture behind direct is gone
+}
+
+}  // namespace
+}  // namespace raycell

@@ -115,7 +115,7 @@ void ExpectCoversOnce(const Subdivision& s, const Grid& g, const std::string& sp
 TEST(SubdivisionSpec, ParsesEveryKindAndPrintsItBack) {
   for (const char* text :
        {"3x3x3", "12x1x4", "grid:1x3x9", "grid:27:crossings", "kd:27:footprint", "kd:8:work",
-        "kd:9:sqrt", "kd:budget:256KiB", "octree:1MB", "octree:1500B", "dynamic:27"}) {
+        "kd:9:sqrt", "kd:budget:256KiB", "octree:1MB", "octree:1500B", "dynamic:27", "auto:27"}) {
     const SubdivisionSpec s = ParseSubdivisionSpec(text, "--cells");
     EXPECT_EQ(s.ToString(), text);
     EXPECT_EQ(ParseSubdivisionSpec(s.ToString(), "--cells"), s);
@@ -217,7 +217,7 @@ TEST(Subdivision, EverySubdivisionCoversEachFineCellExactlyOnce) {
     for (std::uint32_t k : {2u, 7u, 27u, n}) {
       if (k > n) continue;
       for (const char* kind : {"kd:%u:footprint", "kd:%u:work", "kd:%u:sqrt", "dynamic:%u",
-                               "dynamic:%u:sqrt", "grid:%u:crossings"}) {
+                               "dynamic:%u:sqrt", "grid:%u:crossings", "auto:%u"}) {
         char buf[64];
         std::snprintf(buf, sizeof buf, kind, k);
         specs.push_back(buf);
@@ -236,7 +236,8 @@ TEST(Subdivision, EverySubdivisionCoversEachFineCellExactlyOnce) {
           EXPECT_THROW(Subdivide(spec, m.Cells(false)), InputError) << text;  // needs weights
           continue;
         }
-        if (spec.kind == SubdivisionSpec::Kind::kGridCrossings) {
+        if (spec.kind == SubdivisionSpec::Kind::kGridCrossings ||
+            spec.kind == SubdivisionSpec::Kind::kAuto) {
           // A grid of k cells within g exists only for some k (7 in 5x7x3: 1x7x1).
           bool fits = false;
           for (std::uint32_t x = 1; x <= g[0]; ++x)

@@ -37,7 +37,7 @@ echo "scene $scene, $frames frames at $res, $fine fine; cache capacity ${median}
 echo "| SPEC | cells | footprint min-max (KiB) | max/min | scheduler | fetches | cache bytes | board bytes | stall ms |"
 echo "|---|---:|---:|---:|---|---:|---:|---:|---:|"
 for spec in 3x3x3 kd:27:footprint kd:27:work kd:27:sqrt "kd:budget:${median}B" "octree:${median}B" \
-  dynamic:27 dynamic:27:sqrt grid:1x3x9 grid:1x9x3 grid:3x1x9 grid:9x1x3 grid:3x9x1 grid:9x3x1 \
+  dynamic:27 dynamic:27:sqrt auto:27 grid:1x3x9 grid:1x9x3 grid:3x1x9 grid:9x1x3 grid:3x9x1 grid:9x3x1 \
   grid:27:crossings $(slabs); do
   fp=$(spread "$spec")
   for sched in maxwork celltree; do
