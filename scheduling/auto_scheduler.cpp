@@ -8,6 +8,8 @@
 #include "base/format.h"
 #include "scheduling/adaptive_scheduler.h"
 #include "scheduling/balanced_scheduler.h"
+#include "scheduling/best_scheduler.h"
+#include "scheduling/cell_tree_scheduler.h"
 #include "scheduling/max_work.h"
 
 namespace raycell {
@@ -16,10 +18,11 @@ constexpr SchedulerEntry kAutoEntry = [] {
   SchedulerEntry e;
   e.name = "auto";
   e.meaning =
-      "the recommended online scheduler: celltree-adaptive on one processor, balanced-critical "
-      "or celltree-adaptive on several, whichever fetched fewest on the previous frame's tree "
-      "in a model of the board; Max Work when each fetched more or took longer than Max Work "
-      "there (and on several processors in frames 0 and 1, with nothing to judge by)";
+      "the recommended online scheduler: per frame, of celltree-adaptive, celltree-union, "
+      "celltree-best and celltree (one processor) or balanced-critical, celltree-adaptive, "
+      "celltree and balanced (several), the one that fetched fewest on the previous frame's "
+      "tree in a model of the board; Max Work when each fetched more than Max Work there (and "
+      "on several processors in frames 0 and 1, with nothing to judge by)";
   e.label = "auto (recommended, falls back to Max Work)";
   e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
     return std::make_unique<AutoScheduler>(seed);
@@ -171,8 +174,10 @@ ModelResult ModelFrame(const CellTree& tree, Scheduler& scheduler, const FrameIn
 }
 
 std::vector<const SchedulerEntry*> AutoScheduler::CandidatesFor(std::uint32_t processors) {
-  if (processors <= 1) return {&kCellTreeAdaptiveEntry};
-  return {&kBalancedCriticalEntry, &kCellTreeAdaptiveEntry};
+  if (processors <= 1) {
+    return {&kCellTreeAdaptiveEntry, &kCellTreeUnionEntry, &kCellTreeBestEntry, &kCellTreeEntry};
+  }
+  return {&kBalancedCriticalEntry, &kCellTreeAdaptiveEntry, &kCellTreeEntry, &kBalancedEntry};
 }
 
 void AutoScheduler::BeginFrame(const FrameInfo& frame) {
@@ -205,9 +210,9 @@ void AutoScheduler::BeginFrame(const FrameInfo& frame) {
       const DecisionCost c = candidates_[k]->Cost();
       check_cost_.steps += models_[k].steps + c.steps;
       check_cost_.peak_bytes = std::max(check_cost_.peak_bytes, c.peak_bytes);
-      // Not worse than Max Work on either count; the fewest fetches, then the least time.
+      // No more fetches than Max Work; the fewest, then the least time, then the first.
       const ModelResult& m = models_[k];
-      if (m.fetches > max_work_model_.fetches || m.time > max_work_model_.time) continue;
+      if (m.fetches > max_work_model_.fetches) continue;
       if (chosen_ == kNone || m.fetches < models_[chosen_].fetches ||
           (m.fetches == models_[chosen_].fetches && m.time < models_[chosen_].time)) {
         chosen_ = k;

@@ -1,15 +1,16 @@
 // The recommended online scheduler (issue 42; docs/design.md §5 "The recommended scheduler"):
 // `auto`, one name for any processor count, that watches itself and falls back to Max Work.
 //
-//  - Its candidates: with one processor `celltree-adaptive` (issue 24's adaptive rule); with
-//    several `balanced-critical` (load balancing, critical path first, issue 22), then
-//    `celltree-adaptive`.
+//  - Its candidates: with one processor `celltree-adaptive` (issue 24's adaptive rule),
+//    `celltree-union`, `celltree-best` and `celltree`; with several `balanced-critical` (load
+//    balancing, critical path first, issue 22), `celltree-adaptive`, `celltree` and `balanced`.
 //  - Its check, before each frame i >= 2: a model of the board (ModelFrame, linear in the tree
 //    but for the choices it asks for) replays frame i-1's tree under each candidate as it
 //    would have run frame i-1 (planned from frame i-2's tree alone) and under Max Work. Frame i
-//    runs the candidate that fetched fewest there (then took least time) among those that
-//    fetched no more and took no longer than Max Work; when none did, Max Work.
-//  - Frames 0 and 1 have no frame seen to judge by: the candidate with one processor, Max Work
+//    runs the candidate that fetched fewest there (then took least time, then the first
+//    listed) among those that fetched no more than Max Work; when none did, Max Work.
+//  - Frames 0 and 1 have no frame seen to judge by: the first candidate with one processor, Max
+//  Work
 //    with several (there the candidates fetch 29-58% more in frame 0 on the development set).
 // The decision is a function of the frame's FrameInfo (frames i-1 and i-2's trees, the
 // processor count, the fetch costs), so the scheduler keeps no state across frames (frame

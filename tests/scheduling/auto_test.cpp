@@ -71,7 +71,9 @@ TEST(AutoModel, FetchesAsTheReplayWithOneProcessor) {
     const CellTree previous = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 20));
     std::vector<std::uint64_t> footprints(cells);
     for (auto& f : footprints) f = 1000 + rng() % 300'000;
-    for (const SchedulerEntry* e : {&kMaxWorkEntry, &kCellTreeAdaptiveEntry}) {
+    std::vector<const SchedulerEntry*> entries = AutoScheduler::CandidatesFor(1);
+    entries.push_back(&kMaxWorkEntry);
+    for (const SchedulerEntry* e : entries) {
       ReplayConfig config = Config(*e, 1);
       config.granularity = ReplayConfig::Granularity::kNode;
       const FrameTrees info{1, nullptr, trial % 4 == 0 ? nullptr : &previous, cells};
@@ -198,15 +200,16 @@ class Chooser : public Scheduler {
   std::unique_ptr<Scheduler> s_;
 };
 
-// The fallback, judged by the replay itself (independent of auto's model): on random frames
-// i-2, i-1 and i, when the replay of frame i-1 under celltree-adaptive (as it would have run
-// it, planned from frame i-2) fetches more and takes longer than under Max Work, auto's
-// choices in frame i are Max Work's, one for one; when it fetches fewer and takes less time,
-// they are celltree-adaptive's. One processor, where the replay per node is exact. Both cases
-// occur. And with several processors, frames 0 and 1 (nothing seen to judge by) run Max Work.
+// The fallback and the choice, judged by the replay itself (independent of auto's model): on
+// random frames i-2, i-1 and i, with one processor (where the replay per node is exact), each
+// candidate and Max Work replay frame i-1 as each would have run it (planned from frame i-2).
+// When every candidate fetches more than Max Work there, auto's choices in frame i are Max
+// Work's, one for one; else they are those of the candidate that fetched fewest (then took
+// least time, then the first listed). Both cases occur.
 TEST(Auto, FallsBackToMaxWorkWhenThePreviousFrameShowsItBetter) {
   std::mt19937 rng(45);
-  int worse = 0, better = 0;
+  const std::vector<const SchedulerEntry*> candidates = AutoScheduler::CandidatesFor(1);
+  int fell_back = 0, followed = 0;
   for (int trial = 0; trial < 80; ++trial) {
     const std::uint32_t cells = 2 + rng() % 6;
     const RayBatch f2 = testing::RandomReplayFrame(rng, cells, 30),
@@ -219,38 +222,46 @@ TEST(Auto, FallsBackToMaxWorkWhenThePreviousFrameShowsItBetter) {
     node.granularity = ReplayConfig::Granularity::kNode;
     // Frame i-1 in the replay, as each would have run it.
     const FrameTrees seen{1, nullptr, &t2, cells};
-    auto cand = MakeScheduler(kCellTreeAdaptiveEntry, 1), mw = MakeScheduler(kMaxWorkEntry, 1);
-    const ReplayResult rc = ReplayOn(f1, node, *cand, seen, footprints),
-                       rm = ReplayOn(f1, node, *mw, seen, footprints);
-    const bool cand_worse = rc.fetches > rm.fetches && rc.time > rm.time;
-    const bool cand_better = rc.fetches < rm.fetches && rc.time < rm.time;
-    if (!cand_worse && !cand_better) continue;
-    // Frame i under auto, Max Work and celltree-adaptive.
+    auto mw = MakeScheduler(kMaxWorkEntry, 1);
+    const ReplayResult rm = ReplayOn(f1, node, *mw, seen, footprints);
+    const SchedulerEntry* best = nullptr;
+    ReplayResult rb;
+    for (const SchedulerEntry* e : candidates) {
+      auto c = MakeScheduler(*e, 1);
+      const ReplayResult r = ReplayOn(f1, node, *c, seen, footprints);
+      if (r.fetches > rm.fetches) continue;
+      if (best == nullptr || r.fetches < rb.fetches ||
+          (r.fetches == rb.fetches && r.time < rb.time)) {
+        best = e, rb = r;
+      }
+    }
+    // Frame i under auto, Max Work and the candidate expected.
     const FrameTrees now{2, nullptr, &t1, cells, &t2};
-    Chooser a(MakeScheduler(kAutoEntry, 1)), m(MakeScheduler(kMaxWorkEntry, 1)),
-        c(MakeScheduler(kCellTreeAdaptiveEntry, 1));
+    Chooser a(MakeScheduler(kAutoEntry, 1)),
+        expected(MakeScheduler(best == nullptr ? kMaxWorkEntry : *best, 1));
     const ReplayConfig ray = Config(kAutoEntry, 1);
     const ReplayResult ra = ReplayOn(f0, ray, a, now, footprints);
-    ReplayOn(f0, ray, m, now, footprints);
-    ReplayOn(f0, ray, c, now, footprints);
+    ReplayOn(f0, ray, expected, now, footprints);
     const AutoScheduler& inner = dynamic_cast<const AutoScheduler&>(a.inner());
     EXPECT_TRUE(inner.checked());
-    if (cand_worse) {
-      EXPECT_EQ(a.chosen, m.chosen) << "trial " << trial;
-      EXPECT_EQ(inner.chosen(), AutoScheduler::kNone);
-      ++worse;
+    EXPECT_EQ(a.chosen, expected.chosen) << "trial " << trial;
+    if (best == nullptr) {
+      EXPECT_EQ(inner.chosen(), AutoScheduler::kNone) << "trial " << trial;
+      ++fell_back;
     } else {
-      EXPECT_EQ(a.chosen, c.chosen) << "trial " << trial;
-      EXPECT_EQ(inner.chosen(), 0u);
-      ++better;
+      EXPECT_EQ(candidates[inner.chosen()], best) << "trial " << trial;
+      ++followed;
     }
     EXPECT_GT(ra.decision_steps, 0u);  // the check's steps are reported
     EXPECT_GT(ra.scheduler_bytes, 0u);
   }
-  EXPECT_GE(worse, 5);
-  EXPECT_GE(better, 5);
+  EXPECT_GE(fell_back, 5);
+  EXPECT_GE(followed, 5);
+}
 
-  // Several processors, no frame to judge by: Max Work's choices.
+// With several processors, frames 0 and 1 (nothing seen to judge by) run Max Work.
+TEST(Auto, SeveralProcessorsRunMaxWorkInFramesZeroAndOne) {
+  std::mt19937 rng(46);
   for (int trial = 0; trial < 10; ++trial) {
     const std::uint32_t cells = 2 + rng() % 8;
     const RayBatch f1 = testing::RandomReplayFrame(rng, cells, 60),

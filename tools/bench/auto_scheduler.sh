@@ -14,8 +14,9 @@
 # Usage: tools/bench/auto_scheduler.sh [DIR]   (DIR default /tmp/auto-dev: the vdb files, the
 #        captures and the sweeps' CSVs; delete a capture to record it again)
 # Env:   RAYCELL (default build/tools/raycell), RES (128x128), ORBIT (8:60), CELLS (3x3x3),
-#        SCHEDULERS (the list above), SCENES (a subset of the names below)
-# Takes about 15-25 minutes on a loaded 2-core machine, most of it the planners' searches.
+#        SCHEDULERS (the list above), SCENES (a subset of the names below), REUSE=1 (keep the
+#        sweeps' CSVs of an earlier run with the same schedulers instead of replaying again)
+# Takes about 1-2 minutes on a loaded 2-core machine once recorded (recording: under a minute).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 raycell=${RAYCELL:-$root/build/tools/raycell}
@@ -74,7 +75,7 @@ for s in $scenes; do
   [ -f "$s.rct" ] || continue
   for range in 0..0 1..$last; do
     out="$s.$range.csv"
-    [ -f "$out" ] && head -1 "$out" | grep -q "scheduler=$schedulers\"" && continue
+    [ -n "${REUSE:-}" ] && [ -f "$out" ] && head -1 "$out" | grep -q "scheduler=$schedulers\"" && continue
     rm -f "$out"
     nice "$raycell" sweep "$s.rct" --vary "scheduler=$schedulers" --vary processors.count=1,8 \
       --frames "$range" --jobs 1 --quiet --out "$out"
