@@ -66,8 +66,15 @@ class BoardModel {
     }
     double now = 0;
     for (;;) {
-      for (std::uint32_t k = 0; k < procs_.size(); ++k) {
-        if (!procs_[k].working) Ask(k, now);
+      // The idle processors ask again only when the queues or the busy cells changed since they
+      // last asked (a node done inside a batch with no child changes neither): a scheduler
+      // answers the same view the same (Scheduler::Next: no work, or postponing, changes
+      // nothing).
+      if (changed_) {
+        changed_ = false;
+        for (std::uint32_t k = 0; k < procs_.size(); ++k) {
+          if (!procs_[k].working) Ask(k, now);
+        }
       }
       // The next node done: its children are queued, and its processor goes on with its batch,
       // then with what others released into its cell meanwhile (no fetch), else frees the cell.
@@ -88,6 +95,7 @@ class BoardModel {
       }
       open_[next->cell.value()] = 1;
       next->working = false;
+      changed_ = true;
     }
     RAYCELL_CHECK_EQ(taken_, tree_.node_count());
     result_.time = now;
@@ -110,6 +118,7 @@ class BoardModel {
     const std::uint64_t rays = std::max<std::uint64_t>(tree_.enter(n), 1);
     queue_[c.value()].push_back(n);
     queued_[c.value()] += rays;
+    changed_ = true;
     ++result_.steps;
     if (watch_) s_.Arrived({number_[n.index()], number_[tree_.parent(n).index()], c, rays});
   }
@@ -163,6 +172,7 @@ class BoardModel {
   std::uint32_t next_number_ = 1;
   std::vector<Proc> procs_;
   std::size_t taken_ = 0;
+  bool changed_ = true;  // since the idle processors last asked
   ModelResult result_;
 };
 
@@ -189,7 +199,7 @@ void AutoScheduler::BeginFrame(const FrameInfo& frame) {
   if (!max_work_) max_work_ = MakeScheduler(kMaxWorkEntry, seed_);
   models_.assign(candidates_.size(), {});
   max_work_model_ = {};
-  check_cost_ = fallback_cost_ = {};
+  check_cost_ = own_cost_ = {};
   // No frame seen to judge by (frames 0 and 1): the candidate with one processor, Max Work with
   // several (docs/design.md §5 "The recommended scheduler" has the evidence).
   chosen_ = frame.processors <= 1 ? 0 : kNone;
@@ -243,15 +253,24 @@ void AutoScheduler::Taken(CellId cell) {
 
 std::optional<CellId> AutoScheduler::Next(const QueueView& queues) {
   const std::optional<CellId> c = active_->Next(queues);
-  if (c && chosen_ == kNone) {  // Max Work counts nothing itself: one decision, a scan of the cells
-    ++fallback_cost_.decisions;
-    fallback_cost_.steps += queues.cells;
+  if (c) {
+    ++own_cost_.decisions;
+    // Max Work and the plain followers count nothing themselves: a scan of the cells (Max Work's,
+    // or a follower's skipped entries at worst, one per cell).
+    if (!active_->Watches()) own_cost_.steps += queues.cells;
   }
   return c;
 }
 
 Scheduler::DecisionCost AutoScheduler::Cost() const {
-  DecisionCost c = chosen_ != kNone ? active_->Cost() : fallback_cost_;
+  // Decisions counted here, whoever runs the frame; the steps of the one that runs it (its own
+  // count when it watches, else one scan per decision) and the check's; the most bytes of either.
+  DecisionCost c = own_cost_;
+  if (active_->Watches()) {
+    const DecisionCost a = active_->Cost();
+    c.steps += a.steps;
+    c.peak_bytes = a.peak_bytes;
+  }
   c.steps += check_cost_.steps;
   c.peak_bytes = std::max(c.peak_bytes, check_cost_.peak_bytes);
   return c;

@@ -87,8 +87,8 @@ class AutoScheduler : public Scheduler {
   bool checked_ = false;
   ModelResult max_work_model_;
   std::vector<ModelResult> models_;
-  DecisionCost check_cost_;     // the check's steps and bytes this frame
-  DecisionCost fallback_cost_;  // Max Work's decisions and steps, when it runs the frame
+  DecisionCost check_cost_;  // the check's steps and bytes this frame
+  DecisionCost own_cost_;    // decisions this frame, and the scans of one that does not count
 };
 
 }  // namespace raycell
