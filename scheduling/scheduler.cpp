@@ -6,6 +6,7 @@
 #include "base/check.h"
 #include "base/parse.h"
 #include "scheduling/adaptive_scheduler.h"
+#include "scheduling/auto_scheduler.h"
 #include "scheduling/balanced_scheduler.h"
 #include "scheduling/best_scheduler.h"
 #include "scheduling/cell_tree_scheduler.h"
@@ -132,6 +133,8 @@ const std::vector<std::reference_wrapper<const SchedulerEntry>>& SchedulerRegist
       kBalancedCriticalEntry,
       kBalancedAdaptiveEntry,
       kCellTreeAdaptiveEntry,
+      // The recommended one (auto_scheduler.h).
+      kAutoEntry,
   };
   return registry;
 }

@@ -37,9 +37,9 @@ std::string Describe(const ReplayResult& r) {
 }
 
 const char* const kSchedulers[] = {
-    "maxwork",          "roundrobin", "random",          "peel",  "celltree", "affinity",
-    "partition",        "steal",      "partition-steal", "share", "balanced", "balanced-critical",
-    "celltree-adaptive"};
+    "maxwork",           "roundrobin", "random",          "peel",  "celltree", "affinity",
+    "partition",         "steal",      "partition-steal", "share", "balanced", "balanced-critical",
+    "celltree-adaptive", "auto"};
 
 const ReplacementEntry* RandomReplacement(std::mt19937& rng) {
   switch (rng() % 4) {

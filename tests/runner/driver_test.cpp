@@ -100,8 +100,8 @@ TraceReader* DriverTest::reader_ = nullptr;
 TEST_F(DriverTest, EveryFrameEqualsItsReplayBuiltByHand) {
   for (const std::vector<std::size_t>& frames :
        {std::vector<std::size_t>{0, 1, 2, 3, 4}, {1, 3}, {2}, {0, 2, 3}}) {
-    for (const char* scheduler :
-         {"celltree", "peel", "maxwork", "random", "best", "celltree-best", "celltree-union"}) {
+    for (const char* scheduler : {"celltree", "peel", "maxwork", "random", "best", "celltree-best",
+                                  "celltree-union", "auto"}) {
       for (std::uint32_t processors : {1u, 2u}) {
         for (std::uint32_t k : {1u, 2u}) {
           ReplayConfig config = Config(scheduler, processors);
@@ -202,7 +202,7 @@ TEST_F(DriverTest, TheSeedIsKeptForEverySchedulerThatUsesIt) {
                         s == "celltree-union" || s == "partition" || s == "partition-steal" ||
                         s == "balanced" || s == "celltree-2level-best" ||
                         s == "celltree-adaptive" || s == "balanced-adaptive" ||
-                        s == "balanced-critical";
+                        s == "balanced-critical" || s == "auto";
     ReplayConfig a = Config(s.c_str(), 1), b = a;
     a.seed = 7, b.seed = 8;
     EXPECT_EQ(CanonicalConfig(a).seed, seeded ? 7u : 0u) << s;

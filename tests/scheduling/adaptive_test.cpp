@@ -98,22 +98,21 @@ std::vector<std::string> RunLogged(const RayBatch& rays, const ReplayConfig& con
 // Two frames that differ only in one ray's extra last visit: until the replay shows the
 // scheduler something different (a view, an arrival, a queue taken), it chooses the same
 // cells. A scheduler that read the frame's future (its own tree, all its rays) would choose
-// differently before that. Both watching schedulers: celltree-adaptive on 1-4 processors,
-// balanced-critical (whose rule acts only with several) on 2-8.
-TEST(Adaptive, DecidesOnlyOnWhatTheFrameHasShown) {
-  std::mt19937 rng(24);
+// differently before that. `pick(trial, rng)` names the scheduler and its processors.
+template <typename Pick>
+void ExpectNoFutureInformation(std::uint32_t seed, int trials, Pick pick) {
+  std::mt19937 rng(seed);
   int compared = 0, decisions_before = 0;
-  for (int trial = 0; trial < 60; ++trial) {
+  for (int trial = 0; trial < trials; ++trial) {
     const std::uint32_t cells = 2 + rng() % 8;
     const RayBatch a = testing::RandomReplayFrame(rng, cells, 60);
     const RayBatch b = WithOneMoreVisit(a, rng() % a.size(), cells, rng);
     const CellTree previous = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 30));
     const CellTree before = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 30));
     ReplayConfig config = DefaultConfig();
-    const bool critical = trial / 2 % 2 == 1;
-    config.scheduler =
-        &SchedulerByName(critical ? "balanced-critical" : "celltree-adaptive", "test");
-    config.processors.count = critical ? 2 + rng() % 7 : 1 + rng() % 4;
+    std::uint32_t processors = 1;
+    config.scheduler = &SchedulerByName(pick(trial, rng, &processors), "test");
+    config.processors.count = processors;
     if (trial % 2 == 1) config.granularity = ReplayConfig::Granularity::kNode;
     FrameTrees info{2, nullptr, &previous, cells};
     if (trial % 3 != 0) info.before_previous = &before;
@@ -132,8 +131,28 @@ TEST(Adaptive, DecidesOnlyOnWhatTheFrameHasShown) {
                                  << " and " << lb[i] << " on the same information";
     ++compared;
   }
-  EXPECT_EQ(compared, 60);
-  EXPECT_GT(decisions_before, 60 * 3);  // the frames share many decisions before they differ
+  EXPECT_EQ(compared, trials);
+  EXPECT_GT(decisions_before, trials * 3);  // the frames share many decisions before they differ
+}
+
+// Both watching schedulers: celltree-adaptive on 1-4 processors, balanced-critical (whose rule
+// acts only with several) on 2-8.
+TEST(Adaptive, DecidesOnlyOnWhatTheFrameHasShown) {
+  ExpectNoFutureInformation(24, 60, [](int trial, std::mt19937& rng, std::uint32_t* p) {
+    const bool critical = trial / 2 % 2 == 1;
+    *p = critical ? 2 + rng() % 7 : 1 + rng() % 4;
+    return critical ? "balanced-critical" : "celltree-adaptive";
+  });
+}
+
+// The recommended scheduler (auto_scheduler.h) on 1, 2 and 8 processors: its check of the
+// previous frame and the candidate it then runs see no more of the frame than was shown.
+TEST(Adaptive, AutoDecidesOnlyOnWhatTheFrameHasShown) {
+  ExpectNoFutureInformation(42, 24, [](int trial, std::mt19937&, std::uint32_t* p) {
+    const std::uint32_t processors[] = {1, 2, 8};
+    *p = processors[trial / 2 % 3];
+    return "auto";
+  });
 }
 
 // Frame 0, hand-worked: no earlier frame, so the shallowest queued work goes first. C's node

@@ -389,7 +389,7 @@ TEST(MakeSchedulerTest, EveryNameRoundTrips) {
     ASSERT_NE(s, nullptr);
     EXPECT_EQ(s->Name(), name);
   }
-  EXPECT_EQ(SchedulerNames().size(), 19u);
+  EXPECT_EQ(SchedulerNames().size(), 20u);
   EXPECT_NE(dynamic_cast<RandomScheduler*>(MakeScheduler("random", 99).get()), nullptr);
   EXPECT_EQ(dynamic_cast<RandomScheduler&>(*MakeScheduler("random", 99)).seed(), 99u);
 }
@@ -424,6 +424,7 @@ TEST(SchedulerRegistryTest, EntriesKeepTheirFlagsAndNameWhatTheyMake) {
       {"balanced-critical", 1, true, true, false, false},
       {"balanced-adaptive", 2, true, true, false, false},
       {"celltree-adaptive", 2, true, true, false, true},
+      {"auto", 2, true, true, false, false},
   };
   ASSERT_EQ(SchedulerRegistry().size(), std::size(expected));
   for (std::size_t i = 0; i < std::size(expected); ++i) {
@@ -448,7 +449,7 @@ TEST(SchedulerRegistryTest, EntriesKeepTheirFlagsAndNameWhatTheyMake) {
   EXPECT_EQ(&SchedulerByName("celltree-union", "test"), &kCellTreeUnionEntry);
   EXPECT_EQ(SeededSchedulerList(", "),
             "random, best, celltree-best, celltree-union, partition, partition-steal, balanced, "
-            "celltree-2level-best, balanced-critical, balanced-adaptive, celltree-adaptive");
+            "celltree-2level-best, balanced-critical, balanced-adaptive, celltree-adaptive, auto");
 }
 
 TEST(MakeSchedulerTest, UnknownNameListsTheValidOnes) {
@@ -460,7 +461,7 @@ TEST(MakeSchedulerTest, UnknownNameListsTheValidOnes) {
                  "scheduler: unknown scheduler 'MaxWork' (expected maxwork, roundrobin, random, "
                  "peel, celltree, best, celltree-best, celltree-union, affinity, partition, steal, "
                  "partition-steal, share, balanced, celltree-2level, celltree-2level-best, "
-                 "balanced-critical, balanced-adaptive or celltree-adaptive)");
+                 "balanced-critical, balanced-adaptive, celltree-adaptive or auto)");
   }
   EXPECT_THROW(MakeScheduler("", 0), InputError);
 }

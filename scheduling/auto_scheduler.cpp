@@ -1,0 +1,279 @@
+#include "scheduling/auto_scheduler.h"
+
+#include <algorithm>
+#include <sstream>
+#include <vector>
+
+#include "base/check.h"
+#include "base/format.h"
+#include "scheduling/adaptive_scheduler.h"
+#include "scheduling/balanced_scheduler.h"
+#include "scheduling/best_scheduler.h"
+#include "scheduling/cell_tree_scheduler.h"
+#include "scheduling/max_work.h"
+
+namespace raycell {
+
+constexpr SchedulerEntry kAutoEntry = [] {
+  SchedulerEntry e;
+  e.name = "auto";
+  e.meaning =
+      "the recommended online scheduler: per frame, of celltree-adaptive, celltree-union, "
+      "celltree-best and celltree (one processor) or balanced-critical, celltree-adaptive, "
+      "celltree and balanced (several), the one that fetched fewest on the previous frame's "
+      "tree in a model of the board; Max Work when each fetched more than Max Work there (and "
+      "on several processors in frames 0 and 1, with nothing to judge by)";
+  e.label = "auto (recommended, falls back to Max Work)";
+  e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<AutoScheduler>(seed);
+  };
+  e.history = 2;
+  e.seeded = true;
+  e.studied = false;
+  return e;
+}();
+
+std::string ModelResult::ToString() const {
+  std::ostringstream s;
+  s << "fetches " << fetches << ", time " << FormatReal(time);
+  return s.str();
+}
+
+namespace {
+
+// The model's state: per cell its queue of nodes and queued rays, open (1) or busy (0); per
+// node its number in the order queued (0: the root); per processor its batch.
+class BoardModel {
+ public:
+  BoardModel(const CellTree& tree, Scheduler& scheduler, const FrameInfo& info)
+      : tree_(tree),
+        s_(scheduler),
+        cells_(info.cells),
+        watch_(scheduler.Watches()),
+        fetch_samples_(info.fetch_samples),
+        queue_(cells_),
+        queued_(cells_, 0),
+        view_(cells_, 0),
+        open_(cells_, 1),
+        number_(tree.size(), 0),
+        procs_(std::max<std::uint32_t>(info.processors, 1)) {
+    RAYCELL_CHECK_LE(tree.cell_count(), cells_);
+  }
+
+  ModelResult Run() {
+    for (NodeId c = tree_.first_child(kRootNode); c != kNoNode; c = tree_.next_sibling(c)) {
+      Release(c);
+    }
+    double now = 0;
+    for (;;) {
+      // The idle processors ask again only when the queues or the busy cells changed since they
+      // last asked (a node done inside a batch with no child changes neither): a scheduler
+      // answers the same view the same (Scheduler::Next: no work, or postponing, changes
+      // nothing).
+      if (changed_) {
+        changed_ = false;
+        for (std::uint32_t k = 0; k < procs_.size(); ++k) {
+          if (!procs_[k].working) Ask(k, now);
+        }
+      }
+      // The next node done: its children are queued, and its processor goes on with its batch,
+      // then with what others released into its cell meanwhile (no fetch), else frees the cell.
+      Proc* next = nullptr;
+      for (Proc& p : procs_) {
+        if (p.working && (next == nullptr || p.end < next->end)) next = &p;
+      }
+      if (next == nullptr) break;
+      now = next->end;
+      const NodeId done = next->batch[next->done++];
+      for (NodeId c = tree_.first_child(done); c != kNoNode; c = tree_.next_sibling(c)) Release(c);
+      if (next->done == next->batch.size() && !queue_[next->cell.value()].empty()) {
+        Take(*next, next->cell);
+      }
+      if (next->done < next->batch.size()) {
+        next->end = now + double(tree_.samples(next->batch[next->done]));
+        continue;
+      }
+      open_[next->cell.value()] = 1;
+      next->working = false;
+      changed_ = true;
+    }
+    RAYCELL_CHECK_EQ(taken_, tree_.node_count());
+    result_.time = now;
+    return result_;
+  }
+
+ private:
+  struct Proc {
+    bool working = false;
+    double end = 0;  // when batch[done] is done
+    std::optional<CellId> loaded;
+    CellId cell{0};
+    std::vector<NodeId> batch;
+    std::size_t done = 0;
+  };
+
+  void Release(NodeId n) {
+    const CellId c = tree_.cell(n);
+    number_[n.index()] = next_number_++;
+    const std::uint64_t rays = std::max<std::uint64_t>(tree_.enter(n), 1);
+    queue_[c.value()].push_back(n);
+    queued_[c.value()] += rays;
+    changed_ = true;
+    ++result_.steps;
+    if (watch_) s_.Arrived({number_[n.index()], number_[tree_.parent(n).index()], c, rays});
+  }
+
+  // Takes `c`'s queue whole as p's batch.
+  void Take(Proc& p, CellId c) {
+    if (watch_) s_.Taken(c);
+    p.batch.swap(queue_[c.value()]);
+    queue_[c.value()].clear();
+    p.done = 0;
+    taken_ += p.batch.size();
+    result_.steps += p.batch.size();
+    queued_[c.value()] = 0;
+  }
+
+  void Ask(std::uint32_t k, double now) {
+    Proc& p = procs_[k];
+    std::uint32_t working = 0;
+    for (const Proc& o : procs_) working += o.working ? 1 : 0;
+    for (std::uint32_t c = 0; c < cells_; ++c) view_[c] = open_[c] != 0 ? queued_[c] : 0;
+    result_.steps += cells_;
+    QueueView v{view_.data(), cells_, p.loaded};
+    v.processor = k;
+    v.open = open_.data();
+    v.working = working;
+    if (v.empty()) return;
+    const std::optional<CellId> c = s_.Next(v);
+    if (!c) return;  // postponed: waits for released work
+    RAYCELL_CHECK(v.has_work(*c));
+    double fetch = 0;
+    if (p.loaded != c) {
+      ++result_.fetches;
+      if (fetch_samples_ != nullptr) fetch = (*fetch_samples_)[c->value()];
+    }
+    p.loaded = c;
+    p.cell = *c;
+    p.working = true;
+    open_[c->value()] = 0;
+    Take(p, *c);
+    p.end = now + fetch + double(tree_.samples(p.batch[0]));
+  }
+
+  const CellTree& tree_;
+  Scheduler& s_;
+  std::uint32_t cells_;
+  bool watch_;
+  const std::vector<double>* fetch_samples_;
+  std::vector<std::vector<NodeId>> queue_;
+  std::vector<std::uint64_t> queued_, view_, open_;
+  std::vector<std::uint32_t> number_;
+  std::uint32_t next_number_ = 1;
+  std::vector<Proc> procs_;
+  std::size_t taken_ = 0;
+  bool changed_ = true;  // since the idle processors last asked
+  ModelResult result_;
+};
+
+}  // namespace
+
+ModelResult ModelFrame(const CellTree& tree, Scheduler& scheduler, const FrameInfo& info) {
+  scheduler.BeginFrame(info);
+  return BoardModel(tree, scheduler, info).Run();
+}
+
+std::vector<const SchedulerEntry*> AutoScheduler::CandidatesFor(std::uint32_t processors) {
+  if (processors <= 1) {
+    return {&kCellTreeAdaptiveEntry, &kCellTreeUnionEntry, &kCellTreeBestEntry, &kCellTreeEntry};
+  }
+  return {&kBalancedCriticalEntry, &kCellTreeAdaptiveEntry, &kCellTreeEntry, &kBalancedEntry};
+}
+
+void AutoScheduler::BeginFrame(const FrameInfo& frame) {
+  const std::vector<const SchedulerEntry*> entries = CandidatesFor(frame.processors);
+  if (candidates_.size() != entries.size() || &candidates_[0]->entry() != entries[0]) {
+    candidates_.clear();
+    for (const SchedulerEntry* e : entries) candidates_.push_back(MakeScheduler(*e, seed_));
+  }
+  if (!max_work_) max_work_ = MakeScheduler(kMaxWorkEntry, seed_);
+  models_.assign(candidates_.size(), {});
+  max_work_model_ = {};
+  check_cost_ = own_cost_ = {};
+  // No frame seen to judge by (frames 0 and 1): the candidate with one processor, Max Work with
+  // several (docs/design.md §5 "The recommended scheduler" has the evidence).
+  chosen_ = frame.processors <= 1 ? 0 : kNone;
+  checked_ = frame.previous != nullptr && frame.before_previous != nullptr;
+  if (checked_) {
+    // Frame i-1 as each candidate would have run it (planned from frame i-2 alone: frame i-3
+    // is not told) and as Max Work would have.
+    FrameInfo seen = frame;
+    seen.frame_index = frame.frame_index > 0 ? frame.frame_index - 1 : 0;
+    seen.current = nullptr;
+    seen.previous = frame.before_previous;
+    seen.before_previous = nullptr;
+    max_work_model_ = ModelFrame(*frame.previous, *max_work_, seen);
+    check_cost_.steps += max_work_model_.steps;
+    chosen_ = kNone;
+    for (std::size_t k = 0; k < candidates_.size(); ++k) {
+      models_[k] = ModelFrame(*frame.previous, *candidates_[k], seen);
+      const DecisionCost c = candidates_[k]->Cost();
+      check_cost_.steps += models_[k].steps + c.steps;
+      check_cost_.peak_bytes = std::max(check_cost_.peak_bytes, c.peak_bytes);
+      // No more fetches than Max Work; the fewest, then the least time, then the first.
+      const ModelResult& m = models_[k];
+      if (m.fetches > max_work_model_.fetches) continue;
+      if (chosen_ == kNone || m.fetches < models_[chosen_].fetches ||
+          (m.fetches == models_[chosen_].fetches && m.time < models_[chosen_].time)) {
+        chosen_ = k;
+      }
+    }
+    // The model's state: per node its number and queue slot (8 bytes), per cell its queued
+    // rays and state (16), beside what the candidates kept.
+    check_cost_.peak_bytes +=
+        8 * std::uint64_t{frame.previous->size()} + 16 * std::uint64_t{frame.cells};
+  }
+  active_ = chosen_ == kNone ? max_work_.get() : candidates_[chosen_].get();
+  active_->BeginFrame(frame);
+}
+
+std::string AutoScheduler::Reason() const {
+  const std::string r = active_->Reason();
+  if (chosen_ != kNone) return r;
+  return "max work (fallback)";
+}
+
+void AutoScheduler::Arrived(const Arrival& arrival) {
+  if (active_->Watches()) active_->Arrived(arrival);
+}
+
+void AutoScheduler::Taken(CellId cell) {
+  if (active_->Watches()) active_->Taken(cell);
+}
+
+std::optional<CellId> AutoScheduler::Next(const QueueView& queues) {
+  const std::optional<CellId> c = active_->Next(queues);
+  if (c) {
+    ++own_cost_.decisions;
+    // Max Work and the plain followers count nothing themselves: a scan of the cells (Max Work's,
+    // or a follower's skipped entries at worst, one per cell).
+    if (!active_->Watches()) own_cost_.steps += queues.cells;
+  }
+  return c;
+}
+
+Scheduler::DecisionCost AutoScheduler::Cost() const {
+  // Decisions counted here, whoever runs the frame; the steps of the one that runs it (its own
+  // count when it watches, else one scan per decision) and the check's; the most bytes of either.
+  DecisionCost c = own_cost_;
+  if (active_->Watches()) {
+    const DecisionCost a = active_->Cost();
+    c.steps += a.steps;
+    c.peak_bytes = a.peak_bytes;
+  }
+  c.steps += check_cost_.steps;
+  c.peak_bytes = std::max(c.peak_bytes, check_cost_.peak_bytes);
+  return c;
+}
+
+}  // namespace raycell

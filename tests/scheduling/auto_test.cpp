@@ -1,0 +1,283 @@
+// The recommended scheduler (scheduling/auto_scheduler.h; docs/design.md §5 "The recommended
+// scheduler"): its model of the board fetches as the replay per node with one processor; it
+// processes every ray, segment and sample once on 1, 2 and 8 processors, on random frames and
+// on a capture of frames that resemble each other; it falls back to Max Work exactly when
+// the replay of the previous frame shows the candidate doing worse, and follows it otherwise.
+// (That it uses no future information: tests/scheduling/adaptive_test.cpp; that frame ranges
+// give the whole replay's frames: tests/runner/driver_test.cpp.)
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "replay/config.h"
+#include "replay/replayer.h"
+#include "replay/work.h"
+#include "runner/driver.h"
+#include "scheduling/adaptive_scheduler.h"
+#include "scheduling/auto_scheduler.h"
+#include "scheduling/max_work.h"
+#include "tests/graph/test_trees.h"
+#include "tests/replay/random_frame.h"
+#include "tests/test_util.h"
+#include "traces/trace_reader.h"
+#include "traces/trace_writer.h"
+
+namespace raycell {
+namespace {
+
+struct Counts {
+  std::uint64_t rays = 0, segments = 0, samples = 0;
+};
+
+// Counted from the rays themselves: rays with a visit, visits, samples.
+Counts Count(const RayBatch& rays) {
+  Counts c;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    if (rays.visit_end(i) > rays.visit_begin(i)) ++c.rays;
+  }
+  c.segments = rays.cells().size();
+  for (const std::uint32_t s : rays.samples()) c.samples += s;
+  return c;
+}
+
+ReplayConfig Config(const SchedulerEntry& s, std::uint32_t processors) {
+  ReplayConfig c = DefaultConfig();
+  c.scheduler = &s;
+  c.processors.count = processors;
+  return c;
+}
+
+ReplayResult ReplayOn(const RayBatch& rays, const ReplayConfig& config, Scheduler& s,
+                      const FrameTrees& info, const std::vector<std::uint64_t>& footprints) {
+  const std::uint32_t cells = std::uint32_t(footprints.size());
+  const CellTree tree = testing::TreeOf(rays);
+  const WorkGraph w = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay
+                          ? RaySegmentWork(rays, cells)
+                          : NodeWork(tree, cells);
+  return ReplayFrame(w, footprints, config, s, info, Bound(tree));
+}
+
+// With one processor the replay per node is exact (docs/design.md §2 "Granularity"), and the
+// model is that replay: it fetches as many cells, for every scheduler auto asks it about.
+TEST(AutoModel, FetchesAsTheReplayWithOneProcessor) {
+  std::mt19937 rng(42);
+  for (int trial = 0; trial < 40; ++trial) {
+    const std::uint32_t cells = 2 + rng() % 8;
+    const RayBatch rays = testing::RandomReplayFrame(rng, cells, 60);
+    const CellTree tree = testing::TreeOf(rays);
+    const CellTree previous = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 20));
+    std::vector<std::uint64_t> footprints(cells);
+    for (auto& f : footprints) f = 1000 + rng() % 300'000;
+    std::vector<const SchedulerEntry*> entries = AutoScheduler::CandidatesFor(1);
+    entries.push_back(&kMaxWorkEntry);
+    for (const SchedulerEntry* e : entries) {
+      ReplayConfig config = Config(*e, 1);
+      config.granularity = ReplayConfig::Granularity::kNode;
+      const FrameTrees info{1, nullptr, trial % 4 == 0 ? nullptr : &previous, cells};
+      auto a = MakeScheduler(*e, 1), b = MakeScheduler(*e, 1);
+      const ReplayResult r = ReplayOn(rays, config, *a, info, footprints);
+      const std::vector<double> fetch_samples(cells, 7.0);
+      FrameInfo f;
+      f.frame_index = 1;
+      f.previous = info.previous;
+      f.cells = cells;
+      f.fetch_samples = &fetch_samples;
+      const ModelResult m = ModelFrame(tree, *b, f);
+      EXPECT_EQ(m.fetches, r.fetches) << e->name << " trial " << trial;
+      // Time: every sample once, 7 per fetch (the processor waits for its fetches).
+      std::uint64_t samples = 0;
+      for (const NodeId n : tree.nodes()) samples += tree.samples(n);
+      EXPECT_EQ(m.time, double(samples) + 7.0 * double(m.fetches)) << e->name;
+    }
+  }
+}
+
+TEST(Auto, EveryRaySegmentAndSampleOnceOnRandomFrames) {
+  std::mt19937 rng(43);
+  int replays = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    const std::uint32_t cells = 2 + rng() % 12;
+    const RayBatch rays = testing::RandomReplayFrame(rng, cells, 80);
+    const CellTree previous = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 20));
+    const CellTree before = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 20));
+    const Counts expected = Count(rays);
+    std::vector<std::uint64_t> footprints(cells);
+    for (auto& f : footprints) f = 1000 + rng() % 300'000;
+    for (const std::uint32_t p : {1u, 2u, 8u}) {
+      ReplayConfig config = Config(kAutoEntry, p);
+      if (trial % 2 == 1) config.levels[0].capacity = 2;
+      if (trial % 3 == 1) config.granularity = ReplayConfig::Granularity::kNode;
+      AutoScheduler s(1);
+      FrameTrees info{2, nullptr, &previous, cells, &before};
+      if (trial % 4 == 3) info = FrameTrees{1, nullptr, &previous, cells};
+      const ReplayResult r = ReplayOn(rays, config, s, info, footprints);
+      EXPECT_EQ(r.rays, expected.rays) << "P" << p << " trial " << trial;
+      EXPECT_EQ(r.segments, expected.segments) << "P" << p;
+      EXPECT_EQ(r.samples, expected.samples) << "P" << p;
+      EXPECT_EQ(r.work + r.stall + r.idle, r.time * p) << "P" << p;
+      ++replays;
+    }
+  }
+  EXPECT_EQ(replays, 12 * 3);
+}
+
+// A capture whose frames resemble each other (a base frame, and in each frame a few rays with
+// one more visit at their end), so that plans from earlier frames are worth following: every
+// frame of a replay under auto processes exactly the frame's rays, segments and samples.
+TEST(Auto, EveryRaySegmentAndSampleOnceOnACaptureOfSimilarFrames) {
+  const std::string path = testing::TempPath("auto", "similar.rct");
+  TraceHeader h;
+  h.producer = "raycell test";
+  h.scene = "builtin:test";
+  h.cells = {3, 2, 1};
+  for (std::uint32_t c = 0; c < h.cell_count(); ++c) h.footprints.push_back(20'000 * (c + 1));
+  const int frames = 5;
+  for (int f = 0; f < frames; ++f)
+    h.cameras.push_back({f, {1, 2, 3.0 + f}, {0, 0, 0}, {0, 1, 0}, 40});
+  h.settings.store_t = false;
+  std::mt19937 rng(44);
+  const RayBatch base = testing::RandomReplayFrame(rng, h.cell_count(), 80);
+  std::vector<Counts> expected;
+  {
+    TraceWriter w = TraceWriter::Create(path, h, 3);
+    for (int f = 0; f < frames; ++f) {
+      RayBatch b(false);
+      for (std::size_t i = 0; i < base.size(); ++i) {
+        const RayView ray = base.ray(i);
+        b.BeginRay(ray.kind, ray.parent, ray.spawn, 0, 0);
+        for (std::size_t v = 0; v < ray.visit_count; ++v) {
+          b.AddVisit(ray.cells[v], ray.samples[v], 0, 0);
+        }
+        if (rng() % 8 == 0) {  // one more visit, to a cell other than its last
+          CellId next;
+          do next = CellId(std::uint32_t(rng() % h.cell_count()));
+          while (next == ray.cells[ray.visit_count - 1]);
+          b.AddVisit(next, 1 + std::uint32_t(rng() % 10), 0, 0);
+        }
+      }
+      expected.push_back(Count(b));
+      w.BeginFrame(f);
+      w.Append(b);
+      w.EndFrame();
+    }
+    w.Finish();
+  }
+  const TraceReader reader = TraceReader::Open(path);
+  for (const std::uint32_t p : {1u, 2u, 8u}) {
+    const TraceReplay t = ReplayTrace(reader, {0, 1, 2, 3, 4}, Config(kAutoEntry, p));
+    ASSERT_EQ(t.frames.size(), std::size_t(frames));
+    for (int f = 0; f < frames; ++f) {
+      EXPECT_EQ(t.frames[f].rays, expected[f].rays) << "P" << p << " frame " << f;
+      EXPECT_EQ(t.frames[f].segments, expected[f].segments) << "P" << p << " frame " << f;
+      EXPECT_EQ(t.frames[f].samples, expected[f].samples) << "P" << p << " frame " << f;
+    }
+  }
+  std::remove(path.c_str());
+}
+
+// What a scheduler chose in one frame's replay, in order.
+class Chooser : public Scheduler {
+ public:
+  explicit Chooser(std::unique_ptr<Scheduler> s) : Scheduler(s->entry()), s_(std::move(s)) {}
+  std::vector<std::string> chosen;
+  void BeginFrame(const FrameInfo& frame) override { s_->BeginFrame(frame); }
+  std::optional<CellId> Next(const QueueView& q) override {
+    const std::optional<CellId> c = s_->Next(q);
+    chosen.push_back(c ? std::to_string(c->value()) : "none");
+    return c;
+  }
+  std::optional<CellId> Peek(const QueueView& q) const override { return s_->Peek(q); }
+  bool Watches() const override { return s_->Watches(); }
+  void Arrived(const Arrival& a) override { s_->Arrived(a); }
+  void Taken(CellId c) override { s_->Taken(c); }
+  DecisionCost Cost() const override { return s_->Cost(); }
+  Scheduler& inner() { return *s_; }
+
+ private:
+  std::unique_ptr<Scheduler> s_;
+};
+
+// The fallback and the choice, judged by the replay itself (independent of auto's model): on
+// random frames i-2, i-1 and i, with one processor (where the replay per node is exact), each
+// candidate and Max Work replay frame i-1 as each would have run it (planned from frame i-2).
+// When every candidate fetches more than Max Work there, auto's choices in frame i are Max
+// Work's, one for one; else they are those of the candidate that fetched fewest (then took
+// least time, then the first listed). Both cases occur.
+TEST(Auto, FallsBackToMaxWorkWhenThePreviousFrameShowsItBetter) {
+  std::mt19937 rng(45);
+  const std::vector<const SchedulerEntry*> candidates = AutoScheduler::CandidatesFor(1);
+  int fell_back = 0, followed = 0;
+  for (int trial = 0; trial < 80; ++trial) {
+    const std::uint32_t cells = 2 + rng() % 6;
+    const RayBatch f2 = testing::RandomReplayFrame(rng, cells, 30),
+                   f1 = testing::RandomReplayFrame(rng, cells, 30),
+                   f0 = testing::RandomReplayFrame(rng, cells, 30);
+    const CellTree t2 = testing::TreeOf(f2), t1 = testing::TreeOf(f1);
+    std::vector<std::uint64_t> footprints(cells);
+    for (auto& f : footprints) f = 1000 + rng() % 300'000;
+    ReplayConfig node = Config(kAutoEntry, 1);
+    node.granularity = ReplayConfig::Granularity::kNode;
+    // Frame i-1 in the replay, as each would have run it.
+    const FrameTrees seen{1, nullptr, &t2, cells};
+    auto mw = MakeScheduler(kMaxWorkEntry, 1);
+    const ReplayResult rm = ReplayOn(f1, node, *mw, seen, footprints);
+    const SchedulerEntry* best = nullptr;
+    ReplayResult rb;
+    for (const SchedulerEntry* e : candidates) {
+      auto c = MakeScheduler(*e, 1);
+      const ReplayResult r = ReplayOn(f1, node, *c, seen, footprints);
+      if (r.fetches > rm.fetches) continue;
+      if (best == nullptr || r.fetches < rb.fetches ||
+          (r.fetches == rb.fetches && r.time < rb.time)) {
+        best = e, rb = r;
+      }
+    }
+    // Frame i under auto, Max Work and the candidate expected.
+    const FrameTrees now{2, nullptr, &t1, cells, &t2};
+    Chooser a(MakeScheduler(kAutoEntry, 1)),
+        expected(MakeScheduler(best == nullptr ? kMaxWorkEntry : *best, 1));
+    const ReplayConfig ray = Config(kAutoEntry, 1);
+    const ReplayResult ra = ReplayOn(f0, ray, a, now, footprints);
+    ReplayOn(f0, ray, expected, now, footprints);
+    const AutoScheduler& inner = dynamic_cast<const AutoScheduler&>(a.inner());
+    EXPECT_TRUE(inner.checked());
+    EXPECT_EQ(a.chosen, expected.chosen) << "trial " << trial;
+    if (best == nullptr) {
+      EXPECT_EQ(inner.chosen(), AutoScheduler::kNone) << "trial " << trial;
+      ++fell_back;
+    } else {
+      EXPECT_EQ(candidates[inner.chosen()], best) << "trial " << trial;
+      ++followed;
+    }
+    EXPECT_GT(ra.decision_steps, 0u);  // the check's steps are reported
+    EXPECT_GT(ra.scheduler_bytes, 0u);
+  }
+  EXPECT_GE(fell_back, 5);
+  EXPECT_GE(followed, 5);
+}
+
+// With several processors, frames 0 and 1 (nothing seen to judge by) run Max Work.
+TEST(Auto, SeveralProcessorsRunMaxWorkInFramesZeroAndOne) {
+  std::mt19937 rng(46);
+  for (int trial = 0; trial < 10; ++trial) {
+    const std::uint32_t cells = 2 + rng() % 8;
+    const RayBatch f1 = testing::RandomReplayFrame(rng, cells, 60),
+                   f0 = testing::RandomReplayFrame(rng, cells, 60);
+    const CellTree t1 = testing::TreeOf(f1);
+    std::vector<std::uint64_t> footprints(cells, 50'000);
+    const ReplayConfig eight = Config(kAutoEntry, 8);
+    for (const FrameTrees& info :
+         {FrameTrees{0, nullptr, nullptr, cells}, FrameTrees{1, nullptr, &t1, cells}}) {
+      Chooser a(MakeScheduler(kAutoEntry, 1)), m(MakeScheduler(kMaxWorkEntry, 1));
+      ReplayOn(f0, eight, a, info, footprints);
+      ReplayOn(f0, eight, m, info, footprints);
+      EXPECT_EQ(a.chosen, m.chosen) << "trial " << trial << " frame " << info.frame_index;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace raycell
