@@ -20,9 +20,10 @@ constexpr SchedulerEntry kAutoEntry = [] {
   e.meaning =
       "the recommended online scheduler: per frame, of celltree-adaptive, celltree-union, "
       "celltree-best and celltree (one processor) or balanced-critical, celltree-adaptive, "
-      "celltree and balanced (several), the one that fetched fewest on the previous frame's "
-      "tree in a model of the board; Max Work when each fetched more than Max Work there (and "
-      "on several processors in frames 0 and 1, with nothing to judge by)";
+      "celltree and balanced (several), the one that fetched fewest on the two previous frames' "
+      "trees (each planned from the other) in a model of the board; Max Work when none fetched "
+      "fewer than Max Work there (by 3 per processor with several), and on several processors "
+      "in frames 0 and 1, with nothing to judge by";
   e.label = "auto (recommended, falls back to Max Work)";
   e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
     return std::make_unique<AutoScheduler>(seed);
@@ -205,24 +206,39 @@ void AutoScheduler::BeginFrame(const FrameInfo& frame) {
   chosen_ = frame.processors <= 1 ? 0 : kNone;
   checked_ = frame.previous != nullptr && frame.before_previous != nullptr;
   if (checked_) {
-    // Frame i-1 as each candidate would have run it (planned from frame i-2 alone: frame i-3
-    // is not told) and as Max Work would have.
+    // Frame i-1 as each candidate would have run it planned from frame i-2 (alone: frame i-3
+    // is not told), and frame i-2 planned from frame i-1, and the same frames under Max Work:
+    // two frames' worth of evidence of how the plans of one frame serve the next.
     FrameInfo seen = frame;
     seen.frame_index = frame.frame_index > 0 ? frame.frame_index - 1 : 0;
     seen.current = nullptr;
     seen.previous = frame.before_previous;
     seen.before_previous = nullptr;
-    max_work_model_ = ModelFrame(*frame.previous, *max_work_, seen);
-    check_cost_.steps += max_work_model_.steps;
+    FrameInfo back = seen;
+    back.previous = frame.previous;
+    const auto run = [&](Scheduler& s) {
+      ModelResult m = ModelFrame(*frame.previous, s, seen);
+      check_cost_.steps += m.steps + s.Cost().steps;
+      check_cost_.peak_bytes = std::max(check_cost_.peak_bytes, s.Cost().peak_bytes);
+      const ModelResult r = ModelFrame(*frame.before_previous, s, back);
+      check_cost_.steps += r.steps + s.Cost().steps;
+      check_cost_.peak_bytes = std::max(check_cost_.peak_bytes, s.Cost().peak_bytes);
+      m.fetches += r.fetches;
+      m.time += r.time;
+      m.steps += r.steps;
+      return m;
+    };
+    max_work_model_ = run(*max_work_);
+    // With several processors the model is an estimate: a candidate must save more than
+    // kMarginPerProcessor fetches per processor over the two frames.
+    const std::uint64_t margin = frame.processors > 1 ? kMarginPerProcessor * frame.processors : 0;
     chosen_ = kNone;
     for (std::size_t k = 0; k < candidates_.size(); ++k) {
-      models_[k] = ModelFrame(*frame.previous, *candidates_[k], seen);
-      const DecisionCost c = candidates_[k]->Cost();
-      check_cost_.steps += models_[k].steps + c.steps;
-      check_cost_.peak_bytes = std::max(check_cost_.peak_bytes, c.peak_bytes);
-      // No more fetches than Max Work; the fewest, then the least time, then the first.
+      models_[k] = run(*candidates_[k]);
+      // Fewer fetches than Max Work by the margin; the fewest, then the least time, then the
+      // first listed.
       const ModelResult& m = models_[k];
-      if (m.fetches > max_work_model_.fetches) continue;
+      if (m.fetches + margin > max_work_model_.fetches) continue;
       if (chosen_ == kNone || m.fetches < models_[chosen_].fetches ||
           (m.fetches == models_[chosen_].fetches && m.time < models_[chosen_].time)) {
         chosen_ = k;
@@ -231,7 +247,8 @@ void AutoScheduler::BeginFrame(const FrameInfo& frame) {
     // The model's state: per node its number and queue slot (8 bytes), per cell its queued
     // rays and state (16), beside what the candidates kept.
     check_cost_.peak_bytes +=
-        8 * std::uint64_t{frame.previous->size()} + 16 * std::uint64_t{frame.cells};
+        8 * std::uint64_t{std::max(frame.previous->size(), frame.before_previous->size())} +
+        16 * std::uint64_t{frame.cells};
   }
   active_ = chosen_ == kNone ? max_work_.get() : candidates_[chosen_].get();
   active_->BeginFrame(frame);

@@ -6,9 +6,12 @@
 //    balancing, critical path first, issue 22), `celltree-adaptive`, `celltree` and `balanced`.
 //  - Its check, before each frame i >= 2: a model of the board (ModelFrame, linear in the tree
 //    but for the choices it asks for) replays frame i-1's tree under each candidate as it
-//    would have run frame i-1 (planned from frame i-2's tree alone) and under Max Work. Frame i
-//    runs the candidate that fetched fewest there (then took least time, then the first
-//    listed) among those that fetched no more than Max Work; when none did, Max Work.
+//    would have run frame i-1 planned from frame i-2's tree alone, and frame i-2's planned
+//    from frame i-1's, and both under Max Work. Frame i runs the candidate that fetched fewest
+//    over the two (then took least time, then the first listed) among those that fetched
+//    fewer than Max Work by a margin, 0 with one processor (the model fetches as the replay
+//    there) and kMarginPerProcessor per processor with several (the model is an estimate);
+//    when none did, Max Work.
 //  - Frames 0 and 1 have no frame seen to judge by: the first candidate with one processor, Max
 //  Work
 //    with several (there the candidates fetch 29-58% more in frame 0 on the development set).
@@ -31,6 +34,11 @@ namespace raycell {
 
 // Its registry entry (SchedulerEntry), defined in auto_scheduler.cpp.
 extern const SchedulerEntry kAutoEntry;
+
+// With several processors, the fetches per processor a candidate must save over Max Work in
+// the model's two frames (docs/design.md §5 "The recommended scheduler": chosen among 0-4 on
+// the development set).
+inline constexpr std::uint64_t kMarginPerProcessor = 3;
 
 // What a scheduler's choices cost on one frame's Cell Tree in the model of the board.
 struct ModelResult {

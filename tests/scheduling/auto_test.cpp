@@ -202,10 +202,10 @@ class Chooser : public Scheduler {
 
 // The fallback and the choice, judged by the replay itself (independent of auto's model): on
 // random frames i-2, i-1 and i, with one processor (where the replay per node is exact), each
-// candidate and Max Work replay frame i-1 as each would have run it (planned from frame i-2).
-// When every candidate fetches more than Max Work there, auto's choices in frame i are Max
-// Work's, one for one; else they are those of the candidate that fetched fewest (then took
-// least time, then the first listed). Both cases occur.
+// candidate and Max Work replay frame i-1 planned from frame i-2 and frame i-2 planned from
+// frame i-1. When every candidate fetches more than Max Work over the two, auto's choices in
+// frame i are Max Work's, one for one; else they are those of the candidate that fetched
+// fewest (then took least time, then the first listed). Both cases occur.
 TEST(Auto, FallsBackToMaxWorkWhenThePreviousFrameShowsItBetter) {
   std::mt19937 rng(45);
   const std::vector<const SchedulerEntry*> candidates = AutoScheduler::CandidatesFor(1);
@@ -220,15 +220,21 @@ TEST(Auto, FallsBackToMaxWorkWhenThePreviousFrameShowsItBetter) {
     for (auto& f : footprints) f = 1000 + rng() % 300'000;
     ReplayConfig node = Config(kAutoEntry, 1);
     node.granularity = ReplayConfig::Granularity::kNode;
-    // Frame i-1 in the replay, as each would have run it.
-    const FrameTrees seen{1, nullptr, &t2, cells};
-    auto mw = MakeScheduler(kMaxWorkEntry, 1);
-    const ReplayResult rm = ReplayOn(f1, node, *mw, seen, footprints);
+    // Frames i-1 and i-2 in the replay, each planned from the other.
+    const FrameTrees seen{1, nullptr, &t2, cells}, back{1, nullptr, &t1, cells};
+    const auto both = [&](const SchedulerEntry& e) {
+      auto s = MakeScheduler(e, 1);
+      ReplayResult r = ReplayOn(f1, node, *s, seen, footprints);
+      const ReplayResult q = ReplayOn(f2, node, *s, back, footprints);
+      r.fetches += q.fetches;
+      r.time = r.time + q.time;
+      return r;
+    };
+    const ReplayResult rm = both(kMaxWorkEntry);
     const SchedulerEntry* best = nullptr;
     ReplayResult rb;
     for (const SchedulerEntry* e : candidates) {
-      auto c = MakeScheduler(*e, 1);
-      const ReplayResult r = ReplayOn(f1, node, *c, seen, footprints);
+      const ReplayResult r = both(*e);
       if (r.fetches > rm.fetches) continue;
       if (best == nullptr || r.fetches < rb.fetches ||
           (r.fetches == rb.fetches && r.time < rb.time)) {
