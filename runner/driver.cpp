@@ -161,8 +161,18 @@ ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& head
   const bool per_ray = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay;
   const WorkGraph* work = per_ray ? frame.segments.get() : frame.nodes.get();
   RAYCELL_CHECK(work != nullptr);  // the walker was asked for this granularity
-  const FrameTrees info{frame.index, frame.tree.get(), frame.previous.get(), header.cell_count(),
-                        frame.before_previous.get()};
+  // An earlier frame's tree in other cells (a dynamic subdivision whose boxes changed) says
+  // nothing about this frame's cells: the schedulers get none, as in frame 0 (design §5).
+  const std::uint32_t cells = header.cell_count();
+  const SubdivisionInfo& sub = header.subdivision;
+  const CellTree* previous = frame.previous && sub.SameCells(frame.index, frame.index - 1, cells)
+                                 ? frame.previous.get()
+                                 : nullptr;
+  const CellTree* before =
+      previous && frame.before_previous && sub.SameCells(frame.index, frame.index - 2, cells)
+          ? frame.before_previous.get()
+          : nullptr;
+  const FrameTrees info{frame.index, frame.tree.get(), previous, cells, before};
   ReplayResult r = ReplayFrame(*work, frame.footprints ? *frame.footprints : header.footprints,
                                config, scheduler, info, frame.bound, observer, memory, units);
   ScaleBack(r, sample_every, config.processors.count);

@@ -20,6 +20,14 @@ std::vector<CellId> SubdivisionInfo::CellOfFine(std::size_t frame, std::uint32_t
                              fine);
 }
 
+bool SubdivisionInfo::SameCells(std::size_t a, std::size_t b, std::uint32_t cells) const {
+  if (!dynamic() || a == b) return true;
+  const std::size_t fa = a * cells, fb = b * cells;
+  RAYCELL_CHECK_LE(std::max(fa, fb) + cells, boxes.size());
+  return std::equal(boxes.begin() + std::ptrdiff_t(fa), boxes.begin() + std::ptrdiff_t(fa + cells),
+                    boxes.begin() + std::ptrdiff_t(fb));
+}
+
 std::uint64_t CellLeaves::UnionBytes(const std::vector<std::uint32_t>& cells) const {
   std::vector<std::uint32_t> all;
   for (std::uint32_t c : cells) {

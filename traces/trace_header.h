@@ -122,6 +122,9 @@ struct SubdivisionInfo {
   // Per fine cell, its cell in frame `frame` (an index into the trace's frames) of a trace of
   // `cells` cells each frame: the boxes of that frame (`dynamic:N`) or the only ones.
   std::vector<CellId> CellOfFine(std::size_t frame, std::uint32_t cells) const;
+  // Whether frames `a` and `b` (indices into the trace's frames) have the same cells: true but
+  // for a dynamic subdivision whose boxes differ between them.
+  bool SameCells(std::size_t a, std::size_t b, std::uint32_t cells) const;
   bool operator==(const SubdivisionInfo& o) const {
     return spec == o.spec && fine == o.fine && boxes == o.boxes &&
            frame_footprints == o.frame_footprints;

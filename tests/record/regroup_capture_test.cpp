@@ -151,6 +151,39 @@ TEST_F(RegroupCaptureTest, DynamicCellsHaveEachFramesFootprints) {
   }
 }
 
+// A dynamic subdivision whose boxes change between frames i - 1 and i: frame i - 1's tree is of
+// other cells and says nothing about frame i's, so Cell Tree scheduling gets none and replays
+// frame i as Max Work does (its frame-0 rule); with the boxes unchanged it follows the tree.
+TEST(RegroupCaptureDynamicTest, ATreeOfOtherCellsIsNotGivenToTheSchedulers) {
+  const auto dir = TempDir("regroup_dynamic");
+  RecordOptions o = SmallBuiltin(dir, 32);
+  o.cells = {12, 12, 12};
+  o.regroupable = true;
+  o.frames = {0, 1, 2, 3};
+  o.camera.orbit_degrees = 90;
+  std::ostringstream log;
+  Record(o, log);
+  const TraceReader view = TraceReader::Open(o.out, "dynamic:9");
+  const auto& boxes = view.header().subdivision.boxes;
+  std::vector<std::size_t> frames(view.frames().size());
+  for (std::size_t f = 0; f < frames.size(); ++f) frames[f] = f;
+  ReplayConfig celltree = DefaultConfig(), maxwork = DefaultConfig();
+  ApplyOverride(celltree, "scheduler", "celltree", "test");
+  ApplyOverride(maxwork, "scheduler", "maxwork", "test");
+  const TraceReplay a = ReplayTrace(view, frames, celltree), b = ReplayTrace(view, frames, maxwork);
+  int changed = 0;
+  for (std::size_t f = 1; f < frames.size(); ++f) {
+    if (std::equal(boxes.begin() + (f - 1) * 9, boxes.begin() + f * 9, boxes.begin() + f * 9)) {
+      continue;
+    }
+    ++changed;
+    EXPECT_EQ(a.frames[f].fetches, b.frames[f].fetches) << "frame " << f;
+    EXPECT_EQ(a.frames[f].time, b.frames[f].time) << "frame " << f;
+  }
+  EXPECT_GT(changed, 0) << "no frame changed its boxes: the test shows nothing";
+  std::filesystem::remove_all(dir);
+}
+
 // Without empty cells dropped, a regroupable capture's rays are those of a plain capture on
 // the same grid: the empty visits it adds change nothing once dropped.
 TEST_F(RegroupCaptureTest, ItsOwnGridIsThePlainCapture) {
