@@ -304,18 +304,35 @@ class Board {
     queued_rays_[c.value()] += q;
     queued_total_ += q;
     peak_queued_ = std::max(peak_queued_, queued_total_);
+    // The view only grows here, so the cell with the most queued rays in view can change only
+    // to c (lowest number on ties, as MostQueuedCell).
+    const std::uint64_t v = queued_rays_[c.value()] & open_[c.value()];
+    view_[c.value()] = v;
+    if (most_known_ && v != 0 &&
+        (most_ == kNoCell || v > view_[most_.value()] ||
+         (v == view_[most_.value()] && c.value() < most_.value()))) {
+      most_ = c;
+    }
   }
 
-  // The queues a scheduler may choose from: cells being worked are not available.
+  // The queues a scheduler may choose from: cells being worked are not available. view_ is
+  // kept as the queues change (Enqueue, the lock in OnIdle), and with it the cell with the
+  // most queued rays in view (QueueView::most), found again by a scan only when the lock took
+  // it: with several processors most calls find every queued cell being worked, and cost
+  // neither a pass over the cells nor Max Work's scan.
   QueueView View(std::uint32_t p) {
-    // A mask, not a branch per cell: the loop vectorises (a processor asks on every idle event,
-    // and with several processors most of them find every queued cell being worked).
-    for (std::uint32_t c = 0; c < w_.cells; ++c) view_[c] = queued_rays_[c] & open_[c];
+    if (!most_known_) {
+      most_ = ScanMostQueued(view_.data(), w_.cells);
+      most_known_ = true;
+    }
     QueueView v = QueueView::Of(view_, processors_[p].cell);
     v.processor = p;
     v.open = open_.data();
     v.working = working_;
     v.all_queued = queued_rays_.data();
+    v.most_of = view_.data();
+    v.most_cells = w_.cells;
+    v.most = most_;
     return v;
   }
 
@@ -336,6 +353,8 @@ class Board {
     RAYCELL_CHECK(!queues_[c->value()].empty() && queued_rays_[c->value()] != 0);
     if (holders_[c->value()] == 0) {  // lock it: its queued rays now wait for a holder
       open_[c->value()] = 0;
+      view_[c->value()] = 0;
+      if (*c == most_) most_known_ = false;
       --available_;
       ++joinable_;
     }
@@ -510,7 +529,12 @@ class Board {
   Scheduler& scheduler_;
   MemoryHierarchy memory_;
   std::vector<std::vector<Entry>> queues_;
+  // view_[c] = queued_rays_[c] & open_[c], kept so (the queues in a scheduler's view).
   std::vector<std::uint64_t> queued_rays_, view_;
+  // The cell with the most queued rays in view_, lowest number on ties (kNoCell: none), when
+  // most_known_; found again by a scan at the next View when not.
+  CellId most_ = kNoCell;
+  bool most_known_ = true;
   // Per cell: all ones, or 0 while a processor works it (locked: not in the view).
   static constexpr std::uint64_t kOpen = ~std::uint64_t{0};
   std::vector<std::uint64_t> open_;
