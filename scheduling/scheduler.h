@@ -105,6 +105,11 @@ struct SchedulerEntry {
   bool oracle = false;
   // Whether raycell study replays it: all but the naive baselines (Round Robin, Random).
   bool studied = true;
+  // Whether it may choose a busy cell (QueueView::all_queued: join it) or otherwise answer
+  // anything but nothing when no cell in view has work. false promises that Next then returns
+  // nullopt and changes nothing, so the replay does not ask it (with tens of processors most
+  // calls are such). true, the default, is always safe.
+  bool joins = true;
 };
 
 // A scheduling policy. Per frame: BeginFrame once, then Next once per fetch.
