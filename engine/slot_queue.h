@@ -102,6 +102,15 @@ class SlotQueue {
     return std::uint32_t(key & (leaves_ - 1));
   }
 
+  // Numbers n events that the model keeps outside the slots (the replay's woken processors,
+  // replay/replayer.cpp), as n Schedules would: returns the first number, the others follow.
+  std::uint64_t TakeSeqs(std::uint64_t n) {
+    RAYCELL_CHECK_LE(n, max_seq_ + 1 - next_seq_);
+    const std::uint64_t first = next_seq_;
+    next_seq_ += n;
+    return first;
+  }
+
   // Events scheduled so far.
   std::uint64_t scheduled() const { return next_seq_; }
   // The most events a queue of this many slots can number (the rest of the key's bits name

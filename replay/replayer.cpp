@@ -202,7 +202,6 @@ struct Processor {
   std::vector<Entry> worklist;  // units of `cell` to work in this fetch, from `head` on
   std::size_t head = 0;
   Entry unit{};          // the unit being worked
-  bool waiting = false;  // idle, no cell had work
   bool holding = false;  // `cell` is locked by this processor (fetching or working it)
   SimTime work, stall;
 };
@@ -233,6 +232,11 @@ class Board {
         holders_(w.cells, 0),
         processors_(config.processors.count),
         slots_(config.processors.count),
+        words_((config.processors.count + 63) / 64),
+        waiting_mask_(words_, 0),
+        holder_mask_(words_, 0),
+        last_on_(std::size_t{w.cells} * words_, 0),
+        ask_when_joinable_(scheduler.entry().joins),
         obs_(observer),
         watch_(std::move(watch)) {
     u_.ForEachRoot(
@@ -252,6 +256,12 @@ class Board {
     }
     for (std::uint32_t p = slots_.top();;) {
       const auto& slot = slots_.at(p);
+      // A woken processor's call comes first when its number is lower (its time is now_).
+      if (batch_head_ != batch_end_ &&
+          (slot.time != now_ || slot.seq > batches_[batch_head_].seq)) {
+        p = HandleWoken();
+        continue;
+      }
       const Kind kind = slot.kind;
       if (kind == Kind::kNone) break;
       RAYCELL_CHECK_LE(now_, slot.time);  // time never goes backwards
@@ -301,21 +311,42 @@ class Board {
     const bool starts = (queued_rays_[c.value()] == 0) & (q != 0);
     available_ += starts & (open_[c.value()] != 0);
     joinable_ += starts & (open_[c.value()] == 0);
+    if (starts) {  // the processors whose last cell this is now hold a cell with queued rays
+      const std::uint64_t* on = &last_on_[std::size_t{c.value()} * words_];
+      for (std::uint32_t k = 0; k < words_; ++k) holder_mask_[k] |= on[k];
+    }
     queued_rays_[c.value()] += q;
     queued_total_ += q;
     peak_queued_ = std::max(peak_queued_, queued_total_);
+    // The view only grows here, so the cell with the most queued rays in view can change only
+    // to c (lowest number on ties, as MostQueuedCell).
+    const std::uint64_t v = queued_rays_[c.value()] & open_[c.value()];
+    view_[c.value()] = v;
+    if (most_known_ && v != 0 &&
+        (most_ == kNoCell || v > view_[most_.value()] ||
+         (v == view_[most_.value()] && c.value() < most_.value()))) {
+      most_ = c;
+    }
   }
 
-  // The queues a scheduler may choose from: cells being worked are not available.
+  // The queues a scheduler may choose from: cells being worked are not available. view_ is
+  // kept as the queues change (Enqueue, the lock in OnIdle), and with it the cell with the
+  // most queued rays in view (QueueView::most), found again by a scan only when the lock took
+  // it: with several processors most calls find every queued cell being worked, and cost
+  // neither a pass over the cells nor Max Work's scan.
   QueueView View(std::uint32_t p) {
-    // A mask, not a branch per cell: the loop vectorises (a processor asks on every idle event,
-    // and with several processors most of them find every queued cell being worked).
-    for (std::uint32_t c = 0; c < w_.cells; ++c) view_[c] = queued_rays_[c] & open_[c];
+    if (!most_known_) {
+      most_ = ScanMostQueued(view_.data(), w_.cells);
+      most_known_ = true;
+    }
     QueueView v = QueueView::Of(view_, processors_[p].cell);
     v.processor = p;
     v.open = open_.data();
     v.working = working_;
     v.all_queued = queued_rays_.data();
+    v.most_of = view_.data();
+    v.most_cells = w_.cells;
+    v.most = most_;
     return v;
   }
 
@@ -324,23 +355,31 @@ class Board {
     // (Scheduler::Next), so it is not asked: with several processors most idle events are
     // of processors woken by work released into a cell that another one is working.
     // (A busy cell with queued rays may be joined: the scheduler is asked then too.)
-    const std::optional<CellId> c =
-        available_ == 0 && joinable_ == 0 ? std::nullopt : scheduler_.Next(View(p));
+    // (A busy cell with queued rays may be joined: the scheduler is asked then too, unless its
+    // entry says it never joins, SchedulerEntry::joins.)
+    const std::optional<CellId> c = NothingToAsk() ? std::nullopt : scheduler_.Next(View(p));
     if (!c) {
       // Next answers nothing only when nothing is in view, or postpones while others work.
       RAYCELL_CHECK(available_ == 0 || working_ > 0);
-      processors_[p].waiting = true;  // woken when work is released
+      waiting_mask_[p / 64] |= std::uint64_t{1} << (p % 64);  // woken when work is released
       ++waiting_;
       return;
     }
     RAYCELL_CHECK(!queues_[c->value()].empty() && queued_rays_[c->value()] != 0);
     if (holders_[c->value()] == 0) {  // lock it: its queued rays now wait for a holder
       open_[c->value()] = 0;
+      view_[c->value()] = 0;
+      if (*c == most_) most_known_ = false;
       --available_;
       ++joinable_;
     }
     ++holders_[c->value()];  // more than one: processors sharing a cell (Scheduler::Next)
     ++working_;
+    const std::uint64_t bit = std::uint64_t{1} << (p % 64);
+    if (processors_[p].cell)
+      last_on_[std::size_t{processors_[p].cell->value()} * words_ + p / 64] &= ~bit;
+    last_on_[std::size_t{c->value()} * words_ + p / 64] |= bit;
+    holder_mask_[p / 64] |= bit;  // c has queued rays
     processors_[p].cell = *c;
     processors_[p].holding = true;
     const std::uint64_t fetches = obs_ ? memory_.stats()[0].fetches : 0;  // observed only
@@ -363,6 +402,10 @@ class Board {
     watch_.Taken(c);
 
     joinable_ -= queued_rays_[c.value()] != 0;
+    if (queued_rays_[c.value()] != 0) {
+      const std::uint64_t* on = &last_on_[std::size_t{c.value()} * words_];
+      for (std::uint32_t k = 0; k < words_; ++k) holder_mask_[k] &= ~on[k];
+    }
     queued_total_ -= queued_rays_[c.value()];
     queued_rays_[c.value()] = 0;
     if (ps.head == ps.worklist.size()) {
@@ -481,18 +524,68 @@ class Board {
   // Wakes every waiting processor: first, in processor order, those whose last cell (the one
   // in their cache, QueueView::loaded) now has queued rays, so that such a cell goes to a
   // processor that holds it rather than to one that would fetch it; then the others.
+  //
+  // Each gets a call at now_, numbered in that order (as if scheduled), but the calls are kept
+  // as one batch outside the slots: with tens of processors a release wakes dozens, and most
+  // find nothing. Nothing comes between a batch's calls (later events have higher numbers),
+  // and a call that finds nothing changes nothing but the event count, so once one does, every
+  // call left in its batch would too: HandleWoken puts them back to waiting at once, each
+  // counted as an event as before.
   void WakeWaiting() {
-    for (const bool holders_first : {true, false}) {
-      for (std::uint32_t q = 0; q < processors_.size(); ++q) {
-        Processor<Entry>& qs = processors_[q];
-        if (!qs.waiting) continue;
-        if (holders_first && (!qs.cell || queued_rays_[qs.cell->value()] == 0)) continue;
-        qs.waiting = false;
-        --waiting_;
-        Schedule(q, now_, Kind::kIdle);
-        slots_.Update(q);
+    if (batch_end_ == batches_.size()) batches_.emplace_back();
+    Batch& b = batches_[batch_end_++];
+    b.seq = slots_.TakeSeqs(waiting_);
+    b.left = waiting_;
+    b.bits.resize(2 * std::size_t{words_});
+    for (std::uint32_t k = 0; k < words_; ++k) {
+      b.bits[k] = waiting_mask_[k] & holder_mask_[k];
+      b.bits[words_ + k] = waiting_mask_[k] & ~holder_mask_[k];
+      waiting_mask_[k] = 0;
+    }
+    waiting_ = 0;
+  }
+
+  // Whether a call now would find nothing without asking the scheduler (OnIdle).
+  bool NothingToAsk() const { return available_ == 0 && (joinable_ == 0 || !ask_when_joinable_); }
+
+  // Handles the first batch's next call (WakeWaiting); returns the next slot to look at.
+  std::uint32_t HandleWoken() {
+    Batch& b = batches_[batch_head_];
+    if (NothingToAsk()) {
+      // This call and every one left in the batch find nothing: back to waiting, each an event
+      // (up to the watchdog's limit, where the replay stops as it would have).
+      const std::uint64_t n =
+          std::min<std::uint64_t>(b.left, kWatchdogEvents - events_since_progress_);
+      events_ = CheckedAdd(events_, n);
+      events_since_progress_ += n;
+      if (events_since_progress_ >= kWatchdogEvents) Stall("events without progress");
+      for (std::uint32_t k = 0; k < words_; ++k) waiting_mask_[k] |= b.bits[k] | b.bits[words_ + k];
+      waiting_ += b.left;
+      PopBatch();
+      return slots_.top();
+    }
+    // The next in order: the lowest bit of the holders, then of the others.
+    std::uint32_t q = 0;
+    for (std::uint32_t k = 0; k < 2 * words_; ++k) {
+      if (b.bits[k] != 0) {
+        q = (k % words_) * 64 + std::uint32_t(__builtin_ctzll(b.bits[k]));
+        b.bits[k] &= b.bits[k] - 1;
+        break;
       }
     }
+    ++b.seq;
+    const bool last = --b.left == 0;
+    if (last) PopBatch();
+    CheckedIncrement(events_);
+    ++events_since_progress_;
+    OnIdle(q);
+    const std::uint32_t top = slots_.at(q).kind != Kind::kNone ? slots_.Update(q) : slots_.top();
+    if (events_since_progress_ >= kWatchdogEvents) Stall("events without progress");
+    return top;
+  }
+
+  void PopBatch() {
+    if (++batch_head_ == batch_end_) batch_head_ = batch_end_ = 0;
   }
 
   [[noreturn]] void Stall(const std::string& reason) const {
@@ -510,7 +603,12 @@ class Board {
   Scheduler& scheduler_;
   MemoryHierarchy memory_;
   std::vector<std::vector<Entry>> queues_;
+  // view_[c] = queued_rays_[c] & open_[c], kept so (the queues in a scheduler's view).
   std::vector<std::uint64_t> queued_rays_, view_;
+  // The cell with the most queued rays in view_, lowest number on ties (kNoCell: none), when
+  // most_known_; found again by a scan at the next View when not.
+  CellId most_ = kNoCell;
+  bool most_known_ = true;
   // Per cell: all ones, or 0 while a processor works it (locked: not in the view).
   static constexpr std::uint64_t kOpen = ~std::uint64_t{0};
   std::vector<std::uint64_t> open_;
@@ -525,7 +623,23 @@ class Board {
   std::uint32_t joinable_ = 0;
   std::vector<Processor<Entry>> processors_;
   SlotQueue<Kind> slots_;
+  // Bit sets of processors, words_ 64-bit words each: waiting (idle, no cell had work), and
+  // whose last cell has queued rays; per cell, the processors whose last cell it is.
+  std::uint32_t words_;
+  std::vector<std::uint64_t> waiting_mask_, holder_mask_, last_on_;
   std::uint32_t waiting_ = 0;
+  // Woken processors' calls not yet handled (WakeWaiting): batches_[batch_head_, batch_end_),
+  // in order; each the number of its next call, the calls left, and the processors, holders
+  // first (bits[0, words_)) then the others.
+  struct Batch {
+    std::uint64_t seq = 0;
+    std::uint32_t left = 0;
+    std::vector<std::uint64_t> bits;
+  };
+  std::vector<Batch> batches_;
+  std::size_t batch_head_ = 0, batch_end_ = 0;
+  // Whether the scheduler is asked when only busy cells have work (SchedulerEntry::joins).
+  bool ask_when_joinable_;
   // OnUnitDone brought its processor's slot up to date itself; top_ is then the next.
   bool updated_ = false;
   std::uint32_t top_ = 0;

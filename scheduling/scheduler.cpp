@@ -24,12 +24,21 @@ QueueView QueueView::Of(const std::vector<std::uint64_t>& queued, std::optional<
   return {queued.data(), static_cast<std::uint32_t>(queued.size()), loaded};
 }
 
-std::optional<CellId> MostQueuedCell(const QueueView& queues) {
-  std::optional<CellId> best;
-  for (CellId c : CellRange(queues.cells)) {
-    if (queues.queued(c) > (best ? queues.queued(*best) : 0)) best = c;
+CellId ScanMostQueued(const std::uint64_t* queued, std::uint32_t cells) {
+  std::uint32_t best = kNoCell.value();
+  std::uint64_t most = 0;
+  for (std::uint32_t c = 0; c < cells; ++c) {
+    if (queued[c] > most) best = c, most = queued[c];
   }
-  return best;
+  return CellId(best);
+}
+
+std::optional<CellId> MostQueuedCell(const QueueView& queues) {
+  const CellId c = queues.most_of != nullptr && queues.most_of == queues.queued_rays &&
+                           queues.most_cells == queues.cells
+                       ? queues.most
+                       : ScanMostQueued(queues.queued_rays, queues.cells);
+  return c == kNoCell ? std::nullopt : std::optional<CellId>(c);
 }
 
 std::string ScheduleFollower::Stats::ToString() const {

@@ -36,6 +36,14 @@ struct QueueView {
   // (a cell is read-only volume data, so each holds a copy); every queue the holders take is
   // taken whole by the first that asks. Only the `share` schedulers do.
   const std::uint64_t* all_queued = nullptr;
+  // The replay's answer of MostQueuedCell for this view, kept as its queues change so that a
+  // decision need not scan every cell (docs/design.md §2 "Several processors"): `most`
+  // (kNoCell: no cell has work), for these queued_rays and cells only. MostQueuedCell uses it
+  // when most_of == queued_rays and most_cells == cells, so a view a scheduler copies with other
+  // counts (or made by QueueView::Of) is scanned. Null: none given.
+  const std::uint64_t* most_of = nullptr;
+  std::uint32_t most_cells = 0;
+  CellId most = kNoCell;
 
   std::uint64_t queued(CellId c) const { return queued_rays[c.value()]; }
   // Whether another processor is working `c` (work released there is done by that one).
@@ -97,6 +105,11 @@ struct SchedulerEntry {
   bool oracle = false;
   // Whether raycell study replays it: all but the naive baselines (Round Robin, Random).
   bool studied = true;
+  // Whether it may choose a busy cell (QueueView::all_queued: join it) or otherwise answer
+  // anything but nothing when no cell in view has work. false promises that Next then returns
+  // nullopt and changes nothing, so the replay does not ask it (with tens of processors most
+  // calls are such). true, the default, is always safe.
+  bool joins = true;
 };
 
 // A scheduling policy. Per frame: BeginFrame once, then Next once per fetch.
@@ -166,8 +179,11 @@ class Scheduler {
 };
 
 // Max Work's choice: the cell with the most queued rays, lowest number on ties; nullopt when
-// no cell has work.
+// no cell has work. O(1) with the replay's answer (QueueView::most), else a scan of the cells
+// (ScanMostQueued).
 std::optional<CellId> MostQueuedCell(const QueueView& queues);
+// The same by a scan of queued[0 .. cells): kNoCell when no cell has work.
+CellId ScanMostQueued(const std::uint64_t* queued, std::uint32_t cells);
 
 // Walks a fixed schedule with a cursor, skipping (using up) entries whose cell has no queued
 // work (no fetch); once the schedule is used up, Max Work. With several processors an entry

@@ -147,6 +147,39 @@ TEST(ReplayCore, EqualsTheReferenceWhenEventsTie) {
   }
 }
 
+// Tens of processors (issue 43): sets of processors span several 64-bit words (the board keeps
+// the waiting processors and those woken together in bit sets), dozens wait and are woken by
+// each release, and with free fetches many calls fall at one instant.
+TEST(ReplayCore, EqualsTheReferenceOnTensOfProcessors) {
+  std::mt19937 rng(43);
+  for (int trial = 0; trial < 12; ++trial) {
+    const std::uint32_t cells = 60 + rng() % 140;  // enough for most processors to hold one
+    const RayBatch rays = testing::RandomReplayFrame(rng, cells, 600);
+    const CellTree tree = testing::TreeOf(rays);
+    const std::vector<std::uint64_t> footprints(cells, 4096);
+    ReplayConfig config = DefaultConfig();
+    config.granularity = ReplayConfig::Granularity::kRay;
+    config.processors.count = 60 + rng() % 80;  // 60..139: one to three words
+    config.processors.time_per_sample = SimTime::Picoseconds(rng() % 2 ? 1 : 1000);
+    if (trial % 2 == 0) {
+      for (LevelConfig& l : config.levels) {
+        l.bandwidth_below = ParseBandwidth("unlimited", "test");
+        l.latency_below = SimTime::Zero();
+      }
+    }
+    const FrameTrees info{0, &tree, nullptr, cells};
+    const WorkGraph w = RaySegmentWork(rays, cells);
+    for (const char* name : kSchedulers) {
+      config.scheduler = &SchedulerByName(name, "test");
+      auto a = MakeScheduler(name, 1), b = MakeScheduler(name, 1);
+      ASSERT_EQ(Describe(ReplayFrame(w, footprints, config, *a, info, Bound(tree))),
+                Describe(ReferenceReplayFrame(w, footprints, config, *b, info, Bound(tree))))
+          << "trial " << trial << " scheduler " << name << " processors "
+          << config.processors.count;
+    }
+  }
+}
+
 // Without the packed records (as for units whose samples exceed 32 bits) the core reads the
 // work graph's columns: the same results.
 TEST(ReplayCore, EqualsTheReferenceOnTheColumns) {

@@ -16,6 +16,7 @@
 //
 // Usage: build/tools/bench_replay_core TRACE [FRAMES=all] [REPS=3] [CASE=all|-1]
 //            [--core-only]
+// CASE numbers the configurations in Cases()' order, from 0.
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -67,6 +68,11 @@ std::vector<Case> Cases() {
   add("random, 8 processors, 2 cells", "random", 8, "2 cells", false);
   // Case 0 on eight processors: the core's cost of parallelism with the same scheduler.
   add("celltree, 8 processors, 1 cell", "celltree", 8, "1 cell", false);
+  // Tens of processors (issue 43): Max Work's segments per second at 64 processors against
+  // one, on a capture of hundreds of cells (case 6 / case 5); and case 0 on 64 processors.
+  add("maxwork, 1 processor, 1 cell", "maxwork", 1, "1 cell", false);
+  add("maxwork, 64 processors, 1 cell", "maxwork", 64, "1 cell", false);
+  add("celltree, 64 processors, 1 cell", "celltree", 64, "1 cell", false);
   return cases;
 }
 
