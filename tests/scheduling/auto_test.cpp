@@ -185,8 +185,11 @@ class Chooser : public Scheduler {
   std::vector<std::string> chosen;
   void BeginFrame(const FrameInfo& frame) override { s_->BeginFrame(frame); }
   std::optional<CellId> Next(const QueueView& q) override {
+    // The cells chosen, in order. A call that chooses nothing is not recorded: how often the
+    // replay asks while only busy cells have work depends on the scheduler's entry (Max Work
+    // says it never joins one, SchedulerEntry::joins), not on the choices.
     const std::optional<CellId> c = s_->Next(q);
-    chosen.push_back(c ? std::to_string(c->value()) : "none");
+    if (c) chosen.push_back(std::to_string(c->value()));
     return c;
   }
   std::optional<CellId> Peek(const QueueView& q) const override { return s_->Peek(q); }
