@@ -97,5 +97,8 @@ inline constexpr unsigned kSpawnExplicit = 3;
 // Version 5: a visit's samples are predicted from the reference ray's visit of the same cell,
 // searched at most this many visits from the one after the last matched (see "Samples").
 inline constexpr std::size_t kSampleMatchWindow = 4;
+// Version 5: Batch.referenceRule, how a ray that is not primary finds its reference ray.
+inline constexpr unsigned kReferenceSibling = 0;
+inline constexpr unsigned kReferenceCorresponding = 1;
 
 }  // namespace raycell

@@ -36,14 +36,16 @@
 #                        ray has the same parent and the same kind as ray i: the ray's place
 #                        in its run of siblings of its kind.
 #   reference ray        version 5: for a primary ray, the last primary ray before it in the
-#                        batch; for another ray whose parent is in the batch, the last ray
-#                        before it in the batch that has the same kind, the same ordinal and
-#                        a parent in the batch of the same kind as its parent (the
-#                        corresponding ray of the previous pixel, typically: the shadow ray
-#                        cast from the same place along the previous pixel's primary ray) if
-#                        there is one, else its sibling; for a ray whose parent is before the
-#                        batch, its sibling; else none.
-#                        Versions 1-4: for a primary ray, the last primary ray before it in
+#                        batch. For another ray, by the batch's referenceRule: 0, the sibling
+#                        rule, as in versions 1-4 (below); 1, the corresponding rule: for a
+#                        ray whose parent is in the batch, the last ray before it in the
+#                        batch that has the same kind, the same ordinal and a parent in the
+#                        batch of the same kind as its parent (the corresponding ray of the
+#                        previous pixel, typically: the shadow ray cast from the same place
+#                        along the previous pixel's primary ray) if there is one, else its
+#                        sibling; for a ray whose parent is before the batch, its sibling;
+#                        else none.
+#                        Versions 1-4 (and the sibling rule): for a primary ray, the last primary ray before it in
 #                        the batch; for a ray with a sibling that is not primary, its sibling;
 #                        for a group start whose parent is in the batch, the last group start
 #                        before it in the batch that has the same kind and whose parent is in
@@ -384,6 +386,11 @@ struct Batch {
   shadowSamples @13 :Column;
   # Version 5: the zero-run coded residuals of the visits of shadow rays (secondarySamples
   # then holds those of reflection and refraction rays only). Empty before version 5.
+  referenceRule @14 :UInt8;
+  # Version 5: how a ray that is not primary finds its reference ray (see "Column
+  # encoding"): 0 the sibling rule, 1 the corresponding rule. The writer codes each batch
+  # both ways and keeps the one with fewer bytes before zstd (the corresponding ray is the
+  # nearer at high resolutions, the sibling at low ones). 0 before version 5.
 }
 
 # Totals of one frame, written after its last batch (and repeated in the index).

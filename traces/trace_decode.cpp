@@ -392,6 +392,10 @@ class FrameDecoder {
       for (std::vector<std::size_t>& slots : by_parent) slots.clear();
     }
     last_first_cell_ = 0;
+    corresponding_rule_ = v5_ && b.getReferenceRule() == kReferenceCorresponding;
+    if (b.getReferenceRule() > (v5_ ? kReferenceCorresponding : kReferenceSibling)) {
+      throw BadData("bad reference rule " + Str(unsigned{b.getReferenceRule()}));
+    }
     std::size_t i = 0;
     for (unsigned r = 0; r < c.heads.size(); ++r) {
       const std::uint8_t head = c.heads[r];
@@ -433,7 +437,8 @@ class FrameDecoder {
     std::size_t ref;
     if (v5_) {
       ordinals_.push_back(sibling && out.kinds()[i - 1] == kind ? ordinals_.back() + 1 : 0);
-      ref = ReferenceRayV5(out, kind, parent, i, sibling);
+      ref = corresponding_rule_ ? ReferenceRayV5(out, kind, parent, i, sibling)
+                                : ReferenceRay(out, kind, parent, i, sibling);
     } else {
       ref = ReferenceRay(out, kind, parent, i, sibling);
     }
@@ -462,8 +467,9 @@ class FrameDecoder {
     return std::exchange(group_start_[static_cast<int>(kind)][parent_kind], i);
   }
 
-  // Version 5: the reference ray of ray i (see "Column encoding" in trace.capnp), or kNone.
-  // Also records ray i as the corresponding ray of its kind, parent kind and ordinal.
+  // Version 5, the corresponding rule: the reference ray of ray i (see "Column encoding" in
+  // trace.capnp), or kNone. Also records ray i as the corresponding ray of its kind, parent
+  // kind and ordinal.
   std::size_t ReferenceRayV5(const RayBatch& out, RayKind kind, RayId parent, std::size_t i,
                              bool sibling) {
     if (parent == kNoParent) return last_primary_;
@@ -658,6 +664,7 @@ class FrameDecoder {
   std::vector<std::uint32_t> ordinals_;
   std::vector<std::size_t> corresponding_[kRayKindCount][kRayKindCount];
   std::uint32_t last_first_cell_ = 0;
+  bool corresponding_rule_ = false;  // the batch's referenceRule is the corresponding rule
 };
 
 // ---- Frames ------------------------------------------------------------------------------

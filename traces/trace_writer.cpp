@@ -201,15 +201,18 @@ bool SameCells(const RayView& a, const RayView& b) {
 }
 
 // The columns of one Batch message, encoded ray by ray as trace.capnp's "Column encoding"
-// describes (format version 5). Every prediction looks only at earlier rays of the same
-// batch.
+// describes (format version 5) with the reference rule `rule` (Batch.referenceRule). Every
+// prediction looks only at earlier rays of the same batch.
 struct BatchColumns {
   HeadRunBuilder heads;
   ColumnBuilder parents, spawns, pixels, primary_paths, secondary_paths;
   ZeroRunColumnBuilder primary_samples, secondary_samples, shadow_samples;
   static constexpr std::size_t kNone = ~std::size_t{0};
   CellGrid grid;
+  unsigned rule;
   std::size_t last_primary = kNone;  // index in the batch of the last primary ray
+  // Sibling rule: index of the last group start by [kind][kind of its parent].
+  std::size_t group_start[kRayKindCount][kRayKindCount];
   // By [kind][kind of its parent][ordinal]: the last ray of the batch with them whose parent
   // is in the batch.
   std::vector<std::size_t> corresponding[kRayKindCount][kRayKindCount];
@@ -217,7 +220,9 @@ struct BatchColumns {
   RayId last_non_shadow = kNoParent;    // id of the last ray whose kind is not shadow
   std::uint32_t last_first_cell = 0;    // first cell of the last ray with a visit
 
-  BatchColumns(const RayBatch& b, const CellGrid& g) : grid(g) {
+  BatchColumns(const RayBatch& b, const CellGrid& g, unsigned reference_rule)
+      : grid(g), rule(reference_rule) {
+    for (auto& starts : group_start) std::fill(std::begin(starts), std::end(starts), kNone);
     ordinals.reserve(b.size());
     for (std::size_t i = 0; i < b.size(); ++i) AddRay(b, i);
     heads.Finish();
@@ -272,9 +277,16 @@ struct BatchColumns {
   }
 
   // Index of the reference ray of ray i (see "Column encoding" in trace.capnp), or kNone.
-  // Also records ray i as the corresponding ray of its kind, parent kind and ordinal.
+  // Also records ray i as a group start (sibling rule) or as the corresponding ray of its
+  // kind, parent kind and ordinal (corresponding rule).
   std::size_t ReferenceRay(const RayBatch& b, const RayView& r, std::size_t i, bool sibling) {
     if (r.is_primary()) return last_primary;
+    if (rule == kReferenceSibling) {
+      if (sibling) return i - 1;
+      if (r.parent < b.first_id()) return kNone;
+      const auto parent_kind = static_cast<int>(b.kinds()[r.parent - b.first_id()]);
+      return std::exchange(group_start[static_cast<int>(r.kind)][parent_kind], i);
+    }
     if (r.parent >= b.first_id()) {
       const auto parent_kind = static_cast<int>(b.kinds()[r.parent - b.first_id()]);
       std::vector<std::size_t>& slots = corresponding[static_cast<int>(r.kind)][parent_kind];
@@ -336,6 +348,7 @@ void FillFloats(capnp::List<float>::Builder list, const std::vector<float>& valu
 void FillBatch(schema::Batch::Builder out, const RayBatch& b, const BatchColumns& c,
                std::int32_t frame, bool store_t) {
   out.setFrame(frame);
+  out.setReferenceRule(static_cast<std::uint8_t>(c.rule));
   out.setFirstId(b.first_id());
   c.heads.Fill(out);
   c.parents.Fill(out.initParents());
@@ -614,7 +627,11 @@ struct TraceWriter::Impl {
 
   void FlushPending() {
     if (pending.empty()) return;
-    const BatchColumns columns(pending, header.cells);
+    // Each reference rule's columns; the batch keeps the one with fewer bytes before zstd
+    // (which zstd's output follows), the sibling rule on a tie.
+    const BatchColumns sibling(pending, header.cells, kReferenceSibling);
+    const BatchColumns corresponding(pending, header.cells, kReferenceCorresponding);
+    const BatchColumns& columns = corresponding.bytes() < sibling.bytes() ? corresponding : sibling;
     const std::size_t t_bytes = header.settings.store_t ? 8 * pending.visit_count() : 0;
     capnp::MallocMessageBuilder message(MessageWordsHint(columns.bytes() + t_bytes));
     FillBatch(message.initRoot<schema::Record>().initBatch(), pending, columns,

@@ -256,6 +256,7 @@ struct RawBatch {
   std::vector<std::uint8_t> heads;
   std::vector<std::uint64_t> runs, parents, spawns, pixels, primary_paths, secondary_paths,
       primary_samples, secondary_samples, shadow_samples;
+  std::uint8_t reference_rule = 0;
   std::size_t t_values = 3;       // entries of tEnter and tExit
   bool drop_wide_pixels = false;  // leave the pixels' escaped values out
 };
@@ -293,6 +294,7 @@ std::string BatchMessage(const RawBatch& b) {
   FillColumn(out.initPrimarySamples(), b.primary_samples);
   FillColumn(out.initSecondarySamples(), b.secondary_samples);
   FillColumn(out.initShadowSamples(), b.shadow_samples);
+  out.setReferenceRule(b.reference_rule);
   out.initTEnter(static_cast<unsigned>(b.t_values));
   out.initTExit(static_cast<unsigned>(b.t_values));
   return Flat(message);
@@ -544,10 +546,13 @@ TEST_F(InvalidContentTest, BatchesMustContinueTheFrame) {
   ExpectRejected({GoodBatch(), second}, "batch of frame 6");
 }
 
-TEST_F(InvalidContentTest, Version4HasNoShadowSamplesColumn) {
+TEST_F(InvalidContentTest, Version4HasNoShadowSamplesColumnOrReferenceRule) {
   RawBatch b = GoodBatch();
   b.shadow_samples = {1};
   ExpectRejected({b}, "column shadowSamples: extra values");
+  b = GoodBatch();
+  b.reference_rule = 1;
+  ExpectRejected({b}, "bad reference rule 1");
 }
 
 class InvalidContentV5Test : public InvalidContentTest {
@@ -583,6 +588,14 @@ TEST_F(InvalidContentV5Test, StepsMustStayInTheGrid) {
   b = GoodBatchV5();
   b.secondary_paths = {1, 0};  // (-2,-2,-2) from the parent's cell 2 leaves the grid
   ExpectRejected({b}, "ray 1: bad cell");
+}
+
+TEST_F(InvalidContentV5Test, ReferenceRuleIsZeroOrOne) {
+  RawBatch b = GoodBatchV5();
+  b.reference_rule = 1;  // the shadow ray has no corresponding ray nor sibling either way
+  EXPECT_EQ(Read({b}, GoodSummary()).frames().size(), 1u);
+  b.reference_rule = 2;
+  ExpectRejected({b}, "bad reference rule 2");
 }
 
 TEST_F(InvalidContentV5Test, ShadowSamplesMustFitTheShadowVisits) {

@@ -560,6 +560,9 @@ TEST(TraceIoTest, SiblingRaysEncodeToRunsOfEqualHeads) {
   const auto record = message.getRoot<schema::Record>();
   ASSERT_EQ(record.which(), schema::Record::BATCH);
   const auto batch = record.getBatch();
+  // One parent: both reference rules code the batch alike, and the writer keeps the sibling
+  // rule on a tie.
+  EXPECT_EQ(batch.getReferenceRule(), kReferenceSibling);
   // Every shadow ray's parent is the last non-shadow ray (parent code 0), so no parent is
   // stored; a spawn is the previous sibling's (code 0) or one more (code 1); a sibling with
   // the previous sibling's cells stores no path; only the primary ray stores a pixel.
@@ -646,6 +649,8 @@ TEST(TraceIoTest, RaysArePredictedFromTheCorrespondingRayOfThePreviousPixel) {
   const kj::Array<capnp::word> words = FrameMessages(path, written[0]);
   capnp::FlatArrayMessageReader message(words);
   const auto batch = message.getRoot<schema::Record>().getBatch();
+  // The corresponding rule, which codes the batch in fewer bytes than the sibling rule.
+  EXPECT_EQ(batch.getReferenceRule(), kReferenceCorresponding);
   // Rays 1 and 2 only (ray 4's and 5's paths are those of rays 1 and 2): 2 visits, from the
   // parent's cell at the spawn (0, then 1) step (0,0,0) = 62, then (0,+1,0) = 67.
   EXPECT_EQ(Values(batch.getSecondaryPaths()), (std::vector<std::uint64_t>{2, 62, 67, 2, 62, 67}));
