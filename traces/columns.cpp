@@ -1,5 +1,6 @@
 #include "traces/columns.h"
 
+#include <cmath>
 #include <cstdlib>
 
 #include "base/check.h"
@@ -13,6 +14,21 @@ std::uint32_t ApplyDelta(std::uint64_t previous, std::uint64_t code, const char*
     throw BadTraceData(std::string("bad ") + what + " delta");
   }
   return static_cast<std::uint32_t>(v);
+}
+
+double EntropyBits(const std::vector<std::uint8_t>& bytes) {
+  std::size_t counts[256] = {};
+  for (const std::uint8_t b : bytes) ++counts[b];
+  const double n = static_cast<double>(bytes.size());
+  double bits = 0;
+  for (const std::size_t c : counts) {
+    if (c > 0) bits += static_cast<double>(c) * std::log2(n / static_cast<double>(c));
+  }
+  return bits;
+}
+
+double ColumnBuilder::EntropyBits() const {
+  return raycell::EntropyBits(narrow_) + 64.0 * static_cast<double>(wide_.size());
 }
 
 void ColumnBuilder::Fill(schema::Column::Builder column) const {

@@ -62,6 +62,9 @@ class ColumnBuilder {
   void Fill(schema::Column::Builder column) const;
   // Bytes of the column's lists (without Cap'n Proto's framing).
   std::size_t bytes() const { return narrow_.size() + 8 * wide_.size(); }
+  // The order-0 entropy of the narrow bytes plus 64 bits per wide value: an estimate of
+  // what zstd makes of the column.
+  double EntropyBits() const;
 
  private:
   std::vector<std::uint8_t> narrow_;
@@ -79,6 +82,7 @@ class ZeroRunColumnBuilder {
   void Finish() { FlushZeros(); }
   void Fill(schema::Column::Builder column) const { column_.Fill(column); }
   std::size_t bytes() const { return column_.bytes(); }
+  double EntropyBits() const { return column_.EntropyBits(); }
 
  private:
   void FlushZeros();
@@ -90,6 +94,9 @@ class ZeroRunColumnBuilder {
 // Adds the step from cell `from` to cell `to` of `grid` to `column` (one value, or four with
 // the escape).
 void AddStep(ColumnBuilder& column, std::uint32_t from, std::uint32_t to, const CellGrid& grid);
+
+// The order-0 entropy of `bytes`, in bits.
+double EntropyBits(const std::vector<std::uint8_t>& bytes);
 
 // ---- Reading -----------------------------------------------------------------------------
 

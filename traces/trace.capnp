@@ -389,8 +389,9 @@ struct Batch {
   referenceRule @14 :UInt8;
   # Version 5: how a ray that is not primary finds its reference ray (see "Column
   # encoding"): 0 the sibling rule, 1 the corresponding rule. The writer codes each batch
-  # both ways and keeps the one with fewer bytes before zstd (the corresponding ray is the
-  # nearer at high resolutions, the sibling at low ones). 0 before version 5.
+  # both ways and keeps the one whose columns have the lower order-0 entropy (the
+  # corresponding ray is the nearer at high resolutions, the sibling at low ones). 0 before
+  # version 5.
 }
 
 # Totals of one frame, written after its last batch (and repeated in the index).

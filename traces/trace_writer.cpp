@@ -184,6 +184,7 @@ class HeadRunBuilder {
     runs_.Fill(out.initHeadRuns());
   }
   std::size_t bytes() const { return heads_.size() + runs_.bytes(); }
+  double EntropyBits() const { return raycell::EntropyBits(heads_) + runs_.EntropyBits(); }
 
  private:
   void Flush() {
@@ -336,6 +337,16 @@ struct BatchColumns {
                     shadow_samples.bytes();
     for (const ColumnBuilder* c : {&parents, &spawns, &pixels, &primary_paths, &secondary_paths}) {
       n += c->bytes();
+    }
+    return n;
+  }
+
+  // The columns' order-0 entropy (ColumnBuilder::EntropyBits), summed.
+  double EntropyBits() const {
+    double n = heads.EntropyBits() + primary_samples.EntropyBits() +
+               secondary_samples.EntropyBits() + shadow_samples.EntropyBits();
+    for (const ColumnBuilder* c : {&parents, &spawns, &pixels, &primary_paths, &secondary_paths}) {
+      n += c->EntropyBits();
     }
     return n;
   }
@@ -627,11 +638,12 @@ struct TraceWriter::Impl {
 
   void FlushPending() {
     if (pending.empty()) return;
-    // Each reference rule's columns; the batch keeps the one with fewer bytes before zstd
-    // (which zstd's output follows), the sibling rule on a tie.
+    // Each reference rule's columns; the batch keeps the one whose columns have the lower
+    // order-0 entropy (which zstd's output follows), the sibling rule on a tie.
     const BatchColumns sibling(pending, header.cells, kReferenceSibling);
     const BatchColumns corresponding(pending, header.cells, kReferenceCorresponding);
-    const BatchColumns& columns = corresponding.bytes() < sibling.bytes() ? corresponding : sibling;
+    const BatchColumns& columns =
+        corresponding.EntropyBits() < sibling.EntropyBits() ? corresponding : sibling;
     const std::size_t t_bytes = header.settings.store_t ? 8 * pending.visit_count() : 0;
     capnp::MallocMessageBuilder message(MessageWordsHint(columns.bytes() + t_bytes));
     FillBatch(message.initRoot<schema::Record>().initBatch(), pending, columns,
