@@ -1,5 +1,8 @@
 #include "traces/columns.h"
 
+#include <cmath>
+#include <cstdlib>
+
 #include "base/check.h"
 
 namespace raycell {
@@ -13,11 +16,38 @@ std::uint32_t ApplyDelta(std::uint64_t previous, std::uint64_t code, const char*
   return static_cast<std::uint32_t>(v);
 }
 
+double EntropyBits(const std::vector<std::uint8_t>& bytes) {
+  std::size_t counts[256] = {};
+  for (const std::uint8_t b : bytes) ++counts[b];
+  const double n = static_cast<double>(bytes.size());
+  double bits = 0;
+  for (const std::size_t c : counts) {
+    if (c > 0) bits += static_cast<double>(c) * std::log2(n / static_cast<double>(c));
+  }
+  return bits;
+}
+
+double ColumnBuilder::EntropyBits() const {
+  return raycell::EntropyBits(narrow_) + 64.0 * static_cast<double>(wide_.size());
+}
+
 void ColumnBuilder::Fill(schema::Column::Builder column) const {
   auto narrow = column.initNarrow(static_cast<unsigned>(narrow_.size()));
   for (unsigned i = 0; i < narrow_.size(); ++i) narrow.set(i, narrow_[i]);
   auto wide = column.initWide(static_cast<unsigned>(wide_.size()));
   for (unsigned i = 0; i < wide_.size(); ++i) wide.set(i, wide_[i]);
+}
+
+void AddStep(ColumnBuilder& column, std::uint32_t from, std::uint32_t to, const CellGrid& grid) {
+  const std::int64_t nx = grid[0], nxy = std::int64_t{grid[0]} * grid[1];
+  const std::int64_t a = from, b = to;
+  const std::int64_t dx = b % nx - a % nx, dy = b % nxy / nx - a % nxy / nx, dz = b / nxy - a / nxy;
+  if (std::abs(dx) <= 2 && std::abs(dy) <= 2 && std::abs(dz) <= 2) {
+    column.Add(static_cast<std::uint64_t>((dx + 2) + 5 * (dy + 2) + 25 * (dz + 2)));
+    return;
+  }
+  column.Add(kStepEscape);
+  for (const std::int64_t d : {dx, dy, dz}) column.Add(ZigZag(d));
 }
 
 void ZeroRunColumnBuilder::Add(std::uint64_t v) {
@@ -50,6 +80,30 @@ void ColumnReader::Finish() const {
 
 void ColumnReader::Fail(const char* what) const {
   throw BadTraceData(std::string("column ") + name_ + what);
+}
+
+std::uint32_t ReadStep(ColumnReader& column, std::uint32_t from, const CellGrid& grid) {
+  const std::int64_t nx = grid[0], nxy = std::int64_t{grid[0]} * grid[1];
+  const std::int64_t a = from;
+  std::int64_t d[3];
+  const std::uint64_t code = column.Next();
+  if (code < kStepEscape) {
+    d[0] = static_cast<std::int64_t>(code % 5) - 2;
+    d[1] = static_cast<std::int64_t>(code / 5 % 5) - 2;
+    d[2] = static_cast<std::int64_t>(code / 25) - 2;
+  } else if (code == kStepEscape) {
+    for (std::int64_t& v : d) {
+      const std::uint64_t z = column.Next();
+      v = z > (std::uint64_t{1} << 34) ? std::int64_t{1} << 34 : UnZigZag(z);
+    }
+  } else {
+    return kBadStep;
+  }
+  const std::int64_t at[3] = {a % nx + d[0], a % nxy / nx + d[1], a / nxy + d[2]};
+  for (int axis = 0; axis < 3; ++axis) {
+    if (at[axis] < 0 || at[axis] >= std::int64_t{grid[axis]}) return kBadStep;
+  }
+  return static_cast<std::uint32_t>(at[0] + nx * at[1] + nxy * at[2]);
 }
 
 std::uint64_t ZeroRunColumnReader::StartRun(std::uint64_t v) {

@@ -7,6 +7,7 @@
 // BadTraceData (which it turns into an InputError naming the file and frame).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
@@ -37,6 +38,14 @@ inline std::int64_t Delta(std::uint64_t value, std::uint64_t previous) {
 // previous + unzigzag(code), which must fit a uint32; BadTraceData "bad WHAT delta" if not.
 std::uint32_t ApplyDelta(std::uint64_t previous, std::uint64_t code, const char* what);
 
+// ---- Cell steps (format version 5; see "Paths" in trace.capnp) --------------------------
+
+// A step code: 0..124 is (dx + 2) + 5 * (dy + 2) + 25 * (dz + 2) for a step of at most 2
+// cells along every axis; kStepEscape is followed by zigzag(dx), zigzag(dy), zigzag(dz).
+inline constexpr std::uint64_t kStepEscape = 125;
+// The cell grid nx x ny x nz that cell ids number (cell = x + nx * (y + ny * z)).
+using CellGrid = std::array<std::uint32_t, 3>;
+
 // ---- Writing -----------------------------------------------------------------------------
 
 // A Column being built: narrow bytes with 255 escaping into `wide`.
@@ -53,6 +62,9 @@ class ColumnBuilder {
   void Fill(schema::Column::Builder column) const;
   // Bytes of the column's lists (without Cap'n Proto's framing).
   std::size_t bytes() const { return narrow_.size() + 8 * wide_.size(); }
+  // The order-0 entropy of the narrow bytes plus 64 bits per wide value: an estimate of
+  // what zstd makes of the column.
+  double EntropyBits() const;
 
  private:
   std::vector<std::uint8_t> narrow_;
@@ -70,6 +82,7 @@ class ZeroRunColumnBuilder {
   void Finish() { FlushZeros(); }
   void Fill(schema::Column::Builder column) const { column_.Fill(column); }
   std::size_t bytes() const { return column_.bytes(); }
+  double EntropyBits() const { return column_.EntropyBits(); }
 
  private:
   void FlushZeros();
@@ -77,6 +90,13 @@ class ZeroRunColumnBuilder {
   ColumnBuilder column_;
   std::uint64_t zeros_ = 0;
 };
+
+// Adds the step from cell `from` to cell `to` of `grid` to `column` (one value, or four with
+// the escape).
+void AddStep(ColumnBuilder& column, std::uint32_t from, std::uint32_t to, const CellGrid& grid);
+
+// The order-0 entropy of `bytes`, in bits.
+double EntropyBits(const std::vector<std::uint8_t>& bytes);
 
 // ---- Reading -----------------------------------------------------------------------------
 
@@ -138,5 +158,10 @@ class ZeroRunColumnReader {
   ColumnReader column_;
   std::uint64_t zeros_ = 0;  // zeros of the current run not yet returned
 };
+
+// The cell a step read from `column` leads to from cell `from` of `grid` (whose cells number
+// fewer than 2^32 - 1), or kBadStep when it leaves the grid or its code is not one.
+inline constexpr std::uint32_t kBadStep = ~std::uint32_t{0};
+std::uint32_t ReadStep(ColumnReader& column, std::uint32_t from, const CellGrid& grid);
 
 }  // namespace raycell

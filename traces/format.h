@@ -20,8 +20,10 @@ struct TraceHeader;
 // moved the footprints out of the header message into `footprints` records (so that grids
 // of millions of cells fit); version 3 added the camera path (Header.path) that the cameras
 // are a range of; version 4 the regroupable capture (Header.regroupable, its leaves) and the
-// subdivision of a regrouped trace (Header.subdivision); see trace.capnp.
-inline constexpr std::uint32_t kTraceFormatVersion = 4;
+// subdivision of a regrouped trace (Header.subdivision); version 5 a new batch encoding (rays
+// predicted from the corresponding ray of the previous group, paths as cell steps, shadow
+// rays' samples in their own column); see trace.capnp.
+inline constexpr std::uint32_t kTraceFormatVersion = 5;
 // Magic of the skippable zstd frame that holds the index.
 inline constexpr std::uint32_t kTraceIndexMagic = 0x184D2A5B;
 // Last 8 bytes of a complete trace file.
@@ -92,5 +94,11 @@ inline constexpr unsigned kParentIsLastNonShadow = 0;
 inline constexpr unsigned kParentOfPreviousRay = 1;
 inline constexpr unsigned kParentExplicit = 2;
 inline constexpr unsigned kSpawnExplicit = 3;
+// Version 5: a visit's samples are predicted from the reference ray's visit of the same cell,
+// searched at most this many visits from the one after the last matched (see "Samples").
+inline constexpr std::size_t kSampleMatchWindow = 4;
+// Version 5: Batch.referenceRule, how a ray that is not primary finds its reference ray.
+inline constexpr unsigned kReferenceSibling = 0;
+inline constexpr unsigned kReferenceCorresponding = 1;
 
 }  // namespace raycell

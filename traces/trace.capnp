@@ -1,4 +1,4 @@
-# raycell trace file schema, format version 4 (docs/design.md §3 "The trace"). The format's
+# raycell trace file schema, format version 5 (docs/design.md §3 "The trace"). The format's
 # constants and limits are in traces/format.h.
 #
 # A trace file (".rct") is a sequence of zstd frames:
@@ -32,12 +32,24 @@
 #                        rays count as siblings: neither has a parent); else none.
 #   group start          a ray that is not primary and has no sibling (the first of a run
 #                        of rays cast from one parent).
-#   reference ray        for a primary ray, the last primary ray before it in the batch; for
-#                        a ray with a sibling that is not primary, its sibling; for a group
-#                        start whose parent is in the batch, the last group start before it
-#                        in the batch that has the same kind and whose parent is in the batch
-#                        and has the same kind as its parent (the corresponding ray of the
-#                        previous pixel, typically); else none.
+#   ordinal              (version 5) 0, or the previous ray's ordinal + 1 when the previous
+#                        ray has the same parent and the same kind as ray i: the ray's place
+#                        in its run of siblings of its kind.
+#   reference ray        version 5: for a primary ray, the last primary ray before it in the
+#                        batch. For another ray, by the batch's referenceRule: 0, the sibling
+#                        rule, as in versions 1-4 (below); 1, the corresponding rule: for a
+#                        ray whose parent is in the batch, the last ray before it in the
+#                        batch that has the same kind, the same ordinal and a parent in the
+#                        batch of the same kind as its parent (the corresponding ray of the
+#                        previous pixel, typically: the shadow ray cast from the same place
+#                        along the previous pixel's primary ray) if there is one, else its
+#                        sibling; for a ray whose parent is before the batch, its sibling;
+#                        else none.
+#                        Versions 1-4 (and the sibling rule): for a primary ray, the last primary ray before it in
+#                        the batch; for a ray with a sibling that is not primary, its sibling;
+#                        for a group start whose parent is in the batch, the last group start
+#                        before it in the batch that has the same kind and whose parent is in
+#                        the batch and has the same kind as its parent; else none.
 #   last non-shadow ray  the last ray before ray i in the batch whose kind is not shadow; may
 #                        be none.
 # Ray heads. Each ray has one head byte:
@@ -58,10 +70,24 @@
 # The writer uses the lowest parent and spawn code that applies and clears bits 6 and 7
 # whenever it can. Heads are run-length coded: `heads` has one byte per run of consecutive
 # rays with equal heads and `headRuns` the run's length minus 1.
-# Samples. Visit v of a ray stores the residual zigzag(samples - the reference ray's
-# samples at visit v) when the reference ray exists and has more than v visits, else the
-# samples themselves. primarySamples (visits of primary rays) and secondarySamples (visits of
-# other rays) hold the residuals in ray and visit order, zero-run coded: a run of n >= 1
+# Paths (version 5). A path (in primaryPaths or secondaryPaths) is its visit count, then per
+# visit the step to its cell from the previous visit's cell; the first visit's step starts
+# from the predicted cell: for a ray whose parent is in the batch and has more than `spawn`
+# visits, the parent's cell at visit `spawn`; else the reference ray's first cell if it has
+# a visit; else the first cell of the last ray before it in the batch that has a visit; else
+# cell 0. A step from cell (x, y, z) (cell = x + nx*(y + ny*z)) to (x+dx, y+dy, z+dz) is one
+# value (dx+2) + 5*(dy+2) + 25*(dz+2) (0..124) when |dx|, |dy| and |dz| are at most 2, else
+# 125 followed by zigzag(dx), zigzag(dy), zigzag(dz); a step leaving the grid is invalid.
+# (Versions 1-4: the first visit's cell id, then zigzag(cell - previous visit's cell).)
+# Samples. Version 5: the samples of visit v of a ray are predicted from the reference ray's
+# visit of the same cell, searched from the reference visit after the last one matched (the
+# first, at the ray's first visit) among at most 4 visits (kSampleMatchWindow); the residual
+# zigzag(samples - that visit's samples) is stored when one is found, else the samples
+# themselves. primarySamples (visits of primary rays), secondarySamples (of reflection and
+# refraction rays) and shadowSamples (of shadow rays) hold them in ray and visit order.
+# Versions 1-4: the prediction is the reference ray's samples at visit v when it has more
+# than v visits, and secondarySamples holds the visits of every ray that is not primary.
+# Each samples column is zero-run coded: a run of n >= 1
 # consecutive zero residuals is written as the digits of n in bijective base 2, least
 # significant first, digit 1 as the value 0 and digit 2 as the value 1; any other residual r
 # is written as r + 1. A run ends at the first value >= 2 or at the end of the column. For
@@ -87,8 +113,10 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("raycell::schema");
 
-const formatVersion :UInt32 = 4;
+const formatVersion :UInt32 = 5;
 # The format version this schema describes; Header.formatVersion of files written with it.
+# Version 4 differs only in its batch encoding (see "Column encoding": reference rays, paths
+# as cell ids and deltas, no Batch.shadowSamples); its header and records are version 5's.
 # Version 3 differs only in having no Header.regroupable, leafCount and subdivision (read as
 # false, 0 and the uniform grid) and no leafBytes or cellLeaves records.
 # Version 2 differs only in having no Header.path (the camera path is not recorded; readers
@@ -338,21 +366,32 @@ struct Batch {
   # ray feeds.
   primaryPaths @7 :Column;
   # Per primary ray with the new-path bit, in ray order: its visit count (the number of
-  # non-empty cells it passes through), then per visit the first visit's cell id, and for
-  # every later visit zigzag(cell - previous visit's cell).
+  # non-empty cells it passes through), then per visit its step code (version 5, see
+  # "Paths"); versions 1-4: the first visit's cell id, and for every later visit
+  # zigzag(cell - previous visit's cell).
   secondaryPaths @8 :Column;
   # The same for the rays with the new-path bit that are not primary.
   primarySamples @9 :Column;
   # Zero-run coded residuals (see "Samples") of the visits of primary rays. Samples are the
   # volume samples taken in a visit's cell (the work done there).
   secondarySamples @10 :Column;
-  # The same for the visits of the other rays.
+  # The same for the visits of reflection and refraction rays (versions 1-4: of every ray
+  # that is not primary).
   tEnter @11 :List(Float32);
   # Per visit of the batch (the visits of ray 0, then of ray 1, ...), only when
   # settings.storeT (else empty): ray parameter where the ray enters the cell, world units
   # along its unit direction.
   tExit @12 :List(Float32);
   # Per visit, only when settings.storeT: ray parameter where it leaves the cell.
+  shadowSamples @13 :Column;
+  # Version 5: the zero-run coded residuals of the visits of shadow rays (secondarySamples
+  # then holds those of reflection and refraction rays only). Empty before version 5.
+  referenceRule @14 :UInt8;
+  # Version 5: how a ray that is not primary finds its reference ray (see "Column
+  # encoding"): 0 the sibling rule, 1 the corresponding rule. The writer codes each batch
+  # both ways and keeps the one whose columns have the lower order-0 entropy (the
+  # corresponding ray is the nearer at high resolutions, the sibling at low ones). 0 before
+  # version 5.
 }
 
 # Totals of one frame, written after its last batch (and repeated in the index).

@@ -186,6 +186,7 @@ ConcatSummary ConcatTraces(const std::vector<std::string>& inputs, const std::st
   }
   TraceWriterOptions options;
   options.name_at_finish = true;
+  options.format_version = header.format_version;  // the frames are copied as encoded
   TraceWriter writer = TraceWriter::Create(out, header, options);
   for (const Part& p : parts) {
     for (std::size_t i = 0; i < p.reader.frames().size(); ++i) {

@@ -318,7 +318,7 @@ namespace {
 struct BatchColumns {
   capnp::List<std::uint8_t>::Reader heads;
   ColumnReader head_runs, parents, spawns, pixels, primary_paths, secondary_paths;
-  ZeroRunColumnReader primary_samples, secondary_samples;
+  ZeroRunColumnReader primary_samples, secondary_samples, shadow_samples;
   capnp::List<float>::Reader t_enter, t_exit;
 
   explicit BatchColumns(schema::Batch::Reader b)
@@ -331,6 +331,7 @@ struct BatchColumns {
         secondary_paths(b.getSecondaryPaths(), "secondaryPaths"),
         primary_samples(b.getPrimarySamples(), "primarySamples"),
         secondary_samples(b.getSecondarySamples(), "secondarySamples"),
+        shadow_samples(b.getShadowSamples(), "shadowSamples"),
         t_enter(b.getTEnter()),
         t_exit(b.getTExit()) {}
 
@@ -355,6 +356,7 @@ struct BatchColumns {
     }
     primary_samples.Finish();
     secondary_samples.Finish();
+    shadow_samples.Finish();
   }
 };
 
@@ -363,7 +365,11 @@ struct BatchColumns {
 class FrameDecoder {
  public:
   FrameDecoder(const TraceHeader& header, std::int32_t frame, const FrameSummary* expected)
-      : header_(header), acc_(frame, header.settings.store_t), frame_(frame), expected_(expected) {}
+      : header_(header),
+        acc_(frame, header.settings.store_t),
+        frame_(frame),
+        expected_(expected),
+        v5_(header.format_version >= 5) {}
 
   void Decode(schema::Batch::Reader b, RayBatch& out) {
     if (b.getFrame() != frame_) throw BadData("batch of frame " + Str(b.getFrame()));
@@ -381,6 +387,15 @@ class FrameDecoder {
     for (auto& starts : group_start_) std::fill(std::begin(starts), std::end(starts), kNone);
     last_non_shadow_ = kNoParent;
     prev_x_ = prev_y_ = 0;
+    ordinals_.clear();
+    for (auto& by_parent : corresponding_) {
+      for (std::vector<std::size_t>& slots : by_parent) slots.clear();
+    }
+    last_first_cell_ = 0;
+    corresponding_rule_ = v5_ && b.getReferenceRule() == kReferenceCorresponding;
+    if (b.getReferenceRule() > (v5_ ? kReferenceCorresponding : kReferenceSibling)) {
+      throw BadData("bad reference rule " + Str(unsigned{b.getReferenceRule()}));
+    }
     std::size_t i = 0;
     for (unsigned r = 0; r < c.heads.size(); ++r) {
       const std::uint8_t head = c.heads[r];
@@ -419,10 +434,22 @@ class FrameDecoder {
       prev_y_ = ApplyDelta(prev_y_, c.pixels.Next(), "pixel y");
     }
     const bool primary = parent == kNoParent;
-    const std::size_t ref = ReferenceRay(out, kind, parent, i, sibling);
+    std::size_t ref;
+    if (v5_) {
+      ordinals_.push_back(sibling && out.kinds()[i - 1] == kind ? ordinals_.back() + 1 : 0);
+      ref = corresponding_rule_ ? ReferenceRayV5(out, kind, parent, i, sibling)
+                                : ReferenceRay(out, kind, parent, i, sibling);
+    } else {
+      ref = ReferenceRay(out, kind, parent, i, sibling);
+    }
     out.BeginRay(kind, parent, spawn, prev_x_, prev_y_);
-    DecodeVisits(c, head, id, primary, ref, out);
+    if (v5_) {
+      DecodeVisitsV5(c, head, id, kind, ref, out);
+    } else {
+      DecodeVisits(c, head, id, primary, ref, out);
+    }
     const std::size_t count = out.visit_end(i) - out.visit_begin(i);
+    if (count > 0) last_first_cell_ = out.cells()[out.visit_begin(i)].value();
     Remember(id, static_cast<std::uint32_t>(count));
     acc_.AddRay(out.ray(i));
     if (primary) last_primary_ = i;
@@ -438,6 +465,22 @@ class FrameDecoder {
     if (parent < out.first_id()) return kNone;
     const auto parent_kind = static_cast<int>(out.kinds()[parent - out.first_id()]);
     return std::exchange(group_start_[static_cast<int>(kind)][parent_kind], i);
+  }
+
+  // Version 5, the corresponding rule: the reference ray of ray i (see "Column encoding" in
+  // trace.capnp), or kNone. Also records ray i as the corresponding ray of its kind, parent
+  // kind and ordinal.
+  std::size_t ReferenceRayV5(const RayBatch& out, RayKind kind, RayId parent, std::size_t i,
+                             bool sibling) {
+    if (parent == kNoParent) return last_primary_;
+    if (parent >= out.first_id()) {
+      const auto parent_kind = static_cast<int>(out.kinds()[parent - out.first_id()]);
+      std::vector<std::size_t>& slots = corresponding_[static_cast<int>(kind)][parent_kind];
+      if (slots.size() <= ordinals_[i]) slots.resize(ordinals_[i] + 1, kNone);
+      const std::size_t found = std::exchange(slots[ordinals_[i]], i);
+      if (found != kNone) return found;
+    }
+    return sibling ? i - 1 : kNone;
   }
 
   RayId DecodeParent(BatchColumns& c, std::uint8_t head, RayId id, RayKind kind, std::size_t i,
@@ -525,6 +568,68 @@ class FrameDecoder {
     }
   }
 
+  // Version 5: adds the visits of ray `id` (the last ray of `out`, index i in the batch);
+  // `ref` is its reference ray (see "Paths" and "Samples" in trace.capnp).
+  void DecodeVisitsV5(BatchColumns& c, std::uint8_t head, RayId id, RayKind kind, std::size_t ref,
+                      RayBatch& out) {
+    const bool primary = kind == RayKind::kPrimary;
+    ColumnReader& paths = primary ? c.primary_paths : c.secondary_paths;
+    ZeroRunColumnReader& samples = primary                    ? c.primary_samples
+                                   : kind == RayKind::kShadow ? c.shadow_samples
+                                                              : c.secondary_samples;
+    const bool new_path = head & kHeadNewPath;
+    if (!new_path && ref == kNone) {
+      throw BadData("ray " + Str(id) + ": repeats the path of a reference ray it does not have");
+    }
+    const std::size_t ref_begin = ref == kNone ? 0 : out.visit_begin(ref);
+    const std::size_t ref_count = ref == kNone ? 0 : out.visit_end(ref) - ref_begin;
+    const std::uint64_t count = new_path ? paths.Next() : ref_count;
+    if (count > kTraceMaxRayVisits || count > kTraceMaxBatchVisits - out.visit_count()) {
+      throw BadData("ray " + Str(id) + ": too many visits");
+    }
+    const CellGrid grid = header_.cells;
+    std::uint32_t cell = 0;
+    if (new_path && count > 0) cell = PredictedFirstCell(out, ref, ref_begin, ref_count);
+    const bool t = header_.settings.store_t;
+    std::size_t next = 0;  // the reference's visit after the last matched
+    for (std::uint64_t v = 0; v < count; ++v) {
+      cell = new_path ? ReadStep(paths, cell, grid) : out.cells()[ref_begin + v].value();
+      if (cell == kBadStep) throw BadData("ray " + Str(id) + ": bad cell");
+      const std::size_t end = std::min(ref_count, next + kSampleMatchWindow);
+      std::size_t k = next;
+      while (k < end && out.cells()[ref_begin + k].value() != cell) ++k;
+      const std::uint64_t code = samples.Next();
+      std::uint64_t n = code;
+      if (k < end) {
+        n = ApplyDelta(out.samples()[ref_begin + k], code, "samples");
+        next = k + 1;
+      } else if (code > 0xFFFFFFFF) {
+        throw BadData("ray " + Str(id) + ": bad samples");
+      }
+      const std::size_t at = out.visit_count();
+      if (t && at >= c.t_enter.size()) throw BadData("t columns have bad length");
+      out.AddVisit(CellId(cell), static_cast<std::uint32_t>(n), t ? c.t_enter[at] : 0.f,
+                   t ? c.t_exit[at] : 0.f);
+    }
+  }
+
+  // Version 5: the cell a new path's first step starts from (the last ray of `out` is the
+  // one being decoded, its visits not yet added).
+  std::uint32_t PredictedFirstCell(const RayBatch& out, std::size_t ref, std::size_t ref_begin,
+                                   std::size_t ref_count) const {
+    const std::size_t i = out.size() - 1;
+    const RayId parent = out.parents()[i];
+    if (parent != kNoParent && parent >= out.first_id()) {
+      const std::size_t p = parent - out.first_id();
+      const std::uint32_t spawn = out.spawns()[i];
+      if (spawn < out.visit_end(p) - out.visit_begin(p)) {
+        return out.cells()[out.visit_begin(p) + spawn].value();
+      }
+    }
+    if (ref != kNone && ref_count > 0) return out.cells()[ref_begin].value();
+    return last_first_cell_;
+  }
+
   void Remember(RayId id, std::uint32_t visit_count) {
     if (id < kWindow) {
       counts_.push_back(visit_count);
@@ -552,6 +657,14 @@ class FrameDecoder {
   std::size_t group_start_[kRayKindCount][kRayKindCount];
   RayId last_non_shadow_ = kNoParent;  // id of the last ray that is not a shadow ray
   std::vector<std::uint32_t> counts_;  // visit counts of the last kWindow rays
+  // Version 5 (see "Column encoding" in trace.capnp): whether the frame is coded so; per ray
+  // of the batch, its ordinal; by [kind][kind of its parent][ordinal], the last ray of the
+  // batch with them whose parent is in the batch; the first cell of the last ray with a visit.
+  bool v5_;
+  std::vector<std::uint32_t> ordinals_;
+  std::vector<std::size_t> corresponding_[kRayKindCount][kRayKindCount];
+  std::uint32_t last_first_cell_ = 0;
+  bool corresponding_rule_ = false;  // the batch's referenceRule is the corresponding rule
 };
 
 // ---- Frames ------------------------------------------------------------------------------

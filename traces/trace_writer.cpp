@@ -184,6 +184,7 @@ class HeadRunBuilder {
     runs_.Fill(out.initHeadRuns());
   }
   std::size_t bytes() const { return heads_.size() + runs_.bytes(); }
+  double EntropyBits() const { return raycell::EntropyBits(heads_) + runs_.EntropyBits(); }
 
  private:
   void Flush() {
@@ -201,23 +202,34 @@ bool SameCells(const RayView& a, const RayView& b) {
 }
 
 // The columns of one Batch message, encoded ray by ray as trace.capnp's "Column encoding"
-// describes. Every prediction looks only at earlier rays of the same batch.
+// describes (format version 5) with the reference rule `rule` (Batch.referenceRule). Every
+// prediction looks only at earlier rays of the same batch.
 struct BatchColumns {
   HeadRunBuilder heads;
   ColumnBuilder parents, spawns, pixels, primary_paths, secondary_paths;
-  ZeroRunColumnBuilder primary_samples, secondary_samples;
+  ZeroRunColumnBuilder primary_samples, secondary_samples, shadow_samples;
   static constexpr std::size_t kNone = ~std::size_t{0};
+  CellGrid grid;
+  unsigned rule;
   std::size_t last_primary = kNone;  // index in the batch of the last primary ray
-  // Index of the last group start by [kind][kind of its parent].
+  // Sibling rule: index of the last group start by [kind][kind of its parent].
   std::size_t group_start[kRayKindCount][kRayKindCount];
-  RayId last_non_shadow = kNoParent;  // id of the last ray whose kind is not shadow
+  // By [kind][kind of its parent][ordinal]: the last ray of the batch with them whose parent
+  // is in the batch.
+  std::vector<std::size_t> corresponding[kRayKindCount][kRayKindCount];
+  std::vector<std::uint32_t> ordinals;  // per ray of the batch
+  RayId last_non_shadow = kNoParent;    // id of the last ray whose kind is not shadow
+  std::uint32_t last_first_cell = 0;    // first cell of the last ray with a visit
 
-  explicit BatchColumns(const RayBatch& b) {
+  BatchColumns(const RayBatch& b, const CellGrid& g, unsigned reference_rule)
+      : grid(g), rule(reference_rule) {
     for (auto& starts : group_start) std::fill(std::begin(starts), std::end(starts), kNone);
+    ordinals.reserve(b.size());
     for (std::size_t i = 0; i < b.size(); ++i) AddRay(b, i);
     heads.Finish();
     primary_samples.Finish();
     secondary_samples.Finish();
+    shadow_samples.Finish();
   }
 
   void AddRay(const RayBatch& b, std::size_t i) {
@@ -234,32 +246,69 @@ struct BatchColumns {
       pixels.Add(ZigZag(Delta(r.pixel_x, px)));
       pixels.Add(ZigZag(Delta(r.pixel_y, py)));
     }
+    ordinals.push_back(sibling && prev.kind == r.kind ? ordinals.back() + 1 : 0);
     const std::size_t ref = ReferenceRay(b, r, i, sibling);
     const RayView reference = ref != kNone ? b.ray(ref) : RayView{};
     if (ref == kNone || !SameCells(r, reference)) {
       head |= kHeadNewPath;
-      AddPath(r, r.is_primary() ? primary_paths : secondary_paths);
+      AddPath(r, PredictedFirstCell(b, r, ref, reference),
+              r.is_primary() ? primary_paths : secondary_paths);
     }
-    ZeroRunColumnBuilder& samples = r.is_primary() ? primary_samples : secondary_samples;
+    ZeroRunColumnBuilder& samples = r.is_primary()               ? primary_samples
+                                    : r.kind == RayKind::kShadow ? shadow_samples
+                                                                 : secondary_samples;
+    // Each visit against the reference's visit of the same cell, searched from the one after
+    // the last matched, at most kSampleMatchWindow visits on.
+    std::size_t next = 0;
     for (std::size_t v = 0; v < r.visit_count; ++v) {
-      samples.Add(ref != kNone && v < reference.visit_count
-                      ? ZigZag(Delta(r.samples[v], reference.samples[v]))
-                      : r.samples[v]);
+      const std::size_t end = std::min(reference.visit_count, next + kSampleMatchWindow);
+      std::size_t k = next;
+      while (k < end && reference.cells[k] != r.cells[v]) ++k;
+      if (ref != kNone && k < end) {
+        samples.Add(ZigZag(Delta(r.samples[v], reference.samples[k])));
+        next = k + 1;
+      } else {
+        samples.Add(r.samples[v]);
+      }
     }
     heads.Add(static_cast<std::uint8_t>(head));
     if (r.is_primary()) last_primary = i;
     if (r.kind != RayKind::kShadow) last_non_shadow = r.id;
+    if (r.visit_count > 0) last_first_cell = r.cells[0].value();
   }
 
   // Index of the reference ray of ray i (see "Column encoding" in trace.capnp), or kNone.
-  // Also records ray i as a group start.
+  // Also records ray i as a group start (sibling rule) or as the corresponding ray of its
+  // kind, parent kind and ordinal (corresponding rule).
   std::size_t ReferenceRay(const RayBatch& b, const RayView& r, std::size_t i, bool sibling) {
     if (r.is_primary()) return last_primary;
-    if (sibling) return i - 1;
-    if (r.parent < b.first_id()) return kNone;
-    const auto parent_kind = static_cast<int>(b.kinds()[r.parent - b.first_id()]);
-    std::size_t& start = group_start[static_cast<int>(r.kind)][parent_kind];
-    return std::exchange(start, i);
+    if (rule == kReferenceSibling) {
+      if (sibling) return i - 1;
+      if (r.parent < b.first_id()) return kNone;
+      const auto parent_kind = static_cast<int>(b.kinds()[r.parent - b.first_id()]);
+      return std::exchange(group_start[static_cast<int>(r.kind)][parent_kind], i);
+    }
+    if (r.parent >= b.first_id()) {
+      const auto parent_kind = static_cast<int>(b.kinds()[r.parent - b.first_id()]);
+      std::vector<std::size_t>& slots = corresponding[static_cast<int>(r.kind)][parent_kind];
+      if (slots.size() <= ordinals[i]) slots.resize(ordinals[i] + 1, kNone);
+      const std::size_t found = std::exchange(slots[ordinals[i]], i);
+      if (found != kNone) return found;
+    }
+    return sibling ? i - 1 : kNone;
+  }
+
+  // The cell a new path's first step starts from (see "Paths" in trace.capnp).
+  std::uint32_t PredictedFirstCell(const RayBatch& b, const RayView& r, std::size_t ref,
+                                   const RayView& reference) const {
+    if (!r.is_primary() && r.parent >= b.first_id()) {
+      const std::size_t p = r.parent - b.first_id();
+      if (r.spawn < b.visit_end(p) - b.visit_begin(p)) {
+        return b.cells()[b.visit_begin(p) + r.spawn].value();
+      }
+    }
+    if (ref != kNone && reference.visit_count > 0) return reference.cells[0].value();
+    return last_first_cell;
   }
 
   unsigned ParentCode(const RayView& r, bool has_prev, const RayView& prev) {
@@ -276,18 +325,28 @@ struct BatchColumns {
     return kSpawnExplicit;
   }
 
-  static void AddPath(const RayView& r, ColumnBuilder& paths) {
+  void AddPath(const RayView& r, std::uint32_t first, ColumnBuilder& paths) const {
     paths.Add(r.visit_count);
     for (std::size_t v = 0; v < r.visit_count; ++v) {
-      paths.Add(v == 0 ? r.cells[0].value()
-                       : ZigZag(Delta(r.cells[v].value(), r.cells[v - 1].value())));
+      AddStep(paths, v == 0 ? first : r.cells[v - 1].value(), r.cells[v].value(), grid);
     }
   }
 
   std::size_t bytes() const {
-    std::size_t n = heads.bytes() + primary_samples.bytes() + secondary_samples.bytes();
+    std::size_t n = heads.bytes() + primary_samples.bytes() + secondary_samples.bytes() +
+                    shadow_samples.bytes();
     for (const ColumnBuilder* c : {&parents, &spawns, &pixels, &primary_paths, &secondary_paths}) {
       n += c->bytes();
+    }
+    return n;
+  }
+
+  // The columns' order-0 entropy (ColumnBuilder::EntropyBits), summed.
+  double EntropyBits() const {
+    double n = heads.EntropyBits() + primary_samples.EntropyBits() +
+               secondary_samples.EntropyBits() + shadow_samples.EntropyBits();
+    for (const ColumnBuilder* c : {&parents, &spawns, &pixels, &primary_paths, &secondary_paths}) {
+      n += c->EntropyBits();
     }
     return n;
   }
@@ -300,6 +359,7 @@ void FillFloats(capnp::List<float>::Builder list, const std::vector<float>& valu
 void FillBatch(schema::Batch::Builder out, const RayBatch& b, const BatchColumns& c,
                std::int32_t frame, bool store_t) {
   out.setFrame(frame);
+  out.setReferenceRule(static_cast<std::uint8_t>(c.rule));
   out.setFirstId(b.first_id());
   c.heads.Fill(out);
   c.parents.Fill(out.initParents());
@@ -309,6 +369,7 @@ void FillBatch(schema::Batch::Builder out, const RayBatch& b, const BatchColumns
   c.secondary_paths.Fill(out.initSecondaryPaths());
   c.primary_samples.Fill(out.initPrimarySamples());
   c.secondary_samples.Fill(out.initSecondarySamples());
+  c.shadow_samples.Fill(out.initShadowSamples());
   if (!store_t) return;
   FillFloats(out.initTEnter(static_cast<unsigned>(b.visit_count())), b.t_enters());
   FillFloats(out.initTExit(static_cast<unsigned>(b.visit_count())), b.t_exits());
@@ -366,8 +427,8 @@ void FillPath(schema::CameraPath::Builder out, const CameraPathInfo& p) {
 }
 
 // The header message; the footprints follow in footprints records.
-void FillHeader(schema::Header::Builder out, const TraceHeader& h) {
-  out.setFormatVersion(kTraceFormatVersion);
+void FillHeader(schema::Header::Builder out, const TraceHeader& h, std::uint32_t version) {
+  out.setFormatVersion(version);
   out.setProducer(h.producer);
   out.setScene(h.scene);
   FillGrids(out.initGrids(static_cast<unsigned>(h.grids.size())), h.grids);
@@ -436,9 +497,9 @@ void FillFrameEnd(schema::FrameEnd::Builder out, const FrameSummary& s) {
   out.setChecksum(s.checksum);
 }
 
-void FillIndex(schema::Index::Builder out, std::uint64_t header_length,
+void FillIndex(schema::Index::Builder out, std::uint32_t version, std::uint64_t header_length,
                const std::vector<FrameSummary>& frames) {
-  out.setFormatVersion(kTraceFormatVersion);
+  out.setFormatVersion(version);
   out.setHeaderLength(header_length);
   auto entries = out.initFrames(static_cast<unsigned>(frames.size()));
   for (unsigned i = 0; i < frames.size(); ++i) {
@@ -464,10 +525,10 @@ void PutU64(std::vector<unsigned char>& out, std::uint64_t v) {
 }
 
 // The index as a skippable frame: magic, size, Index message, trailer.
-std::vector<unsigned char> IndexFrame(std::uint64_t header_length,
+std::vector<unsigned char> IndexFrame(std::uint32_t version, std::uint64_t header_length,
                                       const std::vector<FrameSummary>& frames) {
   capnp::MallocMessageBuilder message;
-  FillIndex(message.initRoot<schema::Index>(), header_length, frames);
+  FillIndex(message.initRoot<schema::Index>(), version, header_length, frames);
   const kj::Array<capnp::word> words = capnp::messageToFlatArray(message);
   const kj::ArrayPtr<const kj::byte> bytes = words.asBytes();
   RAYCELL_CHECK_LT(bytes.size() + kTraceTrailerBytes, std::size_t{0xFFFFFFFF});
@@ -518,7 +579,7 @@ struct TraceWriter::Impl {
 
   void WriteHeader() {
     capnp::MallocMessageBuilder message;
-    FillHeader(message.initRoot<schema::Record>().initHeader(), header);
+    FillHeader(message.initRoot<schema::Record>().initHeader(), header, options.format_version);
     WriteRecord(message);
     WriteRuns(header.footprints, /*leaves=*/false);
     if (header.regroupable) {
@@ -577,7 +638,12 @@ struct TraceWriter::Impl {
 
   void FlushPending() {
     if (pending.empty()) return;
-    const BatchColumns columns(pending);
+    // Each reference rule's columns; the batch keeps the one whose columns have the lower
+    // order-0 entropy (which zstd's output follows), the sibling rule on a tie.
+    const BatchColumns sibling(pending, header.cells, kReferenceSibling);
+    const BatchColumns corresponding(pending, header.cells, kReferenceCorresponding);
+    const BatchColumns& columns =
+        corresponding.EntropyBits() < sibling.EntropyBits() ? corresponding : sibling;
     const std::size_t t_bytes = header.settings.store_t ? 8 * pending.visit_count() : 0;
     capnp::MallocMessageBuilder message(MessageWordsHint(columns.bytes() + t_bytes));
     FillBatch(message.initRoot<schema::Record>().initBatch(), pending, columns,
@@ -632,6 +698,7 @@ TraceWriter TraceWriter::Create(const std::string& path, const TraceHeader& head
   RAYCELL_CHECK(options.footprint_runs_per_record > 0 &&
                 options.footprint_runs_per_record <= kTraceFootprintRunsPerRecord);
   RAYCELL_CHECK_LE(options.max_frames, kTraceMaxFrames);
+  RAYCELL_CHECK(options.format_version >= 3 && options.format_version <= kTraceFormatVersion);
   RAYCELL_CHECK_LE(options.max_batch_rays, kTraceMaxBatchRays);
   RAYCELL_CHECK_LE(options.max_batch_visits, kTraceMaxBatchVisits - kTraceMaxRayVisits);
   RAYCELL_CHECK_EQ(header.footprints.size(), std::size_t{header.cell_count()});
@@ -673,6 +740,7 @@ void TraceWriter::BeginFrame(std::int32_t frame) {
 void TraceWriter::Append(const RayBatch& rays) {
   Impl& w = *impl_;
   RAYCELL_CHECK(w.in_frame);
+  RAYCELL_CHECK_EQ(w.options.format_version, kTraceFormatVersion);  // encodes only the current
   RAYCELL_CHECK_EQ(rays.first_id(), w.frame.rays());
   for (std::size_t i = 0; i < rays.size(); ++i) w.AddRay(rays.ray(i));
 }
@@ -717,7 +785,8 @@ FrameSummary TraceWriter::AppendEncodedFrame(const FrameSummary& summary,
 void TraceWriter::Finish() {
   Impl& w = *impl_;
   RAYCELL_CHECK(!w.in_frame && !w.finished);
-  const std::vector<unsigned char> index = IndexFrame(w.header_length, w.frames);
+  const std::vector<unsigned char> index =
+      IndexFrame(w.options.format_version, w.header_length, w.frames);
   w.file.Write(index.data(), index.size());
   if (w.options.name_at_finish) w.file.Publish();
   w.file.SyncAndClose();

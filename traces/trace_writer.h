@@ -35,13 +35,17 @@ struct TraceWriterOptions {
   // frame if the writer is dropped. true (`trace concat`): the file has no name until
   // Finish(), so a writer dropped before it leaves nothing.
   bool name_at_finish = false;
+  // The format version the header and index say (3..kTraceFormatVersion). Rays are encoded
+  // (Append) only in the current one; an earlier one is for copying encoded frames of files
+  // of that version (AppendEncodedFrame: `trace concat`).
+  std::uint32_t format_version = kTraceFormatVersion;
 };
 
 class TraceWriter {
  public:
-  // Opens `path + ".tmp"` and writes the header (format version kTraceFormatVersion, whatever
-  // header.format_version says). The zstd level is header.settings.zstd_level (1..19); visits
-  // carry t when header.settings.store_t. Throws InputError naming the path when the file
+  // Opens `path + ".tmp"` and writes the header (format version options.format_version,
+  // whatever header.format_version says). The zstd level is header.settings.zstd_level (1..19);
+  // visits carry t when header.settings.store_t. Throws InputError naming the path when the file
   // cannot be written or the header exceeds a limit of the format (TraceHeaderProblem in
   // traces/format.h), before anything is written.
   static TraceWriter Create(const std::string& path, const TraceHeader& header,

@@ -255,7 +255,8 @@ struct RawBatch {
   std::uint64_t first_id = 0;
   std::vector<std::uint8_t> heads;
   std::vector<std::uint64_t> runs, parents, spawns, pixels, primary_paths, secondary_paths,
-      primary_samples, secondary_samples;
+      primary_samples, secondary_samples, shadow_samples;
+  std::uint8_t reference_rule = 0;
   std::size_t t_values = 3;       // entries of tEnter and tExit
   bool drop_wide_pixels = false;  // leave the pixels' escaped values out
 };
@@ -292,6 +293,8 @@ std::string BatchMessage(const RawBatch& b) {
   FillColumn(out.initSecondaryPaths(), b.secondary_paths);
   FillColumn(out.initPrimarySamples(), b.primary_samples);
   FillColumn(out.initSecondarySamples(), b.secondary_samples);
+  FillColumn(out.initShadowSamples(), b.shadow_samples);
+  out.setReferenceRule(b.reference_rule);
   out.initTEnter(static_cast<unsigned>(b.t_values));
   out.initTExit(static_cast<unsigned>(b.t_values));
   return Flat(message);
@@ -327,7 +330,7 @@ constexpr std::uint8_t kPrimaryHead = Head(RayKind::kPrimary, 0, 0, true, true);
 constexpr std::uint8_t kShadowHead = Head(RayKind::kShadow, 0, 1, true, false);
 
 // A primary ray (cells 3 then 2, samples 5 and 6) and a shadow ray spawned at its second
-// visit (cell 2, samples 7), all at pixel (1, 1).
+// visit (cell 2, samples 7), all at pixel (1, 1), in a 2x2x2 grid; coded as format version 4.
 RawBatch GoodBatch() {
   RawBatch b;
   b.heads = {kPrimaryHead, kShadowHead};
@@ -338,6 +341,34 @@ RawBatch GoodBatch() {
   b.primary_samples = {6, 7};   // 5 + 1, 6 + 1 (no reference ray: samples as they are)
   b.secondary_samples = {8};    // 7 + 1
   return b;
+}
+
+// The same rays coded as format version 5: paths as cell steps (see "Paths" in trace.capnp),
+// the shadow ray's samples in shadowSamples.
+RawBatch GoodBatchV5() {
+  RawBatch b = GoodBatch();
+  // 2 visits: from the predicted cell 0 = (0,0,0) step (+1,+1,0) to cell 3 = (1,1,0), code
+  // 3 + 5*3 + 25*2; then step (-1,0,0) to cell 2 = (0,1,0), code 1 + 5*2 + 25*2.
+  b.primary_paths = {2, 68, 61};
+  // 1 visit: from the parent's cell at the spawn (2), step (0,0,0), code 2 + 5*2 + 25*2.
+  b.secondary_paths = {1, 62};
+  b.secondary_samples = {};
+  b.shadow_samples = {8};  // 7 + 1 (no reference ray)
+  return b;
+}
+
+// The header frame of a 2x2x2 capture written as format `version` (its file at `path` is
+// removed).
+std::string HeaderFrame(const std::string& path, std::uint32_t version) {
+  TraceWriterOptions options;
+  options.format_version = version;
+  TraceWriter w = TraceWriter::Create(path, TestHeader({2, 2, 2}, true), options);
+  w.Finish();
+  const std::string bytes = ReadBytes(path);
+  std::remove(path.c_str());
+  const std::size_t n = ZSTD_findFrameCompressedSize(bytes.data(), bytes.size());
+  RAYCELL_CHECK(!ZSTD_isError(n));
+  return bytes.substr(0, n);
 }
 
 FrameSummary GoodSummary() {
@@ -352,20 +383,20 @@ FrameSummary GoodSummary() {
   return acc.Summary();
 }
 
+// Crafted frames after the header of a format version 4 capture (a version 5 one in
+// InvalidContentV5Test).
 class InvalidContentTest : public ::testing::Test {
  protected:
-  void SetUp() override { ref_ = MakeReference("content.rct", 10, 10); }
-  void TearDown() override {
-    std::remove(ref_.path.c_str());
-    std::remove(path_.c_str());
-  }
+  explicit InvalidContentTest(std::uint32_t version = 4) : version_(version) {}
+  void SetUp() override { header_ = HeaderFrame(TempPath("content.rct"), version_); }
+  void TearDown() override { std::remove(path_.c_str()); }
 
   // Header of the reference file, then one crafted frame, no index.
   TraceReader Read(const std::vector<RawBatch>& batches, const std::optional<FrameSummary>& end) {
     std::string content;
     for (const RawBatch& b : batches) content += BatchMessage(b);
     if (end) content += FrameEndMessage(*end);
-    WriteBytes(path_, ref_.bytes.substr(0, ref_.header_length) + ZstdFrame(content));
+    WriteBytes(path_, header_ + ZstdFrame(content));
     return TraceReader::Open(path_);
   }
 
@@ -377,7 +408,8 @@ class InvalidContentTest : public ::testing::Test {
     EXPECT_TRUE(Contains(reader.warning(), reason)) << reader.warning();
   }
 
-  Reference ref_;
+  std::uint32_t version_;
+  std::string header_;
   std::string path_ = TempPath("crafted.rct");
 };
 
@@ -394,8 +426,8 @@ TEST_F(InvalidContentTest, ParentMustBeAnEarlierRay) {
   RawBatch b = GoodBatch();
   b.heads[1] = Head(RayKind::kShadow, 2, 1, true, false);  // parent given in `parents`
   b.parents = {2};                                         // id - 2 < 0
-  ExpectRejected(
-      {b}, "frame 5 (#0, offset " + std::to_string(ref_.header_length) + "): ray 1: bad parent");
+  ExpectRejected({b},
+                 "frame 5 (#0, offset " + std::to_string(header_.size()) + "): ray 1: bad parent");
   b.parents = {0};
   ExpectRejected({b}, "ray 1: bad parent");
   b.parents = {};
@@ -514,6 +546,69 @@ TEST_F(InvalidContentTest, BatchesMustContinueTheFrame) {
   ExpectRejected({GoodBatch(), second}, "batch of frame 6");
 }
 
+TEST_F(InvalidContentTest, Version4HasNoShadowSamplesColumnOrReferenceRule) {
+  RawBatch b = GoodBatch();
+  b.shadow_samples = {1};
+  ExpectRejected({b}, "column shadowSamples: extra values");
+  b = GoodBatch();
+  b.reference_rule = 1;
+  ExpectRejected({b}, "bad reference rule 1");
+}
+
+class InvalidContentV5Test : public InvalidContentTest {
+ protected:
+  InvalidContentV5Test() : InvalidContentTest(5) {}
+};
+
+TEST_F(InvalidContentV5Test, CraftedGoodFrameReads) {
+  const TraceReader reader = Read({GoodBatchV5()}, GoodSummary());
+  EXPECT_EQ(reader.header().format_version, 5u);
+  ASSERT_EQ(reader.frames().size(), 1u) << reader.warning();
+  const RayBatch frame = reader.LoadFrame(0);
+  EXPECT_EQ(frame.cells(), (testing::CellList{3, 2, 2}));
+  EXPECT_EQ(frame.samples(), (std::vector<std::uint32_t>{5, 6, 7}));
+  EXPECT_EQ(frame.ray(1).parent, 0u);
+  EXPECT_EQ(frame.ray(1).spawn, 1u);
+}
+
+TEST_F(InvalidContentV5Test, StepsMustStayInTheGrid) {
+  RawBatch b = GoodBatchV5();
+  b.primary_paths = {2, 68, 126};  // not a step code
+  ExpectRejected({b}, "ray 0: bad cell");
+  b.primary_paths = {2, 68, 63};  // (+1,0,0) from x = 1 leaves the 2x2x2 grid
+  ExpectRejected({b}, "ray 0: bad cell");
+  b.primary_paths = {2, 68, 125, 0, 0, 2};  // escaped (0,0,+1): cell 7, then the checksum
+  ExpectRejected({b}, "checksum mismatch");
+  b.primary_paths = {2, 68, 125, 0, 0, 4};  // escaped (0,0,+2) leaves the grid
+  ExpectRejected({b}, "ray 0: bad cell");
+  b.primary_paths = {2, 68, 125, 0, std::uint64_t{1} << 40, 0};  // a huge escaped step
+  ExpectRejected({b}, "ray 0: bad cell");
+  b.primary_paths = {2, 68, 125, 0};  // an escape without its three values
+  ExpectRejected({b}, "column primaryPaths: too few values");
+  b = GoodBatchV5();
+  b.secondary_paths = {1, 0};  // (-2,-2,-2) from the parent's cell 2 leaves the grid
+  ExpectRejected({b}, "ray 1: bad cell");
+}
+
+TEST_F(InvalidContentV5Test, ReferenceRuleIsZeroOrOne) {
+  RawBatch b = GoodBatchV5();
+  b.reference_rule = 1;  // the shadow ray has no corresponding ray nor sibling either way
+  EXPECT_EQ(Read({b}, GoodSummary()).frames().size(), 1u);
+  b.reference_rule = 2;
+  ExpectRejected({b}, "bad reference rule 2");
+}
+
+TEST_F(InvalidContentV5Test, ShadowSamplesMustFitTheShadowVisits) {
+  RawBatch b = GoodBatchV5();
+  b.shadow_samples = {8, 8};
+  ExpectRejected({b}, "column shadowSamples: extra values");
+  b.shadow_samples = {};
+  ExpectRejected({b}, "column shadowSamples: too few values");
+  b = GoodBatchV5();
+  b.secondary_samples = {8};  // version 5 keeps shadow rays' samples out of secondarySamples
+  ExpectRejected({b}, "column secondarySamples: extra values");
+}
+
 TEST_F(InvalidContentTest, FrameEndMustMatchTheRays) {
   FrameSummary s = GoodSummary();
   s.checksum ^= 1;
@@ -622,12 +717,12 @@ TEST_F(InvalidHeaderTest, VersionsAndLimitsAreChecked) {
   ExpectRejected(HeaderMessage(1, {2, 1, 1}, {5, 6}) + FootprintsMessage(0, {5}, {1}),
                  "more than one message in the header frame");
   ExpectRejected(HeaderMessage(1, {2, 1, 1}, {5}), "1 footprints for 2 cells");
-  ExpectRejected(HeaderMessage(5, {2, 1, 1}),
-                 "format version 5 is not supported (this reader "
-                 "reads 1..4)");
+  ExpectRejected(HeaderMessage(6, {2, 1, 1}),
+                 "format version 6 is not supported (this reader "
+                 "reads 1..5)");
   ExpectRejected(HeaderMessage(0, {2, 1, 1}),
                  "format version 0 is not supported (this reader "
-                 "reads 1..4)");
+                 "reads 1..5)");
   // A grid beyond the limit is refused before anything is allocated for its cells.
   ExpectRejected(HeaderMessage(2, {4096, 4096, 4096}) + FootprintsMessage(0, {5}, {0}),
                  "cell grid 4096x4096x4096 = 68719476736 cells exceeds the trace format's limit "

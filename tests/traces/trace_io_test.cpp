@@ -383,7 +383,7 @@ TEST(TraceIoTest, ZstdAndCapnpDecodeTheWholeFile) {
   const std::string text = ReadBytes(out);
   // --short prints one message per line.
   EXPECT_EQ(CountOccurrences(text, "\n"), 2 + batches + frames.size()) << text.substr(0, 300);
-  EXPECT_EQ(text.rfind("(header = (formatVersion = 4, producer = \"raycell test\"", 0), 0u);
+  EXPECT_EQ(text.rfind("(header = (formatVersion = 5, producer = \"raycell test\"", 0), 0u);
   // The 27 footprints 7, 1007, 2007, ... in one record of 27 runs of one cell.
   EXPECT_EQ(CountOccurrences(text, "\n(footprints = (firstCell = 0, values = (narrow = [7, 255, "),
             1u);
@@ -452,7 +452,7 @@ TEST(TraceIoTest, PrintInfoShowsHeaderFramesAndTotals) {
   std::ostringstream out;
   PrintInfo(reader, "info.rct", out);
   const std::string text = out.str();
-  for (const char* want : {"format version: 4", "producer:       raycell test", "builtin:smoke",
+  for (const char* want : {"format version: 5", "producer:       raycell test", "builtin:smoke",
                            "density (fog, builtin", "3x3x3 = 27 cells", "sparse", "320x200",
                            "shadow", "refraction", "total", "naive uncompressed", "ratio:"}) {
     EXPECT_NE(text.find(want), std::string::npos) << want << "\n" << text;
@@ -560,6 +560,9 @@ TEST(TraceIoTest, SiblingRaysEncodeToRunsOfEqualHeads) {
   const auto record = message.getRoot<schema::Record>();
   ASSERT_EQ(record.which(), schema::Record::BATCH);
   const auto batch = record.getBatch();
+  // One parent: both reference rules code the batch alike, and the writer keeps the sibling
+  // rule on a tie.
+  EXPECT_EQ(batch.getReferenceRule(), kReferenceSibling);
   // Every shadow ray's parent is the last non-shadow ray (parent code 0), so no parent is
   // stored; a spawn is the previous sibling's (code 0) or one more (code 1); a sibling with
   // the previous sibling's cells stores no path; only the primary ray stores a pixel.
@@ -574,25 +577,89 @@ TEST(TraceIoTest, SiblingRaysEncodeToRunsOfEqualHeads) {
   EXPECT_TRUE(Values(batch.getParents()).empty());
   EXPECT_TRUE(Values(batch.getSpawns()).empty());
   EXPECT_EQ(Values(batch.getPixels()), (std::vector<std::uint64_t>{10, 14}));
-  // Count, first cell, zigzag deltas.
-  EXPECT_EQ(Values(batch.getPrimaryPaths()), (std::vector<std::uint64_t>{3, 4, 2, 16}));
+  // Count, then per visit the step code (dx + 2) + 5 (dy + 2) + 25 (dz + 2) from the
+  // previous cell, the first from the predicted cell: 0 for the primary ray, the parent's cell
+  // at the spawn for the others. In the 3x3x2 grid cell 4 is (1,1,0), 5 (2,1,0), 13 (1,1,1),
+  // 1 (1,0,0) and 12 (0,1,1).
+  EXPECT_EQ(Values(batch.getPrimaryPaths()), (std::vector<std::uint64_t>{3, 68, 63, 86}));
   EXPECT_EQ(Values(batch.getSecondaryPaths()),
-            (std::vector<std::uint64_t>{2, 4, 5, 1, 5, 2, 13, 1}));
-  // Samples: residuals against the previous sibling's samples at the same visit (the
-  // samples themselves without one), r > 0 stored as r + 1, runs of n zero residuals as n's
-  // digits in bijective base 2 (digit 1 -> 0, digit 2 -> 1), least significant first.
+            (std::vector<std::uint64_t>{2, 62, 57, 1, 62, 2, 62, 61}));
+  // Samples: residuals against the reference ray's (here the previous sibling's) visit of
+  // the same cell (the samples themselves without one), r > 0 stored as r + 1, runs of n
+  // zero residuals as n's digits in bijective base 2 (digit 1 -> 0, digit 2 -> 1), least
+  // significant first. Shadow rays' samples are in their own column.
   EXPECT_EQ(Values(batch.getPrimarySamples()), (std::vector<std::uint64_t>{31, 32, 30}));
-  EXPECT_EQ(Values(batch.getSecondarySamples()),
+  EXPECT_TRUE(Values(batch.getSecondarySamples()).empty());
+  EXPECT_EQ(Values(batch.getShadowSamples()),
             (std::vector<std::uint64_t>{
                 7,  4,           // ray 1: 6, 3
                 1,  1, 1, 0, 0,  // rays 2..20: 38 zeros = 2 + 2*2 + 2*4 + 1*8 + 1*16
-                7,               // ray 21: 9 against ray 20's 6 -> zigzag(3) = 6
+                10,              // ray 21: 9 (ray 20 has no visit of cell 5)
                 1,  0, 0,        // rays 22..29: 8 zeros = 2 + 1*2 + 1*4
                 3,  2,           // rays 30 and 31: 10 (zigzag(1) = 2), 9 (zigzag(-1) = 1)
                 0,  1, 0,        // rays 32..40: 9 zeros = 1 + 2*2 + 1*4
-                14, 3,           // ray 41: 2 against 9 -> zigzag(-7) = 13; 2 (ray 40 has 1 visit)
+                3,  3,           // ray 41: 2, 2 (ray 40 visits neither 13 nor 12)
                 1,  1, 0, 0,     // rays 42..50: 18 zeros = 2 + 2*2 + 1*4 + 1*8
             }));
+  std::remove(path.c_str());
+}
+
+// Version 5 codes paths as steps in the grid, escaping those of more than 2 cells along an
+// axis: random rays (whose consecutive visits jump anywhere) round trip on grids where most
+// steps escape, on a flat grid (a regrouped trace's cells are numbered so) and on 2 cells.
+TEST(TraceIoTest, RoundTripsOnAnyGridShape) {
+  for (const std::array<std::uint32_t, 3> cells :
+       {std::array<std::uint32_t, 3>{64, 64, 64}, {300, 1, 1}, {1, 7, 1}, {2, 1, 1}}) {
+    SCOPED_TRACE(cells[0] * cells[1] * cells[2]);
+    const std::string path = TempPath("grid.rct");
+    std::mt19937_64 rng(cells[0] + cells[1]);
+    const std::vector<Frame> frames = {
+        {0, RandomFrame(rng, 3000, false, cells[0] * cells[1] * cells[2], 8)}};
+    const std::vector<FrameSummary> written = WriteTrace(path, TestHeader(cells, false), frames);
+    const TraceReader reader = TraceReader::Open(path);
+    ASSERT_EQ(reader.frames().size(), 1u) << reader.warning();
+    EXPECT_EQ(reader.frames()[0], written[0]);
+    EXPECT_TRUE(reader.LoadFrame(0) == frames[0].rays);
+    std::remove(path.c_str());
+  }
+}
+
+// Two pixels, each a primary ray and shadow rays spawned along it; the second pixel's are
+// the first's. Version 5 predicts a shadow ray from the corresponding ray of the previous
+// pixel (same kind, parent kind and place among its siblings), so the second pixel stores
+// no path and only zero residuals, though its rays differ from their previous siblings.
+TEST(TraceIoTest, RaysArePredictedFromTheCorrespondingRayOfThePreviousPixel) {
+  RayBatch frame(false);
+  for (std::uint32_t x = 0; x < 2; ++x) {
+    const RayId primary = frame.size();
+    frame.BeginRay(RayKind::kPrimary, kNoParent, 0, x, 0);
+    frame.AddVisit(CellId(0), 10, 0, 0);
+    frame.AddVisit(CellId(1), 10, 0, 0);
+    frame.BeginRay(RayKind::kShadow, primary, 0, x, 0);
+    frame.AddVisit(CellId(0), 5, 0, 0);
+    frame.AddVisit(CellId(2), 7, 0, 0);
+    frame.BeginRay(RayKind::kShadow, primary, 1, x, 0);
+    frame.AddVisit(CellId(1), 4, 0, 0);
+    frame.AddVisit(CellId(3), 9, 0, 0);
+  }
+  const std::string path = TempPath("corresponding.rct");
+  const std::vector<FrameSummary> written =
+      WriteTrace(path, TestHeader({2, 2, 1}, false), {{0, frame}});
+  EXPECT_TRUE(TraceReader::Open(path).LoadFrame(0) == frame);
+  const kj::Array<capnp::word> words = FrameMessages(path, written[0]);
+  capnp::FlatArrayMessageReader message(words);
+  const auto batch = message.getRoot<schema::Record>().getBatch();
+  // The corresponding rule, which codes the batch in fewer bytes than the sibling rule.
+  EXPECT_EQ(batch.getReferenceRule(), kReferenceCorresponding);
+  // Rays 1 and 2 only (ray 4's and 5's paths are those of rays 1 and 2): 2 visits, from the
+  // parent's cell at the spawn (0, then 1) step (0,0,0) = 62, then (0,+1,0) = 67.
+  EXPECT_EQ(Values(batch.getSecondaryPaths()), (std::vector<std::uint64_t>{2, 62, 67, 2, 62, 67}));
+  // Ray 1: 5, 7 (no reference); ray 2: 4, 9 (its reference, ray 1, visits neither cell 1
+  // nor 3); rays 4 and 5: 4 zeros (= 2 + 1*2: digits 2, 1 -> 1, 0).
+  EXPECT_EQ(Values(batch.getShadowSamples()), (std::vector<std::uint64_t>{6, 8, 5, 10, 1, 0}));
+  // The second primary ray repeats the first's path, with zero residuals.
+  EXPECT_EQ(Values(batch.getPrimaryPaths()), (std::vector<std::uint64_t>{2, 62, 63}));
+  EXPECT_EQ(Values(batch.getPrimarySamples()), (std::vector<std::uint64_t>{11, 11, 1}));
   std::remove(path.c_str());
 }
 

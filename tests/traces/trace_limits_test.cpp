@@ -186,5 +186,42 @@ TEST(TraceLimitsTest, Version1FilesStillRead) {
   EXPECT_EQ(reader.LoadFrame(1).visit_count(), 900u);
 }
 
+// tests/traces/data/v4_builtin.rct: written by raycell at commit e03c0fa (format version 4,
+// the last before the version 5 encoding) with
+//   raycell record --res 24x16 --cells 4x4x4 --orbit 2:30 --no-images
+// Its totals are those that raycell's `trace info` printed then.
+TEST(TraceLimitsTest, Version4FilesStillReadAndRewriteAsTheCurrentVersion) {
+  const std::string path = std::string(RAYCELL_SOURCE_DIR) + "/tests/traces/data/v4_builtin.rct";
+  const TraceReader reader = TraceReader::Open(path);
+  EXPECT_EQ(reader.warning(), "");
+  const TraceHeader& h = reader.header();
+  EXPECT_EQ(h.format_version, 4u);
+  EXPECT_EQ(h.cells, (std::array<std::uint32_t, 3>{4, 4, 4}));
+  ASSERT_EQ(reader.frames().size(), 2u);
+  const std::uint64_t rays[] = {1155, 1105}, visits[] = {3432, 3364}, samples[] = {13752, 13094};
+  const std::string copy = TempPath("v4_rewritten.rct");
+  std::vector<RayBatch> frames;
+  {
+    TraceWriter w = TraceWriter::Create(copy, h, TraceWriterOptions{});
+    for (std::size_t f = 0; f < 2; ++f) {
+      EXPECT_EQ(reader.frames()[f].rays, rays[f]);
+      EXPECT_EQ(reader.frames()[f].visits, visits[f]);
+      EXPECT_EQ(reader.frames()[f].samples, samples[f]);
+      // LoadFrame checks the frame's checksum, so the decoded rays are the ones written.
+      frames.push_back(reader.LoadFrame(f));
+      EXPECT_EQ(frames.back().visit_count(), visits[f]);
+      w.BeginFrame(reader.frames()[f].frame);
+      w.Append(frames.back());
+      // The same rays in the current version: the checksum hashes the decoded rays alike.
+      EXPECT_EQ(w.EndFrame().checksum, reader.frames()[f].checksum);
+    }
+    w.Finish();
+  }
+  const TraceReader rewritten = TraceReader::Open(copy);
+  EXPECT_EQ(rewritten.header().format_version, kTraceFormatVersion);
+  for (std::size_t f = 0; f < 2; ++f) EXPECT_TRUE(rewritten.LoadFrame(f) == frames[f]);
+  std::remove(copy.c_str());
+}
+
 }  // namespace
 }  // namespace raycell

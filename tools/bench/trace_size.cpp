@@ -8,17 +8,28 @@
 // box exit. Samples per visit are counted. Deterministic: the same SIZE gives the same bytes.
 //
 // Usage: bench_trace_size [SIZE=256] [OUT=/tmp/bench_trace_size.rct]
+//
+// bench_trace_size --columns FILE: where a trace's bytes go. Each frame's batch columns
+// (any format version) are gathered column by column, each compressed alone with zstd at the
+// file's level, and their sizes printed per visit of the file, beside the file's own bytes
+// per visit (which compresses the columns interleaved, batch by batch).
+#include <capnp/serialize.h>
+#include <zstd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <map>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "base/check.h"
+#include "traces/trace.capnp.h"
 #include "traces/trace_reader.h"
 #include "traces/trace_writer.h"
 
@@ -167,10 +178,103 @@ int Main(int size, const std::string& path) {
   return 0;
 }
 
+// The content of one zstd frame.
+std::string Decompress(const std::string& frame) {
+  ZSTD_DCtx* dctx = ZSTD_createDCtx();
+  std::string out;
+  std::vector<char> buffer(ZSTD_DStreamOutSize());
+  ZSTD_inBuffer in{frame.data(), frame.size(), 0};
+  std::size_t left = 1;
+  while (left != 0 && in.pos < in.size) {
+    ZSTD_outBuffer o{buffer.data(), buffer.size(), 0};
+    left = ZSTD_decompressStream(dctx, &o, &in);
+    RAYCELL_CHECK(!ZSTD_isError(left));
+    out.append(buffer.data(), o.pos);
+  }
+  ZSTD_freeDCtx(dctx);
+  return out;
+}
+
+void AddColumn(std::string& to, schema::Column::Reader c) {
+  for (const std::uint8_t b : c.getNarrow()) to.push_back(static_cast<char>(b));
+  for (const std::uint64_t w : c.getWide()) {
+    for (int k = 0; k < 8; ++k) to.push_back(static_cast<char>(w >> (8 * k)));
+  }
+}
+
+// Each frame's batch columns, compressed column by column (see the file comment).
+int Columns(const std::string& path) {
+  const TraceReader reader = TraceReader::Open(path);
+  const int level = static_cast<int>(reader.header().settings.zstd_level);
+  std::map<std::string, std::uint64_t> packed, raw;
+  std::uint64_t visits = 0, frame_bytes = 0;
+  for (std::size_t f = 0; f < reader.frames().size(); ++f) {
+    visits += reader.frames()[f].visits;
+    const std::string encoded = reader.ReadEncodedFrame(f);
+    frame_bytes += encoded.size();
+    const std::string content = Decompress(encoded);
+    kj::Array<capnp::word> words = kj::heapArray<capnp::word>(content.size() / 8);
+    std::memcpy(words.begin(), content.data(), words.size() * 8);
+    std::map<std::string, std::string> columns;
+    capnp::ReaderOptions options;
+    options.traversalLimitInWords = kTraceMaxMessageBytes / 8;
+    for (kj::ArrayPtr<const capnp::word> rest = words; rest.size() > 0;) {
+      capnp::FlatArrayMessageReader message(rest, options);
+      rest = kj::arrayPtr(message.getEnd(), rest.end());
+      const auto record = message.getRoot<schema::Record>();
+      if (record.which() != schema::Record::BATCH) continue;
+      const auto b = record.getBatch();
+      std::string& heads = columns["heads"];
+      for (const std::uint8_t h : b.getHeads()) heads.push_back(static_cast<char>(h));
+      AddColumn(columns["headRuns"], b.getHeadRuns());
+      AddColumn(columns["parents"], b.getParents());
+      AddColumn(columns["spawns"], b.getSpawns());
+      AddColumn(columns["pixels"], b.getPixels());
+      AddColumn(columns["primaryPaths"], b.getPrimaryPaths());
+      AddColumn(columns["secondaryPaths"], b.getSecondaryPaths());
+      AddColumn(columns["primarySamples"], b.getPrimarySamples());
+      AddColumn(columns["secondarySamples"], b.getSecondarySamples());
+      AddColumn(columns["shadowSamples"], b.getShadowSamples());
+      std::string& t = columns["tEnter+tExit"];
+      for (const float x : b.getTEnter()) t.append(reinterpret_cast<const char*>(&x), 4);
+      for (const float x : b.getTExit()) t.append(reinterpret_cast<const char*>(&x), 4);
+    }
+    for (const auto& [name, bytes] : columns) {
+      std::string out(ZSTD_compressBound(bytes.size()), '\0');
+      const std::size_t n =
+          ZSTD_compress(out.data(), out.size(), bytes.data(), bytes.size(), level);
+      RAYCELL_CHECK(!ZSTD_isError(n));
+      packed[name] += n;
+      raw[name] += bytes.size();
+    }
+  }
+  const double v = static_cast<double>(std::max<std::uint64_t>(visits, 1));
+  std::printf("%s: format version %u, %zu frame(s), %llu visits, %.4f bytes per visit in frames\n",
+              path.c_str(), reader.header().format_version, reader.frames().size(),
+              static_cast<unsigned long long>(visits), frame_bytes / v);
+  std::printf("%-18s %12s %12s\n", "column", "B/visit", "raw B/visit");
+  std::uint64_t all = 0, all_raw = 0;
+  for (const auto& [name, n] : packed) {
+    std::printf("%-18s %12.4f %12.4f\n", name.c_str(), n / v, raw[name] / v);
+    all += n;
+    all_raw += raw[name];
+  }
+  std::printf("%-18s %12.4f %12.4f\n", "sum", all / v, all_raw / v);
+  return 0;
+}
+
 }  // namespace
 }  // namespace raycell
 
 int main(int argc, char** argv) {
+  if (argc == 3 && std::string(argv[1]) == "--columns") {
+    try {
+      return raycell::Columns(argv[2]);
+    } catch (const raycell::InputError& e) {
+      std::fprintf(stderr, "bench_trace_size: %s\n", e.what());
+      return 2;
+    }
+  }
   const int size = argc > 1 ? std::atoi(argv[1]) : 256;
   const std::string out = argc > 2 ? argv[2] : "/tmp/bench_trace_size.rct";
   if (size < 1 || size > 4096) {
