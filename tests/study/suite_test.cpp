@@ -30,7 +30,8 @@ SuiteSceneResult Scene(const std::string& name, std::uint64_t maxwork_fetches,
   r.character.max_gen_largest = 5;
   r.record_seconds = 1.5;
   r.cache_capacity = 4096;
-  r.rows.push_back({"scheduler", "maxwork", "maxwork", 8, maxwork_fetches, 11, 5000, maxwork_after});
+  r.rows.push_back(
+      {"scheduler", "maxwork", "maxwork", 8, maxwork_fetches, 11, 5000, maxwork_after});
   r.rows.push_back(
       {"scheduler", "balanced", "balanced", 8, balanced_fetches, 12, 4000, balanced_after});
   r.rows.push_back({"cells", "kd:27:sqrt", "maxwork", 1, 7, 123456, 9, 3});
@@ -40,9 +41,7 @@ SuiteSceneResult Scene(const std::string& name, std::uint64_t maxwork_fetches,
 TEST(SuiteSceneFileTest, RoundTripsEveryField) {
   const SuiteSceneResult a = Scene("fog", 100, 60, 900, 450);
   const std::string path = testing::TempPath("suite", "fog.csv");
-  {
-    std::ofstream(path) << SuiteSceneCsv(a);
-  }
+  { std::ofstream(path) << SuiteSceneCsv(a); }
   const SuiteSceneResult b = ReadSuiteSceneCsv(path);
   EXPECT_EQ(b.scene.name, a.scene.name);
   EXPECT_EQ(b.scene.file, a.scene.file);
@@ -72,11 +71,9 @@ TEST(SuiteSceneFileTest, RefusesWhatItDidNotWriteNamingTheFileAndLine) {
   const std::string path = testing::TempPath("suite", "bad.csv");
   for (const std::string& text :
        {std::string("kind,name\n"), good.substr(0, good.find("kind,")),  // no rows' header
-        good + "scheduler,maxwork,maxwork,8,x,1,2,3\n",                   // not a count
-        good + "oops,maxwork,maxwork,8,1,1,2,3\n"}) {                     // unknown kind
-    {
-      std::ofstream(path) << text;
-    }
+        good + "scheduler,maxwork,maxwork,8,x,1,2,3\n",                  // not a count
+        good + "oops,maxwork,maxwork,8,1,1,2,3\n"}) {                    // unknown kind
+    { std::ofstream(path) << text; }
     try {
       ReadSuiteSceneCsv(path);
       ADD_FAILURE() << "accepted:\n" << text;
@@ -93,12 +90,10 @@ TEST(SuiteReportTest, GeometricMeanAndWorstSceneOfTheRatiosToMaxWork) {
   // Scene b: fetches 200/100 = 2, time 1800/900 = 2. Geometric means: 1 (0.0%); worst: b, +100%.
   // Scene c: fetches 80/100 = 0.8, time 720/900 = 0.8. With c: geometric mean 0.8^(1/3) =
   // 0.928 (-7.2%).
-  const std::string two = SuiteReportText(o, {Scene("a", 100, 50, 900, 450),
-                                              Scene("b", 100, 200, 900, 1800)});
-  EXPECT_NE(two.find("| **geometric mean** | | 0.0% / 0.0% (-20.0%) |"), std::string::npos)
-      << two;
-  EXPECT_NE(two.find("| **worst scene** | | +100.0% b / +100.0% b (-20.0% a) |"),
-            std::string::npos)
+  const std::string two =
+      SuiteReportText(o, {Scene("a", 100, 50, 900, 450), Scene("b", 100, 200, 900, 1800)});
+  EXPECT_NE(two.find("| **geometric mean** | | 0.0% / 0.0% (-20.0%) |"), std::string::npos) << two;
+  EXPECT_NE(two.find("| **worst scene** | | +100.0% b / +100.0% b (-20.0% a) |"), std::string::npos)
       << two;
   const std::string three =
       SuiteReportText(o, {Scene("a", 100, 50, 900, 450), Scene("b", 100, 200, 900, 1800),
