@@ -295,9 +295,15 @@ std::vector<std::string> SuiteSchedulers(std::uint32_t processors) {
   return out;
 }
 
-std::vector<std::string> SuiteSubdivisions() {
-  return {"3x3x3",      "auto:27",         "kd:27:footprint",
-          "kd:27:sqrt", "dynamic:27:sqrt", "grid:27:crossings"};
+std::vector<std::string> SuiteSubdivisions(const std::string& cells) {
+  const auto d = ParseCellDims(cells, "--cells");
+  const std::string n = std::to_string(std::uint64_t{d[0]} * d[1] * d[2]);
+  return {cells,
+          "auto:" + n,
+          "kd:" + n + ":footprint",
+          "kd:" + n + ":sqrt",
+          "dynamic:" + n + ":sqrt",
+          "grid:" + n + ":crossings"};
 }
 
 SuiteSceneResult RunSuiteScene(const SuiteOptions& o, const SuiteScene& s) {
@@ -332,7 +338,7 @@ SuiteSceneResult RunSuiteScene(const SuiteOptions& o, const SuiteScene& s) {
     r.cache_capacity = NonEmptySorted(
         reader.header().footprints)[(NonEmptySorted(reader.header().footprints).size() - 1) / 2];
     const std::string sched = Registered("auto") ? "auto" : "celltree-best";
-    for (const std::string& spec : SuiteSubdivisions()) {
+    for (const std::string& spec : SuiteSubdivisions(o.cells)) {
       std::unique_ptr<TraceReader> regrouped;
       try {
         regrouped = std::make_unique<TraceReader>(TraceReader::Open(c.path, spec));

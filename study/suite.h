@@ -63,9 +63,11 @@ std::string SuiteFolder();
 std::vector<SuiteScene> SuiteScenes(const SuiteOptions& options);
 
 // The schedulers compared at one processor and at several (registry names; those not in the
-// registry are left out), and the subdivisions.
+// registry are left out), and the subdivisions into as many cells as `cells` (NXxNYxNZ, the
+// uniform grid first): for 3x3x3, 3x3x3, auto:27, kd:27:footprint, kd:27:sqrt,
+// dynamic:27:sqrt and grid:27:crossings.
 std::vector<std::string> SuiteSchedulers(std::uint32_t processors);
-std::vector<std::string> SuiteSubdivisions();
+std::vector<std::string> SuiteSubdivisions(const std::string& cells);
 
 // Records (or reuses) one scene's captures under OUT/captures/ and replays them; writes
 // OUT/scenes/NAME.csv.

@@ -202,7 +202,7 @@ std::string CellsSection(const SuiteOptions& o, const std::vector<SuiteSceneResu
   }
   if (schedulers.empty()) return "";
   std::vector<std::string> specs;
-  for (const std::string& spec : SuiteSubdivisions()) {
+  for (const std::string& spec : SuiteSubdivisions(o.cells)) {
     if (spec == o.cells) continue;
     for (const SuiteSceneResult& r : scenes) {
       if (Find(r, "cells", spec, schedulers.back(), 1)) {

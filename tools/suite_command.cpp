@@ -25,9 +25,10 @@ void AddSuiteCommand(CLI::App& app) {
       "    scheduler) against Max Work;\n"
       "  - replays Max Work, celltree (the paper's Cell Tree scheduling), celltree-adaptive,\n"
       "    auto and the oracle best on one processor: fetches over the oracle's;\n"
-      "  - regroups the capture into the uniform grid, auto:27, kd:27:footprint, kd:27:sqrt,\n"
-      "    dynamic:27:sqrt and grid:27:crossings, the cache sized to the uniform grid's median\n"
-      "    cell, under Max Work and auto: bytes moved into the cache against the uniform grid.\n"
+      "  - regroups the capture into the uniform grid --cells and, with N its cells, auto:N,\n"
+      "    kd:N:footprint, kd:N:sqrt, dynamic:N:sqrt and grid:N:crossings, the cache sized to\n"
+      "    the uniform grid's median cell, under Max Work and auto: bytes moved into the\n"
+      "    cache against the uniform grid.\n"
       "A scene whose volume changes per frame cannot be regrouped: it is recorded in --cells\n"
       "and left out of the subdivision table.\n"
       "It writes OUT/report.md (per comparison one row per scene, the geometric mean of the\n"
@@ -41,7 +42,7 @@ void AddSuiteCommand(CLI::App& app) {
       "(--only NAME) and the report (--report) when all have ended.\n\n"
       "Examples:\n"
       "  raycell suite                                # the default suite into out/suite/\n"
-      "  raycell suite --scenes scenes/fog.toml --scenes my_scene.toml --frames 16\n"
+      "  raycell suite --scenes scenes/dense_fog.toml --scenes my_scene.toml --frames 16\n"
       "  raycell suite --res 256x256 --processors 16 --out out/suite-256");
   cmd->add_option("--scenes", args->scenes,
                   "a scene file (.toml), a volume (.vdb) or a folder of them, repeatable; "
@@ -55,7 +56,7 @@ void AddSuiteCommand(CLI::App& app) {
   cmd->add_option("--cells", args->cells, "the cells replayed, NXxNYxNZ")->capture_default_str();
   cmd->add_option("--fine", args->fine,
                   "the fine grid each scene is recorded on and regrouped from; each count a "
-                  "multiple of --cells' (and of 3, for the 27-cell subdivisions)")
+                  "multiple of --cells'")
       ->capture_default_str();
   cmd->add_option("--processors", args->processors, "the board of several processors, 2..64")
       ->capture_default_str();
