@@ -187,6 +187,12 @@ void WriteFile(const std::string& dir, const std::string& name, const std::strin
 
 }  // namespace
 
+void RunPlotScript(const std::string& name, const std::vector<std::string>& args) {
+  std::string cmd = Python() + " " + Quote(PlotScript(name));
+  for (const std::string& a : args) cmd += " " + Quote(a);
+  RunPlot(cmd);
+}
+
 std::string TreesCsv(const GridStudy& g) {
   std::ostringstream s;
   s << "frame,rays,nodes,rays_per_node,bound,peel_length,splits,optimum,lower_bound,"

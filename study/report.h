@@ -56,6 +56,10 @@ std::string SubdivisionsCsv(const SubdivisionStudy& d);
 std::string SubdivisionsReport(const SubdivisionStudy& d);
 // report.md.
 std::string StudyReport(const StudyResult& r);
+// Runs the plot script `name` (tools/plot_*.py, found beside the running binary or in its
+// ../share/raycell) with python3 and `args`. InputError naming the command if it fails (no
+// matplotlib).
+void RunPlotScript(const std::string& name, const std::vector<std::string>& args);
 
 // Draws DIR/accuracy.png from DIR/accuracy.csv. InputError if it cannot (no matplotlib).
 void PlotAccuracy(const std::string& dir);

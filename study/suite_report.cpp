@@ -1,9 +1,7 @@
 // report.md, suite.csv and suite.png of `raycell suite` (study/suite.h).
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <optional>
 #include <sstream>
@@ -11,6 +9,7 @@
 #include "base/check.h"
 #include "base/file.h"
 #include "base/format.h"
+#include "study/report.h"
 #include "study/suite.h"
 
 namespace raycell {
@@ -273,27 +272,6 @@ std::string SuiteCsv(const std::vector<SuiteSceneResult>& scenes) {
   return s.str();
 }
 
-std::string Python() {
-  return access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
-}
-
-std::string Quote(const std::string& text) {
-  std::string q = "'";
-  for (char c : text) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-// plot_suite.py beside the binary or in ../share/raycell, as the study finds its scripts.
-std::string PlotSuiteScript() {
-  std::error_code ec;
-  const fs::path dir = fs::read_symlink("/proc/self/exe", ec).parent_path();
-  for (const fs::path& p :
-       {dir / "plot_suite.py", dir / ".." / "share" / "raycell" / "plot_suite.py"}) {
-    if (fs::is_regular_file(p)) return p.lexically_normal().string();
-  }
-  throw InputError("plots: plot_suite.py is neither beside the binary nor in ../share/raycell");
-}
-
 }  // namespace
 
 std::string SuiteReportText(const SuiteOptions& o, const std::vector<SuiteSceneResult>& scenes) {
@@ -327,13 +305,8 @@ std::string SuiteReport(const SuiteOptions& o, const std::vector<SuiteSceneResul
   fs::create_directories(o.out);
   WriteFileAtomically((fs::path(o.out) / "suite.csv").string(), SuiteCsv(scenes), "suite.csv");
   WriteFileAtomically((fs::path(o.out) / "report.md").string(), report, "report.md");
-  const std::string cmd = Python() + " " + Quote(PlotSuiteScript()) + " " + Quote(o.out) + " " +
-                          std::to_string(o.processors);
-  if (std::system(cmd.c_str()) != 0 || !fs::exists(fs::path(o.out) / "suite.png")) {
-    throw InputError("plots failed: `" + cmd +
-                     "` (it needs python3 with matplotlib: Debian package python3-matplotlib, "
-                     "installed by tools/setup.sh)");
-  }
+  RunPlotScript("plot_suite.py", {o.out, std::to_string(o.processors)});
+  if (!fs::exists(fs::path(o.out) / "suite.png")) throw InputError("plot missing: suite.png");
   return report;
 }
 
