@@ -1,7 +1,5 @@
 #include "record/scene_file.h"
 
-#include <toml++/toml.h>
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -13,6 +11,7 @@
 #include "base/file.h"
 #include "base/format.h"
 #include "base/parse.h"
+#include "base/toml_read.h"
 #include "record/vec3.h"
 
 namespace raycell {
@@ -172,29 +171,6 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // Reading TOML: every key read is marked; a key nothing read is an error naming its line.
 
-std::string Where(const std::string& file, const toml::source_region& r) {
-  return file + ":" + std::to_string(r.begin.line) + ":" + std::to_string(r.begin.column);
-}
-
-const char* TypeName(const toml::node& n) {
-  switch (n.type()) {
-    case toml::node_type::table:
-      return "a table";
-    case toml::node_type::array:
-      return "an array";
-    case toml::node_type::string:
-      return "a string";
-    case toml::node_type::integer:
-      return "an integer";
-    case toml::node_type::floating_point:
-      return "a floating-point number";
-    case toml::node_type::boolean:
-      return "a boolean";
-    default:
-      return "a date/time";
-  }
-}
-
 class Table {
  public:
   // `label` prefixes keys in messages: "grid 'cloud' " or "camera.".
@@ -207,7 +183,7 @@ class Table {
   }
   int line() const { return int(t_.source().begin.line); }
   std::string What(const toml::node& n, const std::string& key) const {
-    return Where(file_, n.source()) + ": " + label_ + key;
+    return TomlWhere(file_, n.source()) + ": " + label_ + key;
   }
   [[noreturn]] void Fail(const toml::node& n, const std::string& key,
                          const std::string& message) const {
@@ -215,7 +191,7 @@ class Table {
   }
   [[noreturn]] void TypeError(const toml::node& n, const std::string& key,
                               const char* expected) const {
-    Fail(n, key, std::string("expected ") + expected + ", got " + TypeName(n));
+    Fail(n, key, std::string("expected ") + expected + ", got " + TomlTypeName(n));
   }
 
   double Number(const toml::node& n, const std::string& key) const {
@@ -318,18 +294,14 @@ class Table {
     }
   }
   void ReportUnused() const {
-    const toml::key* first = nullptr;
-    for (auto&& [k, v] : t_) {
-      if (used_.count(std::string(k.str())) != 0) continue;
-      if (first == nullptr || k.source().begin < first->source().begin) first = &k;
-    }
+    const toml::key* first = FirstUnusedKey(t_, used_);
     if (first == nullptr) return;
-    std::string valid;
-    for (const std::string& k : used_) valid += (valid.empty() ? "" : ", ") + k;
+    const std::string valid = JoinKeys(used_);
     std::string in(Trim(label_));
     if (!in.empty() && in.back() == '.') in.pop_back();
-    throw InputError(Where(file_, first->source()) + ": unknown key '" + std::string(first->str()) +
-                     "'" + (in.empty() ? "" : " in " + in) + " (valid keys here: " + valid + ")");
+    throw InputError(TomlWhere(file_, first->source()) + ": unknown key '" +
+                     std::string(first->str()) + "'" + (in.empty() ? "" : " in " + in) +
+                     " (valid keys here: " + valid + ")");
   }
   const std::string& file() const { return file_; }
   const std::string& label() const { return label_; }
@@ -372,7 +344,7 @@ ShapeDesc ReadShape(const toml::table& t, const std::string& grid, std::size_t i
   shape.line = s.line();
   const toml::node* type = s.Get("type");
   if (type == nullptr) {
-    throw InputError(Where(file, t.source()) + ": " + s.label() +
+    throw InputError(TomlWhere(file, t.source()) + ": " + s.label() +
                      "missing required key 'type' (sphere, box, " + Join(PlatonicTypes(), ", ") +
                      ")");
   }
@@ -429,7 +401,7 @@ void ReadMaterial(const toml::table& t, GridDesc& g, const std::string& file) {
                                                     : "; a surface's material keys are color, "
                                                       "reflect, transparency, ior"));
   }
-  if (!g.fog) CheckSurfaceMaterial(g.surface_material, Where(file, t.source()) + ": " + g.name);
+  if (!g.fog) CheckSurfaceMaterial(g.surface_material, TomlWhere(file, t.source()) + ": " + g.name);
 }
 
 void ReadNoise(const toml::table& t, GridDesc& g, const std::string& file) {
@@ -473,7 +445,7 @@ GridDesc ReadGrid(const toml::table& t, std::size_t index, const std::string& fi
   Table pre(t, "", file);
   const toml::node* name = pre.Get("name");
   if (name == nullptr) {
-    throw InputError(Where(file, t.source()) + ": grid " + std::to_string(index + 1) +
+    throw InputError(TomlWhere(file, t.source()) + ": grid " + std::to_string(index + 1) +
                      ": missing required key 'name'");
   }
   g.name = pre.String("name", "");
@@ -504,7 +476,7 @@ GridDesc ReadGrid(const toml::table& t, std::size_t index, const std::string& fi
     g.vdb_grid = s.String("grid", "");
   } else {
     if (shapes.empty()) {
-      throw InputError(Where(file, t.source()) + ": grid '" + g.name +
+      throw InputError(TomlWhere(file, t.source()) + ": grid '" + g.name +
                        "': give file = \"PATH.vdb\" or at least one [[grid.shape]]");
     }
     for (std::size_t i = 0; i < shapes.size(); ++i) {
@@ -553,12 +525,12 @@ Light ReadLight(const toml::table& t, std::size_t index, const std::string& file
   const char* vkey = type == "dir" ? "direction" : "position";
   const toml::node* v = s.Get(vkey);
   if (v == nullptr) {
-    throw InputError(Where(file, t.source()) + ": light " + std::to_string(index + 1) +
+    throw InputError(TomlWhere(file, t.source()) + ": light " + std::to_string(index + 1) +
                      ": missing required key '" + vkey + "'");
   }
   l.v = s.VecKey(vkey, l.v);
   l.color = s.Color("color", l.color, kMaxLight);
-  ValidateLight(l, Where(file, t.source()) + ": light " + std::to_string(index + 1));
+  ValidateLight(l, TomlWhere(file, t.source()) + ": light " + std::to_string(index + 1));
   s.ReportUnused();
   return l;
 }
@@ -578,7 +550,7 @@ void ReadCamera(const toml::table& t, SceneDescription& d, const std::string& fi
     c.orbit_degrees = ot.Real("degrees", 0, -1e6, 1e6);
     c.orbit_frames = int(ot.Int("frames", 0, 0, 1000000));
     if (ot.Get("degrees") == nullptr) {
-      throw InputError(Where(file, o->source()) +
+      throw InputError(TomlWhere(file, o->source()) +
                        ": camera.orbit: missing required key "
                        "'degrees'");
     }
@@ -593,8 +565,8 @@ void ReadCamera(const toml::table& t, SceneDescription& d, const std::string& fi
     CameraKey key;
     const toml::node* frame = k.Get("frame");
     if (frame == nullptr || !k.Get("eye") || !k.Get("target")) {
-      throw InputError(Where(file, keys[i]->source()) + ": camera key " + std::to_string(i + 1) +
-                       ": needs frame, eye and target");
+      throw InputError(TomlWhere(file, keys[i]->source()) + ": camera key " +
+                       std::to_string(i + 1) + ": needs frame, eye and target");
     }
     key.frame = int(k.Int("frame", 0, -1000000000, 1000000000));
     key.eye = k.VecKey("eye", key.eye);
@@ -770,7 +742,7 @@ SceneDescription ParseSceneDescription(std::string_view text, const std::string&
   try {
     root = toml::parse(text, source);
   } catch (const toml::parse_error& e) {
-    throw InputError(Where(source, e.source()) + ": " + std::string(e.description()));
+    throw InputError(TomlWhere(source, e.source()) + ": " + std::string(e.description()));
   }
   SceneDescription d;
   Table s(root, "", source);

@@ -1,7 +1,5 @@
 #include "replay/config.h"
 
-#include <toml++/toml.h>
-
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -14,6 +12,7 @@
 #include "base/check.h"
 #include "base/file.h"
 #include "base/parse.h"
+#include "base/toml_read.h"
 #include "replay/replacement.h"
 #include "scheduling/scheduler.h"
 #include "traces/subdivision.h"
@@ -364,33 +363,6 @@ std::string TomlLiteral(TomlKind kind, const std::string& text) {
 // ---------------------------------------------------------------------------------------------
 // TOML reading with pbrt-style ReportUnused.
 
-std::string Where(const std::string& file, const toml::source_region& r) {
-  return file + ":" + std::to_string(r.begin.line) + ":" + std::to_string(r.begin.column);
-}
-
-const char* TypeName(const toml::node& n) {
-  switch (n.type()) {
-    case toml::node_type::table:
-      return "a table";
-    case toml::node_type::array:
-      return "an array";
-    case toml::node_type::string:
-      return "a string";
-    case toml::node_type::integer:
-      return "an integer";
-    case toml::node_type::floating_point:
-      return "a floating-point number";
-    case toml::node_type::boolean:
-      return "a boolean";
-    case toml::node_type::date:
-    case toml::node_type::time:
-    case toml::node_type::date_time:
-      return "a date/time";
-    default:
-      return "nothing";
-  }
-}
-
 // One TOML table being read: Get() marks a key used; ReportUnused() rejects the rest.
 class Section {
  public:
@@ -405,11 +377,11 @@ class Section {
 
   // "FILE:LINE:COL: LABEL KEY" for values of this table.
   std::string What(const toml::node& n, const char* key) const {
-    return Where(file_, n.source()) + ": " + label_ + key;
+    return TomlWhere(file_, n.source()) + ": " + label_ + key;
   }
 
   [[noreturn]] void TypeError(const toml::node& n, const char* key, const char* expected) const {
-    Fail(What(n, key), std::string("expected ") + expected + ", got " + TypeName(n));
+    Fail(What(n, key), std::string("expected ") + expected + ", got " + TomlTypeName(n));
   }
 
   std::string String(const toml::node& n, const char* key, const char* expected) const {
@@ -445,20 +417,14 @@ class Section {
   }
 
   [[noreturn]] void Missing(const char* key) const {
-    Fail(Where(file_, table_.source()), label_ + "missing required key '" + key + "'");
+    Fail(TomlWhere(file_, table_.source()), label_ + "missing required key '" + key + "'");
   }
 
   void ReportUnused() const {
-    const toml::key* first = nullptr;
-    for (auto&& [k, v] : table_) {
-      if (used_.count(std::string(k.str())) != 0) continue;
-      if (first == nullptr || k.source().begin < first->source().begin) first = &k;
-    }
+    const toml::key* first = FirstUnusedKey(table_, used_);
     if (first == nullptr) return;
-    std::string valid;
-    for (const std::string& k : used_) valid += (valid.empty() ? "" : ", ") + k;
-    Fail(Where(file_, first->source()), "unknown key '" + std::string(first->str()) + "' in " +
-                                            name_ + " (valid keys: " + valid + ")");
+    Fail(TomlWhere(file_, first->source()), "unknown key '" + std::string(first->str()) + "' in " +
+                                                name_ + " (valid keys: " + JoinKeys(used_) + ")");
   }
 
  private:
@@ -503,9 +469,10 @@ LevelConfig ReadLevel(const toml::table& table, std::size_t index, const std::st
 }
 
 std::vector<LevelConfig> ReadLevels(const toml::node& node, const std::string& file) {
-  const std::string what = Where(file, node.source()) + ": level";
+  const std::string what = TomlWhere(file, node.source()) + ": level";
   const toml::array* array = node.as_array();
-  if (array == nullptr) Fail(what, std::string("expected [[level]] tables, got ") + TypeName(node));
+  if (array == nullptr)
+    Fail(what, std::string("expected [[level]] tables, got ") + TomlTypeName(node));
   if (array->empty()) Fail(what, "at least one level is required");
   std::vector<LevelConfig> levels;
   std::map<std::string, std::string> seen;  // name → where
@@ -513,11 +480,11 @@ std::vector<LevelConfig> ReadLevels(const toml::node& node, const std::string& f
     const toml::node& element = *array->get(i);
     const toml::table* table = element.as_table();
     if (table == nullptr) {
-      Fail(Where(file, element.source()) + ": level",
-           std::string("expected [[level]] tables, got ") + TypeName(element));
+      Fail(TomlWhere(file, element.source()) + ": level",
+           std::string("expected [[level]] tables, got ") + TomlTypeName(element));
     }
     levels.push_back(ReadLevel(*table, i, file));
-    const std::string where = Where(file, table->source());
+    const std::string where = TomlWhere(file, table->source());
     const auto [it, inserted] = seen.emplace(levels.back().name, where);
     if (!inserted) {
       Fail(where + ": level",
@@ -660,7 +627,7 @@ ReplayConfig LoadConfigFromString(std::string_view text, const std::string& sour
   try {
     root = toml::parse(text, source);
   } catch (const toml::parse_error& e) {
-    Fail(Where(source, e.source()), std::string(e.description()));
+    Fail(TomlWhere(source, e.source()), std::string(e.description()));
   }
   return ReadConfig(root, source);
 }
