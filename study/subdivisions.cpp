@@ -23,8 +23,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The non-empty cells' footprints, sorted.
-std::vector<std::uint64_t> NonEmpty(const std::vector<std::uint64_t>& footprints) {
+}  // namespace
+
+std::vector<std::uint64_t> NonEmptyFootprints(const std::vector<std::uint64_t>& footprints) {
   std::vector<std::uint64_t> f;
   for (std::uint64_t b : footprints) {
     if (b != 0) f.push_back(b);
@@ -33,12 +34,10 @@ std::vector<std::uint64_t> NonEmpty(const std::vector<std::uint64_t>& footprints
   return f;
 }
 
-std::uint64_t Median(const std::vector<std::uint64_t>& sorted) {
+std::uint64_t MedianFootprint(const std::vector<std::uint64_t>& sorted) {
   RAYCELL_CHECK(!sorted.empty());
   return sorted[(sorted.size() - 1) / 2];
 }
-
-}  // namespace
 
 std::vector<std::string> SubdivisionSpecs(std::uint64_t cache_bytes) {
   const std::string budget = std::to_string(cache_bytes) + "B";
@@ -82,10 +81,11 @@ SubdivisionStudy MeasureSubdivisions(const SubdivisionOptions& o) {
   record.progress = false;
   Record(record, log);
 
-  study.cache_bytes = Median(NonEmpty(TraceReader::Open(fine, "3x3x3").header().footprints));
+  study.cache_bytes =
+      MedianFootprint(NonEmptyFootprints(TraceReader::Open(fine, "3x3x3").header().footprints));
   for (const std::string& spec : SubdivisionSpecs(study.cache_bytes)) {
     const TraceReader reader = TraceReader::Open(fine, spec);
-    const std::vector<std::uint64_t> f = NonEmpty(reader.header().footprints);
+    const std::vector<std::uint64_t> f = NonEmptyFootprints(reader.header().footprints);
     std::vector<std::size_t> frames(reader.frames().size());
     std::iota(frames.begin(), frames.end(), std::size_t{0});
     for (const SchedulerEntry* scheduler : {&kMaxWorkEntry, &kCellTreeEntry}) {
@@ -99,7 +99,8 @@ SubdivisionStudy MeasureSubdivisions(const SubdivisionOptions& o) {
       row.spec = spec;
       row.scheduler = scheduler->name;
       row.cells = std::uint32_t(f.size());
-      row.footprint_min = f.front(), row.footprint_median = Median(f), row.footprint_max = f.back();
+      row.footprint_min = f.front(), row.footprint_median = MedianFootprint(f),
+      row.footprint_max = f.back();
       row.fetches = t.fetches;
       RAYCELL_CHECK_LE(2u, t.levels.size());
       row.cache_bytes = t.levels[0].bytes;

@@ -39,6 +39,11 @@ struct SubdivisionStudy {
   std::vector<SubdivisionRow> rows;  // SubdivisionSpecs() x {maxwork, celltree}, in order
 };
 
+// The non-empty cells' footprints, sorted; and the median of such a list (not empty), the
+// cache's capacity of the subdivision section and of `raycell suite`.
+std::vector<std::uint64_t> NonEmptyFootprints(const std::vector<std::uint64_t>& footprints);
+std::uint64_t MedianFootprint(const std::vector<std::uint64_t>& sorted);
+
 // The SPECs studied, given the cache's capacity in bytes: 3x3x3, kd:27:footprint, kd:27:work,
 // kd:budget:CACHE B, octree:CACHE B, dynamic:27.
 std::vector<std::string> SubdivisionSpecs(std::uint64_t cache_bytes);

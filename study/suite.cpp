@@ -19,6 +19,7 @@
 #include "replay/config.h"
 #include "runner/driver.h"
 #include "scheduling/scheduler.h"
+#include "study/subdivisions.h"
 #include "traces/cell_dims.h"
 #include "traces/trace_reader.h"
 
@@ -137,15 +138,6 @@ std::string Stamp(const SuiteOptions& o, const SuiteScene& s, bool fine) {
       << o.frames << " cells " << (fine ? o.fine + " regroupable" : o.cells) << " recorder "
       << Recorder() << "\n";
   return out.str();
-}
-
-std::vector<std::uint64_t> NonEmptySorted(const std::vector<std::uint64_t>& footprints) {
-  std::vector<std::uint64_t> f;
-  for (std::uint64_t b : footprints) {
-    if (b != 0) f.push_back(b);
-  }
-  std::sort(f.begin(), f.end());
-  return f;
 }
 
 struct SceneCapture {
@@ -335,8 +327,7 @@ SuiteSceneResult RunSuiteScene(const SuiteOptions& o, const SuiteScene& s) {
 
   if (c.fine) {
     // The cache holds the uniform grid's median cell, so the cells' shapes make the difference.
-    r.cache_capacity = NonEmptySorted(
-        reader.header().footprints)[(NonEmptySorted(reader.header().footprints).size() - 1) / 2];
+    r.cache_capacity = MedianFootprint(NonEmptyFootprints(reader.header().footprints));
     const std::string sched = Registered("auto") ? "auto" : "celltree-best";
     for (const std::string& spec : SuiteSubdivisions(o.cells)) {
       std::unique_ptr<TraceReader> regrouped;
