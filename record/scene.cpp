@@ -43,15 +43,7 @@ void ApplyMaterial(Scene::Impl& s, const std::string& text, const std::string& s
     throw InputError(what + ": " + source + " has no float grid '" + grid +
                      "' (float grids: " + Join(s.float_grids, ", ") + ")");
   }
-  for (std::size_t i = 1; i < fields.size(); ++i) {
-    const auto eq = fields[i].find('=');
-    if (eq == std::string::npos) throw InputError(what + ": '" + fields[i] + "' is not key=value");
-    const std::string key = fields[i].substr(0, eq), value = fields[i].substr(eq + 1);
-    const std::string kwhat = what + " key '" + key + "'";
-    const std::vector<double> v = ParseMaterialValues(value, kwhat);
-    fog ? SetFogKey(*fog, key, v, kwhat) : SetSurfaceKey(*surface, key, v, kwhat);
-  }
-  if (surface) CheckSurfaceMaterial(*surface, what);
+  ApplyMaterialFields(fields, what, fog, surface);
 }
 
 openvdb::BBoxd WorldBox(const openvdb::FloatGrid& grid, openvdb::Vec3d ilo, openvdb::Vec3d ihi) {

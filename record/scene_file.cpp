@@ -872,16 +872,21 @@ void ApplyMaterialText(SceneDescription& d, const std::string& text) {
     throw InputError(what + ": " + d.name + " has no grid '" + grid +
                      "' (grids: " + Join(names, ", ") + ")");
   }
+  ApplyMaterialFields(fields, what, it->fog ? &it->fog_material : nullptr,
+                      it->fog ? nullptr : &it->surface_material);
+}
+
+void ApplyMaterialFields(const std::vector<std::string>& fields, const std::string& what,
+                         FogMaterial* fog, SurfaceMaterial* surface) {
   for (std::size_t i = 1; i < fields.size(); ++i) {
     const auto eq = fields[i].find('=');
     if (eq == std::string::npos) throw InputError(what + ": '" + fields[i] + "' is not key=value");
     const std::string key = fields[i].substr(0, eq), value = fields[i].substr(eq + 1);
     const std::string kwhat = what + " key '" + key + "'";
     const std::vector<double> v = ParseMaterialValues(value, kwhat);
-    it->fog ? SetFogKey(it->fog_material, key, v, kwhat)
-            : SetSurfaceKey(it->surface_material, key, v, kwhat);
+    fog ? SetFogKey(*fog, key, v, kwhat) : SetSurfaceKey(*surface, key, v, kwhat);
   }
-  if (!it->fog) CheckSurfaceMaterial(it->surface_material, what);
+  if (surface) CheckSurfaceMaterial(*surface, what);
 }
 
 namespace {

@@ -130,6 +130,13 @@ std::string_view BuiltinSceneText();
 // and checks as on a loaded scene). InputError naming the value.
 void ApplyMaterialText(SceneDescription& d, const std::string& text);
 
+// The key=value fields of a --material text split at ':' (fields[0], the grid, skipped)
+// applied to a fog's material or a surface's (exactly one of them given), then the surface
+// checked: what --material does to a description and to a loaded scene. InputError naming
+// `what` and the key.
+void ApplyMaterialFields(const std::vector<std::string>& fields, const std::string& what,
+                         FogMaterial* fog, SurfaceMaterial* surface);
+
 // Material keys, shared by --material and scene files: `values` are one number, or three
 // (R,G,B) for colours; a grey colour may be one number. InputError naming `what`.
 void SetFogKey(FogMaterial& m, const std::string& key, const std::vector<double>& values,
