@@ -102,4 +102,19 @@ inline std::vector<RayBatch> WriteRandomCapture(
   return out;
 }
 
+// What a replay must process once: counted from the rays themselves, the rays with a visit,
+// the visits (segments) and the samples.
+struct RayCounts {
+  std::uint64_t rays = 0, segments = 0, samples = 0;
+};
+inline RayCounts CountRays(const RayBatch& rays) {
+  RayCounts c;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    if (rays.visit_end(i) > rays.visit_begin(i)) ++c.rays;
+  }
+  c.segments = rays.cells().size();
+  for (const std::uint32_t s : rays.samples()) c.samples += s;
+  return c;
+}
+
 }  // namespace raycell::testing

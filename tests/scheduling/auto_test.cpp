@@ -28,21 +28,6 @@
 namespace raycell {
 namespace {
 
-struct Counts {
-  std::uint64_t rays = 0, segments = 0, samples = 0;
-};
-
-// Counted from the rays themselves: rays with a visit, visits, samples.
-Counts Count(const RayBatch& rays) {
-  Counts c;
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    if (rays.visit_end(i) > rays.visit_begin(i)) ++c.rays;
-  }
-  c.segments = rays.cells().size();
-  for (const std::uint32_t s : rays.samples()) c.samples += s;
-  return c;
-}
-
 ReplayConfig Config(const SchedulerEntry& s, std::uint32_t processors) {
   ReplayConfig c = DefaultConfig();
   c.scheduler = &s;
@@ -103,7 +88,7 @@ TEST(Auto, EveryRaySegmentAndSampleOnceOnRandomFrames) {
     const RayBatch rays = testing::RandomReplayFrame(rng, cells, 80);
     const CellTree previous = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 20));
     const CellTree before = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 20));
-    const Counts expected = Count(rays);
+    const testing::RayCounts expected = testing::CountRays(rays);
     std::vector<std::uint64_t> footprints(cells);
     for (auto& f : footprints) f = 1000 + rng() % 300'000;
     for (const std::uint32_t p : {1u, 2u, 8u}) {
@@ -140,7 +125,7 @@ TEST(Auto, EveryRaySegmentAndSampleOnceOnACaptureOfSimilarFrames) {
   h.settings.store_t = false;
   std::mt19937 rng(44);
   const RayBatch base = testing::RandomReplayFrame(rng, h.cell_count(), 80);
-  std::vector<Counts> expected;
+  std::vector<testing::RayCounts> expected;
   {
     TraceWriter w = TraceWriter::Create(path, h, 3);
     for (int f = 0; f < frames; ++f) {
@@ -158,7 +143,7 @@ TEST(Auto, EveryRaySegmentAndSampleOnceOnACaptureOfSimilarFrames) {
           b.AddVisit(next, 1 + std::uint32_t(rng() % 10), 0, 0);
         }
       }
-      expected.push_back(Count(b));
+      expected.push_back(testing::CountRays(b));
       w.BeginFrame(f);
       w.Append(b);
       w.EndFrame();

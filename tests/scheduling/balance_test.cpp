@@ -35,21 +35,6 @@ std::string Describe(const ReplayResult& r) {
   return s.str();
 }
 
-struct Counts {
-  std::uint64_t rays = 0, segments = 0, samples = 0;
-};
-
-// Counted from the rays themselves: rays with a visit, visits, samples.
-Counts Count(const RayBatch& rays) {
-  Counts c;
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    if (rays.visit_end(i) > rays.visit_begin(i)) ++c.rays;
-  }
-  c.segments = rays.cells().size();
-  for (const std::uint32_t s : rays.samples()) c.samples += s;
-  return c;
-}
-
 TEST(Balance, EveryRaySegmentAndSampleOnceForOneToSixteenProcessors) {
   std::mt19937 rng(22);
   int replays = 0;
@@ -58,7 +43,7 @@ TEST(Balance, EveryRaySegmentAndSampleOnceForOneToSixteenProcessors) {
     const RayBatch rays = testing::RandomReplayFrame(rng, cells, 80);
     const RayBatch before = testing::RandomReplayFrame(rng, cells, 80);
     const CellTree tree = testing::TreeOf(rays), previous = testing::TreeOf(before);
-    const Counts expected = Count(rays);
+    const testing::RayCounts expected = testing::CountRays(rays);
     std::vector<std::uint64_t> footprints(cells);
     for (auto& f : footprints) f = 1000 + rng() % 300'000;
     for (const std::uint32_t p : {1u, 2u, 3u, 4u, 8u, 16u}) {
