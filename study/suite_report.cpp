@@ -28,27 +28,6 @@ const SuiteRow* Find(const SuiteSceneResult& r, const std::string& kind, const s
   return nullptr;
 }
 
-// Ratios of one comparison over the scenes, with the geometric mean and the worst (largest).
-struct Ratios {
-  std::vector<std::optional<double>> per_scene;
-  double log_sum = 0;
-  int count = 0;
-  double worst = 0;
-  std::string worst_scene;
-
-  void Add(std::optional<double> r, const std::string& scene) {
-    per_scene.push_back(r);
-    if (!r || !(*r > 0)) return;
-    log_sum += std::log(*r);
-    ++count;
-    if (count == 1 || *r > worst) worst = *r, worst_scene = scene;
-  }
-  std::optional<double> geomean() const {
-    if (count == 0) return std::nullopt;
-    return std::exp(log_sum / count);
-  }
-};
-
 std::optional<double> Ratio(double value, double base) {
   if (!(base > 0)) return std::nullopt;
   return value / base;
@@ -61,6 +40,35 @@ std::string Pct(std::optional<double> r) {
   return (c > 0 ? "+" : c < 0 ? "-" : "") + FormatFixed(std::abs(c), 1) + "%";
 }
 std::string Times(std::optional<double> r) { return r ? FormatFixed(*r, 3) : "n/a"; }
+using RatioFormat = std::string (*)(std::optional<double>);
+
+// Ratios of one comparison over the scenes, with the geometric mean and the worst (largest).
+struct Ratios {
+  double log_sum = 0;
+  int count = 0;
+  double worst = 0;
+  std::string worst_scene;
+
+  void Add(std::optional<double> r, const std::string& scene) {
+    if (!r || !(*r > 0)) return;
+    log_sum += std::log(*r);
+    ++count;
+    if (count == 1 || *r > worst) worst = *r, worst_scene = scene;
+  }
+  std::optional<double> geomean() const {
+    if (count == 0) return std::nullopt;
+    return std::exp(log_sum / count);
+  }
+  // A summary row's cell: the geometric mean, or the worst ratio and its scene.
+  std::string Cell(bool worst_row, RatioFormat f) const {
+    if (!worst_row) return f(geomean());
+    return count ? f(worst) + " " + worst_scene : "n/a";
+  }
+  // "W on SCENE", the worst for a headline.
+  std::string WorstOn(RatioFormat f) const {
+    return count ? f(worst) + " on " + worst_scene : "n/a";
+  }
+};
 
 std::string Ms(std::uint64_t ps) { return FormatFixed(double(ps) / 1e9, 1); }
 
@@ -121,21 +129,17 @@ std::string ProcessorsSection(const SuiteOptions& o, const std::vector<SuiteScen
   for (bool worst : {false, true}) {
     s << "| **" << (worst ? "worst scene" : "geometric mean") << "** | |";
     for (const auto& c : cols) {
-      auto v = [&](const Ratios& r) {
-        return worst ? (r.count ? Pct(r.worst) + " " + r.worst_scene : "n/a") : Pct(r.geomean());
-      };
-      s << " " << v(c[0]) << " / " << v(c[1]) << " (" << v(c[2]) << ") |";
+      s << " " << c[0].Cell(worst, Pct) << " / " << c[1].Cell(worst, Pct) << " ("
+        << c[2].Cell(worst, Pct) << ") |";
     }
     s << "\n";
   }
   for (std::size_t i = 0; i < names.size(); ++i) {
     if (names[i] != "auto") continue;
-    headline->push_back(
-        std::to_string(p) + " processors, `auto` against Max Work: fetches " +
-        Pct(cols[i][0].geomean()) + " (geometric mean; worst " +
-        (cols[i][0].count ? Pct(cols[i][0].worst) + " on " + cols[i][0].worst_scene : "n/a") +
-        "), time after frame 0 " + Pct(cols[i][1].geomean()) + " (worst " +
-        (cols[i][1].count ? Pct(cols[i][1].worst) + " on " + cols[i][1].worst_scene : "n/a") + ")");
+    headline->push_back(std::to_string(p) + " processors, `auto` against Max Work: fetches " +
+                        Pct(cols[i][0].geomean()) + " (geometric mean; worst " +
+                        cols[i][0].WorstOn(Pct) + "), time after frame 0 " +
+                        Pct(cols[i][1].geomean()) + " (worst " + cols[i][1].WorstOn(Pct) + ")");
   }
   return s.str() + "\n";
 }
@@ -172,18 +176,14 @@ std::string OneProcessorSection(const std::vector<SuiteSceneResult>& scenes,
   for (bool worst : {false, true}) {
     s << "| **" << (worst ? "worst scene" : "geometric mean") << "** | |";
     for (const Ratios& r : cols) {
-      s << " "
-        << (worst ? (r.count ? Times(r.worst) + " " + r.worst_scene : "n/a") : Times(r.geomean()))
-        << " |";
+      s << " " << r.Cell(worst, Times) << " |";
     }
     s << "\n";
   }
   for (std::size_t i = 0; i < names.size(); ++i) {
     if (names[i] != "auto") continue;
-    headline->push_back(
-        "1 processor, `auto` online / oracle: " + Times(cols[i].geomean()) +
-        " (geometric mean; worst " +
-        (cols[i].count ? Times(cols[i].worst) + " on " + cols[i].worst_scene : "n/a") + ")");
+    headline->push_back("1 processor, `auto` online / oracle: " + Times(cols[i].geomean()) +
+                        " (geometric mean; worst " + cols[i].WorstOn(Times) + ")");
   }
   return s.str() + "\n";
 }
@@ -241,19 +241,16 @@ std::string CellsSection(const SuiteOptions& o, const std::vector<SuiteSceneResu
     for (bool worst : {false, true}) {
       s << "| **" << (worst ? "worst scene" : "geometric mean") << "** | | |";
       for (const Ratios& r : cols) {
-        s << " "
-          << (worst ? (r.count ? Pct(r.worst) + " " + r.worst_scene : "n/a") : Pct(r.geomean()))
-          << " |";
+        s << " " << r.Cell(worst, Pct) << " |";
       }
       s << "\n";
     }
     s << "\n";
     for (std::size_t i = 0; i < specs.size(); ++i) {
       if (specs[i].rfind("auto:", 0) != 0 || sched != schedulers.back()) continue;
-      headline->push_back(
-          "`--cells " + specs[i] + "` under `" + sched + "`: cache bytes " +
-          Pct(cols[i].geomean()) + " against " + o.cells + " (geometric mean; worst " +
-          (cols[i].count ? Pct(cols[i].worst) + " on " + cols[i].worst_scene : "n/a") + ")");
+      headline->push_back("`--cells " + specs[i] + "` under `" + sched + "`: cache bytes " +
+                          Pct(cols[i].geomean()) + " against " + o.cells +
+                          " (geometric mean; worst " + cols[i].WorstOn(Pct) + ")");
     }
   }
   return s.str();
