@@ -526,21 +526,38 @@ class FrameDecoder {
     }
   }
 
+  // What every version reads before a ray's visits: whether it has a path of its own (else it
+  // repeats its reference's), its reference's visits in `out`, and its visit count, checked.
+  struct PathHead {
+    bool new_path = false;
+    std::size_t ref_begin = 0, ref_count = 0;
+    std::uint64_t count = 0;
+  };
+  static PathHead ReadPathHead(ColumnReader& paths, std::uint8_t head, RayId id, std::size_t ref,
+                               const RayBatch& out) {
+    PathHead h;
+    h.new_path = head & kHeadNewPath;
+    if (!h.new_path && ref == kNone) {
+      throw BadData("ray " + Str(id) + ": repeats the path of a reference ray it does not have");
+    }
+    h.ref_begin = ref == kNone ? 0 : out.visit_begin(ref);
+    h.ref_count = ref == kNone ? 0 : out.visit_end(ref) - h.ref_begin;
+    h.count = h.new_path ? paths.Next() : h.ref_count;
+    if (h.count > kTraceMaxRayVisits || h.count > kTraceMaxBatchVisits - out.visit_count()) {
+      throw BadData("ray " + Str(id) + ": too many visits");
+    }
+    return h;
+  }
+
   // Adds the visits of ray `id` (the last ray of `out`); `ref` is its reference ray.
   void DecodeVisits(BatchColumns& c, std::uint8_t head, RayId id, bool primary, std::size_t ref,
                     RayBatch& out) {
     ColumnReader& paths = primary ? c.primary_paths : c.secondary_paths;
     ZeroRunColumnReader& samples = primary ? c.primary_samples : c.secondary_samples;
-    const bool new_path = head & kHeadNewPath;
-    if (!new_path && ref == kNone) {
-      throw BadData("ray " + Str(id) + ": repeats the path of a reference ray it does not have");
-    }
-    const std::size_t ref_begin = ref == kNone ? 0 : out.visit_begin(ref);
-    const std::size_t ref_count = ref == kNone ? 0 : out.visit_end(ref) - ref_begin;
-    const std::uint64_t count = new_path ? paths.Next() : ref_count;
-    if (count > kTraceMaxRayVisits || count > kTraceMaxBatchVisits - out.visit_count()) {
-      throw BadData("ray " + Str(id) + ": too many visits");
-    }
+    const PathHead h = ReadPathHead(paths, head, id, ref, out);
+    const bool new_path = h.new_path;
+    const std::size_t ref_begin = h.ref_begin, ref_count = h.ref_count;
+    const std::uint64_t count = h.count;
     const bool t = header_.settings.store_t;
     std::uint32_t cell = 0;
     for (std::uint64_t v = 0; v < count; ++v) {
@@ -577,16 +594,10 @@ class FrameDecoder {
     ZeroRunColumnReader& samples = primary                    ? c.primary_samples
                                    : kind == RayKind::kShadow ? c.shadow_samples
                                                               : c.secondary_samples;
-    const bool new_path = head & kHeadNewPath;
-    if (!new_path && ref == kNone) {
-      throw BadData("ray " + Str(id) + ": repeats the path of a reference ray it does not have");
-    }
-    const std::size_t ref_begin = ref == kNone ? 0 : out.visit_begin(ref);
-    const std::size_t ref_count = ref == kNone ? 0 : out.visit_end(ref) - ref_begin;
-    const std::uint64_t count = new_path ? paths.Next() : ref_count;
-    if (count > kTraceMaxRayVisits || count > kTraceMaxBatchVisits - out.visit_count()) {
-      throw BadData("ray " + Str(id) + ": too many visits");
-    }
+    const PathHead h = ReadPathHead(paths, head, id, ref, out);
+    const bool new_path = h.new_path;
+    const std::size_t ref_begin = h.ref_begin, ref_count = h.ref_count;
+    const std::uint64_t count = h.count;
     const CellGrid grid = header_.cells;
     std::uint32_t cell = 0;
     if (new_path && count > 0) cell = PredictedFirstCell(out, ref, ref_begin, ref_count);
