@@ -13,7 +13,7 @@ set(RAYCELL_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/raycell)
 install(TARGETS raycell RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 # `raycell study` and `raycell suite` look for them next to its binary, then in
 # <bindir>/../share/raycell; the suite's scene files likewise in share/raycell/scenes.
-install(PROGRAMS tools/plot_study.py tools/plot_accuracy.py tools/plot_suite.py
+install(PROGRAMS tools/plot_study.py tools/plot_accuracy.py tools/plot_suite.py tools/plot_scale.py
         DESTINATION ${CMAKE_INSTALL_DATADIR}/raycell)
 if(EXISTS ${PROJECT_SOURCE_DIR}/scenes)
   install(DIRECTORY scenes/ DESTINATION ${CMAKE_INSTALL_DATADIR}/raycell/scenes

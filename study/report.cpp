@@ -540,7 +540,8 @@ std::string StudyReport(const StudyResult& r) {
   const std::string accuracy = AccuracyReport(r.accuracy);
   const std::string depth = DepthReport(r.depth);
   s << accuracy << (accuracy.empty() ? "" : "\n") << depth << (depth.empty() ? "" : "\n")
-    << SubdivisionsReport(r.subdivisions);
+    << SubdivisionsReport(r.subdivisions) << "\n"
+    << ScaleReport(r.scale);
   return s.str();
 }
 
@@ -567,6 +568,11 @@ std::string WriteStudyReport(const StudyResult& r) {
     WriteFile(out, "subdivisions.csv", SubdivisionsCsv(r.subdivisions));
   }
   Plot(out, labels, processors, r.depth.measured, r.subdivisions.measured);
+  if (r.scale.measured) {
+    WriteFile(out, "scale.csv", ScaleCsv(r.scale));
+    RunPlotScript("plot_scale.py", {out});
+    if (!fs::exists(fs::path(out) / "scale.png")) throw InputError("plot missing: scale");
+  }
   if (r.accuracy.measured) {
     WriteFile(r.accuracy.options.out, "accuracy.csv", AccuracyCsv(r.accuracy.rows));
     PlotAccuracy(r.accuracy.options.out);

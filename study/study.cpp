@@ -303,6 +303,9 @@ StudyResult RunStudy(const StudyOptions& a) {
   if (a.accuracy_frames < 0 || a.accuracy_frames > 1000) {
     throw InputError("--accuracy-frames: must be in 0..1000");
   }
+  if (a.scale_frames < 0 || a.scale_frames > 1000) {
+    throw InputError("--scale-frames: must be in 0..1000");
+  }
   if (a.subdivision_frames < 0 || a.subdivision_frames > 1000) {
     throw InputError("--subdivision-frames: must be in 0..1000");
   }
@@ -349,6 +352,17 @@ StudyResult RunStudy(const StudyOptions& a) {
   sub.out = (fs::path(a.out) / "subdivisions").string();
   sub.quiet = a.quiet;
   result.subdivisions = MeasureSubdivisions(sub);
+  ScaleOptions scale;
+  scale.scene = accuracy.scene;
+  scale.binary = a.traces.empty() ? a.binary : "";
+  scale.out = (fs::path(a.out) / "scale").string();
+  scale.frames = a.scale_frames;
+  if (!a.quiet && !scale.binary.empty() && scale.frames > 0) {
+    std::cerr << "scale: record, analyze and replay at "
+              << scale.res.size() + scale.cells.size() - 1 << " small points\n";
+  }
+  result.scale = MeasureScale(scale);
+  if (!a.traces.empty()) result.scale.not_measured = "the study was given captures (--trace)";
   return result;
 }
 

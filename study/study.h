@@ -18,6 +18,7 @@
 #include "scheduling/scheduler.h"
 #include "study/accuracy.h"
 #include "study/depth.h"
+#include "study/scale.h"
 #include "study/subdivisions.h"
 
 namespace raycell {
@@ -25,9 +26,13 @@ namespace raycell {
 struct StudyOptions {
   std::string scene = "builtin", cells = "2x2x2,3x3x3", res = "256x256", out = "out/study";
   std::string accuracy_res = "128x128";
-  std::string frames = "24";                  // a count N (frames 0..N-1) or frame numbers A..B
-  int accuracy_frames = 2;                    // 0: no run time against error section
-  int subdivision_frames = 8;                 // 0: no subdivision section (study/subdivisions.h)
+  std::string frames = "24";   // a count N (frames 0..N-1) or frame numbers A..B
+  int accuracy_frames = 2;     // 0: no run time against error section
+  int subdivision_frames = 8;  // 0: no subdivision section (study/subdivisions.h)
+  int scale_frames = 2;        // 0: no scale section (study/scale.h)
+  // The raycell binary the scale section runs (tools/study_command.cpp: this process's);
+  // empty: the section is not measured.
+  std::string binary;
   std::string subdivision_fine = "12x12x12";  // its fine grid: each count a multiple of 3
   std::vector<std::string> traces;            // reused captures instead of recording
   std::string effort = "quick";               // the bracket's budget (BracketEffort)
@@ -89,6 +94,7 @@ struct StudyResult {
   AccuracyStudy accuracy;
   DepthStudy depth;               // from accuracy's captures: not measured when accuracy was not
   SubdivisionStudy subdivisions;  // one fine capture of the scene, at accuracy_res
+  ScaleStudy scale;               // record, analyze and replay run at small points
 };
 
 // Runs the study: checks the options (InputError naming the option, before any work),

@@ -1,10 +1,33 @@
 // raycell: capture volume ray tracing traces, cell by cell, and study ray schedules on them.
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
+#include <fstream>
 #include <iostream>
+#include <string>
 
 #include "base/check.h"
 #include "tools/commands.h"
+
+namespace {
+
+// With RAYCELL_PEAK_FILE set, a command that succeeded writes its peak resident memory in kB
+// there: VmHWM of /proc/self/status, which counts this program alone. (The study's scale
+// section reads it, study/scale.h: the wait's rusage starts a spawned child at its parent's.)
+void WritePeakMemory() {
+  const char* file = std::getenv("RAYCELL_PEAK_FILE");
+  if (file == nullptr || *file == '\0') return;
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) {
+      std::ofstream(file) << std::stoull(line.substr(6)) << "\n";
+      return;
+    }
+  }
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -31,16 +54,18 @@ int main(int argc, char** argv) {
   raycell::AddAnalyzeCommand(app);
   raycell::AddReplayCommand(app);
   raycell::AddSweepCommand(app);
+  int status = 0;
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {  // --help and --version exit 0, usage errors 2
-    return app.exit(e) == 0 ? 0 : 2;
+    status = app.exit(e) == 0 ? 0 : 2;
   } catch (const raycell::InputError& e) {
     std::cerr << "raycell: error: " << e.what() << "\n";
-    return 2;
+    status = 2;
   } catch (const std::exception& e) {
     std::cerr << "raycell: error: " << e.what() << "\n";
-    return 1;
+    status = 1;
   }
-  return 0;
+  if (status == 0) WritePeakMemory();
+  return status;
 }

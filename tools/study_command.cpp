@@ -1,5 +1,6 @@
 // raycell study: the main job end to end (study/study.h), its options parsed here and its
 // report written by study/report.h.
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
@@ -38,6 +39,10 @@ void AddStudyCommand(CLI::App& app) {
       "grid:27:crossings under Max Work and Cell Tree scheduling, the cache sized to the\n"
       "median 3x3x3 footprint: fetches, bytes over each link, stall (OUT/subdivisions.csv,\n"
       "subdivisions.png).\n"
+      "Then the scale section (study/scale.h): record, analyze and replay (Max Work) each\n"
+      "run as its own process at 64x64 to 256x256 in 4x4x4 cells and at 128x128 in 2x2x2\n"
+      "to 16x16x16 cells, --scale-frames frames each: wall time and peak memory against\n"
+      "visits and cells, with their log-log slopes (OUT/scale.csv, scale.png).\n"
       "With no options: the built-in scene, 24 frames over 90 degrees, 2x2x2 and 3x3x3\n"
       "cells, 256x256, into out/study/ (out/ is outside every source folder); about two\n"
       "minutes on 2 cores.\n"
@@ -82,6 +87,9 @@ void AddStudyCommand(CLI::App& app) {
   cmd->add_option("--subdivision-frames", args->subdivision_frames,
                   "frames of the subdivision section's fine capture; 0 skips the section")
       ->capture_default_str();
+  cmd->add_option("--scale-frames", args->scale_frames,
+                  "frames of each capture of the scale section; 0 skips the section")
+      ->capture_default_str();
   cmd->add_option("--subdivision-fine", args->subdivision_fine,
                   "the subdivision section's fine grid, each count a multiple of 3 (e.g. "
                   "24x24x24 for finer k-d and octree cells, at about 8 times the capture)")
@@ -98,6 +106,8 @@ void AddStudyCommand(CLI::App& app) {
   CLI::Option* orbit = recording[3];
   cmd->callback([args, orbit] {
     args->orbit_given = orbit->count() > 0;
+    std::error_code error;  // the scale section runs this binary; without it, not measured
+    args->binary = std::filesystem::read_symlink("/proc/self/exe", error).string();
     const std::string report = WriteStudyReport(RunStudy(*args));
     std::cout << "report: " << report << "\n";
   });

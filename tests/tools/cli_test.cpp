@@ -392,7 +392,7 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
   const auto out = cwd / "out" / "study";
   const Result r = Raycell(
       "study --res 24x24 --frames 3 --cells 2x2x2,1x2x1 --accuracy-frames 1 "
-      "--accuracy-res 16x16 --quiet",
+      "--accuracy-res 16x16 --scale-frames 0 --quiet",
       true, cwd.string());
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("report: out/study/report.md"), std::string::npos) << r.out;
@@ -418,6 +418,9 @@ TEST(Cli, StudyWritesTheReportItsCsvsAndPlots) {
   EXPECT_NE(report.find("| fetches, Cell Tree scheduling (Peel of frame i's tree) |"),
             std::string::npos);
   EXPECT_NE(report.find("![fetches per frame](fetches_2x2x2.png)"), std::string::npos);
+  // The scale section (tests/study/scale_test) skipped as asked, saying so.
+  EXPECT_NE(report.find("## Scale\n\nNot measured: skipped (--scale-frames 0)."),
+            std::string::npos);
   EXPECT_NE(report.find("![bracket of the optimum](bracket_2x2x2.png)"), std::string::npos);
   EXPECT_NE(report.find("against the best-schedule oracle | "), std::string::npos) << report;
   // With two cells Peel meets the lower bound on every frame: nothing to close.
