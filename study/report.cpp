@@ -511,6 +511,29 @@ std::string SubdivisionsReport(const SubdivisionStudy& d) {
   return s.str();
 }
 
+std::string SuiteHeadlinesReport(const StudyResult& r) {
+  std::ostringstream s;
+  const std::string dir = "`" + r.options.suite + "`";
+  s << "## On the suite\n\n";
+  if (!r.suite_error.empty()) {
+    s << "The suite's results in " << dir << " could not be read: " << r.suite_error << ".\n\n";
+  } else if (r.suite_headlines.empty()) {
+    s << "This study measures one scene. `raycell suite` (about five minutes) measures the "
+         "recommended scheduler and subdivision (`--scheduler auto`, `--cells auto:N`) on a "
+         "suite of scenes, each figure as the geometric mean over the scenes and the worst "
+         "scene; no results of it in "
+      << dir << " (`--suite DIR` reads another folder).\n\n";
+  } else {
+    s << "The recommendations on the suite, from the " << r.suite_scenes << " scenes' results of "
+      << "`raycell suite` in " << dir
+      << " (its report.md has every table), with this scene's own figure where it is one of "
+         "them:\n";
+    for (const std::string& h : r.suite_headlines) s << "- " << h << "\n";
+    s << "\n";
+  }
+  return s.str();
+}
+
 std::string StudyReport(const StudyResult& r) {
   const StudyOptions& a = r.options;
   std::ostringstream s;
@@ -535,6 +558,7 @@ std::string StudyReport(const StudyResult& r) {
     << "entry whose cell has no ready ray is skipped), and the best-schedule oracle replays "
     << "the plan the online schedulers make (`raycell replay --scheduler best`), whose budget "
     << "is smaller than the bracket's.\n\n";
+  s << SuiteHeadlinesReport(r);
   for (const GridStudy& g : r.grids) s << GridReport(g);
   for (const GridStudy& g : r.grids) s << ProcessorsReport(g);
   const std::string accuracy = AccuracyReport(r.accuracy);

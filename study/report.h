@@ -66,5 +66,8 @@ void PlotAccuracy(const std::string& dir);
 // Writes report.md, the CSVs and the plots into the study's folder; returns report.md's path.
 // InputError if the plots cannot be drawn.
 std::string WriteStudyReport(const StudyResult& r);
+// The "On the suite" section: the suite's headlines read from options.suite, or how to get
+// them.
+std::string SuiteHeadlinesReport(const StudyResult& r);
 
 }  // namespace raycell

@@ -21,6 +21,7 @@
 #include "scheduling/balanced_scheduler.h"
 #include "scheduling/cell_tree_scheduler.h"
 #include "scheduling/max_work.h"
+#include "study/suite.h"
 #include "traces/cell_dims.h"
 #include "traces/format.h"
 #include "traces/trace_reader.h"
@@ -342,6 +343,16 @@ StudyResult RunStudy(const StudyOptions& a) {
     accuracy.scene = readers.front().header().scene;
   }
   result.accuracy.options = accuracy;
+  try {
+    SuiteOptions suite;
+    const std::vector<SuiteSceneResult> scenes = ReadSuiteResults(a.suite, &suite);
+    result.suite_scenes = scenes.size();
+    // The scene's name as the suite names it: a file's stem ("builtin" for the built-in one).
+    const std::string name = fs::path(accuracy.scene).stem().string();
+    if (!scenes.empty()) result.suite_headlines = SuiteHeadlines(suite, scenes, name);
+  } catch (const InputError& e) {
+    result.suite_error = e.what();
+  }
   if (a.accuracy_frames > 0) result.accuracy = MeasureAccuracy(accuracy);
   result.depth = MeasureDepth(result.accuracy);
   SubdivisionOptions sub;

@@ -30,6 +30,9 @@ struct StudyOptions {
   int accuracy_frames = 2;     // 0: no run time against error section
   int subdivision_frames = 8;  // 0: no subdivision section (study/subdivisions.h)
   int scale_frames = 2;        // 0: no scale section (study/scale.h)
+  // A `raycell suite` folder whose results the report quotes (study/suite.h): its headlines,
+  // beside this scene's own figure when the scene is one of its scenes.
+  std::string suite = "out/suite";
   // The raycell binary the scale section runs (tools/study_command.cpp: this process's);
   // empty: the section is not measured.
   std::string binary;
@@ -95,6 +98,11 @@ struct StudyResult {
   DepthStudy depth;               // from accuracy's captures: not measured when accuracy was not
   SubdivisionStudy subdivisions;  // one fine capture of the scene, at accuracy_res
   ScaleStudy scale;               // record, analyze and replay run at small points
+  // The suite's results in options.suite: how many scenes, its headlines (SuiteHeadlines,
+  // beside the scene's name), or why they could not be read.
+  std::size_t suite_scenes = 0;
+  std::vector<std::string> suite_headlines;
+  std::string suite_error;
 };
 
 // Runs the study: checks the options (InputError naming the option, before any work),

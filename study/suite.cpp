@@ -352,6 +352,26 @@ SuiteSceneResult RunSuiteScene(const SuiteOptions& o, const SuiteScene& s) {
   return r;
 }
 
+std::vector<SuiteSceneResult> ReadSuiteResults(const std::string& dir, SuiteOptions* options) {
+  std::vector<std::string> files;
+  std::error_code error;
+  for (const auto& e : fs::directory_iterator(fs::path(dir) / "scenes", error)) {
+    if (e.path().extension() == ".csv") files.push_back(e.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  std::vector<SuiteSceneResult> results;
+  bool cells_seen = false;
+  options->processors = 1;
+  for (const std::string& f : files) {
+    results.push_back(ReadSuiteSceneCsv(f));
+    for (const SuiteRow& row : results.back().rows) {
+      options->processors = std::max(options->processors, row.processors);
+      if (row.kind == "cells" && !cells_seen) options->cells = row.name, cells_seen = true;
+    }
+  }
+  return results;
+}
+
 std::string SuiteSceneCsv(const SuiteSceneResult& r) {
   const CaptureCharacter& c = r.character;
   std::ostringstream out;

@@ -80,6 +80,19 @@ SuiteSceneResult ReadSuiteSceneCsv(const std::string& path);
 // row per scene, the geometric mean of the ratios over the scenes and the worst scene.
 std::string SuiteReportText(const SuiteOptions& options,
                             const std::vector<SuiteSceneResult>& scenes);
+// The scene whose own figure report.md's headlines give beside the suite's: the built-in one.
+inline constexpr const char* kSuiteBeside = "builtin";
+// report.md's headlines: per comparison of `auto` (several processors and one against their
+// baselines, auto:N against the uniform grid), the geometric mean over the scenes, the worst
+// scene, and `beside`'s own figure when it is one of the scenes.
+std::vector<std::string> SuiteHeadlines(const SuiteOptions& options,
+                                        const std::vector<SuiteSceneResult>& scenes,
+                                        const std::string& beside);
+// The results a suite left in DIR/scenes/*.csv, sorted by name (empty when there are none;
+// InputError for a file that is not one), and in `options` what the rows tell of the options
+// they were made with: processors (the largest count replayed) and cells (the first
+// subdivision row's, the uniform grid).
+std::vector<SuiteSceneResult> ReadSuiteResults(const std::string& dir, SuiteOptions* options);
 // report.md from the scenes' results (geometric means and worst scenes), suite.csv (every
 // row of every scene) and the plots. Returns report.md's text.
 std::string SuiteReport(const SuiteOptions& options, const std::vector<SuiteSceneResult>& scenes);

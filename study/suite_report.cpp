@@ -48,11 +48,13 @@ struct Ratios {
   int count = 0;
   double worst = 0;
   std::string worst_scene;
+  std::vector<std::pair<std::string, double>> by_scene;
 
   void Add(std::optional<double> r, const std::string& scene) {
     if (!r || !(*r > 0)) return;
     log_sum += std::log(*r);
     ++count;
+    by_scene.emplace_back(scene, *r);
     if (count == 1 || *r > worst) worst = *r, worst_scene = scene;
   }
   std::optional<double> geomean() const {
@@ -67,6 +69,13 @@ struct Ratios {
   // "W on SCENE", the worst for a headline.
   std::string WorstOn(RatioFormat f) const {
     return count ? f(worst) + " on " + worst_scene : "n/a";
+  }
+  // "; SCENE R" when `scene` is one of the scenes (a headline's figure beside the suite's).
+  std::string Beside(const std::string& scene, RatioFormat f) const {
+    for (const auto& [name, r] : by_scene) {
+      if (name == scene) return "; " + scene + " " + f(r);
+    }
+    return "";
   }
 };
 
@@ -88,7 +97,7 @@ std::string CharacterTable(const std::vector<SuiteSceneResult>& scenes) {
 }
 
 std::string ProcessorsSection(const SuiteOptions& o, const std::vector<SuiteSceneResult>& scenes,
-                              std::vector<std::string>* headline) {
+                              const std::string& beside, std::vector<std::string>* headline) {
   const std::uint32_t p = o.processors;
   std::vector<std::string> names;
   for (const std::string& n : SuiteSchedulers(p)) {
@@ -138,14 +147,15 @@ std::string ProcessorsSection(const SuiteOptions& o, const std::vector<SuiteScen
     if (names[i] != "auto") continue;
     headline->push_back(std::to_string(p) + " processors, `auto` against Max Work: fetches " +
                         Pct(cols[i][0].geomean()) + " (geometric mean; worst " +
-                        cols[i][0].WorstOn(Pct) + "), time after frame 0 " +
-                        Pct(cols[i][1].geomean()) + " (worst " + cols[i][1].WorstOn(Pct) + ")");
+                        cols[i][0].WorstOn(Pct) + cols[i][0].Beside(beside, Pct) +
+                        "), time after frame 0 " + Pct(cols[i][1].geomean()) + " (worst " +
+                        cols[i][1].WorstOn(Pct) + cols[i][1].Beside(beside, Pct) + ")");
   }
   return s.str() + "\n";
 }
 
 std::string OneProcessorSection(const std::vector<SuiteSceneResult>& scenes,
-                                std::vector<std::string>* headline) {
+                                const std::string& beside, std::vector<std::string>* headline) {
   std::vector<std::string> names;
   for (const std::string& n : SuiteSchedulers(1)) {
     if (n != "best") names.push_back(n);
@@ -183,13 +193,14 @@ std::string OneProcessorSection(const std::vector<SuiteSceneResult>& scenes,
   for (std::size_t i = 0; i < names.size(); ++i) {
     if (names[i] != "auto") continue;
     headline->push_back("1 processor, `auto` online / oracle: " + Times(cols[i].geomean()) +
-                        " (geometric mean; worst " + cols[i].WorstOn(Times) + ")");
+                        " (geometric mean; worst " + cols[i].WorstOn(Times) +
+                        cols[i].Beside(beside, Times) + ")");
   }
   return s.str() + "\n";
 }
 
 std::string CellsSection(const SuiteOptions& o, const std::vector<SuiteSceneResult>& scenes,
-                         std::vector<std::string>* headline) {
+                         const std::string& beside, std::vector<std::string>* headline) {
   std::vector<std::string> schedulers;
   for (const SuiteSceneResult& r : scenes) {
     for (const SuiteRow& row : r.rows) {
@@ -250,7 +261,8 @@ std::string CellsSection(const SuiteOptions& o, const std::vector<SuiteSceneResu
       if (specs[i].rfind("auto:", 0) != 0 || sched != schedulers.back()) continue;
       headline->push_back("`--cells " + specs[i] + "` under `" + sched + "`: cache bytes " +
                           Pct(cols[i].geomean()) + " against " + o.cells +
-                          " (geometric mean; worst " + cols[i].WorstOn(Pct) + ")");
+                          " (geometric mean; worst " + cols[i].WorstOn(Pct) +
+                          cols[i].Beside(beside, Pct) + ")");
     }
   }
   return s.str();
@@ -271,17 +283,28 @@ std::string SuiteCsv(const std::vector<SuiteSceneResult>& scenes) {
 
 }  // namespace
 
+std::vector<std::string> SuiteHeadlines(const SuiteOptions& o,
+                                        const std::vector<SuiteSceneResult>& scenes,
+                                        const std::string& beside) {
+  std::vector<std::string> headline;
+  ProcessorsSection(o, scenes, beside, &headline);
+  OneProcessorSection(scenes, beside, &headline);
+  CellsSection(o, scenes, beside, &headline);
+  return headline;
+}
+
 std::string SuiteReportText(const SuiteOptions& o, const std::vector<SuiteSceneResult>& scenes) {
   std::vector<std::string> headline;
-  const std::string processors = ProcessorsSection(o, scenes, &headline);
-  const std::string one = OneProcessorSection(scenes, &headline);
-  const std::string cells = CellsSection(o, scenes, &headline);
+  const std::string processors = ProcessorsSection(o, scenes, kSuiteBeside, &headline);
+  const std::string one = OneProcessorSection(scenes, kSuiteBeside, &headline);
+  const std::string cells = CellsSection(o, scenes, kSuiteBeside, &headline);
   std::ostringstream s;
   s << "# raycell suite\n\n"
     << scenes.size() << " scenes at " << o.res << ", " << o.frames << " frames each (a sequence: "
     << "at most its own), " << o.cells << " cells (regrouped from " << o.fine
     << " where the scene allows). Each figure is the geometric mean over the scenes and "
-       "its worst scene, as a suite of workloads is reported.\n\n";
+       "its worst scene, as a suite of workloads is reported, and the headlines give the "
+    << kSuiteBeside << " scene's own figure beside them.\n\n";
   if (!headline.empty()) {
     s << "Headlines:\n";
     for (const std::string& h : headline) s << "- " << h << "\n";

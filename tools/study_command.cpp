@@ -87,6 +87,10 @@ void AddStudyCommand(CLI::App& app) {
   cmd->add_option("--subdivision-frames", args->subdivision_frames,
                   "frames of the subdivision section's fine capture; 0 skips the section")
       ->capture_default_str();
+  cmd->add_option("--suite", args->suite,
+                  "a `raycell suite` folder: the report quotes its headlines (geometric mean and "
+                  "worst scene of each recommendation) beside this scene's figure")
+      ->capture_default_str();
   cmd->add_option("--scale-frames", args->scale_frames,
                   "frames of each capture of the scale section; 0 skips the section")
       ->capture_default_str();

@@ -387,6 +387,26 @@ TEST(Study, TheReportTellsWhatTheResultHolds) {
   }
 }
 
+TEST(Study, OnTheSuiteQuotesTheSuitesHeadlinesOrSaysWhereTheyWouldBe) {
+  StudyResult r;
+  r.options.suite = "somewhere/suite";
+  const std::string none = SuiteHeadlinesReport(r);
+  EXPECT_NE(none.find("no results of it in `somewhere/suite`"), std::string::npos) << none;
+  r.suite_scenes = 13;
+  r.suite_headlines = {"first (geometric mean; worst +1.0% on x; builtin -2.0%)", "second"};
+  const std::string two = SuiteHeadlinesReport(r);
+  EXPECT_NE(two.find("from the 13 scenes' results of `raycell suite` in `somewhere/suite`"),
+            std::string::npos)
+      << two;
+  EXPECT_NE(two.find(":\n- first (geometric mean; worst +1.0% on x; builtin -2.0%)\n- second\n\n"),
+            std::string::npos)
+      << two;
+  r.suite_error = "bad.csv: line 3: not a number";
+  EXPECT_NE(SuiteHeadlinesReport(r).find("could not be read: bad.csv: line 3: not a number."),
+            std::string::npos);
+  EXPECT_NE(StudyReport(TinyStudy()).find("## On the suite\n\n"), std::string::npos);
+}
+
 // A grid whose numbers are given: Peel meets the lower bound on every frame, or not.
 GridStudy HandMadeGrid(std::uint64_t peel, std::uint64_t lower, std::uint64_t best) {
   GridStudy g;

@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <tuple>
 
 #include "base/check.h"
 #include "tests/test_util.h"
@@ -106,6 +107,52 @@ TEST(SuiteReportTest, GeometricMeanAndWorstSceneOfTheRatiosToMaxWork) {
                        "1.75 | 5 |"),
             std::string::npos)
       << three;
+}
+
+TEST(SuiteReportTest, HeadlinesFromTheFilesOfAFolderWithOneScenesOwnFigure) {
+  // `auto` against Max Work at 8 processors. Scene a: fetches 50/100 = 0.5, time after frame 0
+  // 450/900 = 0.5; scene b: 80/100 = 0.8, 720/900 = 0.8. Geometric mean sqrt(0.4) = 0.632
+  // (-36.8%); worst b (-20.0%). One processor: auto / best 30/20 = 1.5 (a), 22/20 = 1.1 (b):
+  // geometric mean sqrt(1.65) = 1.285, worst a.
+  const auto dir = testing::TempDir("suite_headlines");
+  std::filesystem::create_directories(dir / "scenes");
+  for (auto [name, f, t, one] : {std::tuple{"a", 50, 450, 30}, std::tuple{"b", 80, 720, 22}}) {
+    SuiteSceneResult r = Scene(name, 100, 1, 900, 1);
+    r.rows.pop_back();  // the subdivisions: the uniform grid first, as the suite writes them
+    r.rows.push_back({"cells", "3x3x3", "auto", 1, 9, 1000, 1, 1});
+    r.rows.push_back(
+        {"cells", "auto:27", "auto", 1, 9, name == std::string("a") ? 900u : 1100u, 1, 1});
+    r.rows.push_back({"scheduler", "auto", "auto", 8, std::uint64_t(f), 0, 5000, std::uint64_t(t)});
+    r.rows.push_back({"scheduler", "best", "best", 1, 20, 0, 1, 1});
+    r.rows.push_back({"scheduler", "auto", "auto", 1, std::uint64_t(one), 0, 1, 1});
+    std::ofstream(dir / "scenes" / (std::string(name) + ".csv")) << SuiteSceneCsv(r);
+  }
+  SuiteOptions o;
+  o.processors = 3;
+  o.cells = "2x2x2";
+  const std::vector<SuiteSceneResult> scenes = ReadSuiteResults(dir.string(), &o);
+  ASSERT_EQ(scenes.size(), 2u);
+  EXPECT_EQ(scenes[0].scene.name, "a");
+  EXPECT_EQ(o.processors, 8u);  // the largest count of the rows
+  EXPECT_EQ(o.cells, "3x3x3");  // the first subdivision row's
+  const std::vector<std::string> h = SuiteHeadlines(o, scenes, "b");
+  ASSERT_EQ(h.size(), 3u);
+  EXPECT_EQ(h[0],
+            "8 processors, `auto` against Max Work: fetches -36.8% (geometric mean; worst -20.0% "
+            "on b; b -20.0%), time after frame 0 -36.8% (worst -20.0% on b; b -20.0%)");
+  EXPECT_EQ(h[1],
+            "1 processor, `auto` online / oracle: 1.285 (geometric mean; worst 1.500 on a; "
+            "b 1.100)");
+  // auto:27's cache bytes 900/1000 (a), 1100/1000 (b): sqrt(0.99) = 0.995 (-0.5%).
+  EXPECT_EQ(h[2],
+            "`--cells auto:27` under `auto`: cache bytes -0.5% against 3x3x3 (geometric "
+            "mean; worst +10.0% on b; b +10.0%)");
+  // A scene that is not one of the suite's: no figure beside.
+  EXPECT_EQ(SuiteHeadlines(o, scenes, "zzz")[1],
+            "1 processor, `auto` online / oracle: 1.285 (geometric mean; worst 1.500 on a)");
+  // No folder: no results.
+  EXPECT_TRUE(ReadSuiteResults((dir / "none").string(), &o).empty());
+  std::filesystem::remove_all(dir);
 }
 
 TEST(SuiteScenesTest, RefusesMissingFilesUnknownKindsAndTwoScenesOfOneName) {
