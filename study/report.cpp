@@ -313,8 +313,8 @@ std::string ProcessorsReport(const GridStudy& g) {
   const std::vector<const SchedulerEntry*> schedulers = ProcessorsSchedulers();
   std::ostringstream s;
   s << "## Several processors (" << g.heading << ")\n\n"
-    << "The capture replayed on boards of " << StudyProcessorCounts().front() << " to "
-    << StudyProcessorCounts().back()
+    << "The capture replayed on boards of " << g.processors.front().processors << " to "
+    << g.processors.back().processors
     << " block processors, the default configuration otherwise: memory warm across frames "
        "(the board's and the caches), a one-cell cache per processor, replayed per Cell Tree "
        "node with one processor and per ray segment beyond (granularity auto, exact either "
@@ -339,7 +339,9 @@ std::string ProcessorsReport(const GridStudy& g) {
   for (std::size_t i = 0; i < 3 * schedulers.size() + 2; ++i) s << "---:|";
   s << '\n';
   bool differ = false;
-  for (const std::uint32_t p : StudyProcessorCounts()) {
+  for (std::size_t i = 0; i < g.processors.size(); ++i) {
+    const std::uint32_t p = g.processors[i].processors;
+    if (i > 0 && g.processors[i - 1].processors >= p) break;  // the next scheduler's rows
     const std::vector<const ProcessorsReplay*> rows = RowsOf(g, p);
     if (rows.empty()) continue;
     s << "| " << p << " |";

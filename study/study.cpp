@@ -120,9 +120,9 @@ std::vector<FrameAnalysis> AnalyzeTrees(const std::vector<CellTree>& trees,
 // InputError naming `what` (the finest grid's option) when the several processors section's
 // largest board on `cells` cells is beyond the memory model's limit (CheckModelSize), before
 // any work.
-void CheckProcessorsFit(const std::string& what, std::uint64_t cells) {
+void CheckProcessorsFit(const std::string& what, std::uint64_t cells, std::uint32_t processors) {
   ReplayConfig config = DefaultConfig();
-  config.processors.count = StudyProcessorCounts().back();
+  config.processors.count = processors;
   try {
     CheckModelSize(config, cells);
   } catch (const InputError& e) {
@@ -134,11 +134,12 @@ void CheckProcessorsFit(const std::string& what, std::uint64_t cells) {
 // StudyProcessorCounts() size, the default configuration otherwise, in one pass over the
 // frames with the configurations on the study's threads (the totals do not depend on them).
 std::vector<ProcessorsReplay> StudyProcessors(const TraceReader& reader, const std::string& label,
+                                              const std::vector<std::uint32_t>& counts,
                                               bool quiet) {
   std::vector<ProcessorsReplay> rows;
   std::vector<ReplayConfig> configs;
   for (const SchedulerEntry* s : ProcessorsSchedulers()) {
-    for (const std::uint32_t p : StudyProcessorCounts()) {
+    for (const std::uint32_t p : counts) {
       ReplayConfig config = DefaultConfig();
       config.scheduler = s;
       config.processors.count = p;
@@ -213,7 +214,9 @@ GridStudy StudyTrace(const TraceReader& reader, GridStudy g, const StudyOptions&
   options.bracket_options.overlap = false;
   g.trees = AnalyzeTrees(trees, options, g.cells, a.quiet);
   for (std::size_t i = 0; i < n; ++i) g.trees[i].frame = numbers[i];
-  if (finest) g.processors = StudyProcessors(reader, g.cells, a.quiet);
+  if (finest) {
+    g.processors = StudyProcessors(reader, g.cells, ParseProcessorCounts(a.processors), a.quiet);
+  }
   return g;
 }
 
@@ -289,6 +292,20 @@ const std::vector<std::uint32_t>& StudyProcessorCounts() {
   return counts;
 }
 
+std::vector<std::uint32_t> ParseProcessorCounts(const std::string& list) {
+  std::vector<std::uint32_t> counts;
+  std::stringstream in(list);
+  for (std::string item; std::getline(in, item, ',');) {
+    counts.push_back(
+        static_cast<std::uint32_t>(ParseUint(item, "--processors '" + list + "'", 1, 64)));
+    if (counts.size() > 1 && counts.back() <= counts[counts.size() - 2]) {
+      throw InputError("--processors '" + list + "': the board sizes must ascend");
+    }
+  }
+  if (counts.empty()) throw InputError("--processors: no board size given");
+  return counts;
+}
+
 const TraceReplay& GridStudy::replay(const SchedulerEntry& scheduler) const {
   for (const SchedulerReplay& r : replays) {
     if (r.scheduler == &scheduler) return r.replay;
@@ -316,7 +333,8 @@ StudyResult RunStudy(const StudyOptions& a) {
                      "multiple of 3, so that the uniform 3x3x3 grid is made of its cells");
   }
   ParseResolution(a.accuracy_res);  // InputError naming it, before any work
-  BracketEffort(a.effort);          // likewise
+  const std::vector<std::uint32_t> processors = ParseProcessorCounts(a.processors);
+  BracketEffort(a.effort);  // likewise
   if (!std::isfinite(a.orbit_degrees())) {
     throw InputError("--orbit: must be a finite number of degrees");
   }
@@ -330,14 +348,15 @@ StudyResult RunStudy(const StudyOptions& a) {
     accuracy.scene = a.sequence() ? FrameFile(a.scene, result.frame_numbers.front()) : a.scene;
     const std::vector<std::string> cells = SplitList(a.cells);
     CheckProcessorsFit("--cells '" + cells.back() + "'",
-                       TraceCellCount(ParseCellDims(cells.back())));
+                       TraceCellCount(ParseCellDims(cells.back())), processors.back());
     fs::create_directories(a.out);
     for (std::size_t i = 0; i < cells.size(); ++i) {
       result.grids.push_back(StudyGrid(a, result.frame_numbers, cells[i], i + 1 == cells.size()));
     }
   } else {
     const std::vector<TraceReader> readers = OpenGivenTraces(a);
-    CheckProcessorsFit("--trace '" + a.traces.back() + "'", readers.back().header().cell_count());
+    CheckProcessorsFit("--trace '" + a.traces.back() + "'", readers.back().header().cell_count(),
+                       processors.back());
     fs::create_directories(a.out);
     result.grids = StudyGivenTraces(a, readers);
     accuracy.scene = readers.front().header().scene;

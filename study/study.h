@@ -30,6 +30,8 @@ struct StudyOptions {
   int accuracy_frames = 2;     // 0: no run time against error section
   int subdivision_frames = 8;  // 0: no subdivision section (study/subdivisions.h)
   int scale_frames = 2;        // 0: no scale section (study/scale.h)
+  // The boards of the several processors section, ascending, each 1..64.
+  std::string processors = "1,2,4,8,16";
   // A `raycell suite` folder whose results the report quotes (study/suite.h): its headlines,
   // beside this scene's own figure when the scene is one of its scenes.
   std::string suite = "out/suite";
@@ -64,7 +66,10 @@ struct SchedulerReplay {
 // and `balanced` (the registry's scheduler for several processors), in the report's order,
 // each on boards of StudyProcessorCounts() block processors.
 std::vector<const SchedulerEntry*> ProcessorsSchedulers();
-const std::vector<std::uint32_t>& StudyProcessorCounts();  // 1, 2, 4, 8, 16
+const std::vector<std::uint32_t>& StudyProcessorCounts();  // 1, 2, 4, 8, 16: the default
+// The board sizes of StudyOptions::processors ("1,2,4,8,16"): InputError naming --processors
+// unless each is in 1..64 and they ascend.
+std::vector<std::uint32_t> ParseProcessorCounts(const std::string& list);
 
 struct ProcessorsReplay {
   const SchedulerEntry* scheduler = nullptr;

@@ -24,7 +24,8 @@ void AddStudyCommand(CLI::App& app) {
       "with the tables, the CSV behind each, and plots of fetches, the bracket and Cell Tree\n"
       "size per frame (matplotlib).\n"
       "On the finest grid (the last of --cells, or the last --trace) it replays Max Work,\n"
-      "Cell Tree scheduling and balanced on 1, 2, 4, 8 and 16 block processors: time,\n"
+      "Cell Tree scheduling and balanced on 1, 2, 4, 8 and 16 block processors (--processors,\n"
+      "up to 64): time,\n"
       "fetches and the time's lower bound in OUT/processors.csv and processors.png.\n"
       "Then measures run time against error for the renderer's step, cutoff, precision and\n"
       "max depth and the replay's granularity and sampling on short captures of the same\n"
@@ -90,6 +91,10 @@ void AddStudyCommand(CLI::App& app) {
   cmd->add_option("--suite", args->suite,
                   "a `raycell suite` folder: the report quotes its headlines (geometric mean and "
                   "worst scene of each recommendation) beside this scene's figure")
+      ->capture_default_str();
+  cmd->add_option("--processors", args->processors,
+                  "the boards of the several processors section, ascending, each 1..64 (e.g. "
+                  "1,8,64)")
       ->capture_default_str();
   cmd->add_option("--scale-frames", args->scale_frames,
                   "frames of each capture of the scale section; 0 skips the section")

@@ -387,6 +387,16 @@ TEST(Study, TheReportTellsWhatTheResultHolds) {
   }
 }
 
+TEST(Study, ProcessorCountsAscendWithinOneToSixtyFour) {
+  EXPECT_EQ(ParseProcessorCounts("1,2,4,8,16"), StudyProcessorCounts());
+  EXPECT_EQ(ParseProcessorCounts("1,8,64"), (std::vector<std::uint32_t>{1, 8, 64}));
+  for (const char* bad : {"0,2", "1,65", "4,2", "2,2", "x", ""}) {
+    EXPECT_THROW(ParseProcessorCounts(bad), InputError) << bad;
+  }
+  EXPECT_NE(testing::ErrorOf([] { ParseProcessorCounts("1,65"); }).find("--processors '1,65'"),
+            std::string::npos);
+}
+
 TEST(Study, OnTheSuiteQuotesTheSuitesHeadlinesOrSaysWhereTheyWouldBe) {
   StudyResult r;
   r.options.suite = "somewhere/suite";
