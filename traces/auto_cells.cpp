@@ -221,6 +221,27 @@ AutoCells::AutoCells(std::uint32_t cells, FineCells fine, const std::string& wha
   capacity_ = full.empty() ? 0 : full[(full.size() - 1) / 2];
 }
 
+std::size_t ChooseAutoRule(const std::vector<double>& before, const std::vector<double>& last,
+                           std::size_t current) {
+  RAYCELL_CHECK_EQ(before.size(), last.size());
+  const std::size_t n = last.size();
+  std::size_t chosen = 0;
+  double best = 1.0;
+  std::vector<double> score(n, 2.0), moved(n, 0.0);
+  for (std::size_t i = 1; i < n; ++i) {
+    if (std::isnan(last[i]) || std::isnan(before[i])) continue;
+    moved[i] = std::abs(last[i] - before[i]);
+    score[i] = std::max(last[i], before[i]) + moved[i];
+    if (score[i] < best) best = score[i], chosen = i;
+  }
+  // Cells that stay put unless another rule is cheaper by more than the frames seen vary.
+  if (current != 0 && current < n && chosen != 0 && current != chosen && score[current] < 1.0 &&
+      score[current] <= best + moved[current] + moved[chosen]) {
+    chosen = current;
+  }
+  return chosen;
+}
+
 AutoCells::~AutoCells() = default;
 
 const Subdivision& AutoCells::next() const { return rules_[chosen_]->sub; }
@@ -255,25 +276,17 @@ void AutoCells::Prepare() {
     rule->regrouper = std::make_unique<RayRegrouper>(NonEmptyMap(rule->sub, rule->fp));
     rule->paths = CellPaths();
   }
-  // The rule for frame k (docs/design.md §1 "auto:N", the fallback rule): the baseline unless
-  // a candidate beat it on the last two frames seen by more than its ratio moved between them;
-  // of those, the one chosen for frame k-1 if it is one, else the least score.
+  // The rule for frame k (ChooseAutoRule): nothing before two frames are seen.
   const std::size_t current = chosen_;
   chosen_ = 0;
-  double best = 1.0;
-  for (std::size_t i = 1; i < rules_.size(); ++i) {
-    const Rule& rule = *rules_[i];
-    if (!rule.has || k < 2) continue;
-    const double last = rule.ratio[k - 1], before = rule.ratio[k - 2];
-    if (std::isnan(last) || std::isnan(before)) continue;
-    const double score = std::max(last, before) + std::abs(last - before);
-    if (score >= 1.0) continue;
-    if (i == current) {  // a candidate still winning is kept: cells that stay put
-      chosen_ = i;
-      break;
-    }
-    if (score < best) best = score, chosen_ = i;
+  if (k < 2) return;
+  std::vector<double> before, last;
+  for (const auto& rule : rules_) {
+    const bool seen = rule->has && rule->ratio.size() == k;
+    before.push_back(seen ? rule->ratio[k - 2] : std::numeric_limits<double>::quiet_NaN());
+    last.push_back(seen ? rule->ratio[k - 1] : std::numeric_limits<double>::quiet_NaN());
   }
+  chosen_ = ChooseAutoRule(before, last, current);
 }
 
 void AutoCells::AddBatch(const RayBatch& fine) {

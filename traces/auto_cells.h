@@ -47,6 +47,15 @@ class CellPaths {
   std::uint32_t cells_ = 0;  // 1 + the largest cell seen
 };
 
+// auto:N's choice for the next frame (docs/design.md §1 "auto:N", the fallback rule), from
+// each rule's estimate over the baseline's on the last two frames seen (`before`, `last`; NaN
+// where the rule was not evaluated; rule 0 is the baseline) and the rule chosen for the frame
+// before (`current`). A candidate qualifies when the worse of its two ratios plus how much they
+// moved is below 1; of those the least such score wins, but `current` is kept while its own
+// score is within the two rules' movements of the least. 0 (the baseline) when none qualifies.
+std::size_t ChooseAutoRule(const std::vector<double>& before, const std::vector<double>& last,
+                           std::size_t current);
+
 class AutoCells {
  public:
   // What auto:N decided for one frame: the rule its cells come from ("uniform": the baseline;

@@ -10,6 +10,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <numeric>
 #include <string>
 #include <vector>
@@ -124,6 +125,30 @@ TEST(AutoCells, TakesACandidateThatWinsOnTheFramesSeen) {
   EXPECT_NE(a.next().boxes, uniform);
   // Its cells keep the bouncing rays in one cell.
   EXPECT_EQ(a.next().coarse_of_fine[1], a.next().coarse_of_fine[2]);
+}
+
+// The choice among rules from their ratios on the last two frames (rule 0 the baseline).
+TEST(AutoCells, ChoosesTheCandidateClearlyCheapestAndKeepsOneWithinTheFramesVariation) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // No candidate below 1 (after adding how much its ratio moved): the baseline.
+  EXPECT_EQ(ChooseAutoRule({1, 1.2, 0.95}, {1, 0.9, 1.02}, 0), 0u);
+  // 0.95 and 0.93 moved 0.02: score 0.97 < 1, taken.
+  EXPECT_EQ(ChooseAutoRule({1, 0.95, nan}, {1, 0.93, nan}, 0), 1u);
+  // A rule evaluated on one frame only does not qualify.
+  EXPECT_EQ(ChooseAutoRule({1, 0.99, nan}, {1, 0.99, 0.5}, 1), 1u);
+  // Rule 1 chosen before (score 0.98) and rule 2 cheaper by far (0.65, steady): switch, as
+  // the frames seen vary by nothing near the difference. (Before, rule 1 was kept while it
+  // stayed below 1, whatever else became cheaper.)
+  EXPECT_EQ(ChooseAutoRule({1, 0.98, 0.65}, {1, 0.98, 0.65}, 1), 2u);
+  // Rule 1 (0.80, 0.84: score 0.88) against rule 2 (0.85, 0.85): chosen before, rule 1 stays,
+  // 0.03 dearer within its movement of 0.04; otherwise the least score wins.
+  EXPECT_EQ(ChooseAutoRule({1, 0.80, 0.85}, {1, 0.84, 0.85}, 1), 1u);
+  EXPECT_EQ(ChooseAutoRule({1, 0.80, 0.85}, {1, 0.84, 0.85}, 2), 2u);
+  EXPECT_EQ(ChooseAutoRule({1, 0.80, 0.85}, {1, 0.84, 0.85}, 0), 2u);
+  // Rule 1 0.06 dearer (0.90, 0.86: score 0.94): beyond its movement, rule 2 is taken.
+  EXPECT_EQ(ChooseAutoRule({1, 0.90, 0.85}, {1, 0.86, 0.85}, 1), 2u);
+  // The rule chosen before no longer below 1: the least score, not it.
+  EXPECT_EQ(ChooseAutoRule({1, 0.99, 0.9}, {1, 1.01, 0.9}, 1), 2u);
 }
 
 // A regroupable capture of Row()'s fine cells, one frame per letter of `frames`: 'W' frames
