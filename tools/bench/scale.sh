@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Scale (issue 43): wall time and peak memory of `raycell record`, `analyze` (no bracket) and
-# `replay` (Max Work, 1 processor) of the built-in scene against its visits (256x256 to
+# Scale (issue 43): wall time and peak memory of `raycell record`, `analyze` (no bracket),
+# `replay` (Max Work, 1 processor) and `sweep` (Max Work, 4 times per sample, 2
+# threads) of the built-in scene against its visits (256x256 to
 # 2048x2048 in 8x8x8 cells) and against its cells (1920x1080 in 2x2x2 to 16x16x16 cells),
 # FRAMES frames of an orbit each, with each command's log-log slope (least squares of log
 # time, log memory on log visits, log cells): the study's scale section (study/scale.h) at
@@ -29,9 +30,10 @@ run() {
   local -a cmds=(
     "record --res $res --cells $cells --orbit $frames:$((2 * frames)) --no-images --quiet --out $trace"
     "analyze $trace --quiet --format csv"
-    "replay $trace --scheduler maxwork --quiet")
-  local names=(record analyze replay) i visits=""
-  for i in 0 1 2; do
+    "replay $trace --scheduler maxwork --quiet"
+    "sweep $trace --vary scheduler=maxwork --vary processors.time_per_sample=5ns,10ns,20ns,40ns --jobs 2 --out $out/sweep.csv --quiet")
+  local names=(record analyze replay sweep) i visits=""
+  for i in 0 1 2 3; do
     # shellcheck disable=SC2086
     /usr/bin/time -f '%e %M' -o "$out/time.txt" nice "$raycell" ${cmds[$i]} > /dev/null 2> "$out/err.txt" ||
       { echo "raycell ${cmds[$i]} failed:" >&2; cat "$out/err.txt" >&2; exit 1; }
@@ -53,19 +55,19 @@ def slope(pts):
     mx, my = sum(lx) / len(lx), sum(ly) / len(ly)
     sxx = sum((a - mx) ** 2 for a in lx)
     return sum((a - mx) * (b - my) for a, b in zip(lx, ly)) / sxx if sxx else 0.0
-print("| image | cells | visits | record s (MB) | analyze s (MB) | replay s (MB) |")
-print("|---|---|---:|---:|---:|---:|")
+print("| image | cells | visits | record s (MB) | analyze s (MB) | replay s (MB) | sweep s (MB) |")
+print("|---|---|---:|---:|---:|---:|---:|")
 points = []
 for r in rows:
     if (r["res"], r["cells"]) not in points: points.append((r["res"], r["cells"]))
 for res, cells in points:
     rs = {r["command"]: r for r in rows if (r["res"], r["cells"]) == (res, cells)}
     print(f"| {res} | {cells} | {rs['record']['visits']} | " + " | ".join(
-        f"{float(rs[c]['seconds']):.1f} ({rs[c]['peak_mb']})" for c in ("record", "analyze", "replay")) + " |")
+        f"{float(rs[c]['seconds']):.1f} ({rs[c]['peak_mb']})" for c in ("record", "analyze", "replay", "sweep")) + " |")
 print("\n| command | time on visits | memory on visits | time on cells | memory on cells |")
 print("|---|---:|---:|---:|---:|")
 cell_count = lambda c: math.prod(int(v) for v in c.split("x"))
-for c in ("record", "analyze", "replay"):
+for c in ("record", "analyze", "replay", "sweep"):
     out = []
     for series, x in (("visits", lambda r: float(r["visits"])), ("cells", lambda r: cell_count(r["cells"]))):
         sel = [r for r in rows if r["command"] == c and r["series"] == series]
