@@ -33,7 +33,7 @@ struct ScaleOptions {
   std::string cells_at = "4x4x4";
   std::vector<std::string> cells = {"2x2x2", "4x4x4", "8x8x8", "16x16x16"};
   std::string res_at = "128x128";
-  int frames = 2;  // 0: not measured
+  int frames = 1;  // 0: not measured
 };
 
 struct ScaleRun {

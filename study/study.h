@@ -29,7 +29,7 @@ struct StudyOptions {
   std::string frames = "24";   // a count N (frames 0..N-1) or frame numbers A..B
   int accuracy_frames = 2;     // 0: no run time against error section
   int subdivision_frames = 8;  // 0: no subdivision section (study/subdivisions.h)
-  int scale_frames = 2;        // 0: no scale section (study/scale.h)
+  int scale_frames = 1;        // 0: no scale section (study/scale.h)
   // The boards of the several processors section, ascending, each 1..64.
   std::string processors = "1,2,4,8,16";
   // A `raycell suite` folder whose results the report quotes (study/suite.h): its headlines,
