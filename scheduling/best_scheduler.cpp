@@ -1,5 +1,6 @@
 #include "scheduling/best_scheduler.h"
 
+#include <algorithm>
 #include <deque>
 #include <map>
 #include <mutex>
@@ -83,6 +84,18 @@ BestScheduleOptions PlanEffort(std::uint64_t seed) {
   return o;
 }
 
+BestScheduleOptions PlanEffort(std::uint64_t seed, const CellTree& tree) {
+  BestScheduleOptions o = PlanEffort(seed);
+  const std::uint64_t nodes = std::max<std::uint64_t>(tree.node_count(), 1);
+  // The beam's first layer alone would narrow it below its width: no beam.
+  if (o.beam_width * nodes > o.beam_max_node_visits / std::max<std::uint64_t>(Bound(tree), 1)) {
+    o.beam_width = 0;
+  }
+  // The local search's re-timings, a pass over every node each: a share of its work limit.
+  o.local.max_retimes = std::max<std::uint64_t>(o.local.max_work / kPlanRetimeShare / nodes, 1);
+  return o;
+}
+
 namespace {
 
 // The tree's contents (cells and parents of every node) and the seed.
@@ -131,7 +144,7 @@ PlanMemo& Memo() {
 std::vector<CellId> PlanFor(const CellTree& tree, std::uint64_t seed) {
   const std::uint64_t key = PlanKey(tree, seed);
   if (auto plan = Memo().Find(key)) return *plan;
-  std::vector<CellId> plan = BestSchedule(tree, PlanEffort(seed)).schedule;
+  std::vector<CellId> plan = BestSchedule(tree, PlanEffort(seed, tree)).schedule;
   RAYCELL_CHECK(IsFeasible(tree, plan));
   Memo().Add(key, plan);
   return plan;
