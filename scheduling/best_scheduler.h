@@ -16,9 +16,11 @@
 // scheduler compute each frame's plan once, with the same result.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <vector>
 
+#include "scheduling/plan_cache.h"
 #include "scheduling/scheduler.h"
 #include "search/best_schedule.h"
 
@@ -47,8 +49,12 @@ inline constexpr std::uint64_t kPlanRetimeShare = 50;
 // The effort for small forests planned many times a frame: the beam search alone (width 64).
 BestScheduleOptions FinePlanEffort(std::uint64_t seed);
 
-// The best schedule BestSchedule(tree, PlanEffort(seed)) finds, memoised (thread-safe).
+// The best schedule BestSchedule(tree, PlanEffort(seed, tree)) finds, memoised (thread-safe).
 std::vector<CellId> PlanFor(const CellTree& tree, std::uint64_t seed);
+// The same plan, shared through `cache` (scheduling/plan_cache.h; null: PlanFor's own): made
+// by PlanFor, or searched again when the cache's memo is off.
+std::shared_ptr<const std::vector<CellId>> SharedPlan(PlanCache* cache, const CellTree& tree,
+                                                      std::uint64_t seed);
 
 class BestOracleScheduler : public FollowingScheduler {
  public:

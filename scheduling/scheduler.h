@@ -56,6 +56,8 @@ struct QueueView {
                       std::optional<CellId> loaded = std::nullopt);
 };
 
+class PlanCache;  // scheduling/plan_cache.h
+
 // What a scheduler is told at the start of each frame.
 struct FrameInfo {
   std::size_t frame_index = 0;
@@ -75,6 +77,10 @@ struct FrameInfo {
   // (level.NAME.cells; the nearest such level): per cell of the grid, the board cell holding
   // it; null when every level holds the grid's cells.
   const std::vector<CellId>* board_cell_of = nullptr;
+  // Where what BeginFrame computes from earlier trees is shared with the other configurations
+  // replayed on this frame (scheduling/plan_cache.h; docs/design.md §5 "Sharing plans"); null:
+  // the scheduler computes it alone.
+  PlanCache* plans = nullptr;
 };
 // The board cell of every cell of frame.previous (not null): FrameInfo::board_cell_of, or
 // each cell its own when every level holds the grid's cells.
