@@ -69,7 +69,7 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   cost_ = {};
   stand_in_.reset();
   plan_.clear();
-  used_.clear();
+  used_.Reset(0);
   cursor_ = 0;
   due_.clear();
   if (predicted_ == nullptr) return;
@@ -134,7 +134,7 @@ void AdaptiveScheduler::SetPlan(std::vector<CellId> plan, const CellTree* planne
 void AdaptiveScheduler::Install(std::vector<CellId> plan, std::vector<std::uint32_t> due) {
   due_ = std::move(due);
   plan_ = std::move(plan);
-  used_.assign(plan_.size(), false);
+  used_.Reset(plan_.size());
   cursor_ = 0;
   remaining_.assign(cells_, 0);
   for (CellId c : plan_) ++remaining_[c.value()];
@@ -189,9 +189,10 @@ std::uint32_t AdaptiveScheduler::DueAt(CellId c) const {
 }
 
 std::size_t AdaptiveScheduler::Find(const QueueView& queues) const {
-  for (std::size_t i = cursor_; i < plan_.size(); ++i) {
+  // Entries used up are passed without a look (UnusedEntries); each entry looked at is a step.
+  for (std::size_t i = used_.From(cursor_); i < plan_.size(); i = used_.From(i + 1)) {
     ++cost_.steps;
-    if (!used_[i] && queues.has_work(plan_[i]) && DueAt(plan_[i]) <= i) return i;
+    if (queues.has_work(plan_[i]) && DueAt(plan_[i]) <= i) return i;
   }
   return plan_.size();
 }
@@ -268,11 +269,11 @@ std::optional<CellId> AdaptiveScheduler::Next(const QueueView& queues) {
     found = Find(queues);
   }
   // Entries before the one taken: used up, unless another processor works their cell.
-  for (std::size_t i = cursor_; i < found; ++i) {
-    if (!used_[i] && !queues.busy(plan_[i])) Use(i);
+  for (std::size_t i = used_.From(cursor_); i < found; i = used_.From(i + 1)) {
+    if (!queues.busy(plan_[i])) Use(i);
   }
   if (found < plan_.size()) Use(found);
-  while (cursor_ < plan_.size() && used_[cursor_]) ++cursor_;
+  cursor_ = used_.From(cursor_);
   if (found < plan_.size()) return plan_[found];
   last_how_ = 3;
   return MostQueuedCell(queues);
@@ -293,7 +294,7 @@ std::optional<CellId> AdaptiveScheduler::Shallowest(const QueueView& queues) con
 }
 
 void AdaptiveScheduler::Use(std::size_t i) {
-  used_[i] = true;
+  used_.Use(i);
   --remaining_[plan_[i].value()];
 }
 

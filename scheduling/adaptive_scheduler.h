@@ -116,7 +116,7 @@ class AdaptiveScheduler : public Scheduler {
   std::shared_ptr<const StandIns> stand_in_;
 
   std::vector<CellId> plan_;
-  std::vector<bool> used_;
+  UnusedEntries used_;
   std::vector<std::uint32_t> remaining_;  // per cell: entries of plan_ not used up
   std::size_t cursor_ = 0;
   std::vector<std::uint32_t> due_;  // per predicted node: its entry in plan_, or kNever

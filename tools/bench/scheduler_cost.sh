@@ -4,7 +4,8 @@
 # count, Max Work first and then every scheduler `raycell replay --help` lists (auto included),
 # one replay after another (never two at once), each timed with /usr/bin/time. Prints a table:
 # scheduler, processors, cells (of the trace's grid), wall s, the ratio to Max Work's wall time
-# of the same (trace, processors), and peak RSS in MB. The replay's own results go to a scratch
+# of the same (trace, processors), CPU s (user + system) and its ratio to Max Work's (on a
+# shared machine the wall time also measures the other processes), and peak RSS in MB. The replay's own results go to a scratch
 # file and are dropped (their fetches are not what this measures).
 #
 # Usage: tools/bench/scheduler_cost.sh [TRACE ...]
@@ -44,27 +45,28 @@ cells_of() {
   echo "${n:-?}"
 }
 
-# Runs one replay; prints "wall_s peak_mb".
+# Runs one replay; prints "wall_s cpu_s peak_mb".
 run() {
   local trace=$1 scheduler=$2 p=$3
-  "${prefix[@]}" /usr/bin/time -f '%e %M' -o "$work/time" "$raycell" replay "$trace" \
+  "${prefix[@]}" /usr/bin/time -f '%e %U %S %M' -o "$work/time" "$raycell" replay "$trace" \
     --scheduler "$scheduler" --set "processors.count=$p" --format csv --quiet \
     --out "$work/out.csv" || { echo "replay failed: $scheduler, $p processors, $trace" >&2; exit 1; }
-  awk '{printf "%s %.0f\n", $1, $2 / 1024}' "$work/time"
+  awk '{printf "%s %.2f %.0f\n", $1, $2 + $3, $4 / 1024}' "$work/time"
 }
 
-printf '%-22s %10s %6s %8s %8s %8s   %s\n' scheduler processors cells wall_s ratio peak_MB trace
+row='%-22s %10s %6s %8.1f %8.2f %8.1f %8.2f %8s   %s\n'
+printf '%-22s %10s %6s %8s %8s %8s %8s %8s   %s\n' scheduler processors cells wall_s ratio \
+  cpu_s ratio peak_MB trace
 for trace in "$@"; do
   cells=$(cells_of "$trace")
   for p in $processors; do
-    read -r base base_mb < <(run "$trace" maxwork "$p")
-    printf '%-22s %10s %6s %8.1f %8.2f %8s   %s\n' maxwork "$p" "$cells" "$base" 1 "$base_mb" \
-      "$(basename "$trace")"
+    read -r base base_cpu base_mb < <(run "$trace" maxwork "$p")
+    printf "$row" maxwork "$p" "$cells" "$base" 1 "$base_cpu" 1 "$base_mb" "$(basename "$trace")"
     for s in "${schedulers[@]}"; do
       [ "$s" = maxwork ] && continue
-      read -r wall mb < <(run "$trace" "$s" "$p")
-      printf '%-22s %10s %6s %8.1f %8.2f %8s   %s\n' "$s" "$p" "$cells" "$wall" \
-        "$(echo "$wall / $base" | bc -l)" "$mb" "$(basename "$trace")"
+      read -r wall cpu mb < <(run "$trace" "$s" "$p")
+      printf "$row" "$s" "$p" "$cells" "$wall" "$(echo "$wall / $base" | bc -l)" "$cpu" \
+        "$(echo "$cpu / $base_cpu" | bc -l)" "$mb" "$(basename "$trace")"
     done
   done
 done
