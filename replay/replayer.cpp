@@ -752,6 +752,7 @@ FrameInfo MakeFrameInfo(const FrameTrees& frame, const ReplayConfig& config,
   info.previous = frame.previous;
   info.cells = frame.cells;
   info.before_previous = frame.before_previous;
+  info.plans = frame.plans;
   info.fetch_samples = &fetch_samples;
   info.processors = config.processors.count;
   if (units != nullptr) {

@@ -58,6 +58,7 @@ struct FrameTrees {
   const CellTree* previous = nullptr;  // the previous frame's tree; null for frame 0
   std::uint32_t cells = 0;             // cells of the grid; every tree's cell_count() <= cells
   const CellTree* before_previous = nullptr;  // frame i-2's tree, for history 2; else null
+  PlanCache* plans = nullptr;                 // FrameInfo::plans (null: none shared)
 };
 
 // The FrameInfo a replay tells `scheduler` (BeginFrame), made here and nowhere else: `frame`'s

@@ -157,7 +157,7 @@ const LoadedFrame* FrameWalker::Next() {
 ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& header,
                                const ReplayConfig& config, Scheduler& scheduler,
                                std::uint32_t sample_every, ReplayObserver* observer,
-                               MemoryState* memory, const MemoryUnits* units) {
+                               MemoryState* memory, const MemoryUnits* units, PlanCache* plans) {
   const bool per_ray = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay;
   const WorkGraph* work = per_ray ? frame.segments.get() : frame.nodes.get();
   RAYCELL_CHECK(work != nullptr);  // the walker was asked for this granularity
@@ -172,7 +172,7 @@ ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& head
       previous && frame.before_previous && sub.SameCells(frame.index, frame.index - 2, cells)
           ? frame.before_previous.get()
           : nullptr;
-  const FrameTrees info{frame.index, frame.tree.get(), previous, cells, before};
+  const FrameTrees info{frame.index, frame.tree.get(), previous, cells, before, plans};
   ReplayResult r = ReplayFrame(*work, frame.footprints ? *frame.footprints : header.footprints,
                                config, scheduler, info, frame.bound, observer, memory, units);
   ScaleBack(r, sample_every, config.processors.count);
@@ -270,12 +270,18 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
     const std::vector<std::size_t>& run = frame->warm_up ? warm : order;
     // A warm-up frame is not watched: the observer sees the frames asked for.
     ReplayObserver* observer = frame->warm_up ? nullptr : options.observer;
+    // This frame's plans: one cache for every configuration, or one each (searched again).
+    PlanCache shared(true);
+    std::vector<std::unique_ptr<PlanCache>> own(options.share_plans ? 0 : distinct.size());
+    for (auto& p : own) p = std::make_unique<PlanCache>(false);
     pool.ParallelFor(run.size(), [&](std::size_t n) {
       const std::size_t d = run[n];
-      distinct_results[d] =
-          ReplayLoadedFrame(*frame, header, distinct[d], *schedulers[d], options.sample_every,
-                            observer, memory[d].get(), &units[d]);
+      distinct_results[d] = ReplayLoadedFrame(
+          *frame, header, distinct[d], *schedulers[d], options.sample_every, observer,
+          memory[d].get(), &units[d], options.share_plans ? &shared : own[d].get());
     });
+    stats.plans += shared.made();
+    for (const auto& p : own) stats.plans += p->made();
     if (frame->warm_up) {
       if (options.progress) options.progress(double(walked) / double(walker.walked()));
       continue;

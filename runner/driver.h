@@ -18,6 +18,7 @@
 #include "replay/level_units.h"
 #include "replay/replayer.h"
 #include "replay/work.h"
+#include "scheduling/plan_cache.h"
 #include "traces/trace_reader.h"
 
 namespace raycell {
@@ -93,10 +94,13 @@ class FrameWalker {
 // scaled back when the frame is sampled (see ReplayTrace), numbered.
 // `memory`: as ReplayFrame takes it (null: cold).
 // `units`: the levels' units (LevelUnitsOf; null: every level holds the cells).
+// `plans`: where the scheduler's plans for this frame are shared with other configurations
+// (FrameInfo::plans; null: none).
 ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& header,
                                const ReplayConfig& config, Scheduler& scheduler,
                                std::uint32_t sample_every = 1, ReplayObserver* observer = nullptr,
-                               MemoryState* memory = nullptr, const MemoryUnits* units = nullptr);
+                               MemoryState* memory = nullptr, const MemoryUnits* units = nullptr,
+                               PlanCache* plans = nullptr);
 
 // What a frame's result cannot depend on, removed: granularity resolved (EffectiveGranularity),
 // the seed unless the scheduler uses it (SchedulerEntry::seeded: random and the planners),
@@ -119,11 +123,16 @@ struct ReplayFramesOptions {
   // The caller ran CheckReplay on every configuration for this trace (a sweep, for all its
   // combinations before its first block); else ReplayFrames runs it, once per configuration.
   bool checked = false;
+  // Plans shared across the configurations (docs/design.md §5 "Sharing plans"): one PlanCache
+  // per frame for all of them, planning through the process-wide memo; false: one per
+  // configuration and frame, each plan searched again (the results are the same: a test).
+  bool share_plans = true;
 };
 
 struct ReplayFramesStats {
   std::size_t frames = 0;    // frames walked
   std::size_t distinct = 0;  // canonical configurations replayed per frame
+  std::size_t plans = 0;     // values the schedulers' PlanCaches made, over the frames
 };
 
 // Replays every configuration on every frame of `frame_indices`, each frame loaded once (see

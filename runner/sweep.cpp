@@ -191,6 +191,7 @@ class Run {
     ReplayFramesOptions o;
     o.jobs = options_.jobs;
     o.checked = true;  // RunSweep checked every combination
+    o.share_plans = options_.share_plans;
     last_checkpoint_ = std::chrono::steady_clock::now();
     const ReplayFramesStats stats = ReplayFrames(
         reader_, frames, b.configs, o,
@@ -206,6 +207,7 @@ class Run {
           return !stopped_;
         });
     outcome_.distinct += stats.distinct;
+    outcome_.plans += stats.plans;
     if (stopped_) return;
     for (std::size_t k = 0; k < b.indices.size() && !stopped_; ++k) {
       FinishTotal(b.configs[k].processors.count, &b.totals[k]);

@@ -23,6 +23,8 @@
 // (ReplayFrames): each frame is decoded and its trees and work graphs built once, every
 // combination of the block is replayed on it (on --jobs threads; combinations with equal
 // canonical configurations once, CanonicalConfig) and added to that combination's totals.
+// What the schedulers compute from earlier frames' trees (plans, unions, ...) is made once per
+// frame for every combination (SweepOptions::share_plans; scheduling/plan_cache.h).
 // When the block's last frame is done its rows are appended. Memory: one frame (its rays
 // until its work graphs are built, the work graphs, two Cell Trees) plus, per combination,
 // its totals and scheduler: a few hundred bytes.
@@ -122,6 +124,9 @@ struct SweepOptions {
   double checkpoint_seconds = 1.0;
   // Combinations per block; tests use small blocks to see several.
   std::size_t block = kSweepBlock;
+  // ReplayFramesOptions::share_plans: each frame's plans made once for every combination
+  // (false: per combination, for the test that they give the same rows).
+  bool share_plans = true;
 };
 
 struct SweepOutcome {
@@ -131,6 +136,10 @@ struct SweepOutcome {
   // Canonical configurations replayed (CanonicalConfig), summed over the blocks run: fewer
   // than the combinations when some can only differ in what no frame's result depends on.
   std::size_t distinct = 0;
+  // Values the schedulers computed from earlier frames' trees (plans, unions, ...: PlanCache),
+  // summed over the frames and blocks run: once per frame with plan sharing, per combination
+  // without.
+  std::size_t plans = 0;
   bool complete = false;  // OUT written (false: stopped, OUT.partial left)
 };
 

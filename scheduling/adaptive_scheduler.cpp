@@ -33,6 +33,11 @@ StandIns StandInsOf(const CellTree& tree) {
   return s;
 }
 
+std::shared_ptr<const StandIns> SharedStandIns(PlanCache* cache, const CellTree& tree) {
+  return Shared<StandIns>(cache, PlanKey(kStandIns, {TreeKey(tree)}),
+                          [&] { return StandInsOf(tree); });
+}
+
 NodeId MatchNode(const CellTree& tree, const StandIns& stand_ins, NodeId parent, CellId parent_cell,
                  CellId cell, bool* stand_in) {
   if (parent != kNoNode) {
@@ -49,8 +54,8 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   own_.reset();
   predicted_ = frame.previous;
   if (frame.previous != nullptr && frame.before_previous != nullptr) {
-    own_ = UnionTree({frame.before_previous, frame.previous});
-    predicted_ = &*own_;
+    own_ = SharedUnion(frame.plans, *frame.before_previous, *frame.previous);
+    predicted_ = own_.get();
   }
   match_.assign(1, predicted_ != nullptr ? kRootNode : kNoNode);
   guess_.assign(1, false);
@@ -62,26 +67,45 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   replans_ = 0;
   last_how_ = 0;
   cost_ = {};
-  stand_in_.clear();
+  stand_in_.reset();
   plan_.clear();
-  used_.clear();
+  used_.Reset(0);
   cursor_ = 0;
   due_.clear();
   if (predicted_ == nullptr) return;
   const CellTree& t = *predicted_;
-  stand_in_ = StandInsOf(t);
+  stand_in_ = SharedStandIns(frame.plans, t);
   cost_.steps += t.size();
-  SetPlan(PlanFor(t, seed_), &t, nullptr);
+  // The plan and its run on the predicted tree: the same for every configuration of the frame.
+  struct Start {
+    std::shared_ptr<const std::vector<CellId>> plan;
+    std::vector<std::uint32_t> due;
+    std::uint64_t steps = 0;
+  };
+  const std::uint32_t cells = cells_;
+  const std::uint64_t seed = seed_;
+  const std::shared_ptr<const Start> start =
+      Shared<Start>(frame.plans, PlanKey(kAdaptiveStart, {TreeKey(t), seed, cells}), [&] {
+        Start s;
+        s.plan = SharedPlan(frame.plans, t, seed);
+        s.due = DueOf(*s.plan, &t, nullptr, t.size(), cells, &s.steps);
+        return s;
+      });
+  cost_.steps += start->steps;
+  Install(*start->plan, start->due);
 }
 
-void AdaptiveScheduler::SetPlan(std::vector<CellId> plan, const CellTree* planned,
-                                const std::vector<NodeId>* nodes) {
-  due_.assign(predicted_->size(), kNever);
+std::vector<std::uint32_t> AdaptiveScheduler::DueOf(const std::vector<CellId>& plan,
+                                                    const CellTree* planned,
+                                                    const std::vector<NodeId>* nodes,
+                                                    std::size_t predicted, std::uint32_t cells,
+                                                    std::uint64_t* steps) {
+  std::vector<std::uint32_t> due(predicted, kNever);
   if (planned != nullptr) {
     // The run of docs/design.md §1 on `planned`: each entry processes every node of its cell
     // whose parent is done.
     const CellTree& f = *planned;
-    std::vector<std::vector<NodeId>> ready(cells_);
+    std::vector<std::vector<NodeId>> ready(cells);
     for (NodeId c = f.first_child(kRootNode); c != kNoNode; c = f.next_sibling(c)) {
       ready[f.cell(c).value()].push_back(c);
     }
@@ -89,16 +113,28 @@ void AdaptiveScheduler::SetPlan(std::vector<CellId> plan, const CellTree* planne
       std::vector<NodeId> now;
       now.swap(ready[plan[i].value()]);
       for (NodeId n : now) {
-        due_[nodes == nullptr ? n.index() : (*nodes)[n.index() - 1].index()] = std::uint32_t(i);
+        due[nodes == nullptr ? n.index() : (*nodes)[n.index() - 1].index()] = std::uint32_t(i);
         for (NodeId c = f.first_child(n); c != kNoNode; c = f.next_sibling(c)) {
           ready[f.cell(c).value()].push_back(c);
         }
       }
-      cost_.steps += 1 + now.size();
+      *steps += 1 + now.size();
     }
   }
+  return due;
+}
+
+void AdaptiveScheduler::SetPlan(std::vector<CellId> plan, const CellTree* planned,
+                                const std::vector<NodeId>* nodes) {
+  std::vector<std::uint32_t> due =
+      DueOf(plan, planned, nodes, predicted_->size(), cells_, &cost_.steps);
+  Install(std::move(plan), std::move(due));
+}
+
+void AdaptiveScheduler::Install(std::vector<CellId> plan, std::vector<std::uint32_t> due) {
+  due_ = std::move(due);
   plan_ = std::move(plan);
-  used_.assign(plan_.size(), false);
+  used_.Reset(plan_.size());
   cursor_ = 0;
   remaining_.assign(cells_, 0);
   for (CellId c : plan_) ++remaining_[c.value()];
@@ -123,7 +159,7 @@ void AdaptiveScheduler::Arrived(const Arrival& a) {
     bool guess = guess_[a.parent];  // a match below a stand-in is a guess too
     if (predicted_ != nullptr) {
       bool stand_in = false;
-      m = MatchNode(*predicted_, stand_in_, match_[a.parent], node_cell_[a.parent], a.cell,
+      m = MatchNode(*predicted_, *stand_in_, match_[a.parent], node_cell_[a.parent], a.cell,
                     &stand_in);
       guess = guess || stand_in;
     }
@@ -153,9 +189,10 @@ std::uint32_t AdaptiveScheduler::DueAt(CellId c) const {
 }
 
 std::size_t AdaptiveScheduler::Find(const QueueView& queues) const {
-  for (std::size_t i = cursor_; i < plan_.size(); ++i) {
+  // Entries used up are passed without a look (UnusedEntries); each entry looked at is a step.
+  for (std::size_t i = used_.From(cursor_); i < plan_.size(); i = used_.From(i + 1)) {
     ++cost_.steps;
-    if (!used_[i] && queues.has_work(plan_[i]) && DueAt(plan_[i]) <= i) return i;
+    if (queues.has_work(plan_[i]) && DueAt(plan_[i]) <= i) return i;
   }
   return plan_.size();
 }
@@ -232,11 +269,11 @@ std::optional<CellId> AdaptiveScheduler::Next(const QueueView& queues) {
     found = Find(queues);
   }
   // Entries before the one taken: used up, unless another processor works their cell.
-  for (std::size_t i = cursor_; i < found; ++i) {
-    if (!used_[i] && !queues.busy(plan_[i])) Use(i);
+  for (std::size_t i = used_.From(cursor_); i < found; i = used_.From(i + 1)) {
+    if (!queues.busy(plan_[i])) Use(i);
   }
   if (found < plan_.size()) Use(found);
-  while (cursor_ < plan_.size() && used_[cursor_]) ++cursor_;
+  cursor_ = used_.From(cursor_);
   if (found < plan_.size()) return plan_[found];
   last_how_ = 3;
   return MostQueuedCell(queues);
@@ -257,7 +294,7 @@ std::optional<CellId> AdaptiveScheduler::Shallowest(const QueueView& queues) con
 }
 
 void AdaptiveScheduler::Use(std::size_t i) {
-  used_[i] = true;
+  used_.Use(i);
   --remaining_[plan_[i].value()];
 }
 

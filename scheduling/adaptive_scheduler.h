@@ -37,6 +37,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "scheduling/plan_cache.h"
 #include "scheduling/scheduler.h"
 
 namespace raycell {
@@ -49,6 +50,8 @@ inline std::uint64_t StandInKey(CellId parent, CellId cell) {
   return std::uint64_t{parent.value()} << 32 | cell.value();
 }
 StandIns StandInsOf(const CellTree& tree);
+// StandInsOf(tree), shared through `cache` (null: made here).
+std::shared_ptr<const StandIns> SharedStandIns(PlanCache* cache, const CellTree& tree);
 // The node of `tree` matching a queued node of `cell` whose parent matched `parent` (kNoNode:
 // no match) in `parent_cell`: the parent's child of that cell, else the stand-in (then
 // *stand_in is set), else kNoNode.
@@ -77,10 +80,15 @@ class AdaptiveScheduler : public Scheduler {
  private:
   static constexpr std::uint32_t kNever = ~std::uint32_t{0};
 
-  // Sets the plan and the due entry of every predicted node it processes when run on
-  // `planned` (null: none), whose node k + 1 is predicted node (*nodes)[k] (null: the
-  // predicted tree itself).
+  // The due entry of every predicted node (of `predicted` nodes) that `plan` processes when run
+  // on `planned` (null: none; kNever for the others), whose node k + 1 is predicted node
+  // (*nodes)[k] (null: the predicted tree itself); *steps counts the entries and nodes visited.
+  static std::vector<std::uint32_t> DueOf(const std::vector<CellId>& plan, const CellTree* planned,
+                                          const std::vector<NodeId>* nodes, std::size_t predicted,
+                                          std::uint32_t cells, std::uint64_t* steps);
+  // Sets the plan and the due entries (DueOf).
   void SetPlan(std::vector<CellId> plan, const CellTree* planned, const std::vector<NodeId>* nodes);
+  void Install(std::vector<CellId> plan, std::vector<std::uint32_t> due);
   // The earliest entry that work queued at `c` is due at (0: due now).
   std::uint32_t DueAt(CellId c) const;
   void RecomputeDue(CellId c);
@@ -102,13 +110,13 @@ class AdaptiveScheduler : public Scheduler {
 
   std::uint64_t seed_;
   std::uint32_t cells_ = 0;
-  std::optional<CellTree> own_;          // the union of the last two trees, when planned from it
+  std::shared_ptr<const CellTree> own_;  // the union of the last two trees, when planned from it
   const CellTree* predicted_ = nullptr;  // null: no earlier frame (Max Work)
-  // Stand-ins of the predicted tree.
-  StandIns stand_in_;
+  // Stand-ins of the predicted tree (shared, FrameInfo::plans).
+  std::shared_ptr<const StandIns> stand_in_;
 
   std::vector<CellId> plan_;
-  std::vector<bool> used_;
+  UnusedEntries used_;
   std::vector<std::uint32_t> remaining_;  // per cell: entries of plan_ not used up
   std::size_t cursor_ = 0;
   std::vector<std::uint32_t> due_;  // per predicted node: its entry in plan_, or kNever

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <numeric>
+#include <utility>
 
 #include "base/check.h"
 #include "scheduling/best_scheduler.h"
@@ -149,34 +150,18 @@ void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
   fetch_samples_ = frame.fetch_samples;
   reason_.clear();
   plan_.clear();
-  if (options_.plan && frame.previous != nullptr) plan_ = PlanFor(*frame.previous, seed_);
+  if (options_.plan && frame.previous != nullptr) {
+    plan_ = *SharedPlan(frame.plans, *frame.previous, seed_);
+  }
   if (adaptive_) adaptive_->BeginFrame(frame);
   // What frame i-1's tree says of each cell: its work, samples per visit, where rays go next.
-  work_.assign(cells_, 0.0);
-  samples_per_visit_.assign(cells_, 0.0);
-  flow_.clear();
-  std::vector<double> visits(cells_, 0.0);
-  if (frame.previous != nullptr) {
-    const CellTree& t = *frame.previous;
-    if (options_.affinity) flow_.assign(std::size_t{cells_} * cells_, 0.0);
-    for (const NodeId n : t.nodes()) {
-      const std::uint32_t c = t.cell(n).value();
-      work_[c] += double(t.samples(n));
-      visits[c] += double(t.visits(n));
-      const NodeId parent = t.parent(n);
-      if (options_.affinity && parent != kRootNode) {
-        flow_[std::size_t{t.cell(parent).value()} * cells_ + c] += double(t.enter(n));
-      }
-    }
-    for (std::uint32_t c = 0; c < cells_; ++c) {
-      if (visits[c] > 0) samples_per_visit_[c] = work_[c] / visits[c];
-    }
-    for (std::uint32_t from = 0; from < cells_ && !flow_.empty(); ++from) {
-      double* row = flow_.data() + std::size_t{from} * cells_;
-      const double out = std::accumulate(row, row + cells_, 0.0);
-      if (out > 0) std::for_each(row, row + cells_, [out](double& x) { x /= out; });
-    }
-  }
+  const bool affinity = options_.affinity;
+  const std::uint32_t cells = cells_;
+  stats_ = Shared<TreeStats>(frame.plans,
+                             PlanKey(kTreeStats, {frame.previous ? TreeKey(*frame.previous) : 0,
+                                                  frame.previous != nullptr, cells, affinity}),
+                             [&] { return StatsOf(frame.previous, cells, affinity); });
+  const std::vector<double>& work = stats_->work;
   // The cells over the processors: list scheduling, largest work first, each to the
   // processor with the least work so far (then the fewest cells, then the lowest number).
   const std::uint32_t p = options_.partition ? processors_ : 1;
@@ -185,7 +170,7 @@ void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
     std::vector<std::uint32_t> order(cells_);
     std::iota(order.begin(), order.end(), 0u);
     std::stable_sort(order.begin(), order.end(),
-                     [&](std::uint32_t a, std::uint32_t b) { return work_[a] > work_[b]; });
+                     [&](std::uint32_t a, std::uint32_t b) { return work[a] > work[b]; });
     std::vector<double> load(p, 0.0);
     std::vector<std::uint32_t> count(p, 0);
     for (const std::uint32_t c : order) {
@@ -194,7 +179,7 @@ void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
         if (load[k] < load[best] || (load[k] == load[best] && count[k] < count[best])) best = k;
       }
       owner_[c] = best;
-      load[best] += work_[c];
+      load[best] += work[c];
       ++count[best];
     }
   }
@@ -208,22 +193,81 @@ void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
     node_cell_.assign(1, kNoCell);
     level_.assign(cells_, 0);
     cost_ = {};
-    height_.clear();
-    stand_in_.clear();
-    if (previous_ != nullptr) SetHeights(*previous_);
+    heights_.reset();
+    if (previous_ != nullptr) SetHeights(frame);
   }
 }
 
-void BalancedScheduler::SetHeights(const CellTree& t) {
-  // A node's children are numbered after it, so one pass from the last node up.
-  height_.assign(t.size(), 0);
-  for (std::size_t i = t.size(); i-- > 1;) {
-    const NodeId n(static_cast<std::uint32_t>(i));
-    height_[i] += 1;
+BalancedScheduler::TreeStats BalancedScheduler::StatsOf(const CellTree* previous,
+                                                        std::uint32_t cells, bool affinity) {
+  TreeStats s;
+  s.work.assign(cells, 0.0);
+  s.samples_per_visit.assign(cells, 0.0);
+  s.flow_begin.assign(std::size_t{cells} + 1, 0);
+  if (previous == nullptr) return s;
+  const CellTree& t = *previous;
+  std::vector<double> visits(cells, 0.0);
+  // Rays entering a node of `to` from its parent's cell `from`, in node order.
+  struct Enter {
+    std::uint32_t from, to;
+    double rays;
+  };
+  std::vector<Enter> enters;
+  for (const NodeId n : t.nodes()) {
+    const std::uint32_t c = t.cell(n).value();
+    s.work[c] += double(t.samples(n));
+    visits[c] += double(t.visits(n));
     const NodeId parent = t.parent(n);
-    height_[parent.index()] = std::max(height_[parent.index()], height_[i]);
+    if (affinity && parent != kRootNode) {
+      enters.push_back({t.cell(parent).value(), c, double(t.enter(n))});
+    }
   }
-  stand_in_ = StandInsOf(t);
+  for (std::uint32_t c = 0; c < cells; ++c) {
+    if (visits[c] > 0) s.samples_per_visit[c] = s.work[c] / visits[c];
+  }
+  // Each (from, to) summed in node order, each row's total over increasing `to`: the sums a
+  // dense cells x cells table would hold, so the shares are the same doubles.
+  std::stable_sort(enters.begin(), enters.end(), [](const Enter& a, const Enter& b) {
+    return a.from != b.from ? a.from < b.from : a.to < b.to;
+  });
+  for (std::size_t k = 0; k < enters.size();) {
+    const Enter& e = enters[k];
+    double sum = 0.0;
+    for (; k < enters.size() && enters[k].from == e.from && enters[k].to == e.to; ++k) {
+      sum += enters[k].rays;
+    }
+    s.flow.emplace_back(e.to, sum);
+    ++s.flow_begin[e.from + 1];
+  }
+  for (std::uint32_t c = 0; c < cells; ++c) s.flow_begin[c + 1] += s.flow_begin[c];
+  for (std::uint32_t from = 0; from < cells; ++from) {
+    const auto row = s.flow.begin() + s.flow_begin[from];
+    const auto end = s.flow.begin() + s.flow_begin[from + 1];
+    double out = 0.0;
+    for (auto it = row; it != end; ++it) out += it->second;
+    if (out > 0) {
+      for (auto it = row; it != end; ++it) it->second /= out;
+    }
+  }
+  return s;
+}
+
+void BalancedScheduler::SetHeights(const FrameInfo& frame) {
+  const CellTree& t = *frame.previous;
+  PlanCache* cache = frame.plans;
+  heights_ = Shared<Heights>(cache, PlanKey(kHeights, {TreeKey(t)}), [&] {
+    Heights h;
+    // A node's children are numbered after it, so one pass from the last node up.
+    h.height.assign(t.size(), 0);
+    for (std::size_t i = t.size(); i-- > 1;) {
+      const NodeId n(static_cast<std::uint32_t>(i));
+      h.height[i] += 1;
+      const NodeId parent = t.parent(n);
+      h.height[parent.index()] = std::max(h.height[parent.index()], h.height[i]);
+    }
+    h.stand_in = SharedStandIns(cache, t);
+    return h;
+  });
   cost_.steps += 2 * t.size();
 }
 
@@ -235,7 +279,7 @@ void BalancedScheduler::Arrived(const Arrival& a) {
     NodeId m = kNoNode;
     if (previous_ != nullptr) {
       bool stand_in = false;
-      m = MatchNode(*previous_, stand_in_, match_[a.parent], node_cell_[a.parent], a.cell,
+      m = MatchNode(*previous_, *heights_->stand_in, match_[a.parent], node_cell_[a.parent], a.cell,
                     &stand_in);
     }
     match_.push_back(m);
@@ -244,7 +288,9 @@ void BalancedScheduler::Arrived(const Arrival& a) {
   }
   RAYCELL_CHECK_LT(a.node, match_.size());
   const NodeId m = match_[a.node];
-  if (m != kNoNode) level_[a.cell.value()] = std::max(level_[a.cell.value()], height_[m.index()]);
+  if (m != kNoNode) {
+    level_[a.cell.value()] = std::max(level_[a.cell.value()], heights_->height[m.index()]);
+  }
 }
 
 void BalancedScheduler::Taken(CellId cell) {
@@ -255,8 +301,8 @@ void BalancedScheduler::Taken(CellId cell) {
 std::uint64_t BalancedScheduler::Bytes() const {
   // As a hardware block would keep it: per node of frame i-1's tree its height (4 bytes), per
   // queued node its match and cell (8), per cell its level (4).
-  return 4 * std::uint64_t{height_.size()} + 8 * std::uint64_t{match_.size()} +
-         4 * std::uint64_t{level_.size()};
+  return 4 * std::uint64_t{heights_ ? heights_->height.size() : 0} +
+         8 * std::uint64_t{match_.size()} + 4 * std::uint64_t{level_.size()};
 }
 
 Scheduler::DecisionCost BalancedScheduler::Cost() const {
@@ -298,16 +344,21 @@ QueueView BalancedScheduler::Own(const QueueView& queues) const {
 template <typename Take>
 std::optional<CellId> BalancedScheduler::Best(const QueueView& queues, const std::uint64_t* queued,
                                               Take take) const {
-  const double* flow = nullptr;
-  if (!flow_.empty() && queues.loaded && queues.loaded->value() < cells_) {
-    flow = flow_.data() + std::size_t{queues.loaded->value()} * cells_;
+  // The loaded cell's row of shares (empty: no affinity), read in step with c.
+  const std::pair<std::uint32_t, double>* flow = nullptr;
+  const std::pair<std::uint32_t, double>* flow_end = nullptr;
+  if (options_.affinity && stats_ && queues.loaded && queues.loaded->value() < cells_) {
+    flow = stats_->flow.data() + stats_->flow_begin[queues.loaded->value()];
+    flow_end = stats_->flow.data() + stats_->flow_begin[queues.loaded->value() + 1];
   }
   std::optional<CellId> best;
   double best_score = 0;
   for (std::uint32_t c = 0; c < queues.cells; ++c) {
     const std::uint64_t q = queued[c];
     if (q == 0 || !take(c)) continue;
-    const double score = double(q) * (1.0 + (flow ? flow[c] : 0.0));
+    while (flow != flow_end && flow->first < c) ++flow;
+    const double share = flow != flow_end && flow->first == c ? flow->second : 0.0;
+    const double score = double(q) * (1.0 + share);
     if (!best || score > best_score) best = CellId(c), best_score = score;
   }
   return best;
@@ -365,9 +416,10 @@ std::optional<CellId> BalancedScheduler::Choose(const QueueView& queues,
 }
 
 bool BalancedScheduler::TooSmall(const QueueView& queues, CellId c) const {
-  if (fetch_samples_ == nullptr || samples_per_visit_[c.value()] <= 0) return false;
+  const double per_visit = stats_->samples_per_visit[c.value()];
+  if (fetch_samples_ == nullptr || per_visit <= 0) return false;
   if (queues.loaded == c) return false;  // in the cache: no fetch
-  const double work = double(Queued(queues)[c.value()]) * samples_per_visit_[c.value()];
+  const double work = double(Queued(queues)[c.value()]) * per_visit;
   return work < kPostponeFactor * (*fetch_samples_)[c.value()];
 }
 

@@ -52,7 +52,7 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "scheduling/adaptive_scheduler.h"
@@ -122,7 +122,7 @@ class BalancedScheduler : public Scheduler {
   // of `plan` (the plan's choice; none: any); ties to the most queued rays, then the lowest
   // number.
   std::optional<CellId> Critical(const QueueView& queues, std::optional<CellId> plan) const;
-  void SetHeights(const CellTree& previous);
+  void SetHeights(const FrameInfo& frame);
   // The bytes of the critical rule's state now (DecisionCost::bytes keeps the largest).
   std::uint64_t Bytes() const;
 
@@ -132,11 +132,22 @@ class BalancedScheduler : public Scheduler {
   std::uint32_t processors_ = 1;  // FrameInfo::processors
   std::vector<CellId> plan_;
   const std::vector<double>* fetch_samples_ = nullptr;
-  std::vector<double> samples_per_visit_;  // per cell, from frame i-1's tree; 0: unknown
-  std::vector<double> work_;               // per cell: samples in frame i-1's tree
-  // Affinity: flow_[from * cells + to], rays entering nodes of `to` from nodes of `from`,
-  // as shares of what leaves `from`.
-  std::vector<double> flow_;
+  // What frame i-1's tree says of each cell (shared by the configurations of a frame,
+  // FrameInfo::plans): per cell its samples and samples per visit (0: unknown); for affinity,
+  // per cell `from` the cells `to` its rays enter, with the share of what leaves `from` that
+  // enters nodes of `to` (a sparse row, increasing `to`: at most one entry per node).
+  struct TreeStats {
+    std::vector<double> work, samples_per_visit;
+    std::vector<std::uint32_t> flow_begin;  // row `from`: flow[flow_begin[from] .. [from + 1])
+    std::vector<std::pair<std::uint32_t, double>> flow;
+  };
+  static TreeStats StatsOf(const CellTree* previous, std::uint32_t cells, bool affinity);
+  std::shared_ptr<const TreeStats> stats_;
+  // Critical: per node of frame i-1's tree its height, and the tree's stand-ins (shared).
+  struct Heights {
+    std::vector<std::uint32_t> height;
+    std::shared_ptr<const StandIns> stand_in;
+  };
   // Each cell's processor and one follower per processor over the plan's entries of its
   // cells (one follower, owner 0 everywhere, without partition).
   std::vector<std::uint32_t> owner_;
@@ -148,8 +159,7 @@ class BalancedScheduler : public Scheduler {
   // cell) the first node with those cells (StandInKey); per queued node (Arrival::node) its
   // match (kNoNode: none) and cell; per cell the highest level of its queued nodes (0: none).
   const CellTree* previous_ = nullptr;
-  std::vector<std::uint32_t> height_;
-  std::unordered_map<std::uint64_t, NodeId> stand_in_;
+  std::shared_ptr<const Heights> heights_;
   std::vector<NodeId> match_;
   std::vector<CellId> node_cell_;
   std::vector<std::uint32_t> level_;

@@ -1,5 +1,6 @@
 #include "scheduling/best_scheduler.h"
 
+#include <algorithm>
 #include <deque>
 #include <map>
 #include <mutex>
@@ -83,16 +84,40 @@ BestScheduleOptions PlanEffort(std::uint64_t seed) {
   return o;
 }
 
+BestScheduleOptions PlanEffort(std::uint64_t seed, const CellTree& tree) {
+  BestScheduleOptions o = PlanEffort(seed);
+  const std::uint64_t nodes = std::max<std::uint64_t>(tree.node_count(), 1);
+  // The beam's first layer alone would narrow it below its width: no beam.
+  if (o.beam_width * nodes > o.beam_max_node_visits / std::max<std::uint64_t>(Bound(tree), 1)) {
+    o.beam_width = 0;
+  }
+  // The local search's re-timings, a pass over every node each: a share of its work limit.
+  o.local.max_retimes = std::max<std::uint64_t>(o.local.max_work / kPlanRetimeShare / nodes, 1);
+  return o;
+}
+
 namespace {
 
 // The tree's contents (cells and parents of every node) and the seed.
-std::uint64_t PlanKey(const CellTree& tree, std::uint64_t seed) {
+std::uint64_t MemoKey(const CellTree& tree, std::uint64_t seed) {
   Hash64 h;
   h.Add(seed);
   h.Add(tree.size());
   for (NodeId n : tree.nodes())
     h.Add(std::uint64_t{tree.cell(n).value()} << 32 | tree.parent(n).index());
   return h.Finish();
+}
+
+// The plan searched again, without the memo.
+std::vector<CellId> SearchPlan(const CellTree& tree, std::uint64_t seed) {
+  std::vector<CellId> plan = BestSchedule(tree, PlanEffort(seed, tree)).schedule;
+  RAYCELL_CHECK(IsFeasible(tree, plan));
+  return plan;
+}
+
+// PlanFor, or the plan searched again when `cache`'s memo is off.
+std::vector<CellId> PlanOf(const PlanCache* cache, const CellTree& tree, std::uint64_t seed) {
+  return cache == nullptr || cache->memo() ? PlanFor(tree, seed) : SearchPlan(tree, seed);
 }
 
 // A bounded memo of plans: the oldest is dropped past kCapacity entries.
@@ -129,25 +154,34 @@ PlanMemo& Memo() {
 }  // namespace
 
 std::vector<CellId> PlanFor(const CellTree& tree, std::uint64_t seed) {
-  const std::uint64_t key = PlanKey(tree, seed);
+  const std::uint64_t key = MemoKey(tree, seed);
   if (auto plan = Memo().Find(key)) return *plan;
-  std::vector<CellId> plan = BestSchedule(tree, PlanEffort(seed)).schedule;
-  RAYCELL_CHECK(IsFeasible(tree, plan));
+  std::vector<CellId> plan = SearchPlan(tree, seed);
   Memo().Add(key, plan);
   return plan;
 }
 
+std::shared_ptr<const std::vector<CellId>> SharedPlan(PlanCache* cache, const CellTree& tree,
+                                                      std::uint64_t seed) {
+  return Shared<std::vector<CellId>>(cache, PlanKey(kBestPlan, {TreeKey(tree), seed}),
+                                     [&] { return PlanOf(cache, tree, seed); });
+}
+
 void BestOracleScheduler::BeginFrame(const FrameInfo& frame) {
   RAYCELL_CHECK(frame.current != nullptr);
-  follower_.Reset(PlanFor(*frame.current, seed_), frame.cells);
+  follower_.Reset(*SharedPlan(frame.plans, *frame.current, seed_), frame.cells);
 }
 
 void CellTreeBestScheduler::BeginFrame(const FrameInfo& frame) {
   std::vector<CellId> plan;
   if (frame.previous != nullptr) {
-    plan = union_frames_ && frame.before_previous != nullptr
-               ? PlanFor(UnionTree({frame.before_previous, frame.previous}), seed_)
-               : PlanFor(*frame.previous, seed_);
+    if (union_frames_ && frame.before_previous != nullptr) {
+      const std::shared_ptr<const CellTree> both =
+          SharedUnion(frame.plans, *frame.before_previous, *frame.previous);
+      plan = *SharedPlan(frame.plans, *both, seed_);
+    } else {
+      plan = *SharedPlan(frame.plans, *frame.previous, seed_);
+    }
   }
   follower_.Reset(std::move(plan), frame.cells);
 }
@@ -167,9 +201,15 @@ void TwoLevelBestScheduler::BeginFrame(const FrameInfo& frame) {
   std::vector<CellId> plan;
   if (frame.previous != nullptr) {
     const std::uint64_t seed = seed_;
-    plan = TwoLevelSchedule(
-        *frame.previous, BoardCellOf(frame), [seed](const CellTree& t) { return PlanFor(t, seed); },
-        [seed](const CellTree& t) { return BestSchedule(t, FinePlanEffort(seed)).schedule; });
+    const std::vector<CellId> board = BoardCellOf(frame);
+    PlanCache* cache = frame.plans;
+    const std::uint64_t key =
+        PlanKey(kTwoLevelBestPlan, {TreeKey(*frame.previous), BoardKey(board), seed});
+    plan = *Shared<std::vector<CellId>>(cache, key, [&] {
+      return TwoLevelSchedule(
+          *frame.previous, board, [&](const CellTree& t) { return PlanOf(cache, t, seed); },
+          [seed](const CellTree& t) { return BestSchedule(t, FinePlanEffort(seed)).schedule; });
+    });
   }
   follower_.Reset(std::move(plan), frame.cells);
 }

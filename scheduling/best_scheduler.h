@@ -16,9 +16,11 @@
 // scheduler compute each frame's plan once, with the same result.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <vector>
 
+#include "scheduling/plan_cache.h"
 #include "scheduling/scheduler.h"
 #include "search/best_schedule.h"
 
@@ -30,14 +32,29 @@ extern const SchedulerEntry kCellTreeBestEntry;
 extern const SchedulerEntry kCellTreeUnionEntry;
 extern const SchedulerEntry kCellTree2LevelBestEntry;
 
-// The schedule search budget of the following schedulers.
+// The schedule search budget of the following schedulers, before it is fitted to a tree.
 BestScheduleOptions PlanEffort(std::uint64_t seed);
+
+// PlanEffort(seed) fitted to `tree` (docs/design.md §5 "Planners and PlanEffort"): the beam
+// search only when its full width fits in its work limit (64 x nodes x the maxGen bound, its
+// moves, within beam_max_node_visits; else it would run narrowed, and a narrow beam plans worse
+// than Peel on large trees), and the local search's re-timings of the whole schedule (a pass
+// over every node after each change and each deletion of an idle entry:
+// LocalSearchOptions::max_retimes) within 1/kPlanRetimeShare of its work limit. Trees of up to
+// a few thousand nodes plan as with PlanEffort(seed).
+BestScheduleOptions PlanEffort(std::uint64_t seed, const CellTree& tree);
+// The local search's re-timings: 1/50 of its work limit, in node visits (see PlanEffort).
+inline constexpr std::uint64_t kPlanRetimeShare = 50;
 
 // The effort for small forests planned many times a frame: the beam search alone (width 64).
 BestScheduleOptions FinePlanEffort(std::uint64_t seed);
 
-// The best schedule BestSchedule(tree, PlanEffort(seed)) finds, memoised (thread-safe).
+// The best schedule BestSchedule(tree, PlanEffort(seed, tree)) finds, memoised (thread-safe).
 std::vector<CellId> PlanFor(const CellTree& tree, std::uint64_t seed);
+// The same plan, shared through `cache` (scheduling/plan_cache.h; null: PlanFor's own): made
+// by PlanFor, or searched again when the cache's memo is off.
+std::shared_ptr<const std::vector<CellId>> SharedPlan(PlanCache* cache, const CellTree& tree,
+                                                      std::uint64_t seed);
 
 class BestOracleScheduler : public FollowingScheduler {
  public:

@@ -1,6 +1,7 @@
 #include "scheduling/cell_tree_scheduler.h"
 
 #include "graph/peel.h"
+#include "scheduling/plan_cache.h"
 
 namespace raycell {
 
@@ -30,14 +31,20 @@ constexpr SchedulerEntry kCellTree2LevelEntry = [] {
 }();
 
 void CellTreeScheduler::BeginFrame(const FrameInfo& frame) {
-  follower_.Reset(frame.previous ? Peel(*frame.previous).schedule : std::vector<CellId>{},
-                  frame.cells);
+  follower_.Reset(
+      frame.previous ? *SharedPeel(frame.plans, *frame.previous) : std::vector<CellId>{},
+      frame.cells);
 }
 
 void TwoLevelScheduler::BeginFrame(const FrameInfo& frame) {
-  follower_.Reset(
-      frame.previous ? TwoLevelPeel(*frame.previous, BoardCellOf(frame)) : std::vector<CellId>{},
-      frame.cells);
+  std::vector<CellId> plan;
+  if (frame.previous != nullptr) {
+    const std::vector<CellId> board = BoardCellOf(frame);
+    plan = *Shared<std::vector<CellId>>(
+        frame.plans, PlanKey(kTwoLevelPeelPlan, {TreeKey(*frame.previous), BoardKey(board)}),
+        [&] { return TwoLevelPeel(*frame.previous, board); });
+  }
+  follower_.Reset(std::move(plan), frame.cells);
 }
 
 }  // namespace raycell

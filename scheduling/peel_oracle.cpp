@@ -1,7 +1,7 @@
 #include "scheduling/peel_oracle.h"
 
 #include "base/check.h"
-#include "graph/peel.h"
+#include "scheduling/plan_cache.h"
 
 namespace raycell {
 
@@ -19,7 +19,7 @@ constexpr SchedulerEntry kPeelEntry = [] {
 
 void PeelOracleScheduler::BeginFrame(const FrameInfo& frame) {
   RAYCELL_CHECK(frame.current != nullptr);
-  follower_.Reset(Peel(*frame.current).schedule, frame.cells);
+  follower_.Reset(*SharedPeel(frame.plans, *frame.current), frame.cells);
 }
 
 }  // namespace raycell

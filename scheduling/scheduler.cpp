@@ -52,7 +52,7 @@ void ScheduleFollower::Reset(std::vector<CellId> schedule, std::uint32_t cells) 
   for (CellId c : schedule) RAYCELL_CHECK_LT(c.value(), cells);
   schedule_ = std::move(schedule);
   cursor_ = 0;
-  used_.assign(schedule_.size(), false);
+  used_.Reset(schedule_.size());
   stats_ = {};
   last_how_ = 0;
   last_skipped_ = 0;
@@ -63,8 +63,10 @@ std::optional<CellId> Scheduler::Peek(const QueueView& queues) const {
 }
 
 std::size_t ScheduleFollower::Find(const QueueView& queues) const {
-  for (std::size_t i = cursor_; i < schedule_.size(); ++i) {
-    if (!used_[i] && queues.has_work(schedule_[i])) return i;
+  // Entries used up are passed without a look; those left are free cells without work (Next
+  // uses them up) or busy cells (deferred).
+  for (std::size_t i = used_.From(cursor_); i < schedule_.size(); i = used_.From(i + 1)) {
+    if (queues.has_work(schedule_[i])) return i;
   }
   return schedule_.size();
 }
@@ -86,18 +88,17 @@ std::optional<CellId> ScheduleFollower::Next(const QueueView& queues) {
   const std::size_t found = Find(queues);
   // Entries before the one taken: used up when their cell has no work and is free, deferred
   // (kept) when another processor is working it.
-  for (std::size_t i = cursor_; i < found; ++i) {
-    if (used_[i]) continue;
+  for (std::size_t i = used_.From(cursor_); i < found; i = used_.From(i + 1)) {
     if (queues.busy(schedule_[i])) {
       ++stats_.deferred;
       continue;
     }
-    used_[i] = true;
+    used_.Use(i);
     ++stats_.skipped;
     ++last_skipped_;
   }
-  if (found < schedule_.size()) used_[found] = true;
-  while (cursor_ < schedule_.size() && used_[cursor_]) ++cursor_;
+  if (found < schedule_.size()) used_.Use(found);
+  cursor_ = used_.From(cursor_);
   if (found < schedule_.size()) {
     ++stats_.followed;
     last_how_ = 1;

@@ -56,6 +56,8 @@ struct QueueView {
                       std::optional<CellId> loaded = std::nullopt);
 };
 
+class PlanCache;  // scheduling/plan_cache.h
+
 // What a scheduler is told at the start of each frame.
 struct FrameInfo {
   std::size_t frame_index = 0;
@@ -75,6 +77,10 @@ struct FrameInfo {
   // (level.NAME.cells; the nearest such level): per cell of the grid, the board cell holding
   // it; null when every level holds the grid's cells.
   const std::vector<CellId>* board_cell_of = nullptr;
+  // Where what BeginFrame computes from earlier trees is shared with the other configurations
+  // replayed on this frame (scheduling/plan_cache.h; docs/design.md §5 "Sharing plans"); null:
+  // the scheduler computes it alone.
+  PlanCache* plans = nullptr;
 };
 // The board cell of every cell of frame.previous (not null): FrameInfo::board_cell_of, or
 // each cell its own when every level holds the grid's cells.
@@ -185,6 +191,31 @@ std::optional<CellId> MostQueuedCell(const QueueView& queues);
 // The same by a scan of queued[0 .. cells): kNoCell when no cell has work.
 CellId ScanMostQueued(const std::uint64_t* queued, std::uint32_t cells);
 
+// Entries 0 .. n-1 of a schedule, some used up: the first entry from i on that is not, in
+// amortised near-constant time (a union-find over the used entries, paths halved as they are
+// walked), so that a follower walking past entries taken out of order does not visit them
+// again at every decision.
+class UnusedEntries {
+ public:
+  void Reset(std::size_t n) {
+    next_.resize(n + 1);
+    for (std::size_t i = 0; i <= n; ++i) next_[i] = i;
+  }
+  // The first entry >= i not used up; n when none.
+  std::size_t From(std::size_t i) const {
+    while (next_[i] != i) {
+      next_[i] = next_[next_[i]];
+      i = next_[i];
+    }
+    return i;
+  }
+  void Use(std::size_t i) { next_[i] = i + 1; }
+  bool used(std::size_t i) const { return next_[i] != i; }
+
+ private:
+  mutable std::vector<std::size_t> next_;
+};
+
 // Walks a fixed schedule with a cursor, skipping (using up) entries whose cell has no queued
 // work (no fetch); once the schedule is used up, Max Work. With several processors an entry
 // whose cell another processor is working (QueueView::busy) is deferred, not used up: Next
@@ -224,7 +255,7 @@ class ScheduleFollower {
 
   std::vector<CellId> schedule_;
   std::size_t cursor_ = 0;  // entries before it are used up
-  std::vector<bool> used_;  // per entry: used up (those from cursor_ on, taken out of order)
+  UnusedEntries used_;      // per entry: used up (those from cursor_ on, taken out of order)
   Stats stats_;
   // The last Next: how it chose (0 none, 1 followed, 2 max work) and the entries it skipped.
   std::uint8_t last_how_ = 0;

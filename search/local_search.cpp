@@ -44,7 +44,8 @@ class LocalSearch {
     DeleteIdle();
     out_.schedule = schedule_;
     std::uint64_t since_better = 0;
-    while (out_.windows < o_.max_windows && out_.work < o_.max_work && !Done()) {
+    while (out_.windows < o_.max_windows && out_.work < o_.max_work &&
+           out_.retimes < o_.max_retimes && !Done()) {
       ++out_.windows;
       TryWindow();
       if (schedule_.size() < out_.schedule.size()) {
@@ -68,6 +69,7 @@ class LocalSearch {
     const ScheduleTimes& t = timer_.Compute(schedule_);
     RAYCELL_CHECK(t.feasible);
     out_.work += f_.size() + schedule_.size();
+    ++out_.retimes;
     const std::size_t len = schedule_.size();
     bucket_start_.assign(len + 2, 0);
     for (Index n = 0; n < f_.size(); ++n) ++bucket_start_[t.earliest[n] + 2];
@@ -79,7 +81,7 @@ class LocalSearch {
 
   // Deletes entries that no node needs, one at a time, re-timing after each.
   void DeleteIdle() {
-    for (;;) {
+    while (out_.retimes < o_.max_retimes) {
       const ScheduleTimes& t = timer_.times();
       needed_.assign(schedule_.size(), false);
       for (Index n = 0; n < f_.size(); ++n) {

@@ -53,6 +53,11 @@ struct LocalSearchOptions {
   // (3,400 nodes) needs 2e8-1e9 for 20000 windows, a tree of 10^5 nodes 2e9 for its
   // re-timings alone.
   std::uint64_t max_work = 1'000'000'000;
+  // Re-timings of the whole schedule (each a pass over every node: after the start, after
+  // every change and every deletion): the search stops when they reach this, and so does the
+  // deletion of idle entries (the schedule stays feasible). On large trees they are most of
+  // the cost (scheduling/best_scheduler.h PlanEffort). Default: no limit.
+  std::uint64_t max_retimes = ~std::uint64_t{0};
   // Memory of one window's exact search (its states and open list); past it the window goes
   // to the beam.
   std::size_t exact_bytes = std::size_t{64} << 20;
@@ -77,7 +82,8 @@ struct LocalSearchResult {
   std::uint64_t windows = 0;        // windows re-solved
   std::uint64_t large_windows = 0;  // of them, large ones (LocalSearchOptions::large_every)
   std::uint64_t improvements = 0, plateau_moves = 0, deletions = 0, kicks = 0;
-  std::uint64_t work = 0;  // node visits
+  std::uint64_t work = 0;     // node visits
+  std::uint64_t retimes = 0;  // re-timings of the whole schedule
   // "84 entries after 20000 windows (10000 large; 5 shorter, 19000 plateau moves, 10
   // deletions, 9 kicks)".
   std::string ToString() const;

@@ -20,6 +20,7 @@
 #include "base/parse.h"
 #include "runner/driver.h"
 #include "runner/sweep_file.h"
+#include "scheduling/scheduler.h"
 #include "tests/cell_list.h"
 #include "tests/test_util.h"
 #include "traces/trace_writer.h"
@@ -369,6 +370,30 @@ TEST_F(SweepTest, CombinationsShareReplaysOnlyWhereNoResultCanDiffer) {
   spec.base.processors.count = 2;
   spec.varies = {Vary::Parse("scheduler=maxwork,random"), Vary::Parse("granularity=auto,node")};
   EXPECT_EQ(RunSweep(*reader_, spec, Fresh("unshared.csv"), {}).distinct, 4u);
+}
+
+// Plans shared across configurations (docs/design.md §5 "Sharing plans"): every scheduler,
+// 1 and 8 processors, caches of 2 and 3 cells, seeds 1 and 2 (160 combinations), with each
+// frame's plans made once for all (2 jobs) give the bytes of the same sweep planning per
+// combination (each plan searched again, 1 job), and make fewer of them.
+TEST_F(SweepTest, SharedPlansGiveTheRowsOfPlanningPerCombination) {
+  SweepSpec spec = Spec();
+  spec.varies = {Vary::Parse("scheduler=" + SchedulerNameList(",")),
+                 Vary::Parse("processors.count=1,8"),
+                 Vary::Parse("level.cache.capacity=2 cells,3 cells"), Vary::Parse("seed=1,2")};
+  SweepOptions shared;
+  shared.jobs = 2;
+  const std::string a = Fresh("plans_shared.csv");
+  const SweepOutcome with = RunSweep(*reader_, spec, a, shared);
+  SweepOptions alone;
+  alone.share_plans = false;
+  const std::string b = Fresh("plans_alone.csv");
+  const SweepOutcome without = RunSweep(*reader_, spec, b, alone);
+  EXPECT_EQ(ReadBytes(a), ReadBytes(b));
+  const std::string rows = ReadBytes(a);
+  EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), 2 + 160);
+  EXPECT_GT(with.plans, 0u);
+  EXPECT_LT(2 * with.plans, without.plans);
 }
 
 TEST_F(SweepTest, MergedShardsEqualTheUnshardedFile) {

@@ -299,6 +299,36 @@ TEST(BestSchedulersTest, PlanEffortIsTheDocumentedBudget) {
   EXPECT_EQ(o.exact_max_nodes, 1000u);
 }
 
+// Fitted to a tree (docs/design.md §5 "Planners and PlanEffort"): on trees of up to a few
+// thousand nodes the beam keeps its width and the re-timings' limit does not bind, so the plans
+// are those of the unfitted budget.
+TEST(BestSchedulersTest, PlanEffortFittedToASmallTreePlansAsTheBudget) {
+  std::mt19937 rng(43);
+  for (int i = 0; i < 3; ++i) {
+    const CellTree t = testing::RandomTree(rng, 6 + i, 40 + 20 * i);
+    const BestScheduleOptions fitted = PlanEffort(5, t);
+    EXPECT_EQ(fitted.beam_width, 64u);
+    // 2*10^8 / 50 node visits of re-timing: 4*10^6 / nodes re-timings.
+    EXPECT_EQ(fitted.local.max_retimes, 4'000'000 / t.node_count()) << t.node_count();
+    EXPECT_EQ(BestSchedule(t, fitted).schedule, BestSchedule(t, PlanEffort(5)).schedule);
+  }
+}
+
+// A tree of 20,000 nodes (one ray's path over 4 cells in turn, a chain) whose maxGen bound is
+// 20,000: the beam's first layer, 64 x 20,000 x 20,000 node visits, is past its 5*10^8, so no
+// beam; re-timings 4*10^6 / 20,000 = 200. The plan is still feasible.
+TEST(BestSchedulersTest, PlanEffortFittedToALargeTreeDropsTheBeamAndLimitsRetimes) {
+  testing::CellList chain;  // one ray of 20,000 visits: every node a child of the last
+  for (std::uint32_t i = 0; i < 20000; ++i) chain.push_back(CellId(i % 4));
+  const CellTree t = FromPaths({chain});
+  ASSERT_EQ(t.node_count(), 20000u);
+  ASSERT_EQ(Bound(t), 20000u);
+  const BestScheduleOptions fitted = PlanEffort(5, t);
+  EXPECT_EQ(fitted.beam_width, 0u);
+  EXPECT_EQ(fitted.local.max_retimes, 200u);
+  EXPECT_EQ(fitted.local.max_windows, PlanEffort(5).local.max_windows);
+}
+
 TEST(BestSchedulersTest, TheOracleFollowsItsOwnTreesBestSchedule) {
   const CellTree t = FromPaths({{C, A, CellId(3), B}, {A, C, A}});
   BestOracleScheduler s(3);

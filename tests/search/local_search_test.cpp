@@ -30,6 +30,18 @@ TEST(LocalSearchTest, DeletesEntriesNoNodeNeeds) {
   EXPECT_EQ(r.windows, 0u);
 }
 
+// Path A B run by A A B B again, with 2 re-timings allowed: the one at the start and the one
+// after the first deletion; the second idle entry stays, and no window is tried.
+TEST(LocalSearchTest, MaxRetimesStopsTheDeletionsAndTheWindows) {
+  LocalSearchOptions o;
+  o.max_retimes = 2;
+  const LocalSearchResult r = Improve(FromPaths({{A, B}}), {A, A, B, B}, o);
+  EXPECT_EQ(r.schedule, (Schedule{A, B, B}));
+  EXPECT_EQ(r.deletions, 1u);
+  EXPECT_EQ(r.retimes, 2u);
+  EXPECT_EQ(r.windows, 0u);
+}
+
 // Paths C B A and B A B (nodes C1 B1 A1, B2 A2 B3) run by B C A B A: every entry processes
 // a node no other entry can (B: B2; C: C1; A: A2; B: B1 and B3; A: A1), so nothing can be
 // deleted, yet C B A B (C1; B1 B2; A1 A2; B3) has 4 entries, the bound (B twice, A and C

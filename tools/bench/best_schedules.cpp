@@ -18,7 +18,8 @@
 //   --max-nodes N       largest synthetic tree (100000)
 //   --schedules         also print each best schedule
 //   --plan-effort       the budget of the online schedulers' plans (scheduling/
-//                       best_scheduler.h PlanEffort) instead: the planning time per frame
+//                       best_scheduler.h PlanEffort, fitted to each tree) instead: the
+//                       planning time per frame
 //   --union             the tree of each frame f >= 1 is the union of frames f-1 and f
 //                       (graph/cell_tree.h UnionTree), as celltree-union plans
 //   --exact-compare     instead: the exact search per frame (Peel as incumbent) with the
@@ -142,7 +143,8 @@ Row Measure(const CellTree& tree, const Args& a) {
   Row r{};
   const auto t0 = std::chrono::steady_clock::now();
   const double cpu0 = ProcessCpuSeconds();
-  const BestScheduleResult b = BestSchedule(tree, a.options);
+  const BestScheduleResult b =
+      BestSchedule(tree, a.plan_effort ? PlanEffort(a.options.seed, tree) : a.options);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   r.cpu_seconds = ProcessCpuSeconds() - cpu0;
   r.nodes = tree.node_count(), r.bound = b.bound, r.peel = b.peel_length;
