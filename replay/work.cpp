@@ -231,6 +231,41 @@ WorkGraph NodeWork(const CellTree& tree, std::uint32_t cells) {
   return w;
 }
 
+WorkGraph PackedNodeWork(const CellTree& tree, std::uint32_t cells) {
+  for (NodeId n : tree.nodes()) {
+    if (tree.samples(n) > UINT32_MAX || tree.enter(n) > UINT32_MAX) return NodeWork(tree, cells);
+  }
+  WorkGraph w;
+  w.cells = cells;
+  // Unit n - 1 stands for node n, as in NodeWork; its successors are the node's children in
+  // creation order (NodeWork's edges, made in node order). Breadth first from the root's
+  // children, as Finish lays the records out.
+  std::vector<NodeId> order;
+  order.reserve(tree.node_count());
+  for (NodeId c = tree.first_child(kRootNode); c != kNoNode; c = tree.next_sibling(c)) {
+    order.push_back(c);
+  }
+  w.roots.reserve(order.size());
+  for (NodeId c : order) w.roots.push_back(c.index() - 1);
+  w.packed.resize(tree.node_count() + 1);
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const NodeId n = order[i];
+    w.packed[i] = {tree.cell(n), std::uint32_t(tree.samples(n)), std::uint32_t(tree.enter(n)),
+                   std::uint32_t(order.size())};
+    CheckedIncrement(w.totals.samples, tree.samples(n));
+    CheckedIncrement(w.totals.segments, tree.visits(n));
+    CheckedIncrement(w.totals.rays, (tree.parent(n) == kRootNode ? tree.enter(n) : 0) +
+                                        (tree.visits(n) - tree.enter(n)));
+    for (NodeId c = tree.first_child(n); c != kNoNode; c = tree.next_sibling(c)) {
+      order.push_back(c);
+    }
+  }
+  RAYCELL_CHECK_EQ(order.size(), tree.node_count());  // every node hangs from the root
+  w.packed.back() = {kNoCell, 0, 0, std::uint32_t(order.size())};
+  w.shape = ShapeOf(w);
+  return w;
+}
+
 RayBatch SampleRayTrees(const RayBatch& frame, std::uint32_t k) {
   RAYCELL_CHECK(k >= 1);
   RayBatch out(frame.store_t());

@@ -117,7 +117,9 @@ struct WorkGraph {
   };
   std::optional<Shape> shape;
 
-  std::size_t size() const { return compact.units != 0 ? compact.units : cell.size(); }
+  std::size_t size() const {
+    return compact.units != 0 ? compact.units : !packed.empty() ? packed.size() - 1 : cell.size();
+  }
   std::uint64_t total_samples() const { return totals.samples; }
   std::uint64_t total_segments() const { return totals.segments; }
   std::uint64_t total_rays() const { return totals.rays; }
@@ -173,6 +175,13 @@ inline constexpr std::uint64_t kCompactAboveVisits = std::uint64_t{1} << 22;
 WorkGraph RaySegmentWork(const RayBatch& frame, std::uint32_t cells);
 // Per Cell Tree node.
 WorkGraph NodeWork(const CellTree& tree, std::uint32_t cells);
+// The same units as NodeWork, in the packed records alone (no columns: what the replay reads),
+// made straight from the tree: 16 bytes a node (and 4 per root) instead of about 60, and no
+// column copy on the way, so that a frame replayed per node holds about its tree and the
+// records (docs/design.md §2 "What a replay holds"). The same `packed`, `roots`, `totals` and
+// `shape` as NodeWork, so a replay gives the same results; NodeWork itself when some node's
+// samples or entering rays exceed 32 bits (the records cannot hold them).
+WorkGraph PackedNodeWork(const CellTree& tree, std::uint32_t cells);
 
 // Sampling: the ray trees (a primary ray and its descendants) whose order in the frame is a
 // multiple of k, renumbered from 0. k = 1 returns the frame as it is.

@@ -78,13 +78,15 @@ void FinishTotal(std::uint32_t processors, ReplayResult* t) {
 
 FrameWalker::FrameWalker(const TraceReader& reader, std::vector<std::size_t> frame_indices,
                          bool need_segments, bool need_nodes, std::uint32_t sample_every,
-                         std::uint32_t history, std::uint64_t compact_above_visits, bool warm_up)
+                         std::uint32_t history, std::uint64_t compact_above_visits, bool warm_up,
+                         bool keep_tree)
     : reader_(reader),
       indices_(std::move(frame_indices)),
       need_segments_(need_segments),
       need_nodes_(need_nodes),
       k_(sample_every),
       history_(history),
+      keep_tree_(keep_tree || history > 0),
       compact_above_(compact_above_visits) {
   if (k_ < 1) throw InputError("sampling: 1 in k ray trees needs k >= 1");
   for (std::size_t p = 1; p < indices_.size(); ++p) RAYCELL_CHECK_LT(indices_[p - 1], indices_[p]);
@@ -106,6 +108,10 @@ const LoadedFrame* FrameWalker::Next() {
   const std::uint32_t cells = reader_.header().cell_count();
   LoadedFrame& f = frame_;
   const bool follows = position_ > 0 && indices_[position_ - 1] == i - 1;
+  // What the frame before needed and this one does not, released before this one is built.
+  f.segments.reset();
+  f.nodes.reset();
+  if (history_ == 0) f.tree.reset();
   // Frame i - 2's tree, for schedulers that plan from the last two frames.
   if (history_ < 2 || i < 2) {
     f.before_previous.reset();
@@ -114,15 +120,15 @@ const LoadedFrame* FrameWalker::Next() {
   } else {
     f.before_previous = LoadTree(reader_, i - 2, k_);
   }
-  if (i == 0) {
+  if (i == 0 || history_ == 0) {
     f.previous.reset();
   } else if (follows) {
     f.previous = std::move(f.tree);  // Cell Tree scheduling needs frame i - 1's tree
   } else {
     f.previous = LoadTree(reader_, i - 1, k_);
   }
-  f.segments.reset();
-  f.nodes.reset();
+  // The tree: for the work per node, the bound, the oracles, and the next frame's previous.
+  const bool need_tree = need_nodes_ || keep_tree_;
   if (!need_segments_ && k_ == 1) {  // per node the tree is all the replay needs: stream it
     f.tree = LoadTree(reader_, i, 1);
   } else if (k_ == 1 && reader_.frames()[i].visits > compact_above_) {
@@ -131,19 +137,20 @@ const LoadedFrame* FrameWalker::Next() {
     RaySegmentWorkBuilder work(cells);
     work.Reserve(reader_.frames()[i]);
     reader_.ForEachBatch(i, [&](const RayBatch& b) {
-      trees.AddBatch(b);
+      if (need_tree) trees.AddBatch(b);
       work.AddBatch(b);
     });
-    f.tree = std::make_unique<CellTree>(trees.Finish());
+    if (need_tree) f.tree = std::make_unique<CellTree>(trees.Finish());
     f.segments = std::make_unique<WorkGraph>(work.Finish());
   } else {
     RayBatch rays = reader_.LoadFrame(i);
     if (k_ > 1) rays = SampleRayTrees(rays, k_);
-    f.tree = TreeOf(rays);
+    if (need_tree) f.tree = TreeOf(rays);
     if (need_segments_) f.segments = std::make_unique<WorkGraph>(RaySegmentWork(rays, cells));
   }
-  if (need_nodes_) f.nodes = std::make_unique<WorkGraph>(NodeWork(*f.tree, cells));
-  f.bound = Bound(*f.tree);
+  if (need_nodes_) f.nodes = std::make_unique<WorkGraph>(PackedNodeWork(*f.tree, cells));
+  f.bound = f.tree ? Bound(*f.tree) : 0;
+  if (!keep_tree_) f.tree.reset();  // its work and bound made, no replay reads it
   f.warm_up = !asked_for_[position_];
   f.position = reported_;
   if (!f.warm_up) ++reported_;
@@ -210,7 +217,9 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
     which[i] = it->second;
   }
   bool need_segments = false, need_nodes = false;
-  std::uint32_t history = 1;  // earlier frames' trees the schedulers read
+  std::uint32_t history = 0;  // earlier frames' trees the schedulers read
+  // Whether a replay reads the frame's own tree: an oracle's, or the bound where it holds.
+  bool own_tree = false;
   std::vector<std::unique_ptr<Scheduler>> schedulers;
   std::vector<std::size_t> order;  // per-segment replays (the long ones) first
   for (std::size_t d = 0; d < distinct.size(); ++d) {
@@ -218,6 +227,7 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
     (per_ray ? need_segments : need_nodes) = true;
     schedulers.push_back(MakeScheduler(*distinct[d].scheduler, distinct[d].seed));
     history = std::max(history, distinct[d].scheduler->history);
+    own_tree = own_tree || distinct[d].scheduler->oracle || BoundHolds(distinct[d]);
     order.push_back(d);
   }
   std::stable_partition(order.begin(), order.end(), [&](std::size_t d) {
@@ -240,7 +250,7 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
   for (const ReplayConfig& c : distinct) units.push_back(LevelUnitsOf(c, reader));
   const TraceHeader& header = reader.header();
   FrameWalker walker(reader, frame_indices, need_segments, need_nodes, options.sample_every,
-                     history, options.compact_above_visits, !warm.empty());
+                     history, options.compact_above_visits, !warm.empty(), own_tree);
   WorkerPool pool(unsigned(
       std::clamp<std::size_t>(options.jobs, 1, std::max<std::size_t>(distinct.size(), 1))));
   std::vector<ReplayResult> distinct_results(distinct.size()), results(configs.size());

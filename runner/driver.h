@@ -42,13 +42,13 @@ struct LoadedFrame {
   // A frame replayed only for the memory state it leaves (FrameWalker's warm_up), not
   // reported.
   bool warm_up = false;
-  std::size_t index = 0;    // into reader.frames()
-  std::int32_t number = 0;  // the frame number
-  std::unique_ptr<CellTree> tree;
-  std::unique_ptr<CellTree> previous;  // frame index - 1's; null for index 0
+  std::size_t index = 0;               // into reader.frames()
+  std::int32_t number = 0;             // the frame number
+  std::unique_ptr<CellTree> tree;      // null when no replay reads it (FrameWalker's keep_tree)
+  std::unique_ptr<CellTree> previous;  // frame index - 1's; null for index 0 or history 0
   // Frame index - 2's, when a scheduler reads two earlier frames (SchedulerHistory); else null.
   std::unique_ptr<CellTree> before_previous;
-  std::uint64_t bound = 0;  // of `tree`
+  std::uint64_t bound = 0;  // of the frame's tree (0 when it was not built)
   // The cells' footprints in this frame (TraceReader::FrameFootprints: a dynamic
   // subdivision's own, else the header's); the reader's, valid while it is.
   const std::vector<std::uint64_t>* footprints = nullptr;
@@ -63,14 +63,18 @@ struct LoadedFrame {
 // graphs are built: memory holds one frame.
 class FrameWalker {
  public:
-  // history: earlier frames' trees to keep (1: the previous; 2: also the one before it).
+  // history: earlier frames' trees to keep (0: none; 1: the previous; 2: also the one before
+  // it). keep_tree: whether a replay reads the frame's own tree (an oracle, the maxGen bound
+  // where it holds); with neither, LoadedFrame::tree is null, the tree built only when the work
+  // per node is made from it (and bound 0), so that a frame holds no tree it does not need.
   // The per-segment work of a frame of more than `compact_above_visits` visits (not sampled)
   // is built in the Compact form (work.h) from the frame's batches, without holding its rays.
   // warm_up: also walk every frame before the last one asked for that is not asked for,
   // marked LoadedFrame::warm_up (warm memory needs the frames before a range replayed).
   FrameWalker(const TraceReader& reader, std::vector<std::size_t> frame_indices, bool need_segments,
               bool need_nodes, std::uint32_t sample_every = 1, std::uint32_t history = 1,
-              std::uint64_t compact_above_visits = kCompactAboveVisits, bool warm_up = false);
+              std::uint64_t compact_above_visits = kCompactAboveVisits, bool warm_up = false,
+              bool keep_tree = true);
   // The next frame, or nullptr after the last. Valid until the next call.
   const LoadedFrame* Next();
   // Frames asked for; frames walked (with the warm-up ones).
@@ -84,6 +88,7 @@ class FrameWalker {
   std::size_t asked_ = 0, reported_ = 0;
   bool need_segments_, need_nodes_;
   std::uint32_t k_, history_;
+  bool keep_tree_;
   std::uint64_t compact_above_;
   std::size_t position_ = 0;
   LoadedFrame frame_;

@@ -8,6 +8,7 @@ constexpr SchedulerEntry kMaxWorkEntry = [] {
   e.meaning = "Max Work: the cell with the most queued rays";
   e.label = "Max Work";
   e.joins = false;  // stateless, and sees only the view
+  e.history = 0;    // reads no earlier frame
   e.make = [](std::uint64_t) -> std::unique_ptr<Scheduler> {
     return std::make_unique<MaxWorkScheduler>();
   };

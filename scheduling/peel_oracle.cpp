@@ -10,6 +10,7 @@ constexpr SchedulerEntry kPeelEntry = [] {
   e.name = "peel";
   e.meaning = "the Peel oracle: each frame follows its own tree's Peel schedule";
   e.label = "Peel oracle (the frame's own Peel schedule)";
+  e.history = 0;  // reads no earlier frame
   e.make = [](std::uint64_t) -> std::unique_ptr<Scheduler> {
     return std::make_unique<PeelOracleScheduler>();
   };

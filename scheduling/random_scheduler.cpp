@@ -10,6 +10,7 @@ constexpr SchedulerEntry kRandomEntry = [] {
   e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
     return std::make_unique<RandomScheduler>(seed);
   };
+  e.history = 0;  // reads no earlier frame
   e.seeded = true;
   e.predicts = false;
   e.studied = false;

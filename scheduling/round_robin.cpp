@@ -7,6 +7,7 @@ constexpr SchedulerEntry kRoundRobinEntry = [] {
   e.name = "roundrobin";
   e.meaning = "Round Robin: the next cell with work after the last one (a baseline)";
   e.label = "Round Robin";
+  e.history = 0;  // reads no earlier frame
   e.make = [](std::uint64_t) -> std::unique_ptr<Scheduler> {
     return std::make_unique<RoundRobinScheduler>();
   };

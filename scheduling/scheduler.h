@@ -100,7 +100,8 @@ struct SchedulerEntry {
   const char* label = nullptr;    // as raycell study's tables name it: "Max Work"
   // A new scheduler of this kind; `seed` matters to the seeded ones.
   std::unique_ptr<Scheduler> (*make)(std::uint64_t seed) = nullptr;
-  // Earlier frames' trees it reads: 1 (FrameInfo::previous) or 2 (also before_previous).
+  // Earlier frames' trees it reads: 0 (none: the replay keeps no earlier tree for it), 1
+  // (FrameInfo::previous) or 2 (also before_previous).
   std::uint32_t history = 1;
   // Whether its choices depend on the seed (random, and the planners' seeded searches).
   bool seeded = false;

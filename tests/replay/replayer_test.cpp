@@ -133,6 +133,51 @@ TEST(Replay, ConservationBoundsGranularityAndDeterminismOnRandomFrames) {
   }
 }
 
+// PackedNodeWork, made straight from the tree, holds what NodeWork's columns give the replay:
+// the same records, roots, totals and shape, and a replay on it the same results (the
+// columns are its reference here, not itself).
+TEST(Replay, PackedNodeWorkIsNodeWorksRecordsWithoutTheColumns) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 300; ++trial) {
+    SCOPED_TRACE("trial " + std::to_string(trial));
+    const std::uint32_t cells = 2 + rng() % 6;
+    const CellTree tree = TreeOf(RandomReplayFrame(rng, cells));
+    const WorkGraph full = NodeWork(tree, cells), packed = PackedNodeWork(tree, cells);
+    ASSERT_FALSE(full.packed.empty());
+    EXPECT_TRUE(packed.cell.empty() && packed.samples.empty() && packed.succ.empty());
+    EXPECT_EQ(packed.size(), full.size());
+    ASSERT_EQ(packed.packed.size(), full.packed.size());
+    for (std::size_t x = 0; x < full.packed.size(); ++x) {
+      EXPECT_EQ(packed.packed[x].cell, full.packed[x].cell) << x;
+      EXPECT_EQ(packed.packed[x].samples, full.packed[x].samples) << x;
+      EXPECT_EQ(packed.packed[x].queued_rays, full.packed[x].queued_rays) << x;
+      EXPECT_EQ(packed.packed[x].first_child, full.packed[x].first_child) << x;
+    }
+    EXPECT_EQ(packed.roots, full.roots);
+    EXPECT_EQ(packed.totals.samples, full.totals.samples);
+    EXPECT_EQ(packed.totals.segments, full.totals.segments);
+    EXPECT_EQ(packed.totals.rays, full.totals.rays);
+    ASSERT_TRUE(packed.shape && full.shape);
+    EXPECT_EQ(packed.shape->chain_samples, full.shape->chain_samples);
+    EXPECT_EQ(packed.shape->used, full.shape->used);
+    ReplayConfig config = DefaultConfig();
+    config.scheduler = &SchedulerByName("celltree", "test");
+    config.processors.count = 1 + trial % 3;
+    const std::vector<std::uint64_t> footprints(cells, 4096);
+    const FrameTrees info{1, &tree, &tree, cells};
+    auto s1 = MakeScheduler("celltree", 0), s2 = MakeScheduler("celltree", 0);
+    const ReplayResult a = ReplayFrame(full, footprints, config, *s1, info, Bound(tree));
+    const ReplayResult b = ReplayFrame(packed, footprints, config, *s2, info, Bound(tree));
+    EXPECT_EQ(a.fetches, b.fetches);
+    EXPECT_EQ(a.time, b.time);
+    EXPECT_EQ(a.events, b.events);
+    EXPECT_EQ(a.rays, b.rays);
+    EXPECT_EQ(a.segments, b.segments);
+    EXPECT_EQ(a.samples, b.samples);
+    if (::testing::Test::HasFailure()) return;
+  }
+}
+
 TEST(Replay, TimingSanity) {
   std::mt19937 rng(11);
   for (int trial = 0; trial < 100; ++trial) {

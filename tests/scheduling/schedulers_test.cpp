@@ -435,10 +435,10 @@ TEST(SchedulerRegistryTest, EntriesKeepTheirFlagsAndNameWhatTheyMake) {
     bool seeded, predicts, oracle, studied;
   };
   const Flags expected[] = {
-      {"maxwork", 1, false, true, false, true},
-      {"roundrobin", 1, false, true, false, false},
-      {"random", 1, true, false, false, false},
-      {"peel", 1, false, true, true, true},
+      {"maxwork", 0, false, true, false, true},
+      {"roundrobin", 0, false, true, false, false},
+      {"random", 0, true, false, false, false},
+      {"peel", 0, false, true, true, true},
       {"celltree", 1, false, true, false, true},
       {"best", 1, true, true, true, true},
       {"celltree-best", 1, true, true, false, true},
