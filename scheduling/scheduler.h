@@ -56,6 +56,25 @@ struct QueueView {
                       std::optional<CellId> loaded = std::nullopt);
 };
 
+class Scheduler;
+
+// A frame seen, replayed on this replay's board (replay/replayer.cpp SeenReplayer): for a
+// scheduler that judges candidates on earlier frames (auto, scheduling/auto_scheduler.h).
+struct SeenOutcome {
+  std::uint64_t fetches = 0;
+  double time = 0;          // in sample times
+  std::uint64_t steps = 0;  // the replay's events
+};
+class SeenFrameReplayer {
+ public:
+  virtual ~SeenFrameReplayer() = default;
+  // Replays `tree` as frame `frame_index` with `previous` and `before_previous` as its earlier
+  // frames, under `scheduler` (told BeginFrame by the replay), per Cell Tree node, on the board
+  // of the replay asking (configuration, footprints, what its levels hold at the frame's start).
+  virtual SeenOutcome Replay(const CellTree& tree, Scheduler& scheduler, std::size_t frame_index,
+                             const CellTree* previous, const CellTree* before_previous) const = 0;
+};
+
 // What a scheduler is told at the start of each frame.
 struct FrameInfo {
   std::size_t frame_index = 0;
@@ -75,6 +94,9 @@ struct FrameInfo {
   // (level.NAME.cells; the nearest such level): per cell of the grid, the board cell holding
   // it; null when every level holds the grid's cells.
   const std::vector<CellId>* board_cell_of = nullptr;
+  // Replays earlier frames' trees on this replay's board; null outside a replay (and within
+  // such a replay of a frame seen).
+  const SeenFrameReplayer* seen = nullptr;
 };
 // The board cell of every cell of frame.previous (not null): FrameInfo::board_cell_of, or
 // each cell its own when every level holds the grid's cells.
