@@ -681,17 +681,51 @@ bool NeedsFuture(const ReplayConfig& config) {
   return false;
 }
 
+// Earlier frames' trees replayed per node on a frame's board (FrameInfo::seen): its
+// configuration, footprints and what its levels hold at the frame's start.
+class SeenReplayer : public SeenFrameReplayer {
+ public:
+  SeenReplayer(const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
+               const MemoryState& start, const MemoryUnits* units)
+      : footprints_(footprints), config_(config), start_(start), units_(units) {
+    config_.granularity = ReplayConfig::Granularity::kNode;
+  }
+  SeenOutcome Replay(const CellTree& tree, Scheduler& scheduler, std::size_t frame_index,
+                     const CellTree* previous, const CellTree* before_previous) const override {
+    const std::uint32_t cells = std::uint32_t(footprints_.size());
+    const FrameTrees frame{frame_index, &tree, previous, cells, before_previous};
+    MemoryState memory = start_;
+    const ReplayResult r =
+        ReplayFrame(NodeWork(tree, cells), footprints_, config_, scheduler, frame, 0, nullptr,
+                    start_.empty() ? nullptr : &memory, units_, /*seen=*/false);
+    SeenOutcome o;
+    o.fetches = r.fetches;
+    o.time =
+        double(r.time.picoseconds()) / double(config_.processors.time_per_sample.picoseconds());
+    o.steps = r.events;
+    return o;
+  }
+
+ private:
+  const std::vector<std::uint64_t>& footprints_;
+  ReplayConfig config_;
+  const MemoryState& start_;
+  const MemoryUnits* units_;
+};
+
 // `make_watch()` gives each run's W (NoWatch, or Watch for a scheduler that watches).
 template <typename Units, typename W, typename MakeWatch>
 ReplayResult Replay(const WorkGraph& work, Units graph_units,
                     const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
                     Scheduler& scheduler, const FrameTrees& frame, std::uint64_t bound,
                     ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units,
-                    MakeWatch make_watch) {
+                    bool seen, MakeWatch make_watch) {
   static const MemoryState kEmpty;
   const MemoryState& start = memory ? *memory : kEmpty;
   const std::vector<double> fetch_samples = FetchSamples(config, footprints);
-  const FrameInfo info = MakeFrameInfo(frame, config, fetch_samples, units, scheduler);
+  FrameInfo info = MakeFrameInfo(frame, config, fetch_samples, units, scheduler);
+  const SeenReplayer seen_replayer(footprints, config, start, units);
+  if (seen) info.seen = &seen_replayer;
   const bool min = NeedsFuture(config);
   const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
   MemoryHierarchy::Requests futures;
@@ -730,14 +764,16 @@ template <typename Units>
 ReplayResult Replay(const WorkGraph& work, Units graph_units,
                     const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
                     Scheduler& scheduler, const FrameTrees& frame, std::uint64_t bound,
-                    ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units) {
+                    ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units,
+                    bool seen) {
   if (!scheduler.Watches()) {
     return Replay<Units, NoWatch>(work, graph_units, footprints, config, scheduler, frame, bound,
-                                  observer, memory, units, [] { return NoWatch{}; });
+                                  observer, memory, units, seen, [] { return NoWatch{}; });
   }
   const UnitPaths paths = PathsOf(graph_units, work.size());
   return Replay<Units, Watch>(work, graph_units, footprints, config, scheduler, frame, bound,
-                              observer, memory, units, [&] { return Watch(paths, scheduler); });
+                              observer, memory, units, seen,
+                              [&] { return Watch(paths, scheduler); });
 }
 
 }  // namespace
@@ -813,20 +849,20 @@ void CheckReplay(const ReplayConfig& config, std::uint64_t cells) {
 ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                          const ReplayConfig& config, Scheduler& scheduler, const FrameTrees& frame,
                          std::uint64_t bound, ReplayObserver* observer, MemoryState* memory,
-                         const MemoryUnits* units) {
+                         const MemoryUnits* units, bool seen) {
   RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
   // The caller ran CheckReplay (its bound on the memory model's size, as an invariant here).
   RAYCELL_CHECK_LE(std::uint64_t{config.processors.count} * work.cells, kMaxProcessorCells);
   if (work.compact.units != 0) {
     return Replay(work, CompactUnits{work.compact.stream.data(), &work.compact}, footprints, config,
-                  scheduler, frame, bound, observer, memory, units);
+                  scheduler, frame, bound, observer, memory, units, seen);
   }
   if (!work.packed.empty()) {
     return Replay(work, PackedUnits{work.packed.data(), UnitId(work.roots.size())}, footprints,
-                  config, scheduler, frame, bound, observer, memory, units);
+                  config, scheduler, frame, bound, observer, memory, units, seen);
   }
   return Replay(work, ColumnUnits{&work}, footprints, config, scheduler, frame, bound, observer,
-                memory, units);
+                memory, units, seen);
 }
 
 }  // namespace raycell

@@ -91,10 +91,14 @@ FrameInfo MakeFrameInfo(const FrameTrees& frame, const ReplayConfig& config,
 // `units` (null: every level holds the cells) gives the levels that hold coarser cells
 // (level.NAME.cells; replay/memory.h LevelUnits), as LevelUnitsOf makes them; the scheduler is
 // told the nearest such level's map (FrameInfo::board_cell_of).
+//
+// `seen`: the scheduler is given FrameInfo::seen, which replays earlier frames' trees per node
+// on this frame's board (from what `memory` holds at its start); false within such a replay.
 ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                          const ReplayConfig& config, Scheduler& scheduler, const FrameTrees& frame,
                          std::uint64_t bound, ReplayObserver* observer = nullptr,
-                         MemoryState* memory = nullptr, const MemoryUnits* units = nullptr);
+                         MemoryState* memory = nullptr, const MemoryUnits* units = nullptr,
+                         bool seen = true);
 
 // Per cell, what the schedulers are told a fetch costs (FrameInfo::fetch_samples): the first
 // link's latency + footprint / bandwidth, in units of one sample's work.

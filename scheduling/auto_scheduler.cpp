@@ -21,9 +21,10 @@ constexpr SchedulerEntry kAutoEntry = [] {
       "the recommended online scheduler: per frame, of celltree-adaptive, celltree-union, "
       "celltree-best and celltree (one processor) or balanced-critical, celltree-adaptive, "
       "celltree and balanced (several), the one that fetched fewest on the two previous frames' "
-      "trees (each planned from the other) in a model of the board; Max Work when none fetched "
-      "fewer than Max Work there (by 3 per processor with several), and on several processors "
-      "in frames 0 and 1, with nothing to judge by";
+      "trees (each planned from the other) replayed on the board; Max Work when none fetched "
+      "fewer than Max Work there (by 2 per processor with several, and with several, when it "
+      "took longer, by 25% of Max Work's fetches), and on several processors in frames 0 and "
+      "1, with nothing to judge by";
   e.label = "auto (recommended, falls back to Max Work)";
   e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
     return std::make_unique<AutoScheduler>(seed);
@@ -216,11 +217,23 @@ void AutoScheduler::BeginFrame(const FrameInfo& frame) {
     seen.before_previous = nullptr;
     FrameInfo back = seen;
     back.previous = frame.previous;
+    // On the replay's own board when it offers one (FrameInfo::seen: per node, with its links,
+    // levels and joins, from what its levels hold at this frame's start), else in the model.
+    const auto one = [&](const CellTree& tree, Scheduler& s, const FrameInfo& f) {
+      if (frame.seen == nullptr) return ModelFrame(tree, s, f);
+      const SeenOutcome o =
+          frame.seen->Replay(tree, s, f.frame_index, f.previous, f.before_previous);
+      ModelResult m;
+      m.fetches = o.fetches;
+      m.time = o.time;
+      m.steps = o.steps;
+      return m;
+    };
     const auto run = [&](Scheduler& s) {
-      ModelResult m = ModelFrame(*frame.previous, s, seen);
+      ModelResult m = one(*frame.previous, s, seen);
       check_cost_.steps += m.steps + s.Cost().steps;
       check_cost_.peak_bytes = std::max(check_cost_.peak_bytes, s.Cost().peak_bytes);
-      const ModelResult r = ModelFrame(*frame.before_previous, s, back);
+      const ModelResult r = one(*frame.before_previous, s, back);
       check_cost_.steps += r.steps + s.Cost().steps;
       check_cost_.peak_bytes = std::max(check_cost_.peak_bytes, s.Cost().peak_bytes);
       m.fetches += r.fetches;
@@ -229,8 +242,8 @@ void AutoScheduler::BeginFrame(const FrameInfo& frame) {
       return m;
     };
     max_work_model_ = run(*max_work_);
-    // With several processors the model is an estimate: a candidate must save more than
-    // kMarginPerProcessor fetches per processor over the two frames.
+    // With several processors a frame's choices serve the next only roughly: a candidate must
+    // save kMarginPerProcessor fetches per processor over the two frames.
     const std::uint64_t margin = frame.processors > 1 ? kMarginPerProcessor * frame.processors : 0;
     chosen_ = kNone;
     for (std::size_t k = 0; k < candidates_.size(); ++k) {
@@ -239,6 +252,13 @@ void AutoScheduler::BeginFrame(const FrameInfo& frame) {
       // first listed.
       const ModelResult& m = models_[k];
       if (m.fetches + margin > max_work_model_.fetches) continue;
+      // With several processors, one that took longer than Max Work must save at least
+      // kTimeWaiverPercent of Max Work's fetches (fewer fetches saved do not pay for the time).
+      if (frame.processors > 1 && m.time > max_work_model_.time &&
+          (max_work_model_.fetches - m.fetches) * 100 <
+              max_work_model_.fetches * kTimeWaiverPercent) {
+        continue;
+      }
       if (chosen_ == kNone || m.fetches < models_[chosen_].fetches ||
           (m.fetches == models_[chosen_].fetches && m.time < models_[chosen_].time)) {
         chosen_ = k;

@@ -57,6 +57,24 @@ struct QueueView {
 };
 
 class PlanCache;  // scheduling/plan_cache.h
+class Scheduler;
+
+// A frame seen, replayed on this replay's board (replay/replayer.cpp SeenReplayer): for a
+// scheduler that judges candidates on earlier frames (auto, scheduling/auto_scheduler.h).
+struct SeenOutcome {
+  std::uint64_t fetches = 0;
+  double time = 0;          // in sample times
+  std::uint64_t steps = 0;  // the replay's events
+};
+class SeenFrameReplayer {
+ public:
+  virtual ~SeenFrameReplayer() = default;
+  // Replays `tree` as frame `frame_index` with `previous` and `before_previous` as its earlier
+  // frames, under `scheduler` (told BeginFrame by the replay), per Cell Tree node, on the board
+  // of the replay asking (configuration, footprints, what its levels hold at the frame's start).
+  virtual SeenOutcome Replay(const CellTree& tree, Scheduler& scheduler, std::size_t frame_index,
+                             const CellTree* previous, const CellTree* before_previous) const = 0;
+};
 
 // What a scheduler is told at the start of each frame.
 struct FrameInfo {
@@ -81,6 +99,9 @@ struct FrameInfo {
   // replayed on this frame (scheduling/plan_cache.h; docs/design.md §5 "Sharing plans"); null:
   // the scheduler computes it alone.
   PlanCache* plans = nullptr;
+  // Replays earlier frames' trees on this replay's board; null outside a replay (and within
+  // such a replay of a frame seen).
+  const SeenFrameReplayer* seen = nullptr;
 };
 // The board cell of every cell of frame.previous (not null): FrameInfo::board_cell_of, or
 // each cell its own when every level holds the grid's cells.

@@ -253,6 +253,76 @@ TEST(Auto, FallsBackToMaxWorkWhenThePreviousFrameShowsItBetter) {
   EXPECT_GE(followed, 5);
 }
 
+// With several processors the check replays the frames seen on the replay's own board
+// (FrameInfo::seen: per node, its links and levels, joins), judged here by the replay itself:
+// a candidate is taken when it fetched at least kMarginPerProcessor per processor fewer than
+// Max Work over the two frames and, when it took longer, saved at least kTimeWaiverPercent of
+// Max Work's fetches; the fewest fetches, then the least time, then the first listed; else Max
+// Work. Both cases occur, and a candidate that fetched fewer but was refused for its time.
+TEST(Auto, SeveralProcessorsJudgeOnTheReplaysOwnBoard) {
+  std::mt19937 rng(47);
+  const std::uint32_t p = 2;
+  const std::vector<const SchedulerEntry*> candidates = AutoScheduler::CandidatesFor(p);
+  int fell_back = 0, followed = 0, refused_for_time = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    // Half the trials repeat one frame (plans from the frames seen then fit), half draw each.
+    const std::uint32_t cells = 3 + rng() % 6;
+    const RayBatch f2 = testing::RandomReplayFrame(rng, cells, 40),
+                   f1 = trial % 2 == 0 ? f2 : testing::RandomReplayFrame(rng, cells, 40),
+                   f0 = trial % 2 == 0 ? f2 : testing::RandomReplayFrame(rng, cells, 30);
+    const CellTree t2 = testing::TreeOf(f2), t1 = testing::TreeOf(f1);
+    std::vector<std::uint64_t> footprints(cells);
+    for (auto& f : footprints) f = 1000 + rng() % 300'000;
+    ReplayConfig node = Config(kAutoEntry, p);
+    node.granularity = ReplayConfig::Granularity::kNode;
+    const FrameTrees seen{1, nullptr, &t2, cells}, back{1, nullptr, &t1, cells};
+    const auto both = [&](const SchedulerEntry& e) {
+      auto s = MakeScheduler(e, 1);
+      ReplayResult r = ReplayOn(f1, node, *s, seen, footprints);
+      const ReplayResult q = ReplayOn(f2, node, *s, back, footprints);
+      r.fetches += q.fetches;
+      r.time = r.time + q.time;
+      return r;
+    };
+    const ReplayResult rm = both(kMaxWorkEntry);
+    const SchedulerEntry* best = nullptr;
+    ReplayResult rb;
+    for (const SchedulerEntry* e : candidates) {
+      const ReplayResult r = both(*e);
+      if (r.fetches + kMarginPerProcessor * p > rm.fetches) continue;
+      if (r.time > rm.time && (rm.fetches - r.fetches) * 100 < rm.fetches * kTimeWaiverPercent) {
+        ++refused_for_time;
+        continue;
+      }
+      if (best == nullptr || r.fetches < rb.fetches ||
+          (r.fetches == rb.fetches && r.time < rb.time)) {
+        best = e, rb = r;
+      }
+    }
+    const FrameTrees now{2, nullptr, &t1, cells, &t2};
+    Chooser a(MakeScheduler(kAutoEntry, 1)),
+        expected(MakeScheduler(best == nullptr ? kMaxWorkEntry : *best, 1));
+    const ReplayConfig ray = Config(kAutoEntry, p);
+    ReplayOn(f0, ray, a, now, footprints);
+    ReplayOn(f0, ray, expected, now, footprints);
+    const AutoScheduler& inner = dynamic_cast<const AutoScheduler&>(a.inner());
+    EXPECT_TRUE(inner.checked());
+    EXPECT_EQ(a.chosen, expected.chosen) << "trial " << trial;
+    if (best == nullptr) {
+      EXPECT_EQ(inner.chosen(), AutoScheduler::kNone) << "trial " << trial;
+      ++fell_back;
+    } else {
+      EXPECT_EQ(candidates[inner.chosen()], best) << "trial " << trial;
+      ++followed;
+    }
+  }
+  EXPECT_GE(fell_back, 2);
+  EXPECT_GE(followed, 2);
+  EXPECT_GE(refused_for_time, 1);
+  std::printf("fell back %d, followed %d, refused for time %d\n", fell_back, followed,
+              refused_for_time);
+}
+
 // With several processors, frames 0 and 1 (nothing seen to judge by) run Max Work.
 TEST(Auto, SeveralProcessorsRunMaxWorkInFramesZeroAndOne) {
   std::mt19937 rng(46);
