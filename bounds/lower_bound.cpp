@@ -504,23 +504,25 @@ class Bounder {
   void AddBlocks(CountProgram& program) {
     std::vector<std::vector<CellId>> blocks =
         options_.grid[0] != 0 ? GridBlocks() : ClusterBlocks();
-    if (blocks.size() > options_.max_blocks && options_.grid[0] != 0) {
-      // More boxes than the budget (hundreds of cells): the first max_blocks would all sit in
-      // one corner of the grid. The 2x2x2 boxes that tile the grid (a board-level split,
-      // disjoint, so their bounds add in the program) come first instead, all of them: a
-      // budget per cell; then the other boxes, smallest first, up to max_blocks in all.
+    std::size_t most = options_.max_blocks;
+    if (blocks.size() > options_.max_blocks && options_.grid[0] != 0 &&
+        !Covers(blocks, options_.max_blocks)) {
+      // More boxes than the budget, and the first max_blocks leave cells with nodes outside
+      // every box (hundreds of cells: they all sit in one slab of the grid). The 2x2x2 boxes
+      // that tile the grid (a board-level split, disjoint, so their bounds add in the
+      // program) come first instead, all of them: a budget per cell; then the other boxes,
+      // smallest first, up to max_blocks in all. (At 27 cells the first boxes cover every
+      // cell, and the order stays.)
       std::vector<std::vector<CellId>> tiles = GridTiles(2);
       r_.tiles = tiles.size();
-      const std::size_t most = std::max(options_.max_blocks, tiles.size());
+      most = std::max(options_.max_blocks, tiles.size());
       for (auto& b : blocks) {
         if (tiles.size() >= most) break;
         if (std::find(tiles.begin(), tiles.end(), b) == tiles.end()) tiles.push_back(std::move(b));
       }
       blocks = std::move(tiles);
     }
-    if (blocks.size() > options_.max_blocks && options_.grid[0] == 0) {
-      blocks.resize(options_.max_blocks);
-    }
+    if (blocks.size() > most) blocks.resize(most);
     // With few cells, all of them together (the tree's own SCS) comes last.
     std::vector<CellId> all;
     for (CellId c : CellRange(max_gen_.size())) {
@@ -567,6 +569,18 @@ class Bounder {
       }
     }
     return out;
+  }
+
+  // Whether the first `count` blocks hold every cell with nodes.
+  bool Covers(const std::vector<std::vector<CellId>>& blocks, std::size_t count) const {
+    std::vector<bool> in(max_gen_.size(), false);
+    for (std::size_t i = 0; i < std::min(count, blocks.size()); ++i) {
+      for (CellId c : blocks[i]) in[c.value()] = true;
+    }
+    for (std::size_t c = 0; c < max_gen_.size(); ++c) {
+      if (max_gen_[c] > 0 && !in[c]) return false;
+    }
+    return true;
   }
 
   // The boxes of side `side` (smaller at the grid's far edges) that tile the grid, in cell
