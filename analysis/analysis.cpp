@@ -1,6 +1,7 @@
 #include "analysis/analysis.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <exception>
 #include <utility>
@@ -48,6 +49,20 @@ BracketOptions BracketEffort(const std::string& name) {
   throw InputError("--effort '" + name + "': expected quick, default or thorough");
 }
 
+std::vector<CellId> BoardCells(const std::array<std::uint32_t, 3>& n) {
+  std::vector<CellId> coarse_of;
+  if (n[0] == 0 || n[1] == 0 || n[2] == 0) return coarse_of;
+  const std::uint32_t bx = (n[0] + 1) / 2, by = (n[1] + 1) / 2;
+  for (std::uint32_t z = 0; z < n[2]; ++z) {
+    for (std::uint32_t y = 0; y < n[1]; ++y) {
+      for (std::uint32_t x = 0; x < n[0]; ++x) {
+        coarse_of.push_back(CellId(x / 2 + bx * (y / 2 + by * (z / 2))));
+      }
+    }
+  }
+  return coarse_of;
+}
+
 std::optional<double> FrameAnalysis::gap() const {
   if (!lower_bound || !best_length) return std::nullopt;
   if (*lower_bound == 0) return 0.0;
@@ -62,6 +77,7 @@ namespace {
 std::pair<LowerBoundResult, BestScheduleResult> BoundAndSearch(const CellTree& tree,
                                                                const BracketOptions& options) {
   BestScheduleOptions best = options.best;
+  if (best.coarse_of.empty()) best.coarse_of = BoardCells(options.lower.grid);
   if (!options.overlap) {
     LowerBoundResult lb = LowerBound(tree, options.lower);
     best.lower_bound = std::max(best.lower_bound, lb.value);

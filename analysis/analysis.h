@@ -2,6 +2,7 @@
 // Peel schedule and, for small trees, the exact optimum. Printers live with the command.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -27,6 +28,12 @@ struct BracketOptions {
 // --bracket: within about a minute per 27-cell frame on 2 cores) or "thorough" (about four
 // times the default). InputError naming the option otherwise.
 BracketOptions BracketEffort(const std::string& name);
+
+// The board-level split of a cell grid (nx, ny, nz; cell = x + nx*(y + ny*z)) that the
+// bracket's schedule search decomposes by (BestScheduleOptions::coarse_of): each cell's 2x2x2
+// box of the grid, boxes numbered in the order of their corners. Empty for an unknown grid
+// (a zero).
+std::vector<CellId> BoardCells(const std::array<std::uint32_t, 3>& grid);
 
 struct AnalyzeOptions {
   bool exact = false;  // also search for the optimum (small trees only)

@@ -410,25 +410,63 @@ class Bounder {
     if (b.scs_lower > b.max_gen_sum) program.AddAtLeast(b.cells, b.scs_lower);
   }
 
-  // Pairs of cells that share a path, in increasing order.
+  // Pairs of cells that share a path, where the paths conflict most first. A pair (a, b) can
+  // gain over maxGen(a) + maxGen(b) only when some path has an a before a b and some path a b
+  // before an a: otherwise every path's projection is a^i b^j (or b^j a^i, the same order for
+  // every path) with i <= maxGen(a), j <= maxGen(b), all of them subsequences of
+  // a^maxGen(a) b^maxGen(b), and the SCS is the maxGen sum. Those pairs are skipped without a
+  // search (no row is lost: their row would be implied by (1)). The others are searched in the
+  // order of their conflicts, the fewer of the paths with a before b and with b before a, most
+  // first (then by cell numbers), so that on a frame of hundreds of cells, where
+  // max_total_states runs out before every pair is searched, the states go where the paths
+  // cross.
   void AddPairs(CountProgram& program) {
-    std::map<std::pair<CellId, CellId>, std::uint32_t> together;
-    for (const CellString& p : paths_) {
-      CellString c = p;
-      std::sort(c.begin(), c.end());
-      c.erase(std::unique(c.begin(), c.end()), c.end());
-      for (std::size_t i = 0; i < c.size(); ++i) {
-        for (std::size_t j = i + 1; j < c.size(); ++j) ++together[{c[i], c[j]}];
-      }
+    struct Orders {
+      std::uint32_t both = 0;        // paths through a and b
+      std::uint32_t ab = 0, ba = 0;  // of them, with some a before some b; some b before some a
+    };
+    std::map<std::pair<CellId, CellId>, Orders> orders;
+    for (const CellString& p : paths_) PathOrders(p, orders);
+    std::vector<std::pair<std::uint32_t, std::pair<CellId, CellId>>> conflicting;
+    for (const auto& [pair, o] : orders) {
+      together_[pair] = o.both;
+      if (o.ab > 0 && o.ba > 0) conflicting.push_back({std::min(o.ab, o.ba), pair});
     }
-    together_ = together;
-    for (const auto& [pair, count] : together) {
+    std::stable_sort(conflicting.begin(), conflicting.end(),
+                     [](const auto& x, const auto& y) { return x.first > y.first; });
+    r_.pairs_sharing = orders.size();
+    r_.pairs_conflicting = conflicting.size();
+    for (const auto& [weight, pair] : conflicting) {
       const int g = Compute({pair.first, pair.second});
       if (g < 0) continue;
       const GroupBound& b = groups_[g].bound;
       pair_gain_[pair] = b.scs_lower - b.max_gen_sum;
       if (b.scs_lower > b.max_gen_sum) pair_gains_.push_back({pair, b.scs_lower - b.max_gen_sum});
       AddIfGain(program, g);
+    }
+    std::sort(pair_gains_.begin(), pair_gains_.end());  // the matching's input in cell order
+  }
+
+  // Adds one path's orders: for each pair of distinct cells on it, whether some a comes
+  // before some b (ab) and some b before some a (ba), each counted once per path.
+  template <typename OrdersMap>
+  static void PathOrders(const CellString& p, OrdersMap& orders) {
+    std::map<CellId, std::pair<std::size_t, std::size_t>> span;  // first and last position
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      auto it = span.find(p[i]);
+      if (it == span.end()) {
+        span.emplace(p[i], std::make_pair(i, i));
+      } else {
+        it->second.second = i;
+      }
+    }
+    for (auto a = span.begin(); a != span.end(); ++a) {
+      for (auto b = std::next(a); b != span.end(); ++b) {
+        auto& o = orders[{a->first, b->first}];
+        ++o.both;
+        if (a->second.first < b->second.second) ++o.ab;  // the first a before the last b
+        if (b->second.first < a->second.second) ++o.ba;
+      }
     }
   }
 
@@ -466,7 +504,25 @@ class Bounder {
   void AddBlocks(CountProgram& program) {
     std::vector<std::vector<CellId>> blocks =
         options_.grid[0] != 0 ? GridBlocks() : ClusterBlocks();
-    if (blocks.size() > options_.max_blocks) blocks.resize(options_.max_blocks);
+    std::size_t most = options_.max_blocks;
+    if (blocks.size() > options_.max_blocks && options_.grid[0] != 0 &&
+        !Covers(blocks, options_.max_blocks)) {
+      // More boxes than the budget, and the first max_blocks leave cells with nodes outside
+      // every box (hundreds of cells: they all sit in one slab of the grid). The 2x2x2 boxes
+      // that tile the grid (a board-level split, disjoint, so their bounds add in the
+      // program) come first instead, all of them: a budget per cell; then the other boxes,
+      // smallest first, up to max_blocks in all. (At 27 cells the first boxes cover every
+      // cell, and the order stays.)
+      std::vector<std::vector<CellId>> tiles = GridTiles(2);
+      r_.tiles = tiles.size();
+      most = std::max(options_.max_blocks, tiles.size());
+      for (auto& b : blocks) {
+        if (tiles.size() >= most) break;
+        if (std::find(tiles.begin(), tiles.end(), b) == tiles.end()) tiles.push_back(std::move(b));
+      }
+      blocks = std::move(tiles);
+    }
+    if (blocks.size() > most) blocks.resize(most);
     // With few cells, all of them together (the tree's own SCS) comes last.
     std::vector<CellId> all;
     for (CellId c : CellRange(max_gen_.size())) {
@@ -509,6 +565,43 @@ class Bounder {
             }
             if (b.size() >= 3) out.push_back(b);
           }
+        }
+      }
+    }
+    return out;
+  }
+
+  // Whether the first `count` blocks hold every cell with nodes.
+  bool Covers(const std::vector<std::vector<CellId>>& blocks, std::size_t count) const {
+    std::vector<bool> in(max_gen_.size(), false);
+    for (std::size_t i = 0; i < std::min(count, blocks.size()); ++i) {
+      for (CellId c : blocks[i]) in[c.value()] = true;
+    }
+    for (std::size_t c = 0; c < max_gen_.size(); ++c) {
+      if (max_gen_[c] > 0 && !in[c]) return false;
+    }
+    return true;
+  }
+
+  // The boxes of side `side` (smaller at the grid's far edges) that tile the grid, in cell
+  // order of their corners; only cells with nodes are kept, and boxes with fewer than 2 such
+  // cells skipped (a single cell's bound is maxGen).
+  std::vector<std::vector<CellId>> GridTiles(std::uint32_t side) const {
+    const auto& n = options_.grid;
+    std::vector<std::vector<CellId>> out;
+    for (std::uint32_t z = 0; z < n[2]; z += side) {
+      for (std::uint32_t y = 0; y < n[1]; y += side) {
+        for (std::uint32_t x = 0; x < n[0]; x += side) {
+          std::vector<CellId> b;
+          for (std::uint32_t k = z; k < std::min(n[2], z + side); ++k) {
+            for (std::uint32_t j = y; j < std::min(n[1], y + side); ++j) {
+              for (std::uint32_t i = x; i < std::min(n[0], x + side); ++i) {
+                const CellId c(i + n[0] * (j + n[1] * k));
+                if (c.value() < max_gen_.size() && max_gen_[c.value()] > 0) b.push_back(c);
+              }
+            }
+          }
+          if (b.size() >= 2) out.push_back(b);
         }
       }
     }

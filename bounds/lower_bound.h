@@ -89,8 +89,12 @@ struct LowerBoundResult {
   std::vector<LowerBoundStage> stages;
   std::vector<GroupBound> groups;  // groups above their maxGen sum, in the order computed
   std::size_t cuts = 0;            // cuts added
-  std::uint64_t states = 0;        // search states used in total
-  bool limits_reached = false;     // some search or the program stopped at a limit
+  // Pairs of cells on a common path, and of them those whose paths cross (some path has a
+  // before b, some b before a): only those can gain over maxGen and are searched.
+  std::size_t pairs_sharing = 0, pairs_conflicting = 0;
+  std::size_t tiles = 0;  // blocks that tile the grid, searched first (more boxes than max_blocks)
+  std::uint64_t states = 0;     // search states used in total
+  bool limits_reached = false;  // some search or the program stopped at a limit
   // value is the optimum: a group held every cell with nodes and its SCS search was exact.
   bool optimal = false;
   // One line: "lower bound 79 (maxGen 63; ip(pairs,triples,blocks)+cuts; 214 groups, 31 cuts,

@@ -17,6 +17,7 @@ namespace raycell {
 std::string BestScheduleResult::ToString() const {
   std::ostringstream s;
   s << length << " (" << method << "; Peel " << peel_length;
+  if (two_level_length) s << ", two-level " << two_level_length;
   if (beam_length) s << ", beam " << beam_length;
   if (local_length) s << ", local search " << local_length;
   s << ", bound " << bound << ", lower " << lower << (optimal ? ", optimal" : "") << ")";
@@ -85,6 +86,7 @@ class Best {
     const PeelResult peel = Peel(tree_);
     out_.peel_length = peel.schedule.size();
     Offer(peel.schedule, "peel");
+    if (!Done() && o_.beam_width > 0 && BeamIsCut(peel.schedule.size())) RunTwoLevel();
     const CellForest forest = CellForest::FromTree(tree_);
     if (!Done() && o_.beam_width > 0) RunBeam(forest);
     // Small trees: the exact search first, which often proves the beam's schedule optimal;
@@ -131,6 +133,37 @@ class Best {
     out_.beam_states = r.states;
     out_.work += r.node_visits;
     Offer(r.schedule, "beam(" + std::to_string(o_.beam_width) + ")");
+  }
+
+  // Whether the beam's nominal work on the whole tree, about width x layers (Peel's length at
+  // most) x nodes, exceeds its limit, so that it would narrow its width: then the two-level
+  // schedule is worth its cost (coarse_of given).
+  bool BeamIsCut(std::size_t peel_length) const {
+    if (o_.coarse_of.empty()) return false;
+    const double work = double(o_.beam_width) * double(peel_length) * double(tree_.node_count());
+    return work > double(o_.beam_max_node_visits);
+  }
+
+  // The two-level schedule: a beam search of the tree contracted to the coarse cells, then one
+  // of each entry's forest; each search gets a share of beam_max_node_visits in proportion to
+  // its nodes (at least one visit), so the whole costs about one beam budget.
+  void RunTwoLevel() {
+    const double nodes = double(std::max<std::size_t>(tree_.node_count(), 1));
+    const auto plan = [this, nodes](const CellTree& t) {
+      if (t.node_count() == 0) return std::vector<CellId>{};
+      BeamOptions bo;
+      bo.width = o_.beam_width;
+      bo.max_node_visits = std::max<std::uint64_t>(
+          1, std::uint64_t(double(o_.beam_max_node_visits) * double(t.node_count()) / nodes));
+      const BeamResult r = BeamSearch(CellForest::FromTree(t), bo);
+      out_.work += r.node_visits;
+      return r.schedule;
+    };
+    std::vector<CellId> coarse_of = o_.coarse_of;
+    coarse_of.resize(tree_.cell_count(), CellId(0));  // cells past the map: never in the tree
+    const std::vector<CellId> s = TwoLevelSchedule(tree_, coarse_of, plan, plan);
+    out_.two_level_length = s.size();
+    Offer(s, "2level-beam(" + std::to_string(o_.beam_width) + ")");
   }
 
   void RunLocal(const CellForest& forest) {

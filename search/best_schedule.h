@@ -42,6 +42,15 @@ struct BestScheduleOptions {
   // 27-cell ones (3,000-3,600 nodes), where it proves nothing and holds ~400 MiB.
   std::uint64_t exact_states = 50000;
   std::size_t exact_max_nodes = 1000;
+  // A board-level split (empty: none): per cell of the tree, the coarser cell holding it (e.g.
+  // the 2x2x2 boxes of the cell grid). When the beam's work limit would cut its width on the
+  // whole tree (width x Peel's length x nodes above beam_max_node_visits, as on frames of
+  // hundreds of cells), a two-level schedule (graph/peel.h TwoLevelSchedule) is offered too,
+  // after Peel: the coarse cells ordered by a beam search of the contracted tree, each entry's
+  // forest by a beam search of its own, each with the full width and a share of
+  // beam_max_node_visits in proportion to its nodes, so its cost grows with the tree about
+  // linearly; the local search then starts from the shorter of it and the whole tree's beam.
+  std::vector<CellId> coarse_of;
   // A known lower bound on the optimum (0: none): the search stops as soon as a schedule
   // meets it (that schedule is then optimal).
   std::uint64_t lower_bound = 0;
@@ -58,7 +67,8 @@ struct BestScheduleResult {
   // How it was found: "peel", "beam(256)", "beam(256)+lns(4x20000)", "...+exact".
   std::string method;
   std::size_t peel_length = 0, beam_length = 0, local_length = 0;  // 0: not run
-  std::uint64_t bound = 0;                                         // maxGen bound
+  std::size_t two_level_length = 0;  // the two-level schedule's (coarse_of); 0: not run
+  std::uint64_t bound = 0;           // maxGen bound
   // The optimum is in [lower, length]: lower is the largest of the bound, the given lower
   // bound and what the exact search proved. optimal when lower == length.
   std::uint64_t lower = 0;

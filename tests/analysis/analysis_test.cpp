@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "base/check.h"
@@ -15,6 +16,7 @@ namespace raycell {
 namespace {
 
 using testing::BruteForceOptimum;
+using testing::CellList;
 using testing::FromPaths;
 using testing::RandomTree;
 
@@ -55,6 +57,71 @@ TEST(AnalysisBracketTest, RandomTreesAreBracketedAroundTheOptimum) {
     if (::testing::Test::HasFailure()) return;
   }
   EXPECT_GT(met, 250);  // small trees: the two sides meet on nearly all
+}
+
+// Random paths over a few cells of an 8x8x8 grid (512 cells), taken from its 4x4x4 corner so
+// that they fall in several of the 2x2x2 boxes: paths of 1..6 visits without consecutive
+// repeats.
+CellTree RandomGridTree(std::mt19937& rng) {
+  std::vector<CellId> cells;
+  const std::uint32_t count = 4 + rng() % 4;
+  while (cells.size() < count) {
+    const CellId c(rng() % 4 + 8 * (rng() % 4 + 8 * (rng() % 4)));
+    if (std::find(cells.begin(), cells.end(), c) == cells.end()) cells.push_back(c);
+  }
+  std::vector<CellList> paths(1 + rng() % 6);
+  for (CellList& p : paths) {
+    const std::size_t length = 1 + rng() % 6;
+    while (p.size() < length) {
+      const CellId c = cells[rng() % cells.size()];
+      if (p.empty() || p.back() != c) p.push_back(c);
+    }
+  }
+  return FromPaths(paths);
+}
+
+// The bracket as configured at 512 cells (issue 43): the lower bound with the grid's 2x2x2
+// tiles first (max_blocks below the number of boxes, as on a 512-cell frame), pairs sampled by
+// their conflicts within a small state budget, and the search's two-level schedule (its beam
+// budget below width x Peel x nodes, as on a 512-cell frame). On trees small enough for the
+// brute force: the bound never above the optimum, the two-level schedule feasible (BestSchedule
+// checks every schedule it is offered) and never below it.
+TEST(AnalysisBracketTest, AtHundredsOfCellsTheBoundsHoldOnRandomTrees) {
+  std::mt19937 rng(43);
+  int tiled = 0, sampled = 0, raised = 0, two_level = 0;
+  for (int i = 0; i < 300; ++i) {
+    const CellTree t = RandomGridTree(rng);
+    if (t.node_count() > 22) continue;  // keep the brute force fast
+    SCOPED_TRACE("tree " + std::to_string(i) + ": " + t.ToString());
+    const std::size_t optimum = BruteForceOptimum(t);
+    BracketOptions o = BracketEffort(i % 2 ? "quick" : "default");
+    o.lower.grid = {8, 8, 8};
+    o.lower.max_blocks = 1;
+    o.lower.max_total_states = 20 + rng() % 2000;
+    const LowerBoundResult lb = LowerBound(t, o.lower);
+    ASSERT_LE(lb.value, optimum) << lb.ToString();
+    EXPECT_GE(lb.value, Bound(t));
+    tiled += lb.tiles > 0;
+    sampled += lb.pairs_conflicting < lb.pairs_sharing;
+    raised += lb.value > lb.max_gen;
+    BestScheduleOptions b = o.best;
+    b.threads = 1;
+    b.coarse_of = BoardCells(o.lower.grid);
+    b.beam_max_node_visits = 1 + rng() % 400;
+    b.chains = 0;
+    b.exact_states = 0;
+    const BestScheduleResult r = BestSchedule(t, b);
+    ASSERT_TRUE(IsFeasible(t, r.schedule));
+    EXPECT_GE(r.length, optimum);
+    if (r.two_level_length > 0) {
+      ++two_level;
+      EXPECT_GE(r.two_level_length, optimum) << r.ToString();
+    }
+  }
+  EXPECT_GT(tiled, 50);
+  EXPECT_GT(sampled, 50);
+  EXPECT_GT(raised, 50);
+  EXPECT_GT(two_level, 50);
 }
 
 // The lower bound on a thread of its own beside the search (BracketOptions::overlap) reports
