@@ -46,6 +46,7 @@ run() {
   read -r w m < <(tail -1 "$tmp/time")
   wall[$key]=$w
   peak[$key]=$(awk -v k="$m" 'BEGIN { printf "%.0f", k / 1024 }')
+  echo "done: ${key%|*}, $n frames: $w s, ${peak[$key]} MB" >&2  # as it goes: runs are long
 }
 
 labels=()
