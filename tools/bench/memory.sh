@@ -9,7 +9,7 @@
 # peak to the 4-frame one (the goal: at most 1.2, every peak at most 1 GiB).
 #
 # Usage: tools/bench/memory.sh [OUTDIR] [RES] [CELLS] [STEPS]
-# Default: /tmp/scale, 1920x1080, 16x16x16, every step. The captures are OUTDIR/b4096.rct and
+# Default: out/scale, 1920x1080, 16x16x16, every step. The captures are OUTDIR/b4096.rct and
 # OUTDIR/b4096_30.rct (other RES or CELLS: OUTDIR/mem_RES_CELLS_N.rct); STEPS, a space-separated
 # subset of: record analyze replay sweep (record only times a capture it makes).
 # RAYCELL=path/to/raycell measures another build (e.g. the one before a change);
@@ -18,7 +18,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 raycell=${RAYCELL:-$root/build/tools/raycell}
-out=${1:-/tmp/scale}
+out=${1:-out/scale}
 res=${2:-1920x1080}
 cells=${3:-16x16x16}
 steps=${4:-record analyze replay sweep}

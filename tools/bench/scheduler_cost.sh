@@ -9,7 +9,7 @@
 # file and are dropped (their fetches are not what this measures).
 #
 # Usage: tools/bench/scheduler_cost.sh [TRACE ...]
-#        (default: /tmp/scale/b512.rct /tmp/scale/b4096.rct, the built-in scene at 1920x1080,
+#        (default: out/scale/b512.rct out/scale/b4096.rct, the built-in scene at 1920x1080,
 #        an orbit of 4 frames over 20 degrees, 8x8x8 and 16x16x16 cells:
 #        `raycell record --res 1920x1080 --orbit 4:20 --cells 8x8x8 --no-images`)
 # Env:   RAYCELL (default build/tools/raycell), PROCESSORS (default "1 8"), SCHEDULERS (a
@@ -21,7 +21,7 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 raycell=${RAYCELL:-$root/build/tools/raycell}
 processors=${PROCESSORS:-1 8}
-[ $# -gt 0 ] || set -- /tmp/scale/b512.rct /tmp/scale/b4096.rct
+[ $# -gt 0 ] || set -- out/scale/b512.rct out/scale/b4096.rct
 prefix=()
 [ "${NICE:-1}" = 1 ] && prefix=(nice)
 work=$(mktemp -d)
