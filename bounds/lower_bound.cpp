@@ -383,16 +383,19 @@ class Bounder {
     Group g;
     g.bound.cells = cells;
     for (CellId c : cells) g.bound.max_gen_sum += max_gen_[c.value()];
-    g.solver = std::make_unique<ScsSolver>(Project(cells), options_.merged_parts);
-    g.bound.strings = static_cast<std::uint32_t>(g.solver->strings());
     ScsLimits limits = Limits();
     if (options_.merged_parts && cells.size() >= options_.large_group_cells) {
       limits.max_states = std::min(limits.max_states, options_.max_large_group_states);
     }
     if (limits.max_states == 0) {
+      // No states left: no search, and no projection either (at hundreds of cells, projecting
+      // and removing dominated strings for each of thousands of groups after the budget ran
+      // out cost most of the time). Such a group has no gain and no solver: the cuts skip it.
       r_.limits_reached = true;
       g.bound.scs_lower = g.bound.max_gen_sum;  // (1) summed over the group
     } else {
+      g.solver = std::make_unique<ScsSolver>(Project(cells), options_.merged_parts);
+      g.bound.strings = static_cast<std::uint32_t>(g.solver->strings());
       const ScsResult s = g.solver->Shortest(limits);
       g.bound.scs_lower = std::max(s.lower_bound, g.bound.max_gen_sum);
       g.bound.exact = s.exact;
