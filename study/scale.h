@@ -29,10 +29,10 @@ struct ScaleOptions {
   std::string scene;   // record's --scene
   std::string binary;  // the raycell binary to run; empty: the section is not measured
   std::string out;     // folder of the captures and the children's logs
-  std::vector<std::string> res = {"64x64", "128x128", "256x256"};
+  std::vector<std::string> res = {"32x32", "64x64", "128x128"};
   std::string cells_at = "4x4x4";
   std::vector<std::string> cells = {"2x2x2", "4x4x4", "8x8x8", "16x16x16"};
-  std::string res_at = "128x128";
+  std::string res_at = "64x64";
   int frames = 1;  // 0: not measured
 };
 

@@ -41,7 +41,7 @@ void AddStudyCommand(CLI::App& app) {
       "median 3x3x3 footprint: fetches, bytes over each link, stall (OUT/subdivisions.csv,\n"
       "subdivisions.png).\n"
       "Then the scale section (study/scale.h): record, analyze and replay (Max Work) each\n"
-      "run as its own process at 64x64 to 256x256 in 4x4x4 cells and at 128x128 in 2x2x2\n"
+      "run as its own process at 32x32 to 128x128 in 4x4x4 cells and at 64x64 in 2x2x2\n"
       "to 16x16x16 cells, --scale-frames frames each: wall time and peak memory against\n"
       "visits and cells, with their log-log slopes (OUT/scale.csv, scale.png).\n"
       "With no options: the built-in scene, 24 frames over 90 degrees, 2x2x2 and 3x3x3\n"
