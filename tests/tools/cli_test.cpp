@@ -21,6 +21,7 @@
 
 namespace {
 
+using raycell::testing::CsvRow;
 using raycell::testing::Raycell;
 using raycell::testing::Result;
 
@@ -266,33 +267,9 @@ TEST(Cli, ReplayAndSweepAreDeterministicWhateverTheJobs) {
   EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), 2 + 6);  // comment, header, 6 rows
 }
 
-// The fields of one CSV line (quoted fields unquoted).
-std::vector<std::string> CsvRow(const std::string& line) {
-  std::vector<std::string> fields(1);
-  bool quoted = false;
-  for (std::size_t i = 0; i < line.size(); ++i) {
-    const char c = line[i];
-    if (c == '"' && quoted && i + 1 < line.size() && line[i + 1] == '"') {
-      fields.back() += '"', ++i;
-    } else if (c == '"') {
-      quoted = !quoted;
-    } else if (c == ',' && !quoted) {
-      fields.emplace_back();
-    } else {
-      fields.back() += c;
-    }
-  }
-  return fields;
-}
-
 // The rows of a CSV file without its comment lines (# ...), each split into fields.
 std::vector<std::vector<std::string>> CsvRows(const std::filesystem::path& file) {
-  std::vector<std::vector<std::string>> rows;
-  std::istringstream in(raycell::testing::ReadBytes(file.string()));
-  for (std::string line; std::getline(in, line);) {
-    if (line.rfind("#", 0) != 0) rows.push_back(CsvRow(line));
-  }
-  return rows;
+  return raycell::testing::CsvText(raycell::testing::ReadBytes(file.string()));
 }
 
 // The samples of every frame of `capture`, as `raycell trace info` totals them.

@@ -9,7 +9,9 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 #include <string>
+#include <vector>
 
 namespace raycell::testing {
 
@@ -61,6 +63,36 @@ inline SplitResult RaycellSplit(const std::string& args, const std::string& name
   std::ifstream err(err_file, std::ios::binary);
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out,
           std::string(std::istreambuf_iterator<char>(err), {})};
+}
+
+// The fields of one CSV line (quoted fields unquoted, "" inside them a quote).
+inline std::vector<std::string> CsvRow(const std::string& line) {
+  std::vector<std::string> fields(1);
+  bool quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (c == '"' && quoted && i + 1 < line.size() && line[i + 1] == '"') {
+      fields.back() += '"', ++i;
+    } else if (c == '"') {
+      quoted = !quoted;
+    } else if (c == ',' && !quoted) {
+      fields.emplace_back();
+    } else {
+      fields.back() += c;
+    }
+  }
+  return fields;
+}
+
+// The rows of CSV text without its comment lines (# ...) and empty lines, each split into
+// fields.
+inline std::vector<std::vector<std::string>> CsvText(const std::string& text) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty() && line[0] != '#') rows.push_back(CsvRow(line));
+  }
+  return rows;
 }
 
 }  // namespace raycell::testing

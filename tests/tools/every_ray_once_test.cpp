@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "tests/replay/random_frame.h"
+#include "tests/test_util.h"
 #include "tests/tools/cli_util.h"
 #include "traces/trace_reader.h"
 
@@ -40,12 +42,11 @@ std::vector<Counts> CountFrames(const TraceReader& reader) {
   for (std::size_t f = 0; f < reader.frames().size(); ++f) {
     Counts c;
     reader.ForEachBatch(f, [&](const RayBatch& b) {
-      for (std::size_t r = 0; r < b.size(); ++r) {
-        ++c.rays;
-        if (b.visit_end(r) > b.visit_begin(r)) ++c.worked_rays;
-      }
-      c.segments += b.cells().size();
-      for (std::uint32_t s : b.samples()) c.samples += s;
+      const testing::RayCounts k = testing::CountRays(b);
+      c.rays += b.size();
+      c.worked_rays += k.rays;
+      c.segments += k.segments;
+      c.samples += k.samples;
     });
     out.push_back(c);
   }
@@ -63,31 +64,6 @@ Counts Sum(const std::vector<Counts>& frames) {
   return t;
 }
 
-// A CSV's rows (comment lines dropped) as fields; row 0 is the header.
-std::vector<std::vector<std::string>> Csv(const std::string& text) {
-  std::vector<std::vector<std::string>> rows;
-  std::istringstream in(text);
-  for (std::string line; std::getline(in, line);) {
-    if (line.empty() || line[0] == '#') continue;
-    std::vector<std::string> fields;
-    std::string field;
-    bool quoted = false;
-    for (char ch : line) {
-      if (ch == '"') {
-        quoted = !quoted;
-      } else if (ch == ',' && !quoted) {
-        fields.push_back(field);
-        field.clear();
-      } else {
-        field += ch;
-      }
-    }
-    fields.push_back(field);
-    rows.push_back(fields);
-  }
-  return rows;
-}
-
 std::uint64_t Field(const std::vector<std::vector<std::string>>& rows, std::size_t row,
                     const std::string& name) {
   for (std::size_t k = 0; k < rows[0].size(); ++k) {
@@ -97,18 +73,13 @@ std::uint64_t Field(const std::vector<std::vector<std::string>>& rows, std::size
   return 0;
 }
 
-std::string ReadFile(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
 // The replay's rows (frames, then the total) carry each frame's worked rays, segments and
 // samples.
 void ExpectReplayCounts(const std::string& trace, const std::vector<Counts>& frames,
                         const std::string& options) {
   const testing::Result r = Raycell("replay " + trace + " --format csv --quiet " + options, false);
   ASSERT_EQ(r.code, 0) << options;
-  const auto rows = Csv(r.out);
+  const auto rows = testing::CsvText(r.out);
   ASSERT_EQ(rows.size(), frames.size() + 2) << options;  // header, frames, total
   for (std::size_t f = 0; f <= frames.size(); ++f) {
     const Counts c = f < frames.size() ? frames[f] : Sum(frames);
@@ -157,7 +128,7 @@ TEST(EveryRayOnce, EveryCommandAt4096CellsCountsTheTracesRaysSegmentsAndSamples)
   {
     const testing::Result r = Raycell("analyze " + trace + " --format csv --quiet", false);
     ASSERT_EQ(r.code, 0);
-    const auto rows = Csv(r.out);
+    const auto rows = testing::CsvText(r.out);
     ASSERT_EQ(rows.size(), frames.size() + 1);
     for (std::size_t f = 0; f < frames.size(); ++f) {
       EXPECT_EQ(Field(rows, f + 1, "rays"), frames[f].rays);
@@ -182,7 +153,7 @@ TEST(EveryRayOnce, EveryCommandAt4096CellsCountsTheTracesRaysSegmentsAndSamples)
                                       "--quiet --out " +
                                       out);
     ASSERT_EQ(r.code, 0) << r.out;
-    const auto rows = Csv(ReadFile(out));
+    const auto rows = testing::CsvText(testing::ReadBytes(out));
     ASSERT_EQ(rows.size(), 5u);
     const Counts t = Sum(frames);
     for (std::size_t row = 1; row < rows.size(); ++row) {
