@@ -45,6 +45,22 @@ ReplayResult ReplayOn(const RayBatch& rays, const ReplayConfig& config, Schedule
   return ReplayFrame(w, footprints, config, s, info, Bound(tree));
 }
 
+// What auto's check measures of scheduler `e` (one object for both frames): frame i-1 (`f1`,
+// planned from `t2`, frame i-2's tree) then frame i-2 (`f2`, planned from `t1`) replayed under
+// `node`, fetches and time summed.
+ReplayResult OnFramesSeen(const SchedulerEntry& e, const RayBatch& f1, const RayBatch& f2,
+                          const CellTree& t1, const CellTree& t2, const ReplayConfig& node,
+                          const std::vector<std::uint64_t>& footprints) {
+  const std::uint32_t cells = std::uint32_t(footprints.size());
+  const FrameTrees seen{1, nullptr, &t2, cells}, back{1, nullptr, &t1, cells};
+  auto s = MakeScheduler(e, 1);
+  ReplayResult r = ReplayOn(f1, node, *s, seen, footprints);
+  const ReplayResult q = ReplayOn(f2, node, *s, back, footprints);
+  r.fetches += q.fetches;
+  r.time = r.time + q.time;
+  return r;
+}
+
 // With one processor the replay per node is exact (docs/design.md §2 "Granularity"), and the
 // model is that replay: it fetches as many cells, for every scheduler auto asks it about.
 TEST(AutoModel, FetchesAsTheReplayWithOneProcessor) {
@@ -209,14 +225,8 @@ TEST(Auto, FallsBackToMaxWorkWhenThePreviousFrameShowsItBetter) {
     ReplayConfig node = Config(kAutoEntry, 1);
     node.granularity = ReplayConfig::Granularity::kNode;
     // Frames i-1 and i-2 in the replay, each planned from the other.
-    const FrameTrees seen{1, nullptr, &t2, cells}, back{1, nullptr, &t1, cells};
     const auto both = [&](const SchedulerEntry& e) {
-      auto s = MakeScheduler(e, 1);
-      ReplayResult r = ReplayOn(f1, node, *s, seen, footprints);
-      const ReplayResult q = ReplayOn(f2, node, *s, back, footprints);
-      r.fetches += q.fetches;
-      r.time = r.time + q.time;
-      return r;
+      return OnFramesSeen(e, f1, f2, t1, t2, node, footprints);
     };
     const ReplayResult rm = both(kMaxWorkEntry);
     const SchedulerEntry* best = nullptr;
@@ -275,14 +285,8 @@ TEST(Auto, SeveralProcessorsJudgeOnTheReplaysOwnBoard) {
     for (auto& f : footprints) f = 1000 + rng() % 300'000;
     ReplayConfig node = Config(kAutoEntry, p);
     node.granularity = ReplayConfig::Granularity::kNode;
-    const FrameTrees seen{1, nullptr, &t2, cells}, back{1, nullptr, &t1, cells};
     const auto both = [&](const SchedulerEntry& e) {
-      auto s = MakeScheduler(e, 1);
-      ReplayResult r = ReplayOn(f1, node, *s, seen, footprints);
-      const ReplayResult q = ReplayOn(f2, node, *s, back, footprints);
-      r.fetches += q.fetches;
-      r.time = r.time + q.time;
-      return r;
+      return OnFramesSeen(e, f1, f2, t1, t2, node, footprints);
     };
     const ReplayResult rm = both(kMaxWorkEntry);
     const SchedulerEntry* best = nullptr;
