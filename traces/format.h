@@ -22,8 +22,9 @@ struct TraceHeader;
 // are a range of; version 4 the regroupable capture (Header.regroupable, its leaves) and the
 // subdivision of a regrouped trace (Header.subdivision); version 5 a new batch encoding (rays
 // predicted from the corresponding ray of the previous group, paths as cell steps, shadow
-// rays' samples in their own column); see trace.capnp.
-inline constexpr std::uint32_t kTraceFormatVersion = 5;
+// rays' samples in their own column); version 6 the samples range coded under contexts
+// (Batch.sampleCode, traces/sample_coder.h); see trace.capnp.
+inline constexpr std::uint32_t kTraceFormatVersion = 6;
 // Magic of the skippable zstd frame that holds the index.
 inline constexpr std::uint32_t kTraceIndexMagic = 0x184D2A5B;
 // Last 8 bytes of a complete trace file.

@@ -1,4 +1,4 @@
-# raycell trace file schema, format version 5 (docs/design.md §3 "The trace"). The format's
+# raycell trace file schema, format version 6 (docs/design.md §3 "The trace"). The format's
 # constants and limits are in traces/format.h.
 #
 # A trace file (".rct") is a sequence of zstd frames:
@@ -87,7 +87,25 @@
 # refraction rays) and shadowSamples (of shadow rays) hold them in ray and visit order.
 # Versions 1-4: the prediction is the reference ray's samples at visit v when it has more
 # than v visits, and secondarySamples holds the visits of every ray that is not primary.
-# Each samples column is zero-run coded: a run of n >= 1
+# Version 6: the same values (residual or samples, per visit of every ray of the batch, in
+# ray and visit order) are range coded in Batch.sampleCode, the three samples columns empty.
+# The coder is LZMA's binary range coder (traces/sample_coder.h): 32-bit range, carries
+# propagated through a cache byte, 5 bytes flushed at the end; a bit with probability p/2048
+# of being 0 splits the range at (range >> 11) * p, and p then moves by (2048 - p) >> 4 after
+# a 0 or by -(p >> 4) after a 1 (p starts at 1024); a plain bit halves the range. The code
+# must end exactly at the last byte. A value v is coded as u = v + 1: its length e =
+# floor(log2 u) in unary (bit i, 1 while e > i, for i < min(e + 1, 40)), then the top
+# min(e, 3) bits of u below its leading one in a bit tree (node 1, then 2*node + bit), then
+# its remaining bits as plain bits, most significant first. Every bit model belongs to the
+# visit's context: c = ((((g * 2 + n) * 2 + m) * 7 + s) * 2 + l) * 8 + q, where g is the ray's
+# group (0 primary, 1 reflection or refraction, 2 shadow), n its new-path bit, m 1 when the
+# value is a residual, s the size class (0, 1, 2-3, 4-7, 8-15, 16-31, >= 32 -> 0..6) of the
+# predicting visit's samples when it is a residual, else of the ray's previous visit's
+# samples (0 at its first visit), l 1 at the ray's last visit, and q the ray's previous
+# value: 0 at its first visit, 1 when that was not a residual, else its residual clamped to
+# -2..3, plus 4. Each context has its own length bits and its own tree for each length up
+# to 12 (longer lengths share the tree of 12). All models start anew in every batch.
+# Versions 1-5: each samples column is zero-run coded: a run of n >= 1
 # consecutive zero residuals is written as the digits of n in bijective base 2, least
 # significant first, digit 1 as the value 0 and digit 2 as the value 1; any other residual r
 # is written as r + 1. A run ends at the first value >= 2 or at the end of the column. For
@@ -113,8 +131,10 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("raycell::schema");
 
-const formatVersion :UInt32 = 5;
+const formatVersion :UInt32 = 6;
 # The format version this schema describes; Header.formatVersion of files written with it.
+# Version 5 differs only in its samples: in primarySamples, secondarySamples and
+# shadowSamples, zero-run coded, and no Batch.sampleCode (see "Samples").
 # Version 4 differs only in its batch encoding (see "Column encoding": reference rays, paths
 # as cell ids and deltas, no Batch.shadowSamples); its header and records are version 5's.
 # Version 3 differs only in having no Header.regroupable, leafCount and subdivision (read as
@@ -373,10 +393,10 @@ struct Batch {
   # The same for the rays with the new-path bit that are not primary.
   primarySamples @9 :Column;
   # Zero-run coded residuals (see "Samples") of the visits of primary rays. Samples are the
-  # volume samples taken in a visit's cell (the work done there).
+  # volume samples taken in a visit's cell (the work done there). Empty in version 6.
   secondarySamples @10 :Column;
   # The same for the visits of reflection and refraction rays (versions 1-4: of every ray
-  # that is not primary).
+  # that is not primary). Empty in version 6.
   tEnter @11 :List(Float32);
   # Per visit of the batch (the visits of ray 0, then of ray 1, ...), only when
   # settings.storeT (else empty): ray parameter where the ray enters the cell, world units
@@ -385,13 +405,18 @@ struct Batch {
   # Per visit, only when settings.storeT: ray parameter where it leaves the cell.
   shadowSamples @13 :Column;
   # Version 5: the zero-run coded residuals of the visits of shadow rays (secondarySamples
-  # then holds those of reflection and refraction rays only). Empty before version 5.
+  # then holds those of reflection and refraction rays only). Empty before version 5 and in
+  # version 6.
   referenceRule @14 :UInt8;
   # Version 5: how a ray that is not primary finds its reference ray (see "Column
   # encoding"): 0 the sibling rule, 1 the corresponding rule. The writer codes each batch
   # both ways and keeps the one whose columns have the lower order-0 entropy (the
   # corresponding ray is the nearer at high resolutions, the sibling at low ones). 0 before
   # version 5.
+  sampleCode @15 :Data;
+  # Version 6: the samples of every visit of the batch, in ray and visit order, range coded
+  # (see "Samples"); primarySamples, secondarySamples and shadowSamples are then empty.
+  # Empty before version 6.
 }
 
 # Totals of one frame, written after its last batch (and repeated in the index).

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstring>
 #include <iterator>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "traces/columns.h"
 #include "traces/format.h"
 #include "traces/frame_checksum.h"
+#include "traces/sample_coder.h"
 #include "traces/subdivision.h"
 #include "traces/trace.capnp.h"
 
@@ -320,8 +322,9 @@ struct BatchColumns {
   ColumnReader head_runs, parents, spawns, pixels, primary_paths, secondary_paths;
   ZeroRunColumnReader primary_samples, secondary_samples, shadow_samples;
   capnp::List<float>::Reader t_enter, t_exit;
+  std::optional<SampleDecoder> sample_code;  // version 6
 
-  explicit BatchColumns(schema::Batch::Reader b)
+  BatchColumns(schema::Batch::Reader b, bool v6)
       : heads(b.getHeads()),
         head_runs(b.getHeadRuns(), heads.size(), "headRuns"),
         parents(b.getParents(), "parents"),
@@ -333,7 +336,14 @@ struct BatchColumns {
         secondary_samples(b.getSecondarySamples(), "secondarySamples"),
         shadow_samples(b.getShadowSamples(), "shadowSamples"),
         t_enter(b.getTEnter()),
-        t_exit(b.getTExit()) {}
+        t_exit(b.getTExit()) {
+    const capnp::Data::Reader code = b.getSampleCode();
+    if (v6) {
+      sample_code.emplace(code.begin(), code.size());
+    } else if (code.size() != 0) {
+      throw BadData("sampleCode in a batch of format version 5 or earlier");
+    }
+  }
 
   // The number of rays of the batch (the sum of the head runs), at most kTraceMaxBatchRays.
   std::size_t RayCount(schema::Batch::Reader b) const {
@@ -357,6 +367,7 @@ struct BatchColumns {
     primary_samples.Finish();
     secondary_samples.Finish();
     shadow_samples.Finish();
+    if (sample_code) sample_code->Finish();
   }
 };
 
@@ -369,7 +380,8 @@ class FrameDecoder {
         acc_(frame, header.settings.store_t),
         frame_(frame),
         expected_(expected),
-        v5_(header.format_version >= 5) {}
+        v5_(header.format_version >= 5),
+        v6_(header.format_version >= 6) {}
 
   void Decode(schema::Batch::Reader b, RayBatch& out) {
     if (b.getFrame() != frame_) throw BadData("batch of frame " + Str(b.getFrame()));
@@ -377,7 +389,7 @@ class FrameDecoder {
       throw BadData("batch starts at ray " + Str(b.getFirstId()) + ", expected " +
                     Str(acc_.rays()));
     }
-    BatchColumns c(b);
+    BatchColumns c(b, v6_);
     CheckTimeLengths(c);
     const std::size_t rays = c.RayCount(b);
     out.Clear();
@@ -603,20 +615,26 @@ class FrameDecoder {
     if (new_path && count > 0) cell = PredictedFirstCell(out, ref, ref_begin, ref_count);
     const bool t = header_.settings.store_t;
     std::size_t next = 0;  // the reference's visit after the last matched
+    SampleContext context(static_cast<unsigned>(kind), new_path);
     for (std::uint64_t v = 0; v < count; ++v) {
       cell = new_path ? ReadStep(paths, cell, grid) : out.cells()[ref_begin + v].value();
       if (cell == kBadStep) throw BadData("ray " + Str(id) + ": bad cell");
       const std::size_t end = std::min(ref_count, next + kSampleMatchWindow);
       std::size_t k = next;
       while (k < end && out.cells()[ref_begin + k].value() != cell) ++k;
-      const std::uint64_t code = samples.Next();
+      const bool matched = k < end;
+      const std::uint64_t predicted = matched ? out.samples()[ref_begin + k] : 0;
+      const std::uint64_t code =
+          c.sample_code ? c.sample_code->Next(context.Of(matched, predicted, v + 1 == count))
+                        : samples.Next();
       std::uint64_t n = code;
-      if (k < end) {
-        n = ApplyDelta(out.samples()[ref_begin + k], code, "samples");
+      if (matched) {
+        n = ApplyDelta(predicted, code, "samples");
         next = k + 1;
       } else if (code > 0xFFFFFFFF) {
         throw BadData("ray " + Str(id) + ": bad samples");
       }
+      context.Next(matched, code, n);
       const std::size_t at = out.visit_count();
       if (t && at >= c.t_enter.size()) throw BadData("t columns have bad length");
       out.AddVisit(CellId(cell), static_cast<std::uint32_t>(n), t ? c.t_enter[at] : 0.f,
@@ -672,6 +690,7 @@ class FrameDecoder {
   // of the batch, its ordinal; by [kind][kind of its parent][ordinal], the last ray of the
   // batch with them whose parent is in the batch; the first cell of the last ray with a visit.
   bool v5_;
+  bool v6_;  // samples in Batch.sampleCode
   std::vector<std::uint32_t> ordinals_;
   std::vector<std::size_t> corresponding_[kRayKindCount][kRayKindCount];
   std::uint32_t last_first_cell_ = 0;

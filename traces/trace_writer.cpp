@@ -20,6 +20,7 @@
 #include "base/file.h"
 #include "base/hash.h"
 #include "traces/columns.h"
+#include "traces/sample_coder.h"
 #include "traces/trace.capnp.h"
 
 namespace raycell {
@@ -208,9 +209,11 @@ struct BatchColumns {
   HeadRunBuilder heads;
   ColumnBuilder parents, spawns, pixels, primary_paths, secondary_paths;
   ZeroRunColumnBuilder primary_samples, secondary_samples, shadow_samples;
+  SampleEncoder samples;  // version 6: Batch.sampleCode
   static constexpr std::size_t kNone = ~std::size_t{0};
   CellGrid grid;
   unsigned rule;
+  std::uint32_t version;
   std::size_t last_primary = kNone;  // index in the batch of the last primary ray
   // Sibling rule: index of the last group start by [kind][kind of its parent].
   std::size_t group_start[kRayKindCount][kRayKindCount];
@@ -221,8 +224,9 @@ struct BatchColumns {
   RayId last_non_shadow = kNoParent;    // id of the last ray whose kind is not shadow
   std::uint32_t last_first_cell = 0;    // first cell of the last ray with a visit
 
-  BatchColumns(const RayBatch& b, const CellGrid& g, unsigned reference_rule)
-      : grid(g), rule(reference_rule) {
+  BatchColumns(const RayBatch& b, const CellGrid& g, unsigned reference_rule,
+               std::uint32_t format_version)
+      : grid(g), rule(reference_rule), version(format_version) {
     for (auto& starts : group_start) std::fill(std::begin(starts), std::end(starts), kNone);
     ordinals.reserve(b.size());
     for (std::size_t i = 0; i < b.size(); ++i) AddRay(b, i);
@@ -230,6 +234,7 @@ struct BatchColumns {
     primary_samples.Finish();
     secondary_samples.Finish();
     shadow_samples.Finish();
+    if (version >= 6) samples.Finish();
   }
 
   void AddRay(const RayBatch& b, std::size_t i) {
@@ -249,26 +254,36 @@ struct BatchColumns {
     ordinals.push_back(sibling && prev.kind == r.kind ? ordinals.back() + 1 : 0);
     const std::size_t ref = ReferenceRay(b, r, i, sibling);
     const RayView reference = ref != kNone ? b.ray(ref) : RayView{};
-    if (ref == kNone || !SameCells(r, reference)) {
+    const bool new_path = ref == kNone || !SameCells(r, reference);
+    if (new_path) {
       head |= kHeadNewPath;
-      AddPath(r, PredictedFirstCell(b, r, ref, reference),
-              r.is_primary() ? primary_paths : secondary_paths);
+      const std::uint32_t first = PredictedFirstCell(b, r, ref, reference);
+      ColumnBuilder& paths = r.is_primary() ? primary_paths : secondary_paths;
+      paths.Add(r.visit_count);
+      AddSteps(r, first, paths);
     }
-    ZeroRunColumnBuilder& samples = r.is_primary()               ? primary_samples
-                                    : r.kind == RayKind::kShadow ? shadow_samples
-                                                                 : secondary_samples;
+    ZeroRunColumnBuilder& v5_samples = r.is_primary()               ? primary_samples
+                                       : r.kind == RayKind::kShadow ? shadow_samples
+                                                                    : secondary_samples;
     // Each visit against the reference's visit of the same cell, searched from the one after
     // the last matched, at most kSampleMatchWindow visits on.
     std::size_t next = 0;
+    SampleContext context(static_cast<unsigned>(r.kind), new_path);
     for (std::size_t v = 0; v < r.visit_count; ++v) {
       const std::size_t end = std::min(reference.visit_count, next + kSampleMatchWindow);
       std::size_t k = next;
       while (k < end && reference.cells[k] != r.cells[v]) ++k;
-      if (ref != kNone && k < end) {
-        samples.Add(ZigZag(Delta(r.samples[v], reference.samples[k])));
-        next = k + 1;
+      const bool matched = ref != kNone && k < end;
+      const std::uint64_t value =
+          matched ? ZigZag(Delta(r.samples[v], reference.samples[k])) : r.samples[v];
+      if (matched) next = k + 1;
+      if (version >= 6) {
+        const unsigned c =
+            context.Of(matched, matched ? reference.samples[k] : 0, v + 1 == r.visit_count);
+        samples.Add(c, value);
+        context.Next(matched, value, r.samples[v]);
       } else {
-        samples.Add(r.samples[v]);
+        v5_samples.Add(value);
       }
     }
     heads.Add(static_cast<std::uint8_t>(head));
@@ -325,8 +340,7 @@ struct BatchColumns {
     return kSpawnExplicit;
   }
 
-  void AddPath(const RayView& r, std::uint32_t first, ColumnBuilder& paths) const {
-    paths.Add(r.visit_count);
+  void AddSteps(const RayView& r, std::uint32_t first, ColumnBuilder& paths) const {
     for (std::size_t v = 0; v < r.visit_count; ++v) {
       AddStep(paths, v == 0 ? first : r.cells[v - 1].value(), r.cells[v].value(), grid);
     }
@@ -338,6 +352,7 @@ struct BatchColumns {
     for (const ColumnBuilder* c : {&parents, &spawns, &pixels, &primary_paths, &secondary_paths}) {
       n += c->bytes();
     }
+    n += samples.bytes();
     return n;
   }
 
@@ -348,6 +363,7 @@ struct BatchColumns {
     for (const ColumnBuilder* c : {&parents, &spawns, &pixels, &primary_paths, &secondary_paths}) {
       n += c->EntropyBits();
     }
+    n += 8.0 * static_cast<double>(samples.bytes());
     return n;
   }
 };
@@ -370,6 +386,10 @@ void FillBatch(schema::Batch::Builder out, const RayBatch& b, const BatchColumns
   c.primary_samples.Fill(out.initPrimarySamples());
   c.secondary_samples.Fill(out.initSecondarySamples());
   c.shadow_samples.Fill(out.initShadowSamples());
+  if (c.version >= 6) {
+    const std::vector<std::uint8_t>& code = c.samples.code();
+    out.setSampleCode(capnp::Data::Reader(code.data(), code.size()));
+  }
   if (!store_t) return;
   FillFloats(out.initTEnter(static_cast<unsigned>(b.visit_count())), b.t_enters());
   FillFloats(out.initTExit(static_cast<unsigned>(b.visit_count())), b.t_exits());
@@ -639,9 +659,11 @@ struct TraceWriter::Impl {
   void FlushPending() {
     if (pending.empty()) return;
     // Each reference rule's columns; the batch keeps the one whose columns have the lower
-    // order-0 entropy (which zstd's output follows), the sibling rule on a tie.
-    const BatchColumns sibling(pending, header.cells, kReferenceSibling);
-    const BatchColumns corresponding(pending, header.cells, kReferenceCorresponding);
+    // order-0 entropy (which zstd's output follows; format 6: plus the sample code's bits),
+    // the sibling rule on a tie.
+    const std::uint32_t version = options.format_version;
+    const BatchColumns sibling(pending, header.cells, kReferenceSibling, version);
+    const BatchColumns corresponding(pending, header.cells, kReferenceCorresponding, version);
     const BatchColumns& columns =
         corresponding.EntropyBits() < sibling.EntropyBits() ? corresponding : sibling;
     const std::size_t t_bytes = header.settings.store_t ? 8 * pending.visit_count() : 0;
@@ -740,7 +762,7 @@ void TraceWriter::BeginFrame(std::int32_t frame) {
 void TraceWriter::Append(const RayBatch& rays) {
   Impl& w = *impl_;
   RAYCELL_CHECK(w.in_frame);
-  RAYCELL_CHECK_EQ(w.options.format_version, kTraceFormatVersion);  // encodes only the current
+  RAYCELL_CHECK_LE(5u, w.options.format_version);  // encodes only versions 5 and 6
   RAYCELL_CHECK_EQ(rays.first_id(), w.frame.rays());
   for (std::size_t i = 0; i < rays.size(); ++i) w.AddRay(rays.ray(i));
 }

@@ -36,8 +36,9 @@ struct TraceWriterOptions {
   // Finish(), so a writer dropped before it leaves nothing.
   bool name_at_finish = false;
   // The format version the header and index say (3..kTraceFormatVersion). Rays are encoded
-  // (Append) only in the current one; an earlier one is for copying encoded frames of files
-  // of that version (AppendEncodedFrame: `trace concat`).
+  // (Append) in the current one (6) or in 5 (the previous writer's, kept to test that its
+  // files read and to compare); an earlier one is for copying encoded frames of files of
+  // that version (AppendEncodedFrame: `trace concat`).
   std::uint32_t format_version = kTraceFormatVersion;
 };
 

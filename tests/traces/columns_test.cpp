@@ -1,6 +1,8 @@
 // The column codec (traces/columns.h): any column encoded then decoded is identical, for
 // random columns and for the edge values of each coding (escapes at 254/255, 64-bit
-// extremes, zero runs of every length up to the bijective digits' carries).
+// extremes, zero runs of every length up to the bijective digits' carries). Format 6's range
+// coded samples (traces/sample_coder.h): any values in any contexts round trip, a code must
+// end at its last byte, and any bytes decode to bounded values.
 #include "traces/columns.h"
 
 #include <capnp/message.h>
@@ -10,6 +12,8 @@
 #include <limits>
 #include <random>
 #include <vector>
+
+#include "traces/sample_coder.h"
 
 namespace raycell {
 namespace {
@@ -165,6 +169,87 @@ TEST(ColumnsTest, ReaderRejectsColumnsThatDisagreeWithTheirUse) {
   EXPECT_THROW(ColumnReader(column.asReader(), 2, "c"), BadTraceData);
   ColumnReader unread(column.asReader(), "c");
   EXPECT_THROW(unread.Finish(), BadTraceData);
+}
+
+// ---- Format 6's sample code ---------------------------------------------------------------
+
+struct Coded {
+  std::vector<unsigned> contexts;
+  Values values;
+  std::vector<std::uint8_t> code;
+};
+
+// `n` values, mostly small (as residuals are), some of any size up to the largest, each in a
+// random context, encoded.
+Coded EncodeRandom(std::mt19937_64& rng, std::size_t n) {
+  Coded c;
+  SampleEncoder encoder;
+  for (std::size_t i = 0; i < n; ++i) {
+    const unsigned context = static_cast<unsigned>(rng() % SampleContext::kCount);
+    std::uint64_t v = rng() % 4;
+    if (rng() % 8 == 0) v = rng() % 300;
+    if (rng() % 64 == 0) v = rng() % (SampleModels::kMaxValue + 1);
+    if (rng() % 256 == 0) v = SampleModels::kMaxValue;
+    c.contexts.push_back(context);
+    c.values.push_back(v);
+    encoder.Add(context, v);
+  }
+  encoder.Finish();
+  c.code = encoder.code();
+  return c;
+}
+
+Values Decode(const Coded& c, const std::vector<std::uint8_t>& code) {
+  SampleDecoder decoder(code.data(), code.size());
+  Values out;
+  for (const unsigned context : c.contexts) out.push_back(decoder.Next(context));
+  decoder.Finish();
+  return out;
+}
+
+TEST(SampleCoderTest, RandomValuesInRandomContextsRoundTrip) {
+  std::mt19937_64 rng(3);
+  for (const std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{5}, std::size_t{20000}}) {
+    const Coded c = EncodeRandom(rng, n);
+    EXPECT_EQ(Decode(c, c.code), c.values) << n << " values";
+  }
+}
+
+TEST(SampleCoderTest, TheCodeMustEndAtItsLastByte) {
+  std::mt19937_64 rng(4);
+  const Coded c = EncodeRandom(rng, 3000);
+  std::vector<std::uint8_t> shorter(c.code.begin(), c.code.end() - 1), longer = c.code;
+  longer.push_back(0);
+  EXPECT_THROW(Decode(c, shorter), BadTraceData);
+  EXPECT_THROW(Decode(c, longer), BadTraceData);
+  EXPECT_THROW(Decode(c, {}), BadTraceData);
+}
+
+// Whatever the bytes, each value decodes in a bounded number of steps to at most 2^41 - 2
+// (the reader then checks it as a residual or as samples).
+TEST(SampleCoderTest, AnyBytesDecodeToBoundedValues) {
+  std::mt19937_64 rng(5);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<std::uint8_t> bytes(rng() % 200);
+    for (std::uint8_t& b : bytes) b = static_cast<std::uint8_t>(rng());
+    if (trial % 2) std::fill(bytes.begin(), bytes.end(), 0xFF);  // every length bit 1
+    SampleDecoder decoder(bytes.data(), bytes.size());
+    for (int i = 0; i < 2000; ++i) {
+      const std::uint64_t v = decoder.Next(static_cast<unsigned>(rng() % SampleContext::kCount));
+      ASSERT_LE(v, (std::uint64_t{1} << 41) - 2);
+    }
+  }
+}
+
+// The models adapt: a context's value seen again and again costs ever less, down to the
+// probability's bound (15/2048 for the other bit: 0.0106 bits a value), so 100000 zeros
+// take about 133 bytes.
+TEST(SampleCoderTest, RepeatedValuesCostAlmostNothing) {
+  SampleEncoder encoder;
+  for (int i = 0; i < 100000; ++i) encoder.Add(7, 0);
+  encoder.Finish();
+  EXPECT_LE(encoder.code().size(), 160u);
+  EXPECT_GE(encoder.code().size(), 120u);
 }
 
 }  // namespace

@@ -25,6 +25,7 @@
 #include "tests/test_util.h"
 #include "tests/traces/trace_format.h"
 #include "tests/traces/trace_test_util.h"
+#include "traces/sample_coder.h"
 #include "traces/trace.capnp.h"
 #include "traces/trace_reader.h"
 #include "traces/trace_writer.h"
@@ -257,8 +258,9 @@ struct RawBatch {
   std::vector<std::uint64_t> runs, parents, spawns, pixels, primary_paths, secondary_paths,
       primary_samples, secondary_samples, shadow_samples;
   std::uint8_t reference_rule = 0;
-  std::size_t t_values = 3;       // entries of tEnter and tExit
-  bool drop_wide_pixels = false;  // leave the pixels' escaped values out
+  std::vector<std::uint8_t> sample_code;  // format 6
+  std::size_t t_values = 3;               // entries of tEnter and tExit
+  bool drop_wide_pixels = false;          // leave the pixels' escaped values out
 };
 
 void FillColumn(schema::Column::Builder out, const std::vector<std::uint64_t>& values,
@@ -295,6 +297,7 @@ std::string BatchMessage(const RawBatch& b) {
   FillColumn(out.initSecondarySamples(), b.secondary_samples);
   FillColumn(out.initShadowSamples(), b.shadow_samples);
   out.setReferenceRule(b.reference_rule);
+  out.setSampleCode(capnp::Data::Reader(b.sample_code.data(), b.sample_code.size()));
   out.initTEnter(static_cast<unsigned>(b.t_values));
   out.initTExit(static_cast<unsigned>(b.t_values));
   return Flat(message);
@@ -354,6 +357,24 @@ RawBatch GoodBatchV5() {
   b.secondary_paths = {1, 62};
   b.secondary_samples = {};
   b.shadow_samples = {8};  // 7 + 1 (no reference ray)
+  return b;
+}
+
+// The same rays coded as format version 6: version 5's columns but the samples, which are
+// range coded in sampleCode (see "Samples" in trace.capnp): ray 0 (primary, a path of its own,
+// no reference) 5 and 6, ray 1 (shadow, the same) 7, none a residual.
+RawBatch GoodBatchV6() {
+  RawBatch b = GoodBatchV5();
+  b.primary_samples = {};
+  b.shadow_samples = {};
+  SampleEncoder code;
+  SampleContext primary(0, true), shadow(3, true);
+  code.Add(primary.Of(false, 0, false), 5);
+  primary.Next(false, 5, 5);
+  code.Add(primary.Of(false, 0, true), 6);
+  code.Add(shadow.Of(false, 0, true), 7);
+  code.Finish();
+  b.sample_code = code.code();
   return b;
 }
 
@@ -609,6 +630,44 @@ TEST_F(InvalidContentV5Test, ShadowSamplesMustFitTheShadowVisits) {
   ExpectRejected({b}, "column secondarySamples: extra values");
 }
 
+class InvalidContentV6Test : public InvalidContentTest {
+ protected:
+  InvalidContentV6Test() : InvalidContentTest(6) {}
+};
+
+TEST_F(InvalidContentV6Test, CraftedGoodFrameReads) {
+  const TraceReader reader = Read({GoodBatchV6()}, GoodSummary());
+  EXPECT_EQ(reader.header().format_version, 6u);
+  ASSERT_EQ(reader.frames().size(), 1u) << reader.warning();
+  const RayBatch frame = reader.LoadFrame(0);
+  EXPECT_EQ(frame.cells(), (testing::CellList{3, 2, 2}));
+  EXPECT_EQ(frame.samples(), (std::vector<std::uint32_t>{5, 6, 7}));
+}
+
+TEST_F(InvalidContentV6Test, SamplesAreInTheSampleCodeOnly) {
+  RawBatch b = GoodBatchV6();
+  b.primary_samples = {6, 7};
+  ExpectRejected({b}, "column primarySamples: extra values");
+  b = GoodBatchV6();
+  b.sample_code.pop_back();
+  ExpectRejected({b}, "sampleCode of 6 bytes ends at byte 7");
+  b = GoodBatchV6();
+  b.sample_code.push_back(0);
+  ExpectRejected({b}, "sampleCode of 8 bytes ends at byte 7");
+  b = GoodBatchV6();
+  b.sample_code = {};
+  ExpectRejected({b}, "sampleCode of 0 bytes ends at byte");
+  b = GoodBatchV6();
+  b.sample_code = std::vector<std::uint8_t>(6, 0xFF);  // huge values: bad samples
+  ExpectRejected({b}, "ray 0: bad samples");
+}
+
+TEST_F(InvalidContentV5Test, SampleCodeIsRefused) {
+  RawBatch b = GoodBatchV5();
+  b.sample_code = GoodBatchV6().sample_code;
+  ExpectRejected({b}, "sampleCode in a batch of format version 5 or earlier");
+}
+
 TEST_F(InvalidContentTest, FrameEndMustMatchTheRays) {
   FrameSummary s = GoodSummary();
   s.checksum ^= 1;
@@ -717,12 +776,12 @@ TEST_F(InvalidHeaderTest, VersionsAndLimitsAreChecked) {
   ExpectRejected(HeaderMessage(1, {2, 1, 1}, {5, 6}) + FootprintsMessage(0, {5}, {1}),
                  "more than one message in the header frame");
   ExpectRejected(HeaderMessage(1, {2, 1, 1}, {5}), "1 footprints for 2 cells");
-  ExpectRejected(HeaderMessage(6, {2, 1, 1}),
-                 "format version 6 is not supported (this reader "
-                 "reads 1..5)");
+  ExpectRejected(HeaderMessage(7, {2, 1, 1}),
+                 "format version 7 is not supported (this reader "
+                 "reads 1..6)");
   ExpectRejected(HeaderMessage(0, {2, 1, 1}),
                  "format version 0 is not supported (this reader "
-                 "reads 1..5)");
+                 "reads 1..6)");
   // A grid beyond the limit is refused before anything is allocated for its cells.
   ExpectRejected(HeaderMessage(2, {4096, 4096, 4096}) + FootprintsMessage(0, {5}, {0}),
                  "cell grid 4096x4096x4096 = 68719476736 cells exceeds the trace format's limit "

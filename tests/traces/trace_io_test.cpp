@@ -18,6 +18,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include "base/check.h"
@@ -107,19 +108,24 @@ void ExpectSummaryOf(const FrameSummary& s, const Frame& f) {
   EXPECT_EQ(s.samples, samples);
 }
 
-class RoundTripTest : public ::testing::TestWithParam<bool> {};
+// With and without t; in the current format (6) and in format 5, which the writer still
+// writes when asked (options.format_version), so that files of the previous writer are
+// known to read.
+class RoundTripTest : public ::testing::TestWithParam<std::tuple<bool, std::uint32_t>> {};
 
 TEST_P(RoundTripTest, WhatIsReadEqualsWhatWasWritten) {
-  const bool store_t = GetParam();
+  const auto [store_t, version] = GetParam();
   const std::string path = TempPath(store_t ? "rt_t.rct" : "rt.rct");
-  const TraceHeader header = TestHeader({3, 3, 3}, store_t);
+  TraceHeader header = TestHeader({3, 3, 3}, store_t);
   const std::vector<Frame> frames = RandomFrames(store_t, 1);
   TraceWriterOptions options;
   options.max_batch_rays = 1000;
+  options.format_version = version;
   const std::vector<FrameSummary> written = WriteTrace(path, header, frames, options);
 
   const TraceReader reader = TraceReader::Open(path);
   EXPECT_EQ(reader.warning(), "");
+  header.format_version = version;
   EXPECT_EQ(reader.header(), header);
   ASSERT_EQ(reader.frames().size(), frames.size());
   for (std::size_t k = 0; k < frames.size(); ++k) {
@@ -138,7 +144,8 @@ TEST_P(RoundTripTest, WhatIsReadEqualsWhatWasWritten) {
   std::remove(path.c_str());
 }
 
-INSTANTIATE_TEST_SUITE_P(WithAndWithoutT, RoundTripTest, ::testing::Bool());
+INSTANTIATE_TEST_SUITE_P(WithAndWithoutT, RoundTripTest,
+                         ::testing::Combine(::testing::Bool(), ::testing::Values(6u, 5u)));
 
 TEST(TraceIoTest, ForEachBatchStreamsBatchesOfBoundedSize) {
   const std::string path = TempPath("batches.rct");
@@ -383,7 +390,7 @@ TEST(TraceIoTest, ZstdAndCapnpDecodeTheWholeFile) {
   const std::string text = ReadBytes(out);
   // --short prints one message per line.
   EXPECT_EQ(CountOccurrences(text, "\n"), 2 + batches + frames.size()) << text.substr(0, 300);
-  EXPECT_EQ(text.rfind("(header = (formatVersion = 5, producer = \"raycell test\"", 0), 0u);
+  EXPECT_EQ(text.rfind("(header = (formatVersion = 6, producer = \"raycell test\"", 0), 0u);
   // The 27 footprints 7, 1007, 2007, ... in one record of 27 runs of one cell.
   EXPECT_EQ(CountOccurrences(text, "\n(footprints = (firstCell = 0, values = (narrow = [7, 255, "),
             1u);
@@ -452,7 +459,7 @@ TEST(TraceIoTest, PrintInfoShowsHeaderFramesAndTotals) {
   std::ostringstream out;
   PrintInfo(reader, "info.rct", out);
   const std::string text = out.str();
-  for (const char* want : {"format version: 5", "producer:       raycell test", "builtin:smoke",
+  for (const char* want : {"format version: 6", "producer:       raycell test", "builtin:smoke",
                            "density (fog, builtin", "3x3x3 = 27 cells", "sparse", "320x200",
                            "shadow", "refraction", "total", "naive uncompressed", "ratio:"}) {
     EXPECT_NE(text.find(want), std::string::npos) << want << "\n" << text;
@@ -551,8 +558,10 @@ std::vector<std::uint64_t> Values(schema::Column::Reader c) {
 TEST(TraceIoTest, SiblingRaysEncodeToRunsOfEqualHeads) {
   const std::string path = TempPath("siblings.rct");
   const RayBatch frame = SiblingFrame();
+  TraceWriterOptions options;
+  options.format_version = 5;  // whose sample columns are checked below
   const std::vector<FrameSummary> written =
-      WriteTrace(path, TestHeader({3, 3, 2}, false), {{0, frame}});
+      WriteTrace(path, TestHeader({3, 3, 2}, false), {{0, frame}}, options);
   EXPECT_EQ(TraceReader::Open(path).LoadFrame(0), frame);
 
   const kj::Array<capnp::word> words = FrameMessages(path, written[0]);
@@ -628,7 +637,7 @@ TEST(TraceIoTest, RoundTripsOnAnyGridShape) {
 // the first's. Version 5 predicts a shadow ray from the corresponding ray of the previous
 // pixel (same kind, parent kind and place among its siblings), so the second pixel stores
 // no path and only zero residuals, though its rays differ from their previous siblings.
-TEST(TraceIoTest, RaysArePredictedFromTheCorrespondingRayOfThePreviousPixel) {
+RayBatch TwoPixelsWithShadowRays() {
   RayBatch frame(false);
   for (std::uint32_t x = 0; x < 2; ++x) {
     const RayId primary = frame.size();
@@ -642,10 +651,21 @@ TEST(TraceIoTest, RaysArePredictedFromTheCorrespondingRayOfThePreviousPixel) {
     frame.AddVisit(CellId(1), 4, 0, 0);
     frame.AddVisit(CellId(3), 9, 0, 0);
   }
+  return frame;
+}
+
+// Format 5, as the previous writer wrote it (options.format_version = 5): every column as
+// trace.capnp describes it for version 5.
+TEST(TraceIoTest, RaysArePredictedFromTheCorrespondingRayOfThePreviousPixel) {
+  const RayBatch frame = TwoPixelsWithShadowRays();
   const std::string path = TempPath("corresponding.rct");
+  TraceWriterOptions options;
+  options.format_version = 5;
   const std::vector<FrameSummary> written =
-      WriteTrace(path, TestHeader({2, 2, 1}, false), {{0, frame}});
-  EXPECT_TRUE(TraceReader::Open(path).LoadFrame(0) == frame);
+      WriteTrace(path, TestHeader({2, 2, 1}, false), {{0, frame}}, options);
+  const TraceReader reader = TraceReader::Open(path);
+  EXPECT_EQ(reader.header().format_version, 5u);
+  EXPECT_TRUE(reader.LoadFrame(0) == frame);
   const kj::Array<capnp::word> words = FrameMessages(path, written[0]);
   capnp::FlatArrayMessageReader message(words);
   const auto batch = message.getRoot<schema::Record>().getBatch();
@@ -660,6 +680,32 @@ TEST(TraceIoTest, RaysArePredictedFromTheCorrespondingRayOfThePreviousPixel) {
   // The second primary ray repeats the first's path, with zero residuals.
   EXPECT_EQ(Values(batch.getPrimaryPaths()), (std::vector<std::uint64_t>{2, 62, 63}));
   EXPECT_EQ(Values(batch.getPrimarySamples()), (std::vector<std::uint64_t>{11, 11, 1}));
+  EXPECT_EQ(batch.getSampleCode().size(), 0u);
+  std::remove(path.c_str());
+}
+
+// Format 6 codes the same rays with the same references and paths, but every visit's sample
+// value in Batch.sampleCode (range coded), the three sample columns empty.
+TEST(TraceIoTest, Format6RangeCodesTheSamples) {
+  const RayBatch frame = TwoPixelsWithShadowRays();
+  const std::string path = TempPath("corresponding6.rct");
+  const std::vector<FrameSummary> written =
+      WriteTrace(path, TestHeader({2, 2, 1}, false), {{0, frame}});
+  const TraceReader reader = TraceReader::Open(path);
+  EXPECT_EQ(reader.header().format_version, 6u);
+  EXPECT_TRUE(reader.LoadFrame(0) == frame);
+  const kj::Array<capnp::word> words = FrameMessages(path, written[0]);
+  capnp::FlatArrayMessageReader message(words);
+  const auto batch = message.getRoot<schema::Record>().getBatch();
+  EXPECT_EQ(batch.getReferenceRule(), kReferenceCorresponding);
+  EXPECT_EQ(Values(batch.getSecondaryPaths()), (std::vector<std::uint64_t>{2, 62, 67, 2, 62, 67}));
+  EXPECT_EQ(Values(batch.getPrimaryPaths()), (std::vector<std::uint64_t>{2, 62, 63}));
+  EXPECT_EQ(batch.getPrimarySamples().getNarrow().size(), 0u);
+  EXPECT_EQ(batch.getSecondarySamples().getNarrow().size(), 0u);
+  EXPECT_EQ(batch.getShadowSamples().getNarrow().size(), 0u);
+  // 12 values: a range code of at least 5 bytes (its flush), far fewer than 12 values' bytes.
+  EXPECT_GE(batch.getSampleCode().size(), 5u);
+  EXPECT_LE(batch.getSampleCode().size(), 12u);
   std::remove(path.c_str());
 }
 

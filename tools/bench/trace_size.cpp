@@ -12,7 +12,13 @@
 // bench_trace_size --columns FILE: where a trace's bytes go. Each frame's batch columns
 // (any format version) are gathered column by column, each compressed alone with zstd at the
 // file's level, and their sizes printed per visit of the file, beside the file's own bytes
-// per visit (which compresses the columns interleaved, batch by batch).
+// per visit (which compresses the columns interleaved, batch by batch); format 6's range
+// coded samples (sampleCode) count as one more column.
+//
+// bench_trace_size --recode IN OUT [VERSION]: IN's frames written anew by this build's writer
+// as format VERSION (5 or 6, default the current), to compare the formats on one capture: both
+// files' bytes per visit, the encoding time, and each file's read time (every frame decoded
+// and checked, as `raycell trace verify` does).
 #include <capnp/serialize.h>
 #include <zstd.h>
 
@@ -235,6 +241,8 @@ int Columns(const std::string& path) {
       AddColumn(columns["primarySamples"], b.getPrimarySamples());
       AddColumn(columns["secondarySamples"], b.getSecondarySamples());
       AddColumn(columns["shadowSamples"], b.getShadowSamples());
+      const auto code = b.getSampleCode();
+      columns["sampleCode"].append(reinterpret_cast<const char*>(code.begin()), code.size());
       std::string& t = columns["tEnter+tExit"];
       for (const float x : b.getTEnter()) t.append(reinterpret_cast<const char*>(&x), 4);
       for (const float x : b.getTExit()) t.append(reinterpret_cast<const char*>(&x), 4);
@@ -263,10 +271,66 @@ int Columns(const std::string& path) {
   return 0;
 }
 
+// Rewrites the trace IN as OUT with this build's writer (format `version`), frame by frame,
+// and prints both files' bytes per visit and the times: the write (encoding and compressing
+// the rays read) and a verify-speed read of each file (every frame decoded and checked).
+int Recode(const std::string& in, const std::string& out, std::uint32_t version) {
+  const TraceReader reader = TraceReader::OpenStored(in);
+  TraceWriterOptions options;
+  options.format_version = version;
+  std::uint64_t visits = 0, in_bytes = 0, out_bytes = 0;
+  double write_s = 0;
+  {
+    TraceWriter w = TraceWriter::Create(out, reader.header(), options);
+    for (std::size_t f = 0; f < reader.frames().size(); ++f) {
+      const RayBatch rays = reader.LoadFrame(f);
+      const auto t0 = std::chrono::steady_clock::now();
+      w.BeginFrame(reader.frames()[f].frame);
+      w.Append(rays);
+      const FrameSummary s = w.EndFrame();
+      write_s += Seconds(t0);
+      RAYCELL_CHECK_EQ(s.checksum, reader.frames()[f].checksum);
+      visits += s.visits;
+      in_bytes += reader.frames()[f].length;
+      out_bytes += s.length;
+    }
+    w.Finish();
+  }
+  auto read_time = [](const std::string& path) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const TraceReader r = TraceReader::OpenStored(path);
+    for (std::size_t f = 0; f < r.frames().size(); ++f) r.ForEachBatch(f, [](const RayBatch&) {});
+    return Seconds(t0);
+  };
+  const double v = static_cast<double>(std::max<std::uint64_t>(visits, 1));
+  std::printf("%s: version %u, %.4f B/visit; %s: version %u, %.4f B/visit, written in %.3f s\n",
+              in.c_str(), reader.header().format_version, in_bytes / v, out.c_str(), version,
+              out_bytes / v, write_s);
+  std::fflush(stdout);
+  const double read_in = read_time(in), read_out = read_time(out);
+  std::printf("read (decode and check every frame): %s %.3f s, %s %.3f s\n", in.c_str(), read_in,
+              out.c_str(), read_out);
+  return 0;
+}
+
 }  // namespace
 }  // namespace raycell
 
 int main(int argc, char** argv) {
+  if ((argc == 4 || argc == 5) && std::string(argv[1]) == "--recode") {
+    const int version = argc == 5 ? std::atoi(argv[4]) : int{raycell::kTraceFormatVersion};
+    if (version < 5 || version > int{raycell::kTraceFormatVersion}) {
+      std::fprintf(stderr, "bench_trace_size: --recode writes format version 5 or %u\n",
+                   raycell::kTraceFormatVersion);
+      return 2;
+    }
+    try {
+      return raycell::Recode(argv[2], argv[3], static_cast<std::uint32_t>(version));
+    } catch (const raycell::InputError& e) {
+      std::fprintf(stderr, "bench_trace_size: %s\n", e.what());
+      return 2;
+    }
+  }
   if (argc == 3 && std::string(argv[1]) == "--columns") {
     try {
       return raycell::Columns(argv[2]);
