@@ -165,7 +165,13 @@ RecordSummary Record(const RecordOptions& o, std::ostream& log) {
   const std::filesystem::path out_dir = std::filesystem::path(o.out).parent_path();
   std::error_code ignored;
   if (!out_dir.empty()) std::filesystem::create_directories(out_dir, ignored);
-  TraceWriter writer = TraceWriter::Create(o.out, header);
+  if (o.trace_format < 5 || o.trace_format > kTraceFormatVersion) {
+    throw InputError("trace format " + std::to_string(o.trace_format) +
+                     " cannot be written (5 or " + std::to_string(kTraceFormatVersion) + ")");
+  }
+  TraceWriterOptions writer_options;
+  writer_options.format_version = o.trace_format;
+  TraceWriter writer = TraceWriter::Create(o.out, header, writer_options);
   // Made once every frame's scene was built and the trace could be created: a bad scene
   // leaves no folder behind.
   if (!o.images_dir.empty()) std::filesystem::create_directories(o.images_dir);

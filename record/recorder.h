@@ -45,6 +45,9 @@ struct RecordOptions {
   // rays also visit the empty cells they cross, and the header holds each cell's leaves.
   // Sparse footprints of one volume (not a sequence).
   bool regroupable = false;
+  // The trace's format version: 5 (kTraceDefaultVersion, the faster to read) or 6 (samples
+  // range coded, about a sixth smaller).
+  std::uint32_t trace_format = kTraceDefaultVersion;
   PngEncoding image_encoding = PngEncoding::kSrgb;
   int threads = 0;       // 0: all cores
   bool progress = true;  // a bar on stderr, when stderr is a terminal

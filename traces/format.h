@@ -25,6 +25,11 @@ struct TraceHeader;
 // rays' samples in their own column); version 6 the samples range coded under contexts
 // (Batch.sampleCode, traces/sample_coder.h); see trace.capnp.
 inline constexpr std::uint32_t kTraceFormatVersion = 6;
+// The version written unless another is asked for (TraceWriterOptions::format_version, `record
+// --trace-format`): 5. Format 6's files are about a sixth smaller, but reading them takes about
+// a quarter more CPU (a Max Work replay at 1920x1080, 512 cells: +22-27%; BENCHMARKS.md "Trace
+// size"), and a capture is written once and read by every replay.
+inline constexpr std::uint32_t kTraceDefaultVersion = 5;
 // Magic of the skippable zstd frame that holds the index.
 inline constexpr std::uint32_t kTraceIndexMagic = 0x184D2A5B;
 // Last 8 bytes of a complete trace file.

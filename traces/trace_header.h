@@ -132,7 +132,7 @@ struct SubdivisionInfo {
 };
 
 struct TraceHeader {
-  std::uint32_t format_version = kTraceFormatVersion;
+  std::uint32_t format_version = kTraceDefaultVersion;
   std::string producer;  // "raycell 0.1.0"
   std::string scene;     // what --scene was
   std::vector<GridInfo> grids;

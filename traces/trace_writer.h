@@ -36,10 +36,10 @@ struct TraceWriterOptions {
   // Finish(), so a writer dropped before it leaves nothing.
   bool name_at_finish = false;
   // The format version the header and index say (3..kTraceFormatVersion). Rays are encoded
-  // (Append) in the current one (6) or in 5 (the previous writer's, kept to test that its
-  // files read and to compare); an earlier one is for copying encoded frames of files of
-  // that version (AppendEncodedFrame: `trace concat`).
-  std::uint32_t format_version = kTraceFormatVersion;
+  // (Append) in 5 (the default, kTraceDefaultVersion: the faster to read) or 6 (samples range
+  // coded: smaller files); an earlier one is for copying encoded frames of files of that
+  // version (AppendEncodedFrame: `trace concat`).
+  std::uint32_t format_version = kTraceDefaultVersion;
 };
 
 class TraceWriter {

@@ -89,7 +89,7 @@ TEST(TraceImportTest, HeaderDefaultsAndOptions) {
   o.cells = {2, 3, 1};
   ImportJsonl(o);
   TraceHeader h = TraceReader::Open(trace).header();
-  EXPECT_EQ(h.format_version, kTraceFormatVersion);
+  EXPECT_EQ(h.format_version, kTraceDefaultVersion);
   EXPECT_EQ(h.producer, "raycell 0.1.0 (trace import)");
   EXPECT_EQ(h.scene, "import:" + jsonl);
   EXPECT_TRUE(h.grids.empty());

@@ -390,7 +390,7 @@ TEST(TraceIoTest, ZstdAndCapnpDecodeTheWholeFile) {
   const std::string text = ReadBytes(out);
   // --short prints one message per line.
   EXPECT_EQ(CountOccurrences(text, "\n"), 2 + batches + frames.size()) << text.substr(0, 300);
-  EXPECT_EQ(text.rfind("(header = (formatVersion = 6, producer = \"raycell test\"", 0), 0u);
+  EXPECT_EQ(text.rfind("(header = (formatVersion = 5, producer = \"raycell test\"", 0), 0u);
   // The 27 footprints 7, 1007, 2007, ... in one record of 27 runs of one cell.
   EXPECT_EQ(CountOccurrences(text, "\n(footprints = (firstCell = 0, values = (narrow = [7, 255, "),
             1u);
@@ -459,7 +459,7 @@ TEST(TraceIoTest, PrintInfoShowsHeaderFramesAndTotals) {
   std::ostringstream out;
   PrintInfo(reader, "info.rct", out);
   const std::string text = out.str();
-  for (const char* want : {"format version: 6", "producer:       raycell test", "builtin:smoke",
+  for (const char* want : {"format version: 5", "producer:       raycell test", "builtin:smoke",
                            "density (fog, builtin", "3x3x3 = 27 cells", "sparse", "320x200",
                            "shadow", "refraction", "total", "naive uncompressed", "ratio:"}) {
     EXPECT_NE(text.find(want), std::string::npos) << want << "\n" << text;
@@ -689,8 +689,10 @@ TEST(TraceIoTest, RaysArePredictedFromTheCorrespondingRayOfThePreviousPixel) {
 TEST(TraceIoTest, Format6RangeCodesTheSamples) {
   const RayBatch frame = TwoPixelsWithShadowRays();
   const std::string path = TempPath("corresponding6.rct");
+  TraceWriterOptions options;
+  options.format_version = 6;
   const std::vector<FrameSummary> written =
-      WriteTrace(path, TestHeader({2, 2, 1}, false), {{0, frame}});
+      WriteTrace(path, TestHeader({2, 2, 1}, false), {{0, frame}}, options);
   const TraceReader reader = TraceReader::Open(path);
   EXPECT_EQ(reader.header().format_version, 6u);
   EXPECT_TRUE(reader.LoadFrame(0) == frame);

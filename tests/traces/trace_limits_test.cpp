@@ -218,7 +218,7 @@ TEST(TraceLimitsTest, Version4FilesStillReadAndRewriteAsTheCurrentVersion) {
     w.Finish();
   }
   const TraceReader rewritten = TraceReader::Open(copy);
-  EXPECT_EQ(rewritten.header().format_version, kTraceFormatVersion);
+  EXPECT_EQ(rewritten.header().format_version, kTraceDefaultVersion);
   for (std::size_t f = 0; f < 2; ++f) EXPECT_TRUE(rewritten.LoadFrame(f) == frames[f]);
   std::remove(copy.c_str());
 }
