@@ -119,8 +119,11 @@ class CountProgram {
     std::vector<std::uint32_t> x;  // per cell (0 for cells without nodes); empty if none
   };
 
-  Solution Solve(std::uint64_t max_nodes) {
+  // Branch and bound within max_nodes nodes and max_work / rows nodes.
+  Solution Solve(std::uint64_t max_nodes, std::uint64_t max_work) {
     Solution s;
+    const std::uint64_t rows = static_cast<std::uint64_t>(std::max(1, glp_get_num_rows(glp_)));
+    max_nodes = std::min(max_nodes, std::max<std::uint64_t>(1, max_work / rows));
     const int term = glp_term_out(GLP_OFF);
     glp_smcp smcp;
     glp_init_smcp(&smcp);
@@ -270,7 +273,7 @@ struct Group {
 class Bounder {
  public:
   Bounder(const CellTree& tree, const LowerBoundOptions& options)
-      : tree_(tree), options_(options), max_gen_(MaxGenerations(tree)) {
+      : tree_(tree), options_(options), max_gen_(MaxGenerations(tree)), projector_(tree) {
     const std::uint64_t cells = std::uint64_t{options.grid[0]} * options.grid[1] * options.grid[2];
     if (cells != 0 && cells < tree.cell_count()) {
       std::ostringstream s;
@@ -280,13 +283,6 @@ class Bounder {
       throw InputError(s.str());
     }
     paths_ = TreePaths(tree);
-    paths_with_.resize(tree.cell_count());
-    for (std::size_t i = 0; i < paths_.size(); ++i) {
-      CellString cells_of = paths_[i];
-      std::sort(cells_of.begin(), cells_of.end());
-      cells_of.erase(std::unique(cells_of.begin(), cells_of.end()), cells_of.end());
-      for (CellId c : cells_of) paths_with_[c.value()].push_back(i);
-    }
   }
 
   LowerBoundResult Run() {
@@ -362,16 +358,10 @@ class Bounder {
     return l;
   }
 
-  // The paths' projection onto `cells` (increasing), from the paths through them only.
+  // The paths' projection onto `cells` (increasing): ProjectPaths(tree_, cells), at the cost
+  // of those cells' nodes (TreeProjector).
   std::vector<CellString> Project(const std::vector<CellId>& cells) const {
-    std::vector<std::size_t> ids;
-    for (CellId c : cells)
-      ids.insert(ids.end(), paths_with_[c.value()].begin(), paths_with_[c.value()].end());
-    std::sort(ids.begin(), ids.end());
-    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-    std::vector<CellString> strings;
-    for (std::size_t i : ids) strings.push_back(paths_[i]);
-    return ProjectStrings(strings, cells);
+    return projector_.Project(cells);
   }
 
   // Computes the SCS bound of `cells` (once per set); returns its index in groups_, or -1
@@ -424,15 +414,25 @@ class Bounder {
   // max_total_states runs out before every pair is searched, the states go where the paths
   // cross.
   void AddPairs(CountProgram& program) {
-    struct Orders {
-      std::uint32_t both = 0;        // paths through a and b
-      std::uint32_t ab = 0, ba = 0;  // of them, with some a before some b; some b before some a
-    };
-    std::map<std::pair<CellId, CellId>, Orders> orders;
-    for (const CellString& p : paths_) PathOrders(p, orders);
+    // Keyed by a * cells + b (a < b); visited in that order below, the cell order of the
+    // pairs.
+    std::unordered_map<std::uint64_t, Orders> by_key;
+    std::vector<std::uint32_t> at(tree_.cell_count(), kAbsent);
+    std::vector<Span> spans;
+    for (const CellString& p : paths_) PathOrders(p, at, spans, by_key);
+    std::vector<std::pair<std::uint64_t, Orders>> sorted(by_key.begin(), by_key.end());
+    std::sort(sorted.begin(), sorted.end(),
+              [](const auto& x, const auto& y) { return x.first < y.first; });
+    std::vector<std::pair<std::pair<CellId, CellId>, Orders>> orders;
+    const std::uint64_t cells = tree_.cell_count();
+    for (const auto& [key, o] : sorted) {
+      orders.push_back({{CellId(static_cast<std::uint32_t>(key / cells)),
+                         CellId(static_cast<std::uint32_t>(key % cells))},
+                        o});
+      together_.emplace_hint(together_.end(), orders.back().first, o.both);
+    }
     std::vector<std::pair<std::uint32_t, std::pair<CellId, CellId>>> conflicting;
     for (const auto& [pair, o] : orders) {
-      together_[pair] = o.both;
       if (o.ab > 0 && o.ba > 0) conflicting.push_back({std::min(o.ab, o.ba), pair});
     }
     std::stable_sort(conflicting.begin(), conflicting.end(),
@@ -452,23 +452,43 @@ class Bounder {
 
   // Adds one path's orders: for each pair of distinct cells on it, whether some a comes
   // before some b (ab) and some b before some a (ba), each counted once per path.
-  template <typename OrdersMap>
-  static void PathOrders(const CellString& p, OrdersMap& orders) {
-    std::map<CellId, std::pair<std::size_t, std::size_t>> span;  // first and last position
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      auto it = span.find(p[i]);
-      if (it == span.end()) {
-        span.emplace(p[i], std::make_pair(i, i));
+  static constexpr std::uint32_t kAbsent = ~std::uint32_t{0};
+  struct Span {
+    CellId cell;
+    std::uint32_t first = 0, last = 0;  // first and last position on the path
+  };
+  struct Orders {
+    std::uint32_t both = 0;        // paths through a and b
+    std::uint32_t ab = 0, ba = 0;  // of them, with some a before some b; some b before some a
+  };
+
+  // Adds one path's orders: for each pair of distinct cells on it, whether some a comes
+  // before some b (ab) and some b before some a (ba), each counted once per path. `at` (all
+  // kAbsent between calls) and `spans` are scratch.
+  void PathOrders(const CellString& p, std::vector<std::uint32_t>& at, std::vector<Span>& spans,
+                  std::unordered_map<std::uint64_t, Orders>& orders) const {
+    spans.clear();
+    for (std::uint32_t i = 0; i < p.size(); ++i) {
+      std::uint32_t& k = at[p[i].value()];
+      if (k == kAbsent) {
+        k = static_cast<std::uint32_t>(spans.size());
+        spans.push_back({p[i], i, i});
       } else {
-        it->second.second = i;
+        spans[k].last = i;
       }
     }
-    for (auto a = span.begin(); a != span.end(); ++a) {
-      for (auto b = std::next(a); b != span.end(); ++b) {
-        auto& o = orders[{a->first, b->first}];
+    for (const Span& s : spans) at[s.cell.value()] = kAbsent;
+    std::sort(spans.begin(), spans.end(),
+              [](const Span& x, const Span& y) { return x.cell < y.cell; });
+    const std::uint64_t cells = tree_.cell_count();
+    for (std::size_t i = 0; i < spans.size(); ++i) {
+      const Span& a = spans[i];
+      for (std::size_t j = i + 1; j < spans.size(); ++j) {
+        const Span& b = spans[j];
+        Orders& o = orders[std::uint64_t{a.cell.value()} * cells + b.cell.value()];
         ++o.both;
-        if (a->second.first < b->second.second) ++o.ab;  // the first a before the last b
-        if (b->second.first < a->second.second) ++o.ba;
+        if (a.first < b.last) ++o.ab;  // the first a before the last b
+        if (b.first < a.last) ++o.ba;
       }
     }
   }
@@ -643,7 +663,7 @@ class Bounder {
   }
 
   void Solve(CountProgram& program, const std::string& name) {
-    const CountProgram::Solution s = program.Solve(options_.max_ip_nodes);
+    const CountProgram::Solution s = program.Solve(options_.max_ip_nodes, options_.max_ip_work);
     if (!s.optimal) r_.limits_reached = true;
     Stage(name, s.bound);
   }
@@ -654,7 +674,7 @@ class Bounder {
     constexpr std::size_t kCutsPerRound = 20;
     std::uint64_t best = 0;
     for (std::uint32_t round = 0; round < options_.max_cut_rounds; ++round) {
-      const CountProgram::Solution s = program.Solve(options_.max_ip_nodes);
+      const CountProgram::Solution s = program.Solve(options_.max_ip_nodes, options_.max_ip_work);
       if (!s.optimal) r_.limits_reached = true;
       best = std::max(best, s.bound);
       if (!s.optimal || s.x.empty()) break;
@@ -795,7 +815,7 @@ class Bounder {
   const LowerBoundOptions& options_;
   std::vector<std::uint32_t> max_gen_;
   std::vector<CellString> paths_;
-  std::vector<std::vector<std::size_t>> paths_with_;
+  TreeProjector projector_;
   std::map<std::pair<CellId, CellId>, std::uint32_t> together_, pair_gain_;
   std::vector<std::pair<std::pair<CellId, CellId>, std::uint32_t>> pair_gains_;
   std::vector<Group> groups_;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <unordered_map>
+#include <utility>
 
 namespace raycell {
 
@@ -104,6 +105,67 @@ std::vector<CellString> ProjectPaths(const CellTree& tree, const std::vector<Cel
   // it; so a trie node with a child is a proper prefix (a subsequence) of a projection, and
   // every trie leaf is the projection of a tree leaf.
   return RemoveDominated(trie.LeafStrings());
+}
+
+TreeProjector::TreeProjector(const CellTree& tree) : nodes_of_(tree.cell_count()) {
+  // Preorder numbers by an explicit stack (children in order); node n's subtree is the range
+  // [enter(n), last(n)].
+  std::vector<std::uint32_t> enter(tree.size(), 0), last(tree.size(), 0);
+  std::uint32_t next = 0;
+  std::vector<std::pair<NodeId, bool>> stack{{kRootNode, false}};
+  while (!stack.empty()) {
+    const auto [n, done] = stack.back();
+    stack.pop_back();
+    if (done) {
+      last[n.index()] = next - 1;
+      continue;
+    }
+    enter[n.index()] = next++;
+    stack.push_back({n, true});
+    const std::size_t first = stack.size();
+    for (NodeId c = tree.first_child(n); c != kNoNode; c = tree.next_sibling(c)) {
+      stack.push_back({c, false});
+    }
+    std::reverse(stack.begin() + first, stack.end());
+  }
+  for (NodeId n : tree.nodes()) {
+    nodes_of_[tree.cell(n).value()].push_back({enter[n.index()], last[n.index()], tree.cell(n)});
+  }
+  for (auto& v : nodes_of_) {
+    std::sort(v.begin(), v.end(), [](const Visit& a, const Visit& b) { return a.enter < b.enter; });
+  }
+}
+
+std::vector<CellString> TreeProjector::Project(const std::vector<CellId>& cells) const {
+  std::vector<CellId> distinct = cells;
+  std::sort(distinct.begin(), distinct.end());
+  distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+  std::vector<Visit> visits;
+  for (CellId c : distinct) {
+    if (c.value() >= nodes_of_.size()) continue;
+    const auto& v = nodes_of_[c.value()];
+    const std::size_t middle = visits.size();
+    visits.insert(visits.end(), v.begin(), v.end());
+    std::inplace_merge(visits.begin(), visits.begin() + middle, visits.end(),
+                       [](const Visit& a, const Visit& b) { return a.enter < b.enter; });
+  }
+  constexpr std::uint32_t kNone = ~std::uint32_t{0};
+  std::vector<std::uint32_t> parent(visits.size(), kNone), open;
+  std::vector<char> has_child(visits.size(), 0);
+  for (std::uint32_t i = 0; i < visits.size(); ++i) {
+    while (!open.empty() && visits[open.back()].last < visits[i].enter) open.pop_back();
+    if (!open.empty()) parent[i] = open.back(), has_child[open.back()] = 1;
+    open.push_back(i);
+  }
+  std::vector<CellString> strings;
+  for (std::uint32_t i = 0; i < visits.size(); ++i) {
+    if (has_child[i]) continue;
+    CellString s;
+    for (std::uint32_t a = i; a != kNone; a = parent[a]) s.push_back(visits[a].cell);
+    std::reverse(s.begin(), s.end());
+    strings.push_back(std::move(s));
+  }
+  return RemoveDominated(std::move(strings));
 }
 
 std::vector<CellString> ProjectStrings(const std::vector<CellString>& strings,

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,28 @@ using CellString = std::vector<CellId>;
 // node; a trie node with a child is a proper prefix of a projection, so only trie leaves are
 // kept), then the subsequence test of RemoveDominated on the trie leaves.
 std::vector<CellString> ProjectPaths(const CellTree& tree, const std::vector<CellId>& cells);
+
+// The projections of one tree onto many sets of cells (the lower bound's groups): built once
+// (O(nodes log nodes): each cell's nodes in preorder), then Project(cells) == ProjectPaths(tree,
+// cells) at the cost of those cells' nodes and the projected strings, not of the whole tree or
+// of every path through the cells. How: a node's nearest ancestor among the cells' nodes
+// (found with a stack over them in preorder) is its parent in a forest of those nodes; a
+// path's projection is the chain of its deepest such node, and the chain of a node with a
+// child in the forest is a proper prefix (a subsequence) of its child's. So the chains of the
+// forest's leaves, without dominated ones, are the projection (RemoveDominated keeps the
+// maximal strings of a set, in an order fixed by the strings).
+class TreeProjector {
+ public:
+  explicit TreeProjector(const CellTree& tree);
+  std::vector<CellString> Project(const std::vector<CellId>& cells) const;
+
+ private:
+  struct Visit {
+    std::uint32_t enter = 0, last = 0;  // preorder number, the last one of its subtree
+    CellId cell;
+  };
+  std::vector<std::vector<Visit>> nodes_of_;  // per cell, in preorder
+};
 
 // The same projection applied to any strings: each string restricted to `cells`, then
 // RemoveDominated. ProjectStrings(TreePaths(tree), cells) == ProjectPaths(tree, cells).

@@ -97,6 +97,28 @@ TEST(ProjectionTest, RandomTreesMatchTheReference) {
   }
 }
 
+// TreeProjector, built once per tree, projects onto many sets of cells (repeated ones and
+// cells past the tree's included) exactly as ProjectPaths does, string for string and in order.
+TEST(ProjectionTest, TreeProjectorMatchesProjectPaths) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 200; ++trial) {
+    const std::uint32_t cells = 2 + rng() % 7;
+    const CellTree t = RandomTree(rng, cells, 1 + rng() % 12, 1 + rng() % 7);
+    const TreeProjector projector(t);
+    for (int set = 0; set < 8; ++set) {
+      std::vector<CellId> list;
+      for (CellId c : CellRange(cells + 1)) {
+        if (rng() % 2) list.push_back(c);
+      }
+      if (!list.empty() && rng() % 4 == 0) list.push_back(list.front());
+      std::shuffle(list.begin(), list.end(), rng);
+      ASSERT_EQ(projector.Project(list), ProjectPaths(t, list)) << t.ToString();
+      std::set<CellId> subset(list.begin(), list.end());
+      ASSERT_EQ(AsSet(projector.Project(list)), ProjectionReference(t, subset)) << t.ToString();
+    }
+  }
+}
+
 TEST(ProjectionTest, TreePathsAreTheLeafPaths) {
   const CellTree t = FromPaths({{A, B, C}, {A, B, D, A}, {C, A}, {A, B}});
   EXPECT_EQ(AsSet(TreePaths(t)), (std::set<CellString>{{A, B, C}, {A, B, D, A}, {C, A}}));
