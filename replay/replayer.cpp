@@ -863,7 +863,28 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
         work, graph_units, footprints, config, scheduler, frame, bound, observer, memory, units,
         seen, [] { return NoWatch{}; }, time_bound);
   }
+  // The paths of the frame's own work graph are the same for every configuration replayed on
+  // it: made once through the frame's plan cache. The graph (the runner's, alive as long as the
+  // cache) is named by its address and its size and totals, checked again on use.
+  struct FramePaths {
+    const WorkGraph* work;
+    std::size_t size;
+    UnitPaths paths;
+  };
+  std::shared_ptr<const FramePaths> shared;
   UnitPaths made;
+  if (given == nullptr && frame.plans != nullptr) {
+    const WorkGraph::Totals& t = work.totals;
+    shared = Shared<FramePaths>(
+        frame.plans,
+        PlanKey(kFramePaths, {std::uint64_t(reinterpret_cast<std::uintptr_t>(&work)), work.size(),
+                              work.cells, t.rays, t.segments, t.samples}),
+        [&] {
+          return FramePaths{&work, work.size(), PathsOf(graph_units, work.size())};
+        });
+    RAYCELL_CHECK(shared->work == &work && shared->size == work.size());
+    given = &shared->paths;
+  }
   if (given == nullptr) made = PathsOf(graph_units, work.size());
   const UnitPaths& paths = given != nullptr ? *given : made;
   return Replay<Units, Watch>(
