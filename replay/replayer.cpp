@@ -2,13 +2,14 @@
 
 #include <algorithm>
 #include <sstream>
-#include <unordered_map>
 
 #include "base/check.h"
 #include "base/checked.h"
+#include "base/random.h"
 #include "engine/slot_queue.h"
 #include "engine/watchdog.h"
 #include "replay/time_bound.h"
+#include "scheduling/plan_cache.h"
 
 namespace raycell {
 namespace {
@@ -48,6 +49,9 @@ struct PackedUnits {
   std::uint64_t samples(const Entry& e) const { return e.samples; }
   // Starts loading the successors' records of a unit about to be worked.
   void Prefetch(const Entry& e) const { __builtin_prefetch(p + e.first_child); }
+  // The index of a unit's first successor, if it has one (else any index): what a watch
+  // prefetches (Watch::Prefetch).
+  static UnitId FirstChild(const Entry& e) { return e.first_child; }
 };
 
 struct ColumnUnits {
@@ -67,6 +71,7 @@ struct ColumnUnits {
   }
   std::uint64_t samples(UnitId u) const { return w->samples[u]; }
   void Prefetch(UnitId) const {}
+  static UnitId FirstChild(UnitId u) { return u; }  // successors are scattered: no better guess
 };
 
 // The Compact form (work.h): a unit is its record's offset in the stream, its visit's
@@ -108,6 +113,8 @@ struct CompactUnits {
     __builtin_prefetch(stream + e.offset);
     __builtin_prefetch(c->spawned.data() + e.spawned);
   }
+  // The ray's next visit (the usual successor; spawned rays' visits lie elsewhere).
+  static UnitId FirstChild(const Entry& e) { return UnitId(e.visit + 1); }
 };
 
 // ---- Paths, for schedulers that watch the frame unfold ---------------------------------
@@ -127,12 +134,39 @@ UnitPaths PathsOf(const Units& u, std::size_t units) {
   UnitPaths p;
   p.of_unit.assign(units, 0);
   p.parent = {0};
-  std::unordered_map<std::uint64_t, std::uint32_t> child;
+  // (parent path, cell) -> path, open addressing (a lookup per unit entering another cell: a
+  // std::unordered_map's node per path made this a tenth of a watching replay; issue 43).
+  std::vector<std::uint64_t> keys(1024, ~std::uint64_t{0});
+  std::vector<std::uint32_t> values(1024);
+  std::size_t mask = keys.size() - 1;
+  const auto slot = [&](std::uint64_t key) {
+    std::size_t i = std::size_t(SplitMix64(key).Next()) & mask;
+    while (keys[i] != key && keys[i] != ~std::uint64_t{0}) i = (i + 1) & mask;
+    return i;
+  };
   const auto path = [&](std::uint32_t parent, CellId c) {
-    const auto [it, added] =
-        child.try_emplace(std::uint64_t{parent} << 32 | c.value(), std::uint32_t(p.parent.size()));
-    if (added) p.parent.push_back(parent);
-    return it->second;
+    const std::uint64_t key = std::uint64_t{parent} << 32 | c.value();
+    std::size_t i = slot(key);
+    if (keys[i] == key) return values[i];
+    const std::uint32_t id = std::uint32_t(p.parent.size());
+    p.parent.push_back(parent);
+    if (2 * p.parent.size() > keys.size()) {  // grow: at most half full
+      std::vector<std::uint64_t> old_keys(2 * keys.size(), ~std::uint64_t{0});
+      std::vector<std::uint32_t> old_values(old_keys.size());
+      old_keys.swap(keys);
+      old_values.swap(values);
+      mask = keys.size() - 1;
+      for (std::size_t k = 0; k < old_keys.size(); ++k) {
+        if (old_keys[k] == ~std::uint64_t{0}) continue;
+        const std::size_t j = slot(old_keys[k]);
+        keys[j] = old_keys[k];
+        values[j] = old_values[k];
+      }
+      i = slot(key);
+    }
+    keys[i] = key;
+    values[i] = id;
+    return id;
   };
   struct Item {
     Entry e;
@@ -161,6 +195,7 @@ UnitPaths PathsOf(const Units& u, std::size_t units) {
 struct NoWatch {
   void Queued(UnitId, CellId, std::uint64_t) {}
   void Taken(CellId) {}
+  void Prefetch(UnitId) const {}
 };
 
 class Watch {
@@ -177,6 +212,12 @@ class Watch {
     scheduler_->Arrived({id, revealed_[parent], c, q});
   }
   void Taken(CellId c) { scheduler_->Taken(c); }
+  // Starts loading the path of unit x, about to be queued: the units are scattered over a
+  // frame's visits, so each lookup in of_unit would be a cache miss (half the watching board's
+  // time at 1920x1080 before this; issue 43).
+  void Prefetch(UnitId x) const {
+    if (x < paths_->of_unit.size()) __builtin_prefetch(paths_->of_unit.data() + x);
+  }
 
  private:
   const UnitPaths* paths_;
@@ -316,6 +357,14 @@ class Board {
       for (std::uint32_t k = 0; k < words_; ++k) holder_mask_[k] |= on[k];
     }
     queued_rays_[c.value()] += q;
+    // Every cell's queue only grows here too: the most queued of all can change only to c.
+    if (ask_when_joinable_ && all_most_known_ && q != 0) {
+      const std::uint64_t a = queued_rays_[c.value()];
+      if (all_most_ == kNoCell || a > queued_rays_[all_most_.value()] ||
+          (a == queued_rays_[all_most_.value()] && c.value() < all_most_.value())) {
+        all_most_ = c;
+      }
+    }
     queued_total_ += q;
     peak_queued_ = std::max(peak_queued_, queued_total_);
     // The view only grows here, so the cell with the most queued rays in view can change only
@@ -344,6 +393,14 @@ class Board {
     v.open = open_.data();
     v.working = working_;
     v.all_queued = queued_rays_.data();
+    if (ask_when_joinable_) {  // only a scheduler that may join reads every cell's queue
+      if (!all_most_known_) {
+        all_most_ = ScanMostQueued(queued_rays_.data(), w_.cells);
+        all_most_known_ = true;
+      }
+      v.all_most_of = queued_rays_.data();
+      v.all_most = all_most_;
+    }
     v.most_of = view_.data();
     v.most_cells = w_.cells;
     v.most = most_;
@@ -408,6 +465,7 @@ class Board {
     }
     queued_total_ -= queued_rays_[c.value()];
     queued_rays_[c.value()] = 0;
+    if (c == all_most_) all_most_known_ = false;
     if (ps.head == ps.worklist.size()) {
       ps.worklist.clear();
       ps.head = 0;
@@ -417,7 +475,10 @@ class Board {
       if (q.capacity() > kDropWorked) std::vector<Entry>().swap(q);
       // WorkNext prefetches kPrefetch units ahead: start the first ones here.
       const std::size_t n = std::min(kPrefetch, ps.worklist.size());
-      for (std::size_t i = 0; i < n; ++i) u_.Prefetch(ps.worklist[i]);
+      for (std::size_t i = 0; i < n; ++i) {
+        u_.Prefetch(ps.worklist[i]);
+        watch_.Prefetch(Units::FirstChild(ps.worklist[i]));
+      }
     } else {
       ps.worklist.insert(ps.worklist.end(), q.begin(), q.end());
       q.clear();
@@ -483,7 +544,10 @@ class Board {
     }
     // The units a few places ahead are known: load their successors while this one is
     // worked (the records are scattered over the frame, so each would be a cache miss).
-    if (ps.head + kPrefetch < ps.worklist.size()) u_.Prefetch(ps.worklist[ps.head + kPrefetch]);
+    if (ps.head + kPrefetch < ps.worklist.size()) {
+      u_.Prefetch(ps.worklist[ps.head + kPrefetch]);
+      watch_.Prefetch(Units::FirstChild(ps.worklist[ps.head + kPrefetch]));
+    }
     ps.unit = ps.worklist[ps.head++];
     const SimTime dt = tps_ * u_.samples(ps.unit);
     ps.work = ps.work + dt;
@@ -609,6 +673,10 @@ class Board {
   // most_known_; found again by a scan at the next View when not.
   CellId most_ = kNoCell;
   bool most_known_ = true;
+  // The same for queued_rays_ (every cell's queue, QueueView::all_most), kept only for a
+  // scheduler that may join (ask_when_joinable_): found again by a scan when the take emptied it.
+  CellId all_most_ = kNoCell;
+  bool all_most_known_ = true;
   // Per cell: all ones, or 0 while a processor works it (locked: not in the view).
   static constexpr std::uint64_t kOpen = ~std::uint64_t{0};
   std::vector<std::uint64_t> open_;
@@ -681,23 +749,41 @@ bool NeedsFuture(const ReplayConfig& config) {
   return false;
 }
 
+// A tree's work per node for the replays of frames seen (SeenReplayer), and its units' paths
+// (PathsOf) for the schedulers that watch: the same for every replay of the tree.
+struct SeenWork {
+  WorkGraph work;
+  UnitPaths paths;
+};
+SeenWork MakeSeenWork(const CellTree& tree, std::uint32_t cells);
+// ReplayFrame of a seen frame's work, without what only a frame's own result reports (its lower
+// bound on the time) and with the paths made once.
+ReplayResult SeenReplay(const SeenWork& work, const std::vector<std::uint64_t>& footprints,
+                        const ReplayConfig& config, Scheduler& scheduler, const FrameTrees& frame,
+                        MemoryState* memory, const MemoryUnits* units);
+
 // Earlier frames' trees replayed per node on a frame's board (FrameInfo::seen): its
 // configuration, footprints and what its levels hold at the frame's start.
 class SeenReplayer : public SeenFrameReplayer {
  public:
   SeenReplayer(const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
-               const MemoryState& start, const MemoryUnits* units)
-      : footprints_(footprints), config_(config), start_(start), units_(units) {
+               const MemoryState& start, const MemoryUnits* units, PlanCache* plans)
+      : footprints_(footprints), config_(config), start_(start), units_(units), plans_(plans) {
     config_.granularity = ReplayConfig::Granularity::kNode;
   }
   SeenOutcome Replay(const CellTree& tree, Scheduler& scheduler, std::size_t frame_index,
                      const CellTree* previous, const CellTree* before_previous) const override {
     const std::uint32_t cells = std::uint32_t(footprints_.size());
-    const FrameTrees frame{frame_index, &tree, previous, cells, before_previous};
+    // The frame's plan cache: what the scheduler makes from the earlier trees is shared with
+    // the replay's own frame, the other seen replays and the other configurations, and so are
+    // the tree's work per node and its units' paths (docs/design.md §5 "Sharing plans").
+    const FrameTrees frame{frame_index, &tree, previous, cells, before_previous, plans_};
+    const std::shared_ptr<const SeenWork> work =
+        Shared<SeenWork>(plans_, PlanKey(kSeenWork, {TreeKey(tree), cells}),
+                         [&] { return MakeSeenWork(tree, cells); });
     MemoryState memory = start_;
-    const ReplayResult r =
-        ReplayFrame(NodeWork(tree, cells), footprints_, config_, scheduler, frame, 0, nullptr,
-                    start_.empty() ? nullptr : &memory, units_, /*seen=*/false);
+    const ReplayResult r = SeenReplay(*work, footprints_, config_, scheduler, frame,
+                                      start_.empty() ? nullptr : &memory, units_);
     SeenOutcome o;
     o.fetches = r.fetches;
     o.time =
@@ -711,20 +797,22 @@ class SeenReplayer : public SeenFrameReplayer {
   ReplayConfig config_;
   const MemoryState& start_;
   const MemoryUnits* units_;
+  PlanCache* plans_;
 };
 
 // `make_watch()` gives each run's W (NoWatch, or Watch for a scheduler that watches).
+// `time_bound`: false within a replay of a frame seen, which reports no lower bound (0).
 template <typename Units, typename W, typename MakeWatch>
 ReplayResult Replay(const WorkGraph& work, Units graph_units,
                     const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
                     Scheduler& scheduler, const FrameTrees& frame, std::uint64_t bound,
                     ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units,
-                    bool seen, MakeWatch make_watch) {
+                    bool seen, MakeWatch make_watch, bool time_bound = true) {
   static const MemoryState kEmpty;
   const MemoryState& start = memory ? *memory : kEmpty;
   const std::vector<double> fetch_samples = FetchSamples(config, footprints);
   FrameInfo info = MakeFrameInfo(frame, config, fetch_samples, units, scheduler);
-  const SeenReplayer seen_replayer(footprints, config, start, units);
+  const SeenReplayer seen_replayer(footprints, config, start, units, frame.plans);
   if (seen) info.seen = &seen_replayer;
   const bool min = NeedsFuture(config);
   const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
@@ -742,10 +830,13 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
         const bool warm_cache = !start.empty() && !start.held[0][0].empty();
         r.bound = warm_cache && bound > 0 ? bound - 1 : bound;
       }
-      const std::vector<std::vector<bool>> held =
-          start.empty() ? std::vector<std::vector<bool>>() : HeldAnywhere(start, work.cells, units);
-      r.time_bound =
-          TimeLowerBound(work, footprints, config, start.empty() ? nullptr : &held, units);
+      if (time_bound) {
+        const std::vector<std::vector<bool>> held = start.empty()
+                                                        ? std::vector<std::vector<bool>>()
+                                                        : HeldAnywhere(start, work.cells, units);
+        r.time_bound =
+            TimeLowerBound(work, footprints, config, start.empty() ? nullptr : &held, units);
+      }
       r.passes = pass;
       r.min_converged = !min || converged;
       const Scheduler::DecisionCost cost = scheduler.Cost();
@@ -759,21 +850,73 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
   }
 }
 
-// Replay with the board's W chosen by whether the scheduler watches.
+// Replay with the board's W chosen by whether the scheduler watches. `given`: the units' paths
+// when made already (SeenWork), else made here for a scheduler that watches.
 template <typename Units>
 ReplayResult Replay(const WorkGraph& work, Units graph_units,
                     const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
                     Scheduler& scheduler, const FrameTrees& frame, std::uint64_t bound,
                     ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units,
-                    bool seen) {
+                    bool seen, const UnitPaths* given = nullptr, bool time_bound = true) {
   if (!scheduler.Watches()) {
-    return Replay<Units, NoWatch>(work, graph_units, footprints, config, scheduler, frame, bound,
-                                  observer, memory, units, seen, [] { return NoWatch{}; });
+    return Replay<Units, NoWatch>(
+        work, graph_units, footprints, config, scheduler, frame, bound, observer, memory, units,
+        seen, [] { return NoWatch{}; }, time_bound);
   }
-  const UnitPaths paths = PathsOf(graph_units, work.size());
-  return Replay<Units, Watch>(work, graph_units, footprints, config, scheduler, frame, bound,
-                              observer, memory, units, seen,
-                              [&] { return Watch(paths, scheduler); });
+  // The paths of the frame's own work graph are the same for every configuration replayed on
+  // it: made once through the frame's plan cache. The graph (the runner's, alive as long as the
+  // cache) is named by its address and its size and totals, checked again on use.
+  struct FramePaths {
+    const WorkGraph* work;
+    std::size_t size;
+    UnitPaths paths;
+  };
+  std::shared_ptr<const FramePaths> shared;
+  UnitPaths made;
+  if (given == nullptr && frame.plans != nullptr) {
+    const WorkGraph::Totals& t = work.totals;
+    shared = Shared<FramePaths>(
+        frame.plans,
+        PlanKey(kFramePaths, {std::uint64_t(reinterpret_cast<std::uintptr_t>(&work)), work.size(),
+                              work.cells, t.rays, t.segments, t.samples}),
+        [&] {
+          return FramePaths{&work, work.size(), PathsOf(graph_units, work.size())};
+        });
+    RAYCELL_CHECK(shared->work == &work && shared->size == work.size());
+    given = &shared->paths;
+  }
+  if (given == nullptr) made = PathsOf(graph_units, work.size());
+  const UnitPaths& paths = given != nullptr ? *given : made;
+  return Replay<Units, Watch>(
+      work, graph_units, footprints, config, scheduler, frame, bound, observer, memory, units, seen,
+      [&] { return Watch(paths, scheduler); }, time_bound);
+}
+
+SeenWork MakeSeenWork(const CellTree& tree, std::uint32_t cells) {
+  SeenWork s;
+  s.work = NodeWork(tree, cells);
+  if (!s.work.packed.empty()) {
+    s.paths =
+        PathsOf(PackedUnits{s.work.packed.data(), UnitId(s.work.roots.size())}, s.work.size());
+  } else {
+    s.paths = PathsOf(ColumnUnits{&s.work}, s.work.size());
+  }
+  return s;
+}
+
+ReplayResult SeenReplay(const SeenWork& seen, const std::vector<std::uint64_t>& footprints,
+                        const ReplayConfig& config, Scheduler& scheduler, const FrameTrees& frame,
+                        MemoryState* memory, const MemoryUnits* units) {
+  const WorkGraph& work = seen.work;
+  RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
+  RAYCELL_CHECK(work.compact.units == 0);  // per node: packed records or columns
+  if (!work.packed.empty()) {
+    return Replay(work, PackedUnits{work.packed.data(), UnitId(work.roots.size())}, footprints,
+                  config, scheduler, frame, 0, nullptr, memory, units, /*seen=*/false, &seen.paths,
+                  /*time_bound=*/false);
+  }
+  return Replay(work, ColumnUnits{&work}, footprints, config, scheduler, frame, 0, nullptr, memory,
+                units, /*seen=*/false, &seen.paths, /*time_bound=*/false);
 }
 
 }  // namespace

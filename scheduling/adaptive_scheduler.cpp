@@ -64,6 +64,10 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   min_due_.assign(cells_, kNever);
   depth_.assign(1, 0);
   min_depth_.assign(cells_, kNever);
+  for (auto& cells : at_depth_) cells.clear();
+  depth_pos_.assign(cells_, 0);
+  low_depth_ = 0;
+  done_cells_.clear();
   replans_ = 0;
   last_how_ = 0;
   cost_ = {};
@@ -138,6 +142,10 @@ void AdaptiveScheduler::Install(std::vector<CellId> plan, std::vector<std::uint3
   cursor_ = 0;
   remaining_.assign(cells_, 0);
   for (CellId c : plan_) ++remaining_[c.value()];
+  done_cells_.clear();
+  for (std::uint32_t c = 0; c < cells_; ++c) {
+    if (remaining_[c] == 0) done_cells_.push_back(c);
+  }
   for (std::uint32_t c = 0; c < cells_; ++c) RecomputeDue(CellId(c));
   CountBytes();
 }
@@ -174,13 +182,33 @@ void AdaptiveScheduler::Arrived(const Arrival& a) {
   const std::uint32_t d =
       m == kNoNode || due_.empty() || due_[m.index()] == kNever ? 0 : due_[m.index()];
   min_due_[a.cell.value()] = std::min(min_due_[a.cell.value()], d);
-  min_depth_[a.cell.value()] = std::min(min_depth_[a.cell.value()], depth_[a.node]);
+  if (depth_[a.node] < min_depth_[a.cell.value()]) SetMinDepth(a.cell, depth_[a.node]);
 }
 
 void AdaptiveScheduler::Taken(CellId cell) {
   queued_[cell.value()].clear();
   min_due_[cell.value()] = kNever;
-  min_depth_[cell.value()] = kNever;
+  SetMinDepth(cell, kNever);
+}
+
+void AdaptiveScheduler::SetMinDepth(CellId cell, std::uint32_t depth) {
+  const std::uint32_t c = cell.value();
+  const std::uint32_t old = min_depth_[c];
+  if (old == depth) return;
+  if (old != kNever) {  // out of its list: the last one takes its place
+    std::vector<std::uint32_t>& from = at_depth_[old];
+    from[depth_pos_[c]] = from.back();
+    depth_pos_[from.back()] = depth_pos_[c];
+    from.pop_back();
+  }
+  min_depth_[c] = depth;
+  if (depth != kNever) {
+    if (depth >= at_depth_.size()) at_depth_.resize(std::size_t{depth} + 1);
+    depth_pos_[c] = std::uint32_t(at_depth_[depth].size());
+    at_depth_[depth].push_back(c);
+    low_depth_ = std::min(low_depth_, depth);
+  }
+  while (low_depth_ < at_depth_.size() && at_depth_[low_depth_].empty()) ++low_depth_;
 }
 
 std::uint32_t AdaptiveScheduler::DueAt(CellId c) const {
@@ -280,9 +308,24 @@ std::optional<CellId> AdaptiveScheduler::Next(const QueueView& queues) {
 }
 
 std::optional<CellId> AdaptiveScheduler::Shallowest(const QueueView& queues) const {
+  // Counted as the hardware's pass over the cells.
+  cost_.steps += cells_;
+  // The loop below's answer from the shallowest lists up: the first depth with a cell in view,
+  // the most queued rays there (lowest number on ties). Only a cell with work of no known node
+  // (none in a replay, which tells every node) is in no list: then the loop.
+  for (std::uint32_t d = low_depth_; d < at_depth_.size(); ++d) {
+    std::optional<CellId> best;
+    for (const std::uint32_t c : at_depth_[d]) {
+      const std::uint64_t q = queues.queued(CellId(c));
+      if (q == 0) continue;
+      if (!best || q > queues.queued(*best) || (q == queues.queued(*best) && c < best->value())) {
+        best = CellId(c);
+      }
+    }
+    if (best) return best;
+  }
   std::optional<CellId> best;
   for (std::uint32_t c = 0; c < cells_; ++c) {
-    ++cost_.steps;
     const std::uint64_t q = queues.queued(CellId(c));
     if (q == 0) continue;
     if (!best || min_depth_[c] < min_depth_[best->value()] ||
@@ -295,17 +338,25 @@ std::optional<CellId> AdaptiveScheduler::Shallowest(const QueueView& queues) con
 
 void AdaptiveScheduler::Use(std::size_t i) {
   used_.Use(i);
-  --remaining_[plan_[i].value()];
+  if (--remaining_[plan_[i].value()] == 0) done_cells_.push_back(plan_[i].value());
 }
 
 std::optional<CellId> AdaptiveScheduler::Orphan(const QueueView& queues) const {
   if (cursor_ == plan_.size()) return std::nullopt;  // the plan is used up: planned again
+  // Counted as the hardware's mask of the cells with work and no entry left.
+  cost_.steps += cells_;
+  // The most queued cell in view with no entry left (lowest number on ties): the most queued of
+  // all when the plan is done with it (the replay keeps it, QueueView::most), else the most
+  // queued of the cells the plan is done with.
+  const std::optional<CellId> top = MostQueuedCell(queues);
+  if (!top) return std::nullopt;
+  if (top->value() < cells_ && remaining_[top->value()] == 0) return top;
   std::optional<CellId> orphan;
   std::uint64_t most = 0;
-  for (std::uint32_t c = 0; c < cells_; ++c) {
-    ++cost_.steps;
-    if (remaining_[c] == 0 && queues.queued(CellId(c)) > most) {
-      most = queues.queued(CellId(c));
+  for (const std::uint32_t c : done_cells_) {
+    const std::uint64_t q = queues.queued(CellId(c));
+    if (q > most || (q == most && q > 0 && c < orphan->value())) {
+      most = q;
       orphan = CellId(c);
     }
   }

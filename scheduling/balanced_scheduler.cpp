@@ -192,9 +192,13 @@ void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
     match_.assign(1, previous_ != nullptr ? kRootNode : kNoNode);
     node_cell_.assign(1, kNoCell);
     level_.assign(cells_, 0);
+    level_pos_.assign(cells_, 0);
+    top_level_ = 0;
     cost_ = {};
     heights_.reset();
     if (previous_ != nullptr) SetHeights(frame);
+    at_level_.resize(heights_ ? std::size_t{heights_->max_height} + 1 : 1);
+    for (auto& cells : at_level_) cells.clear();
   }
 }
 
@@ -264,6 +268,7 @@ void BalancedScheduler::SetHeights(const FrameInfo& frame) {
       h.height[i] += 1;
       const NodeId parent = t.parent(n);
       h.height[parent.index()] = std::max(h.height[parent.index()], h.height[i]);
+      h.max_height = std::max(h.max_height, h.height[i]);
     }
     h.stand_in = SharedStandIns(cache, t);
     return h;
@@ -288,14 +293,31 @@ void BalancedScheduler::Arrived(const Arrival& a) {
   }
   RAYCELL_CHECK_LT(a.node, match_.size());
   const NodeId m = match_[a.node];
-  if (m != kNoNode) {
-    level_[a.cell.value()] = std::max(level_[a.cell.value()], heights_->height[m.index()]);
+  if (m != kNoNode && heights_->height[m.index()] > level_[a.cell.value()]) {
+    SetLevel(a.cell, heights_->height[m.index()]);
   }
 }
 
 void BalancedScheduler::Taken(CellId cell) {
   if (adaptive_) adaptive_->Taken(cell);
-  if (options_.critical) level_[cell.value()] = 0;
+  if (options_.critical) SetLevel(cell, 0);
+}
+
+void BalancedScheduler::SetLevel(CellId cell, std::uint32_t level) {
+  const std::uint32_t c = cell.value();
+  if (level_[c] == level) return;
+  if (level_[c] > 0) {  // out of its level's list: the last one takes its place
+    std::vector<std::uint32_t>& from = at_level_[level_[c]];
+    from[level_pos_[c]] = from.back();
+    level_pos_[from.back()] = level_pos_[c];
+    from.pop_back();
+  }
+  level_[c] = level;
+  if (level > 0) {
+    level_pos_[c] = std::uint32_t(at_level_[level].size());
+    at_level_[level].push_back(c);
+    top_level_ = std::max(top_level_, level);
+  }
 }
 
 std::uint64_t BalancedScheduler::Bytes() const {
@@ -312,7 +334,27 @@ Scheduler::DecisionCost BalancedScheduler::Cost() const {
 
 std::optional<CellId> BalancedScheduler::Critical(const QueueView& queues,
                                                   std::optional<CellId> plan) const {
+  // Counted as the hardware's pass over the cells (docs/design.md §5 "Load balancing").
   cost_.steps += queues.cells;
+  if (plan) {
+    // The highest level above the plan's entry's with a cell in view, the most queued rays
+    // there (lowest number on ties): the scan below's answer, found from the top level down.
+    // A cell of a level has queued nodes; only the busy ones (at most the other processors)
+    // have none in view.
+    for (std::uint32_t l = top_level_; l > level_[plan->value()]; --l) {
+      std::optional<CellId> best;
+      for (const std::uint32_t c : at_level_[l]) {
+        const std::uint64_t q = queues.queued_rays[c];
+        if (q == 0) continue;
+        if (!best || q > queues.queued_rays[best->value()] ||
+            (q == queues.queued_rays[best->value()] && c < best->value())) {
+          best = CellId(c);
+        }
+      }
+      if (best) return best;
+    }
+    return std::nullopt;
+  }
   std::optional<CellId> best;
   for (std::uint32_t c = 0; c < queues.cells; ++c) {
     const std::uint64_t q = queues.queued_rays[c];
@@ -339,6 +381,39 @@ QueueView BalancedScheduler::Own(const QueueView& queues) const {
   QueueView v = queues;
   v.queued_rays = own_.data();
   return v;
+}
+
+std::optional<CellId> BalancedScheduler::BestOfAll(const QueueView& queues,
+                                                   const std::uint64_t* queued) const {
+  // The scan of Best scores each cell q x (1 + its share) and keeps the first of the highest.
+  // Off the loaded cell's row the share is 0 and the score q, so the highest there is the
+  // most queued cell (lowest number on ties); that cell's score q is at most its own in the
+  // row (shares are >= 0). So the answer is the highest of that cell (at q) and the row's cells
+  // (at their scores), the lowest number on ties, as the scan gives it.
+  CellId most = kNoCell;
+  if (queued == queues.all_queued) {
+    most = MostQueuedAll(queues);
+  } else if (queued == queues.queued_rays) {
+    most = MostQueuedCell(queues).value_or(kNoCell);
+  } else {
+    most = ScanMostQueued(queued, queues.cells);
+  }
+  if (most == kNoCell) return std::nullopt;
+  CellId best = most;
+  double best_score = double(queued[most.value()]);
+  if (options_.affinity && stats_ && queues.loaded && queues.loaded->value() < cells_) {
+    const auto* flow = stats_->flow.data() + stats_->flow_begin[queues.loaded->value()];
+    const auto* flow_end = stats_->flow.data() + stats_->flow_begin[queues.loaded->value() + 1];
+    for (; flow != flow_end && flow->first < queues.cells; ++flow) {
+      const std::uint64_t q = queued[flow->first];
+      if (q == 0) continue;
+      const double score = double(q) * (1.0 + flow->second);
+      if (score > best_score || (score == best_score && flow->first < best.value())) {
+        best = CellId(flow->first), best_score = score;
+      }
+    }
+  }
+  return best;
 }
 
 template <typename Take>
@@ -412,7 +487,7 @@ std::optional<CellId> BalancedScheduler::Choose(const QueueView& queues,
     }
   }
   // Sharing: busy cells' queues count too (the processor joins the cell).
-  return Best(queues, Queued(queues), [](std::uint32_t) { return true; });
+  return BestOfAll(queues, Queued(queues));
 }
 
 bool BalancedScheduler::TooSmall(const QueueView& queues, CellId c) const {
@@ -426,8 +501,7 @@ bool BalancedScheduler::TooSmall(const QueueView& queues, CellId c) const {
 bool BalancedScheduler::NoWork(const QueueView& queues) const {
   if (!queues.empty()) return false;
   if (!options_.share || queues.all_queued == nullptr) return true;
-  return std::all_of(queues.all_queued, queues.all_queued + queues.cells,
-                     [](std::uint64_t q) { return q == 0; });
+  return MostQueuedAll(queues) == kNoCell;
 }
 
 std::optional<CellId> BalancedScheduler::Peek(const QueueView& queues) const {
@@ -449,8 +523,7 @@ std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
   // part of the whole.
   if (options_.postpone && processors_ >= kPostponeMinProcessors &&
       queues.working + 1 >= processors_ && TooSmall(queues, *c)) {
-    const std::optional<CellId> largest =
-        Best(queues, Queued(queues), [](std::uint32_t) { return true; });
+    const std::optional<CellId> largest = BestOfAll(queues, Queued(queues));
     if (largest && !TooSmall(queues, *largest)) {
       reason_ = "largest (plan's batch too small)";
       return largest;  // the plan keeps its place

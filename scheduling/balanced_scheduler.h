@@ -114,6 +114,9 @@ class BalancedScheduler : public Scheduler {
   // `queued`: per cell (queues.queued_rays, or all_queued to count busy cells too).
   template <typename Take>
   std::optional<CellId> Best(const QueueView& queues, const std::uint64_t* queued, Take take) const;
+  // Best taking every cell, without a scan of the cells: the replay's most queued cell
+  // (MostQueuedAll, MostQueuedCell) against the loaded cell's row of shares (O(row)).
+  std::optional<CellId> BestOfAll(const QueueView& queues, const std::uint64_t* queued) const;
   // Whether no cell has queued rays this scheduler may take.
   bool NoWork(const QueueView& queues) const;
   // Whether a batch of `c` is too small to fetch while others work.
@@ -146,8 +149,11 @@ class BalancedScheduler : public Scheduler {
   // Critical: per node of frame i-1's tree its height, and the tree's stand-ins (shared).
   struct Heights {
     std::vector<std::uint32_t> height;
+    std::uint32_t max_height = 0;
     std::shared_ptr<const StandIns> stand_in;
   };
+  // Critical: sets `cell`'s level, keeping the cells of each level (at_level_).
+  void SetLevel(CellId cell, std::uint32_t level);
   // Each cell's processor and one follower per processor over the plan's entries of its
   // cells (one follower, owner 0 everywhere, without partition).
   std::vector<std::uint32_t> owner_;
@@ -163,6 +169,12 @@ class BalancedScheduler : public Scheduler {
   std::vector<NodeId> match_;
   std::vector<CellId> node_cell_;
   std::vector<std::uint32_t> level_;
+  // Per level >= 1 the cells of that level, in any order, and each cell's place in its level's
+  // list; the highest level that may have cells. Critical looks at the levels above the plan's
+  // entry's, from the top, not at every cell.
+  std::vector<std::vector<std::uint32_t>> at_level_;
+  std::vector<std::uint32_t> level_pos_;
+  std::uint32_t top_level_ = 0;
   mutable DecisionCost cost_;  // the critical rule's own
 };
 

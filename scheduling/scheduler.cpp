@@ -41,6 +41,14 @@ std::optional<CellId> MostQueuedCell(const QueueView& queues) {
   return c == kNoCell ? std::nullopt : std::optional<CellId>(c);
 }
 
+CellId MostQueuedAll(const QueueView& queues) {
+  if (queues.all_queued == nullptr) return kNoCell;
+  if (queues.all_most_of != nullptr && queues.all_most_of == queues.all_queued) {
+    return queues.all_most;
+  }
+  return ScanMostQueued(queues.all_queued, queues.cells);
+}
+
 std::string ScheduleFollower::Stats::ToString() const {
   std::ostringstream s;
   s << "followed " << followed << ", skipped " << skipped << ", deferred " << deferred

@@ -44,6 +44,10 @@ struct QueueView {
   const std::uint64_t* most_of = nullptr;
   std::uint32_t most_cells = 0;
   CellId most = kNoCell;
+  // The same for all_queued: the replay's answer of ScanMostQueued(all_queued, cells), used by
+  // MostQueuedAll when all_most_of == all_queued (null: none given, scanned).
+  const std::uint64_t* all_most_of = nullptr;
+  CellId all_most = kNoCell;
 
   std::uint64_t queued(CellId c) const { return queued_rays[c.value()]; }
   // Whether another processor is working `c` (work released there is done by that one).
@@ -212,6 +216,10 @@ class Scheduler {
 std::optional<CellId> MostQueuedCell(const QueueView& queues);
 // The same by a scan of queued[0 .. cells): kNoCell when no cell has work.
 CellId ScanMostQueued(const std::uint64_t* queued, std::uint32_t cells);
+// The cell with the most queued rays of all (QueueView::all_queued, busy cells included), lowest
+// number on ties; kNoCell when none has any or all_queued is not given. O(1) with the replay's
+// answer (QueueView::all_most), else a scan.
+CellId MostQueuedAll(const QueueView& queues);
 
 // Entries 0 .. n-1 of a schedule, some used up: the first entry from i on that is not, in
 // amortised near-constant time (a union-find over the used entries, paths halved as they are

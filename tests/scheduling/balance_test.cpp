@@ -4,6 +4,8 @@
 // processor that joins a busy cell or postpones changes the replay as documented.
 #include <gtest/gtest.h>
 
+#include <memory>
+#include <optional>
 #include <random>
 #include <sstream>
 
@@ -252,6 +254,94 @@ TEST(Balance, CriticalStartsTheLongestPredictedChainHandWorked) {
       }
     }
   }
+}
+
+// Issue 43: the replay keeps each view's most queued cell, of the cells in view
+// (QueueView::most) and of every cell (QueueView::all_most), so that a decision need not scan
+// the cells; the schedulers take them where their scans took the cell with the most queued
+// rays (balanced's affinity-weighted choice, celltree-adaptive's orphans). A wrapper checks on
+// every call that the replay's cells are the scans' (ScanMostQueued), and that a twin of the
+// scheduler told the same frame, shown the same views without them (so that MostQueuedCell and
+// MostQueuedAll scan), chooses the same cells at the same cost.
+class Twin : public Scheduler {
+ public:
+  Twin(const SchedulerEntry& entry, int* calls)
+      : Scheduler(entry), a_(MakeScheduler(entry, 1)), b_(MakeScheduler(entry, 1)), calls_(calls) {}
+  void BeginFrame(const FrameInfo& frame) override {
+    a_->BeginFrame(frame);
+    b_->BeginFrame(frame);
+  }
+  std::optional<CellId> Next(const QueueView& v) override {
+    const std::optional<CellId> a = a_->Next(Check(v));
+    EXPECT_EQ(a, b_->Next(Strip(v))) << Name();
+    return a;
+  }
+  std::optional<CellId> Peek(const QueueView& v) const override {
+    const std::optional<CellId> a = a_->Peek(Check(v));
+    EXPECT_EQ(a, b_->Peek(Strip(v))) << Name();
+    return a;
+  }
+  bool Watches() const override { return a_->Watches(); }
+  void Arrived(const Arrival& arrival) override {
+    a_->Arrived(arrival);
+    b_->Arrived(arrival);
+  }
+  void Taken(CellId cell) override {
+    a_->Taken(cell);
+    b_->Taken(cell);
+  }
+  DecisionCost Cost() const override {
+    EXPECT_EQ(a_->Cost().steps, b_->Cost().steps) << Name();
+    return a_->Cost();
+  }
+
+ private:
+  const QueueView& Check(const QueueView& v) const {
+    ++*calls_;
+    EXPECT_EQ(v.most_of, v.queued_rays);
+    EXPECT_EQ(v.most, ScanMostQueued(v.queued_rays, v.cells)) << Name();
+    if (entry().joins) {  // kept only for a scheduler that may join
+      EXPECT_EQ(v.all_most_of, v.all_queued);
+      EXPECT_EQ(v.all_most, ScanMostQueued(v.all_queued, v.cells)) << Name();
+    }
+    return v;
+  }
+  static QueueView Strip(QueueView v) {
+    v.most_of = nullptr;
+    v.all_most_of = nullptr;
+    return v;
+  }
+  std::unique_ptr<Scheduler> a_, b_;
+  int* calls_;
+};
+
+TEST(Balance, TheReplaysMostQueuedCellsAreTheScans) {
+  std::mt19937 rng(43);
+  int calls = 0;
+  for (int trial = 0; trial < 3; ++trial) {
+    const std::uint32_t cells = 3 + rng() % 12;
+    const RayBatch rays = testing::RandomReplayFrame(rng, cells, 60);
+    const CellTree tree = testing::TreeOf(rays);
+    const CellTree previous = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 60));
+    const CellTree before = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 60));
+    std::vector<std::uint64_t> footprints(cells);
+    for (auto& f : footprints) f = 1000 + rng() % 100'000;
+    const WorkGraph w = RaySegmentWork(rays, cells);
+    for (const std::uint32_t p : {2u, 8u}) {
+      for (const char* name :
+           {"share", "balanced", "balanced-critical", "balanced-adaptive", "celltree-adaptive"}) {
+        ReplayConfig config = DefaultConfig();
+        config.scheduler = &SchedulerByName(name, "test");
+        config.processors.count = p;
+        config.granularity = ReplayConfig::Granularity::kRay;
+        Twin twin(*config.scheduler, &calls);
+        const FrameTrees info{2, &tree, trial % 3 == 0 ? nullptr : &previous, cells,
+                              trial % 2 == 0 ? nullptr : &before};
+        ReplayFrame(w, footprints, config, twin, info, Bound(tree));
+      }
+    }
+  }
+  EXPECT_GT(calls, 1000);
 }
 
 }  // namespace
