@@ -423,21 +423,17 @@ class Bounder {
     std::vector<std::pair<std::uint64_t, Orders>> sorted(by_key.begin(), by_key.end());
     std::sort(sorted.begin(), sorted.end(),
               [](const auto& x, const auto& y) { return x.first < y.first; });
-    std::vector<std::pair<std::pair<CellId, CellId>, Orders>> orders;
     const std::uint64_t cells = tree_.cell_count();
-    for (const auto& [key, o] : sorted) {
-      orders.push_back({{CellId(static_cast<std::uint32_t>(key / cells)),
-                         CellId(static_cast<std::uint32_t>(key % cells))},
-                        o});
-      together_.emplace_hint(together_.end(), orders.back().first, o.both);
-    }
     std::vector<std::pair<std::uint32_t, std::pair<CellId, CellId>>> conflicting;
-    for (const auto& [pair, o] : orders) {
+    for (const auto& [key, o] : sorted) {
+      const std::pair<CellId, CellId> pair{CellId(static_cast<std::uint32_t>(key / cells)),
+                                           CellId(static_cast<std::uint32_t>(key % cells))};
+      together_.emplace_hint(together_.end(), pair, o.both);
       if (o.ab > 0 && o.ba > 0) conflicting.push_back({std::min(o.ab, o.ba), pair});
     }
     std::stable_sort(conflicting.begin(), conflicting.end(),
                      [](const auto& x, const auto& y) { return x.first > y.first; });
-    r_.pairs_sharing = orders.size();
+    r_.pairs_sharing = sorted.size();
     r_.pairs_conflicting = conflicting.size();
     for (const auto& [weight, pair] : conflicting) {
       const int g = Compute({pair.first, pair.second});
@@ -450,8 +446,6 @@ class Bounder {
     std::sort(pair_gains_.begin(), pair_gains_.end());  // the matching's input in cell order
   }
 
-  // Adds one path's orders: for each pair of distinct cells on it, whether some a comes
-  // before some b (ab) and some b before some a (ba), each counted once per path.
   static constexpr std::uint32_t kAbsent = ~std::uint32_t{0};
   struct Span {
     CellId cell;

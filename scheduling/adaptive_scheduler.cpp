@@ -64,8 +64,7 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   min_due_.assign(cells_, kNever);
   depth_.assign(1, 0);
   min_depth_.assign(cells_, kNever);
-  for (auto& cells : at_depth_) cells.clear();
-  depth_pos_.assign(cells_, 0);
+  at_depth_.Reset(cells_);
   low_depth_ = 0;
   done_cells_.clear();
   replans_ = 0;
@@ -192,23 +191,12 @@ void AdaptiveScheduler::Taken(CellId cell) {
 }
 
 void AdaptiveScheduler::SetMinDepth(CellId cell, std::uint32_t depth) {
+  static_assert(kNever == CellLists::kNone, "kNever is in no list");
   const std::uint32_t c = cell.value();
-  const std::uint32_t old = min_depth_[c];
-  if (old == depth) return;
-  if (old != kNever) {  // out of its list: the last one takes its place
-    std::vector<std::uint32_t>& from = at_depth_[old];
-    from[depth_pos_[c]] = from.back();
-    depth_pos_[from.back()] = depth_pos_[c];
-    from.pop_back();
-  }
+  at_depth_.Move(c, min_depth_[c], depth);
   min_depth_[c] = depth;
-  if (depth != kNever) {
-    if (depth >= at_depth_.size()) at_depth_.resize(std::size_t{depth} + 1);
-    depth_pos_[c] = std::uint32_t(at_depth_[depth].size());
-    at_depth_[depth].push_back(c);
-    low_depth_ = std::min(low_depth_, depth);
-  }
-  while (low_depth_ < at_depth_.size() && at_depth_[low_depth_].empty()) ++low_depth_;
+  if (depth != kNever) low_depth_ = std::min(low_depth_, depth);
+  while (low_depth_ < at_depth_.keys() && at_depth_.at(low_depth_).empty()) ++low_depth_;
 }
 
 std::uint32_t AdaptiveScheduler::DueAt(CellId c) const {
@@ -313,16 +301,10 @@ std::optional<CellId> AdaptiveScheduler::Shallowest(const QueueView& queues) con
   // The loop below's answer from the shallowest lists up: the first depth with a cell in view,
   // the most queued rays there (lowest number on ties). Only a cell with work of no known node
   // (none in a replay, which tells every node) is in no list: then the loop.
-  for (std::uint32_t d = low_depth_; d < at_depth_.size(); ++d) {
-    std::optional<CellId> best;
-    for (const std::uint32_t c : at_depth_[d]) {
-      const std::uint64_t q = queues.queued(CellId(c));
-      if (q == 0) continue;
-      if (!best || q > queues.queued(*best) || (q == queues.queued(*best) && c < best->value())) {
-        best = CellId(c);
-      }
+  for (std::uint32_t d = low_depth_; d < at_depth_.keys(); ++d) {
+    if (const std::optional<CellId> best = MostQueuedOf(at_depth_.at(d), queues.queued_rays)) {
+      return best;
     }
-    if (best) return best;
   }
   std::optional<CellId> best;
   for (std::uint32_t c = 0; c < cells_; ++c) {

@@ -128,11 +128,9 @@ class AdaptiveScheduler : public Scheduler {
   std::vector<std::uint32_t> min_due_;              // per cell: the least due entry of queued_
   std::vector<std::uint32_t> depth_;      // per queued node: its depth (the root's children 1)
   std::vector<std::uint32_t> min_depth_;  // per cell: the least depth of queued_
-  // Per depth the cells whose min_depth_ it is, in any order, each cell's place in its list,
-  // and the least depth whose list may have cells: Shallowest looks at the shallowest lists,
-  // not at every cell (issue 43).
-  std::vector<std::vector<std::uint32_t>> at_depth_;
-  std::vector<std::uint32_t> depth_pos_;
+  // Per depth the cells whose min_depth_ it is, and the least depth whose list may have cells:
+  // Shallowest looks at the shallowest lists, not at every cell (issue 43).
+  CellLists at_depth_;
   std::uint32_t low_depth_ = 0;
   void SetMinDepth(CellId c, std::uint32_t depth);
   // Cells no entry left in the plan fetches (remaining_ 0), in any order: where Orphan looks

@@ -192,13 +192,11 @@ void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
     match_.assign(1, previous_ != nullptr ? kRootNode : kNoNode);
     node_cell_.assign(1, kNoCell);
     level_.assign(cells_, 0);
-    level_pos_.assign(cells_, 0);
+    at_level_.Reset(cells_);
     top_level_ = 0;
     cost_ = {};
     heights_.reset();
     if (previous_ != nullptr) SetHeights(frame);
-    at_level_.resize(heights_ ? std::size_t{heights_->max_height} + 1 : 1);
-    for (auto& cells : at_level_) cells.clear();
   }
 }
 
@@ -268,7 +266,6 @@ void BalancedScheduler::SetHeights(const FrameInfo& frame) {
       h.height[i] += 1;
       const NodeId parent = t.parent(n);
       h.height[parent.index()] = std::max(h.height[parent.index()], h.height[i]);
-      h.max_height = std::max(h.max_height, h.height[i]);
     }
     h.stand_in = SharedStandIns(cache, t);
     return h;
@@ -305,19 +302,11 @@ void BalancedScheduler::Taken(CellId cell) {
 
 void BalancedScheduler::SetLevel(CellId cell, std::uint32_t level) {
   const std::uint32_t c = cell.value();
-  if (level_[c] == level) return;
-  if (level_[c] > 0) {  // out of its level's list: the last one takes its place
-    std::vector<std::uint32_t>& from = at_level_[level_[c]];
-    from[level_pos_[c]] = from.back();
-    level_pos_[from.back()] = level_pos_[c];
-    from.pop_back();
-  }
+  // Level 0 (no queued node) is in no list.
+  const auto key = [](std::uint32_t l) { return l > 0 ? l : CellLists::kNone; };
+  at_level_.Move(c, key(level_[c]), key(level));
   level_[c] = level;
-  if (level > 0) {
-    level_pos_[c] = std::uint32_t(at_level_[level].size());
-    at_level_[level].push_back(c);
-    top_level_ = std::max(top_level_, level);
-  }
+  top_level_ = std::max(top_level_, level);
 }
 
 std::uint64_t BalancedScheduler::Bytes() const {
@@ -342,16 +331,9 @@ std::optional<CellId> BalancedScheduler::Critical(const QueueView& queues,
     // A cell of a level has queued nodes; only the busy ones (at most the other processors)
     // have none in view.
     for (std::uint32_t l = top_level_; l > level_[plan->value()]; --l) {
-      std::optional<CellId> best;
-      for (const std::uint32_t c : at_level_[l]) {
-        const std::uint64_t q = queues.queued_rays[c];
-        if (q == 0) continue;
-        if (!best || q > queues.queued_rays[best->value()] ||
-            (q == queues.queued_rays[best->value()] && c < best->value())) {
-          best = CellId(c);
-        }
+      if (const std::optional<CellId> best = MostQueuedOf(at_level_.at(l), queues.queued_rays)) {
+        return best;
       }
-      if (best) return best;
     }
     return std::nullopt;
   }

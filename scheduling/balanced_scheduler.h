@@ -149,7 +149,6 @@ class BalancedScheduler : public Scheduler {
   // Critical: per node of frame i-1's tree its height, and the tree's stand-ins (shared).
   struct Heights {
     std::vector<std::uint32_t> height;
-    std::uint32_t max_height = 0;
     std::shared_ptr<const StandIns> stand_in;
   };
   // Critical: sets `cell`'s level, keeping the cells of each level (at_level_).
@@ -169,11 +168,9 @@ class BalancedScheduler : public Scheduler {
   std::vector<NodeId> match_;
   std::vector<CellId> node_cell_;
   std::vector<std::uint32_t> level_;
-  // Per level >= 1 the cells of that level, in any order, and each cell's place in its level's
-  // list; the highest level that may have cells. Critical looks at the levels above the plan's
-  // entry's, from the top, not at every cell.
-  std::vector<std::vector<std::uint32_t>> at_level_;
-  std::vector<std::uint32_t> level_pos_;
+  // Per level >= 1 the cells of that level, and the highest level that may have cells. Critical
+  // looks at the levels above the plan's entry's, from the top, not at every cell.
+  CellLists at_level_;
   std::uint32_t top_level_ = 0;
   mutable DecisionCost cost_;  // the critical rule's own
 };

@@ -33,6 +33,19 @@ CellId ScanMostQueued(const std::uint64_t* queued, std::uint32_t cells) {
   return CellId(best);
 }
 
+std::optional<CellId> MostQueuedOf(const std::vector<std::uint32_t>& cells,
+                                   const std::uint64_t* queued) {
+  std::optional<CellId> best;
+  for (const std::uint32_t c : cells) {
+    const std::uint64_t q = queued[c];
+    if (q == 0) continue;
+    if (!best || q > queued[best->value()] || (q == queued[best->value()] && c < best->value())) {
+      best = CellId(c);
+    }
+  }
+  return best;
+}
+
 std::optional<CellId> MostQueuedCell(const QueueView& queues) {
   const CellId c = queues.most_of != nullptr && queues.most_of == queues.queued_rays &&
                            queues.most_cells == queues.cells

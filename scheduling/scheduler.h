@@ -221,6 +221,46 @@ CellId ScanMostQueued(const std::uint64_t* queued, std::uint32_t cells);
 // answer (QueueView::all_most), else a scan.
 CellId MostQueuedAll(const QueueView& queues);
 
+// Of `cells`, the one with the most queued rays (queued[c] > 0), lowest number on ties; none
+// when none has work.
+std::optional<CellId> MostQueuedOf(const std::vector<std::uint32_t>& cells,
+                                   const std::uint64_t* queued);
+
+// Cells kept in one list per key (a depth, a level), each cell in at most one list, in any
+// order: a cell moves in O(1), the last cell of its old list taking its place. A scheduler
+// looks at the lists of a few keys instead of at every cell (issue 43).
+class CellLists {
+ public:
+  static constexpr std::uint32_t kNone = ~std::uint32_t{0};  // a key: in no list
+  // Every list empty, for cells 0 .. cells-1.
+  void Reset(std::uint32_t cells) {
+    pos_.assign(cells, 0);
+    for (auto& l : lists_) l.clear();
+  }
+  // Moves `cell` from list `from` to list `to` (either kNone).
+  void Move(std::uint32_t cell, std::uint32_t from, std::uint32_t to) {
+    if (from == to) return;
+    if (from != kNone) {
+      std::vector<std::uint32_t>& l = lists_[from];
+      l[pos_[cell]] = l.back();
+      pos_[l.back()] = pos_[cell];
+      l.pop_back();
+    }
+    if (to != kNone) {
+      if (to >= lists_.size()) lists_.resize(std::size_t{to} + 1);
+      pos_[cell] = std::uint32_t(lists_[to].size());
+      lists_[to].push_back(cell);
+    }
+  }
+  // The keys that have had a list (every key at or above it has an empty one).
+  std::uint32_t keys() const { return std::uint32_t(lists_.size()); }
+  const std::vector<std::uint32_t>& at(std::uint32_t key) const { return lists_[key]; }
+
+ private:
+  std::vector<std::vector<std::uint32_t>> lists_;
+  std::vector<std::uint32_t> pos_;  // per cell: its place in its list
+};
+
 // Entries 0 .. n-1 of a schedule, some used up: the first entry from i on that is not, in
 // amortised near-constant time (a union-find over the used entries, paths halved as they are
 // walked), so that a follower walking past entries taken out of order does not visit them
