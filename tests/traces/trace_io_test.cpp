@@ -654,19 +654,27 @@ RayBatch TwoPixelsWithShadowRays() {
   return frame;
 }
 
-// Format 5, as the previous writer wrote it (options.format_version = 5): every column as
-// trace.capnp describes it for version 5.
-TEST(TraceIoTest, RaysArePredictedFromTheCorrespondingRayOfThePreviousPixel) {
+// TwoPixelsWithShadowRays written in format `version`: checks that the file says that version
+// and reads back the same rays, removes it, and returns the frame's messages as stored.
+kj::Array<capnp::word> TwoPixelsWrittenIn(std::uint32_t version) {
   const RayBatch frame = TwoPixelsWithShadowRays();
-  const std::string path = TempPath("corresponding.rct");
+  const std::string path = TempPath("corresponding" + std::to_string(version) + ".rct");
   TraceWriterOptions options;
-  options.format_version = 5;
+  options.format_version = version;
   const std::vector<FrameSummary> written =
       WriteTrace(path, TestHeader({2, 2, 1}, false), {{0, frame}}, options);
   const TraceReader reader = TraceReader::Open(path);
-  EXPECT_EQ(reader.header().format_version, 5u);
+  EXPECT_EQ(reader.header().format_version, version);
   EXPECT_TRUE(reader.LoadFrame(0) == frame);
-  const kj::Array<capnp::word> words = FrameMessages(path, written[0]);
+  kj::Array<capnp::word> words = FrameMessages(path, written[0]);
+  std::remove(path.c_str());
+  return words;
+}
+
+// Format 5, as the previous writer wrote it (options.format_version = 5): every column as
+// trace.capnp describes it for version 5.
+TEST(TraceIoTest, RaysArePredictedFromTheCorrespondingRayOfThePreviousPixel) {
+  const kj::Array<capnp::word> words = TwoPixelsWrittenIn(5);
   capnp::FlatArrayMessageReader message(words);
   const auto batch = message.getRoot<schema::Record>().getBatch();
   // The corresponding rule, which codes the batch in fewer bytes than the sibling rule.
@@ -681,22 +689,12 @@ TEST(TraceIoTest, RaysArePredictedFromTheCorrespondingRayOfThePreviousPixel) {
   EXPECT_EQ(Values(batch.getPrimaryPaths()), (std::vector<std::uint64_t>{2, 62, 63}));
   EXPECT_EQ(Values(batch.getPrimarySamples()), (std::vector<std::uint64_t>{11, 11, 1}));
   EXPECT_EQ(batch.getSampleCode().size(), 0u);
-  std::remove(path.c_str());
 }
 
 // Format 6 codes the same rays with the same references and paths, but every visit's sample
 // value in Batch.sampleCode (range coded), the three sample columns empty.
 TEST(TraceIoTest, Format6RangeCodesTheSamples) {
-  const RayBatch frame = TwoPixelsWithShadowRays();
-  const std::string path = TempPath("corresponding6.rct");
-  TraceWriterOptions options;
-  options.format_version = 6;
-  const std::vector<FrameSummary> written =
-      WriteTrace(path, TestHeader({2, 2, 1}, false), {{0, frame}}, options);
-  const TraceReader reader = TraceReader::Open(path);
-  EXPECT_EQ(reader.header().format_version, 6u);
-  EXPECT_TRUE(reader.LoadFrame(0) == frame);
-  const kj::Array<capnp::word> words = FrameMessages(path, written[0]);
+  const kj::Array<capnp::word> words = TwoPixelsWrittenIn(6);
   capnp::FlatArrayMessageReader message(words);
   const auto batch = message.getRoot<schema::Record>().getBatch();
   EXPECT_EQ(batch.getReferenceRule(), kReferenceCorresponding);
@@ -708,7 +706,6 @@ TEST(TraceIoTest, Format6RangeCodesTheSamples) {
   // 12 values: a range code of at least 5 bytes (its flush), far fewer than 12 values' bytes.
   EXPECT_GE(batch.getSampleCode().size(), 5u);
   EXPECT_LE(batch.getSampleCode().size(), 12u);
-  std::remove(path.c_str());
 }
 
 }  // namespace
