@@ -8,7 +8,8 @@
 # full size. Peak memory from /usr/bin/time (a fork of a small process, so the child's own).
 #
 # Usage: tools/bench/scale.sh [OUTDIR] [FRAMES]     default: a temporary folder, 2 frames
-# SCALE_RES, SCALE_CELLS and SCALE_AT (the cells series' image) replace the points.
+# SCALE_RES, SCALE_CELLS and SCALE_AT (the cells series' image) replace the points;
+# SCALE_SCENE=scenes/NAME.toml measures that scene instead of the built-in one.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 raycell=${RAYCELL:-$root/build/tools/raycell}
@@ -28,7 +29,7 @@ echo "res,cells,series,visits,command,seconds,peak_mb" > "$rows"
 run() {
   local res=$1 cells=$2 series=$3 trace=$out/$1_$2.rct
   local -a cmds=(
-    "record --res $res --cells $cells --orbit $frames:$((2 * frames)) --no-images --quiet --out $trace"
+    "record ${SCALE_SCENE:+--scene $SCALE_SCENE }--res $res --cells $cells --orbit $frames:$((2 * frames)) --no-images --quiet --out $trace"
     "analyze $trace --quiet --format csv"
     "replay $trace --scheduler maxwork --quiet"
     "sweep $trace --vary scheduler=maxwork --vary processors.time_per_sample=5ns,10ns,20ns,40ns --jobs 2 --out $out/sweep.csv --quiet")
@@ -44,7 +45,7 @@ run() {
   done
 }
 
-echo "built-in scene, $frames frames, nice; $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "${SCALE_SCENE:-built-in scene}, $frames frames, nice; $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg)"
 for res in ${SCALE_RES:-256x256 512x512 1024x1024 2048x2048}; do run "$res" 8x8x8 visits; done
 for cells in ${SCALE_CELLS:-2x2x2 4x4x4 8x8x8 16x16x16}; do run ${SCALE_AT:-1920x1080} "$cells" cells; done
 python3 - "$rows" <<'PY'
