@@ -12,9 +12,9 @@ constexpr SchedulerEntry kCellTreeAdaptiveEntry = [] {
   SchedulerEntry e;
   e.name = "celltree-adaptive";
   e.meaning =
-      "celltree-union followed node by node as the frame unfolds: work waits for the entry "
-      "its predicted node is due at, work the plan is done with is fetched at once, and the "
-      "rest is planned again by Peel when the plan runs out";
+      "celltree-union (one processor: celltree-best) followed node by node as the frame "
+      "unfolds: work waits for the entry its predicted node is due at, work the plan is done "
+      "with is fetched at once, and the rest is planned again by Peel when the plan runs out";
   e.label = "Cell Tree, adaptive";
   e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
     return std::make_unique<AdaptiveScheduler>(seed);
@@ -53,7 +53,10 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   cells_ = frame.cells;
   own_.reset();
   predicted_ = frame.previous;
-  if (frame.previous != nullptr && frame.before_previous != nullptr) {
+  one_processor_ = frame.processors <= 1;
+  // Several processors predict by the union of frames i-2 and i-1, one by frame i-1 alone
+  // (docs/design.md §5 "Adaptive scheduling" has the measurements).
+  if (!one_processor_ && frame.previous != nullptr && frame.before_previous != nullptr) {
     own_ = SharedUnion(frame.plans, *frame.before_previous, *frame.previous);
     predicted_ = own_.get();
   }
@@ -327,9 +330,10 @@ std::optional<CellId> AdaptiveScheduler::Orphan(const QueueView& queues) const {
   if (cursor_ == plan_.size()) return std::nullopt;  // the plan is used up: planned again
   // Counted as the hardware's mask of the cells with work and no entry left.
   cost_.steps += cells_;
-  // The most queued cell in view with no entry left (lowest number on ties): the most queued of
-  // all when the plan is done with it (the replay keeps it, QueueView::most), else the most
-  // queued of the cells the plan is done with.
+  if (one_processor_) return ShallowestOrphan(queues);
+  // Several processors: the most queued cell in view with no entry left (lowest number on ties):
+  // the most queued of all when the plan is done with it (the replay keeps it,
+  // QueueView::most), else the most queued of the cells the plan is done with.
   const std::optional<CellId> top = MostQueuedCell(queues);
   if (!top) return std::nullopt;
   if (top->value() < cells_ && remaining_[top->value()] == 0) return top;
@@ -339,6 +343,21 @@ std::optional<CellId> AdaptiveScheduler::Orphan(const QueueView& queues) const {
     const std::uint64_t q = queues.queued(CellId(c));
     if (q > most || (q == most && q > 0 && c < orphan->value())) {
       most = q;
+      orphan = CellId(c);
+    }
+  }
+  return orphan;
+}
+
+std::optional<CellId> AdaptiveScheduler::ShallowestOrphan(const QueueView& queues) const {
+  std::optional<CellId> orphan;
+  for (const std::uint32_t c : done_cells_) {
+    const std::uint64_t q = queues.queued_rays[c];
+    if (q == 0) continue;
+    const std::uint32_t o = orphan ? orphan->value() : c;
+    if (!orphan || min_depth_[c] < min_depth_[o] ||
+        (min_depth_[c] == min_depth_[o] &&
+         (q > queues.queued_rays[o] || (q == queues.queued_rays[o] && c < o)))) {
       orphan = CellId(c);
     }
   }

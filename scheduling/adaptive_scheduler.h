@@ -2,8 +2,11 @@
 // plan frame i+1 from earlier frames, as Cell Tree scheduling does, and then watch frame i+1
 // unfold (Scheduler::Watches) and correct the plan with what they see.
 //
-// `celltree-adaptive` predicts the frame by the union of frames i-1 and i's trees (as
-// `celltree-union`) and follows the best schedule found for it, node by node:
+// `celltree-adaptive` predicts the frame, with several processors by the union of frames i-1 and
+// i's trees (as `celltree-union`), with one by frame i's tree alone (as `celltree-best`: one
+// processor follows the plan exactly, and the tighter plan of the newer frame fetched fewer on
+// the suite, docs/design.md §5 "Adaptive scheduling"), and follows the best schedule found for
+// it, node by node:
 //  - Each node queued in the frame is matched to the predicted node of the same cell path
 //    (its parent's match, then the child of the same cell). A node on a path the prediction
 //    does not have gets a stand-in: the first predicted node of the same cell whose parent's
@@ -17,9 +20,11 @@
 //    another processor works is deferred (ScheduleFollower).
 //  - Work in a cell that no entry left in the plan fetches (an *orphan*: rays on a path the
 //    earlier frames did not have, arriving after the plan is done with their cell) is fetched
-//    first, the orphan cell with the most queued rays, so that the rays it sends on may still
-//    meet the entries left; waiting for the plan's end, they would each need fetches of their
-//    own (BENCHMARKS.md "Online against the oracle").
+//    first, so that the rays it sends on may still meet the entries left; waiting for the
+//    plan's end, they would each need fetches of their own (BENCHMARKS.md "Online against the
+//    oracle"). With several processors the orphan cell with the most queued rays; with one the
+//    one with the shallowest queued work (then the most rays), so that orphans on a path the
+//    prediction lacks are taken in the path's order rather than one fetch per small batch.
 //  - When the plan is used up and work remains, the rest is planned again: the forest of the
 //    queued nodes matched by path (not through a stand-in, whose subtree is a guess) with their
 //    predicted subtrees, by Peel; cells with other work come after it, in cell order. With
@@ -98,7 +103,12 @@ class AdaptiveScheduler : public Scheduler {
   void Use(std::size_t i);
   // The cell with the most queued rays in view among those no entry left in the plan fetches
   // (lowest number on ties); none when there is none or the plan is used up.
+  // With one processor the orphan is ShallowestOrphan's.
   std::optional<CellId> Orphan(const QueueView& queues) const;
+  // The cell the plan is done with whose queued work in view is the shallowest (min_depth_),
+  // then the most queued rays, then the lowest number: the orphans nearest the root first, so
+  // that what they send on gathers with the deeper orphans (none when none has work).
+  std::optional<CellId> ShallowestOrphan(const QueueView& queues) const;
   // The cell with the shallowest queued work in view (lowest min_depth_, then the most queued
   // rays, then the lowest number); none when no cell has work.
   std::optional<CellId> Shallowest(const QueueView& queues) const;
@@ -110,6 +120,9 @@ class AdaptiveScheduler : public Scheduler {
 
   std::uint64_t seed_;
   std::uint32_t cells_ = 0;
+  // FrameInfo::processors <= 1: the prediction is frame i-1's tree alone, orphans shallowest
+  // first; with several, the union of frames i-2 and i-1, orphans most queued first.
+  bool one_processor_ = true;
   std::shared_ptr<const CellTree> own_;  // the union of the last two trees, when planned from it
   const CellTree* predicted_ = nullptr;  // null: no earlier frame (Max Work)
   // Stand-ins of the predicted tree (shared, FrameInfo::plans).

@@ -18,13 +18,12 @@ constexpr SchedulerEntry kAutoEntry = [] {
   SchedulerEntry e;
   e.name = "auto";
   e.meaning =
-      "the recommended online scheduler: per frame, of celltree-adaptive, celltree-union, "
-      "celltree-best and celltree (one processor) or balanced-critical, celltree-adaptive, "
-      "celltree and balanced (several), the one that fetched fewest on the two previous frames' "
-      "trees (each planned from the other) replayed on the board; Max Work when none fetched "
-      "fewer than Max Work there (by 2 per processor with several, and with several, when it "
-      "took longer, by 25% of Max Work's fetches), and on several processors in frames 0 and "
-      "1, with nothing to judge by";
+      "the recommended online scheduler: with one processor celltree-adaptive; with several, "
+      "per frame, of balanced-critical, celltree-adaptive, celltree and balanced, the one that "
+      "fetched fewest on the two previous frames' trees (each planned from the other) replayed "
+      "on the board; Max Work when none fetched fewer than Max Work there by 2 per processor "
+      "(and, when it took longer, by 25% of Max Work's fetches), and in frames 0 and 1, with "
+      "nothing to judge by";
   e.label = "auto (recommended, falls back to Max Work)";
   e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
     return std::make_unique<AutoScheduler>(seed);
@@ -186,9 +185,7 @@ ModelResult ModelFrame(const CellTree& tree, Scheduler& scheduler, const FrameIn
 }
 
 std::vector<const SchedulerEntry*> AutoScheduler::CandidatesFor(std::uint32_t processors) {
-  if (processors <= 1) {
-    return {&kCellTreeAdaptiveEntry, &kCellTreeUnionEntry, &kCellTreeBestEntry, &kCellTreeEntry};
-  }
+  if (processors <= 1) return {&kCellTreeAdaptiveEntry};
   return {&kBalancedCriticalEntry, &kCellTreeAdaptiveEntry, &kCellTreeEntry, &kBalancedEntry};
 }
 
@@ -205,7 +202,8 @@ void AutoScheduler::BeginFrame(const FrameInfo& frame) {
   // No frame seen to judge by (frames 0 and 1): the candidate with one processor, Max Work with
   // several (docs/design.md §5 "The recommended scheduler" has the evidence).
   chosen_ = frame.processors <= 1 ? 0 : kNone;
-  checked_ = frame.previous != nullptr && frame.before_previous != nullptr;
+  // One processor: nothing to choose (one candidate, no fallback: below).
+  checked_ = frame.processors > 1 && frame.previous != nullptr && frame.before_previous != nullptr;
   if (checked_) {
     // Frame i-1 as each candidate would have run it planned from frame i-2 (alone: frame i-3
     // is not told), and frame i-2 planned from frame i-1, and the same frames under Max Work:

@@ -1,22 +1,23 @@
 // The recommended online scheduler (issue 42; docs/design.md §5 "The recommended scheduler"):
 // `auto`, one name for any processor count, that watches itself and falls back to Max Work.
 //
-//  - Its candidates: with one processor `celltree-adaptive` (issue 24's adaptive rule),
-//    `celltree-union`, `celltree-best` and `celltree`; with several `balanced-critical` (load
-//    balancing, critical path first, issue 22), `celltree-adaptive`, `celltree` and `balanced`.
-//  - Its check, before each frame i >= 2: the replay's own board (FrameInfo::seen: the
+//  - Its candidates: with one processor `celltree-adaptive` (issue 24's adaptive rule) alone,
+//    run every frame without a check (Max Work never fetched fewer at one processor on the
+//    suite, and choosing among `celltree-union`, `celltree-best` and `celltree` besides fetched
+//    more); with several `balanced-critical` (load balancing, critical path first, issue 22),
+//    `celltree-adaptive`, `celltree` and `balanced`, judged by the check below.
+//  - Its check, with several processors before each frame i >= 2: the replay's own board
+//  (FrameInfo::seen: the
 //    replay per Cell Tree node, from what the board's levels hold at frame i's start), or
 //    outside a replay a model of the board (ModelFrame, linear in the tree but for the choices
 //    it asks for), replays frame i-1's tree under each candidate as it would have run frame i-1
 //    planned from frame i-2's tree alone, and frame i-2's planned from frame i-1's, and both
 //    under Max Work. Frame i runs the candidate that fetched fewest over the two (then took
 //    least time, then the first listed) among those that fetched fewer than Max Work by a
-//    margin, 0 with one processor and kMarginPerProcessor per processor with several, and,
-//    with several, that took no longer than Max Work unless they saved kTimeWaiverPercent of
-//    its fetches; when none did, Max Work.
-//  - Frames 0 and 1 have no frame seen to judge by: the first candidate with one processor, Max
-//  Work
-//    with several (there the candidates fetch 29-58% more in frame 0 on the development set).
+//    margin, kMarginPerProcessor per processor, and that took no longer than Max Work unless
+//    they saved kTimeWaiverPercent of its fetches; when none did, Max Work.
+//  - Frames 0 and 1 have no frame seen to judge by: Max Work with several processors (there the
+//    candidates fetch 29-58% more in frame 0 on the development set).
 // The decision is a function of the frame's FrameInfo (frames i-1 and i-2's trees, the
 // processor count, the fetch costs), so the scheduler keeps no state across frames (frame
 // shards and resumed sweeps give the whole replay's results). It watches the frame unfold

@@ -251,6 +251,76 @@ TEST(Adaptive, AnOrphanIsFetchedBeforeThePlanGoesOn) {
   EXPECT_EQ(s.Cost().decisions, 3u);
 }
 
+// With one processor the prediction is frame i-1's tree alone: on a frame equal to frame i-1,
+// with a different frame i-2 (random, adding paths to the union of the two), it fetches no more
+// than following frame i-1's best schedule (celltree-best), and has nothing to plan again. (With
+// several processors the prediction is the union of the two, whose plan may fetch more here.)
+TEST(Adaptive, OneProcessorPredictsByTheLastFrameAlone) {
+  std::mt19937 rng(2042);
+  int wider = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    const std::uint32_t cells = 2 + rng() % 7;
+    const RayBatch rays = testing::RandomReplayFrame(rng, cells, 40);
+    const CellTree tree = testing::TreeOf(rays);
+    const CellTree other = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 40));
+    wider += UnionTree({&other, &tree}).size() > tree.size();
+    ReplayConfig config = DefaultConfig();  // one processor, a one-cell cache
+    config.granularity = ReplayConfig::Granularity::kNode;
+    const WorkGraph w = NodeWork(tree, cells);
+    const std::vector<std::uint64_t> footprints(cells, 50'000);
+    const FrameTrees info{2, &tree, &tree, cells, &other};
+    config.scheduler = &SchedulerByName("celltree-best", "test");
+    auto best = MakeScheduler(*config.scheduler, config.seed);
+    const ReplayResult follow = ReplayFrame(w, footprints, config, *best, info, Bound(tree));
+    config.scheduler = &SchedulerByName("celltree-adaptive", "test");
+    AdaptiveScheduler adaptive(config.seed);
+    const ReplayResult r = ReplayFrame(w, footprints, config, adaptive, info, Bound(tree));
+    EXPECT_LE(r.fetches, follow.fetches) << "trial " << trial;
+    EXPECT_EQ(adaptive.replans(), 0u) << "trial " << trial;
+  }
+  EXPECT_GE(wider, 10);
+}
+
+// Hand-worked orphans: the prediction is paths A and A B (plan A, B). A is followed; A's rays
+// go to B (predicted, due at B's entry) and 50 to C (a path A C the prediction lacks), and 5
+// rays enter D from the root (a path D it lacks): C (depth 2) and D (depth 1) are orphans. With
+// one processor the shallowest orphan goes first, D, then C, then the plan's B; with two, the
+// most queued, C.
+TEST(Adaptive, OneProcessorTakesTheShallowestOrphanFirst) {
+  constexpr CellId A{0}, B{1}, C{2}, D{3};
+  const CellTree previous = testing::FromPaths({{A}, {A, B}});
+  for (const std::uint32_t p : {1u, 2u}) {
+    AdaptiveScheduler s(1);
+    FrameInfo info{1, nullptr, &previous, 4};
+    info.processors = p;
+    s.BeginFrame(info);
+    s.Arrived({1, 0, A, 2});
+    std::vector<std::uint64_t> queued = {2, 0, 0, 0};
+    EXPECT_EQ(s.Next(QueueView::Of(queued)), A) << p;
+    EXPECT_EQ(s.Reason(), "followed");
+    s.Taken(A);
+    s.Arrived({2, 1, B, 1});
+    s.Arrived({3, 1, C, 50});
+    s.Arrived({4, 0, D, 5});
+    queued = {0, 1, 50, 5};
+    if (p > 1) {
+      EXPECT_EQ(s.Next(QueueView::Of(queued)), C);
+      EXPECT_EQ(s.Reason(), "orphan");
+      continue;
+    }
+    EXPECT_EQ(s.Next(QueueView::Of(queued)), D);
+    EXPECT_EQ(s.Reason(), "orphan");
+    s.Taken(D);
+    queued[D.value()] = 0;
+    EXPECT_EQ(s.Next(QueueView::Of(queued)), C);
+    EXPECT_EQ(s.Reason(), "orphan");
+    s.Taken(C);
+    queued[C.value()] = 0;
+    EXPECT_EQ(s.Next(QueueView::Of(queued)), B);
+    EXPECT_EQ(s.Reason(), "followed");
+  }
+}
+
 // Frames unlike their predecessors: the plan runs out and the rest is planned again; every
 // ray, segment and sample is processed once (also for several processors: balance_test), and
 // the choices and their counted cost are the same on every run.

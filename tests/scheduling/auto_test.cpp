@@ -1,8 +1,9 @@
 // The recommended scheduler (scheduling/auto_scheduler.h; docs/design.md §5 "The recommended
 // scheduler"): its model of the board fetches as the replay per node with one processor; it
 // processes every ray, segment and sample once on 1, 2 and 8 processors, on random frames and
-// on a capture of frames that resemble each other; it falls back to Max Work exactly when
-// the replay of the previous frame shows the candidate doing worse, and follows it otherwise.
+// on a capture of frames that resemble each other; with one processor it runs celltree-adaptive
+// in every frame; with several it falls back to Max Work exactly when the replay of the frames
+// seen shows the candidates doing worse, and follows the best of them otherwise.
 // (That it uses no future information: tests/scheduling/adaptive_test.cpp; that frame ranges
 // give the whole replay's frames: tests/runner/driver_test.cpp.)
 #include <gtest/gtest.h>
@@ -18,6 +19,8 @@
 #include "runner/driver.h"
 #include "scheduling/adaptive_scheduler.h"
 #include "scheduling/auto_scheduler.h"
+#include "scheduling/best_scheduler.h"
+#include "scheduling/cell_tree_scheduler.h"
 #include "scheduling/max_work.h"
 #include "tests/graph/test_trees.h"
 #include "tests/replay/random_frame.h"
@@ -72,8 +75,11 @@ TEST(AutoModel, FetchesAsTheReplayWithOneProcessor) {
     const CellTree previous = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 20));
     std::vector<std::uint64_t> footprints(cells);
     for (auto& f : footprints) f = 1000 + rng() % 300'000;
-    std::vector<const SchedulerEntry*> entries = AutoScheduler::CandidatesFor(1);
-    entries.push_back(&kMaxWorkEntry);
+    // Auto's candidate at one processor, the planners and Max Work (the model serves several
+    // processors' checks, and outside a replay).
+    const std::vector<const SchedulerEntry*> entries = {&kCellTreeAdaptiveEntry,
+                                                        &kCellTreeUnionEntry, &kCellTreeBestEntry,
+                                                        &kCellTreeEntry, &kMaxWorkEntry};
     for (const SchedulerEntry* e : entries) {
       ReplayConfig config = Config(*e, 1);
       config.granularity = ReplayConfig::Granularity::kNode;
@@ -204,63 +210,48 @@ class Chooser : public Scheduler {
   std::unique_ptr<Scheduler> s_;
 };
 
-// The fallback and the choice, judged by the replay itself (independent of auto's model): on
-// random frames i-2, i-1 and i, with one processor (where the replay per node is exact), each
-// candidate and Max Work replay frame i-1 planned from frame i-2 and frame i-2 planned from
-// frame i-1. When every candidate fetches more than Max Work over the two, auto's choices in
-// frame i are Max Work's, one for one; else they are those of the candidate that fetched
-// fewest (then took least time, then the first listed). Both cases occur.
-TEST(Auto, FallsBackToMaxWorkWhenThePreviousFrameShowsItBetter) {
+// With one processor auto runs celltree-adaptive in every frame, unchecked: on random frames
+// i-2, i-1 and i its choices in frames 0, 1 and 2 are celltree-adaptive's, one for one, also
+// where Max Work fetched fewer than celltree-adaptive on the frames seen (frame i-1 planned from
+// frame i-2 and frame i-2 from frame i-1, the several processors' check), where the check would
+// fall back to Max Work. Both cases occur.
+TEST(Auto, OneProcessorRunsCellTreeAdaptiveEveryFrame) {
   std::mt19937 rng(45);
-  const std::vector<const SchedulerEntry*> candidates = AutoScheduler::CandidatesFor(1);
-  int fell_back = 0, followed = 0;
-  for (int trial = 0; trial < 80; ++trial) {
+  ASSERT_EQ(AutoScheduler::CandidatesFor(1),
+            std::vector<const SchedulerEntry*>{&kCellTreeAdaptiveEntry});
+  int max_work_fewer = 0, adaptive_fewer = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    // Half the trials repeat one frame (then the plans fit the frames seen), half draw each.
     const std::uint32_t cells = 2 + rng() % 6;
     const RayBatch f2 = testing::RandomReplayFrame(rng, cells, 30),
-                   f1 = testing::RandomReplayFrame(rng, cells, 30),
+                   f1 = trial % 2 == 0 ? f2 : testing::RandomReplayFrame(rng, cells, 30),
                    f0 = testing::RandomReplayFrame(rng, cells, 30);
     const CellTree t2 = testing::TreeOf(f2), t1 = testing::TreeOf(f1);
     std::vector<std::uint64_t> footprints(cells);
     for (auto& f : footprints) f = 1000 + rng() % 300'000;
     ReplayConfig node = Config(kAutoEntry, 1);
     node.granularity = ReplayConfig::Granularity::kNode;
-    // Frames i-1 and i-2 in the replay, each planned from the other.
     const auto both = [&](const SchedulerEntry& e) {
-      return OnFramesSeen(e, f1, f2, t1, t2, node, footprints);
+      return OnFramesSeen(e, f1, f2, t1, t2, node, footprints).fetches;
     };
-    const ReplayResult rm = both(kMaxWorkEntry);
-    const SchedulerEntry* best = nullptr;
-    ReplayResult rb;
-    for (const SchedulerEntry* e : candidates) {
-      const ReplayResult r = both(*e);
-      if (r.fetches > rm.fetches) continue;
-      if (best == nullptr || r.fetches < rb.fetches ||
-          (r.fetches == rb.fetches && r.time < rb.time)) {
-        best = e, rb = r;
-      }
-    }
-    // Frame i under auto, Max Work and the candidate expected.
-    const FrameTrees now{2, nullptr, &t1, cells, &t2};
-    Chooser a(MakeScheduler(kAutoEntry, 1)),
-        expected(MakeScheduler(best == nullptr ? kMaxWorkEntry : *best, 1));
+    const std::uint64_t m = both(kMaxWorkEntry), c = both(kCellTreeAdaptiveEntry);
+    max_work_fewer += m < c;
+    adaptive_fewer += c < m;
     const ReplayConfig ray = Config(kAutoEntry, 1);
-    const ReplayResult ra = ReplayOn(f0, ray, a, now, footprints);
-    ReplayOn(f0, ray, expected, now, footprints);
-    const AutoScheduler& inner = dynamic_cast<const AutoScheduler&>(a.inner());
-    EXPECT_TRUE(inner.checked());
-    EXPECT_EQ(a.chosen, expected.chosen) << "trial " << trial;
-    if (best == nullptr) {
-      EXPECT_EQ(inner.chosen(), AutoScheduler::kNone) << "trial " << trial;
-      ++fell_back;
-    } else {
-      EXPECT_EQ(candidates[inner.chosen()], best) << "trial " << trial;
-      ++followed;
+    for (const FrameTrees& now :
+         {FrameTrees{0, nullptr, nullptr, cells}, FrameTrees{1, nullptr, &t2, cells},
+          FrameTrees{2, nullptr, &t1, cells, &t2}}) {
+      Chooser a(MakeScheduler(kAutoEntry, 1)), expected(MakeScheduler(kCellTreeAdaptiveEntry, 1));
+      ReplayOn(f0, ray, a, now, footprints);
+      ReplayOn(f0, ray, expected, now, footprints);
+      const AutoScheduler& inner = dynamic_cast<const AutoScheduler&>(a.inner());
+      EXPECT_FALSE(inner.checked());
+      EXPECT_EQ(inner.chosen(), 0u);
+      EXPECT_EQ(a.chosen, expected.chosen) << "trial " << trial << " frame " << now.frame_index;
     }
-    EXPECT_GT(ra.decision_steps, 0u);  // the check's steps are reported
-    EXPECT_GT(ra.scheduler_bytes, 0u);
   }
-  EXPECT_GE(fell_back, 5);
-  EXPECT_GE(followed, 5);
+  EXPECT_GE(max_work_fewer, 5);
+  EXPECT_GE(adaptive_fewer, 5);
 }
 
 // With several processors the check replays the frames seen on the replay's own board
