@@ -18,7 +18,8 @@ constexpr SchedulerEntry kAutoEntry = [] {
   SchedulerEntry e;
   e.name = "auto";
   e.meaning =
-      "the recommended online scheduler: with one processor celltree-adaptive; with several, "
+      "the recommended online scheduler: with one processor celltree-adaptive (Max Work when "
+      "Max Work saved a quarter of its fetches on the two previous frames); with several, "
       "per frame, of balanced-critical, celltree-adaptive, celltree and balanced, the one that "
       "fetched fewest on the two previous frames' trees (each planned from the other) replayed "
       "on the board; Max Work when none fetched fewer than Max Work there by 2 per processor "
@@ -202,8 +203,7 @@ void AutoScheduler::BeginFrame(const FrameInfo& frame) {
   // No frame seen to judge by (frames 0 and 1): the candidate with one processor, Max Work with
   // several (docs/design.md §5 "The recommended scheduler" has the evidence).
   chosen_ = frame.processors <= 1 ? 0 : kNone;
-  // One processor: nothing to choose (one candidate, no fallback: below).
-  checked_ = frame.processors > 1 && frame.previous != nullptr && frame.before_previous != nullptr;
+  checked_ = frame.previous != nullptr && frame.before_previous != nullptr;
   if (checked_) {
     // Frame i-1 as each candidate would have run it planned from frame i-2 (alone: frame i-3
     // is not told), and frame i-2 planned from frame i-1, and the same frames under Max Work:
@@ -249,6 +249,15 @@ void AutoScheduler::BeginFrame(const FrameInfo& frame) {
       // Fewer fetches than Max Work by the margin; the fewest, then the least time, then the
       // first listed.
       const ModelResult& m = models_[k];
+      if (frame.processors <= 1) {
+        // One processor: the candidate unless Max Work saved kOneProcessorFallbackPercent of its
+        // fetches (a safety net: smaller savings of Max Work there did not hold in the frame).
+        if (max_work_model_.fetches * 100 < m.fetches * (100 - kOneProcessorFallbackPercent)) {
+          continue;
+        }
+        chosen_ = k;
+        continue;
+      }
       if (m.fetches + margin > max_work_model_.fetches) continue;
       // With several processors, one that took longer than Max Work must save at least
       // kTimeWaiverPercent of Max Work's fetches (fewer fetches saved do not pay for the time).

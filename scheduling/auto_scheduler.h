@@ -2,11 +2,13 @@
 // `auto`, one name for any processor count, that watches itself and falls back to Max Work.
 //
 //  - Its candidates: with one processor `celltree-adaptive` (issue 24's adaptive rule) alone,
-//    run every frame without a check (Max Work never fetched fewer at one processor on the
-//    suite, and choosing among `celltree-union`, `celltree-best` and `celltree` besides fetched
-//    more); with several `balanced-critical` (load balancing, critical path first, issue 22),
-//    `celltree-adaptive`, `celltree` and `balanced`, judged by the check below.
-//  - Its check, with several processors before each frame i >= 2: the replay's own board
+//    falling back to Max Work only when the check shows Max Work saving
+//    kOneProcessorFallbackPercent of its fetches (choosing among `celltree-union`,
+//    `celltree-best` and `celltree` besides fetched more on the suite, and smaller savings of
+//    Max Work on the frames seen did not hold); with several `balanced-critical` (load
+//    balancing, critical path first, issue 22), `celltree-adaptive`, `celltree` and
+//    `balanced`, judged by the check below.
+//  - Its check, before each frame i >= 2: the replay's own board
 //  (FrameInfo::seen: the
 //    replay per Cell Tree node, from what the board's levels hold at frame i's start), or
 //    outside a replay a model of the board (ModelFrame, linear in the tree but for the choices
@@ -46,6 +48,12 @@ inline constexpr std::uint64_t kMarginPerProcessor = 2;
 // is taken only when it saved at least this share, in percent, of Max Work's fetches there
 // (docs/design.md §5 "The recommended scheduler": chosen among 10-25 and never on the suite).
 inline constexpr std::uint64_t kTimeWaiverPercent = 25;
+// With one processor, the share, in percent, of celltree-adaptive's fetches in the check's two
+// frames that Max Work must save there for the frame to fall back to Max Work (docs/design.md §5
+// "The recommended scheduler": on the suite Max Work saved at most 14% in a frame seen, and ran
+// worse in the frame each time; a quarter, as kTimeWaiverPercent, keeps the fallback for frames
+// where the plans clearly fail).
+inline constexpr std::uint64_t kOneProcessorFallbackPercent = 25;
 
 // What a scheduler's choices cost on one frame's Cell Tree in the model of the board.
 struct ModelResult {
