@@ -307,6 +307,9 @@ void BalancedScheduler::SetLevel(CellId cell, std::uint32_t level) {
   at_level_.Move(c, key(level_[c]), key(level));
   level_[c] = level;
   top_level_ = std::max(top_level_, level);
+  // The highest level with a cell: Critical looks down from it, and levels emptied by takes
+  // would otherwise be looked at by every decision until the frame ends.
+  while (top_level_ > 0 && at_level_.at(top_level_).empty()) --top_level_;
 }
 
 std::uint64_t BalancedScheduler::Bytes() const {
@@ -337,6 +340,10 @@ std::optional<CellId> BalancedScheduler::Critical(const QueueView& queues,
     }
     return std::nullopt;
   }
+  // No plan entry: the follower found no cell in view with work (then no cell has a level in
+  // view either; with several processors most calls find only busy cells with work, and a scan
+  // of the cells each time was the cost of this rule at thousands of cells).
+  if (queues.empty()) return std::nullopt;
   std::optional<CellId> best;
   for (std::uint32_t c = 0; c < queues.cells; ++c) {
     const std::uint64_t q = queues.queued_rays[c];
