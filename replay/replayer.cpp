@@ -252,56 +252,6 @@ class Watch {
   std::uint32_t count_ = 0;
 };
 
-// ---- The most queued cell -------------------------------------------------------------
-// Per block of 64 cells, the cell with the most of `values` (lowest number on ties; kNoCell:
-// all 0), for values that only grow or drop to 0 (a cell's queued rays, in view or not): a
-// growth compares with its block's cell, a drop of that cell marks the block to be scanned
-// again. The most of all is then found from the blocks' cells and the marked blocks, a pass
-// of cells / 64 + 64 where ScanMostQueued passes over every cell (once per fetch, for the cell
-// Max Work takes: the cost of a replay of thousands of cells; issue 43). Same answer as
-// ScanMostQueued.
-class BlockMost {
- public:
-  static constexpr std::uint32_t kShift = 6;
-  explicit BlockMost(std::uint32_t cells)
-      : best_((std::size_t{cells} + 63) >> kShift, kNoCell.value()), dirty_(best_.size(), 0) {}
-  // values[c] grew (and is not 0).
-  void Grew(const std::uint64_t* values, std::uint32_t c) {
-    const std::uint32_t b = c >> kShift;
-    if (dirty_[b] != 0) return;
-    const std::uint32_t m = best_[b];
-    const std::uint64_t v = values[c];
-    if (m == kNoCell.value() || v > values[m] || (v == values[m] && c < m)) best_[b] = c;
-  }
-  // values[c] dropped to 0.
-  void Dropped(std::uint32_t c) {
-    if (best_[c >> kShift] == c) dirty_[c >> kShift] = 1;
-  }
-  CellId Most(const std::uint64_t* values, std::uint32_t cells) {
-    std::uint32_t out = kNoCell.value();
-    std::uint64_t most = 0;
-    for (std::uint32_t b = 0; b < best_.size(); ++b) {
-      if (dirty_[b] != 0) {
-        const std::uint32_t first = b << kShift;
-        const std::uint32_t end = std::min(cells, first + (std::uint32_t{1} << kShift));
-        std::uint32_t m = kNoCell.value();
-        for (std::uint32_t c = first; c < end; ++c) {
-          if (values[c] != 0 && (m == kNoCell.value() || values[c] > values[m])) m = c;
-        }
-        best_[b] = m;
-        dirty_[b] = 0;
-      }
-      const std::uint32_t m = best_[b];
-      if (m != kNoCell.value() && values[m] > most) out = m, most = values[m];
-    }
-    return CellId(out);
-  }
-
- private:
-  std::vector<std::uint32_t> best_;
-  std::vector<std::uint8_t> dirty_;
-};
-
 // ---- Pending events -------------------------------------------------------------------
 // Each processor has at most one pending event: the end of its fetch, of its unit, or its
 // call for a cell (and none while it waits for work). So the pending set is the engine's
@@ -345,8 +295,6 @@ class Board {
         queues_(w.cells),
         queued_rays_(w.cells, 0),
         view_(w.cells, 0),
-        view_blocks_(w.cells),
-        all_blocks_(w.cells),
         open_(w.cells, kOpen),
         holders_(w.cells, 0),
         processors_(config.processors.count),
@@ -435,7 +383,6 @@ class Board {
       for (std::uint32_t k = 0; k < words_; ++k) holder_mask_[k] |= on[k];
     }
     queued_rays_[c.value()] += q;
-    if (ask_when_joinable_ && q != 0) all_blocks_.Grew(queued_rays_.data(), c.value());
     // Every cell's queue only grows here too: the most queued of all can change only to c.
     if (ask_when_joinable_ && all_most_known_ && q != 0) {
       const std::uint64_t a = queued_rays_[c.value()];
@@ -450,7 +397,6 @@ class Board {
     // to c (lowest number on ties, as MostQueuedCell).
     const std::uint64_t v = queued_rays_[c.value()] & open_[c.value()];
     view_[c.value()] = v;
-    if (v != 0) view_blocks_.Grew(view_.data(), c.value());
     if (most_known_ && v != 0 &&
         (most_ == kNoCell || v > view_[most_.value()] ||
          (v == view_[most_.value()] && c.value() < most_.value()))) {
@@ -465,7 +411,7 @@ class Board {
   // neither a pass over the cells nor Max Work's scan.
   QueueView View(std::uint32_t p) {
     if (!most_known_) {
-      most_ = view_blocks_.Most(view_.data(), w_.cells);
+      most_ = ScanMostQueued(view_.data(), w_.cells);
       most_known_ = true;
     }
     QueueView v = QueueView::Of(view_, processors_[p].cell);
@@ -475,7 +421,7 @@ class Board {
     v.all_queued = queued_rays_.data();
     if (ask_when_joinable_) {  // only a scheduler that may join reads every cell's queue
       if (!all_most_known_) {
-        all_most_ = all_blocks_.Most(queued_rays_.data(), w_.cells);
+        all_most_ = ScanMostQueued(queued_rays_.data(), w_.cells);
         all_most_known_ = true;
       }
       v.all_most_of = queued_rays_.data();
@@ -506,7 +452,6 @@ class Board {
     if (holders_[c->value()] == 0) {  // lock it: its queued rays now wait for a holder
       open_[c->value()] = 0;
       view_[c->value()] = 0;
-      view_blocks_.Dropped(c->value());
       if (*c == most_) most_known_ = false;
       --available_;
       ++joinable_;
@@ -546,7 +491,6 @@ class Board {
     }
     queued_total_ -= queued_rays_[c.value()];
     queued_rays_[c.value()] = 0;
-    if (ask_when_joinable_) all_blocks_.Dropped(c.value());
     if (c == all_most_) all_most_known_ = false;
     if (ps.head == ps.worklist.size()) {
       ps.worklist.clear();
@@ -759,9 +703,6 @@ class Board {
   // scheduler that may join (ask_when_joinable_): found again by a scan when the take emptied it.
   CellId all_most_ = kNoCell;
   bool all_most_known_ = true;
-  // The scans of the two above, per block of cells (all_blocks_ kept only with
-  // ask_when_joinable_).
-  BlockMost view_blocks_, all_blocks_;
   // Per cell: all ones, or 0 while a processor works it (locked: not in the view).
   static constexpr std::uint64_t kOpen = ~std::uint64_t{0};
   std::vector<std::uint64_t> open_;
