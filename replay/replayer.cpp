@@ -1,6 +1,7 @@
 #include "replay/replayer.h"
 
 #include <algorithm>
+#include <memory>
 #include <sstream>
 
 #include "base/check.h"
@@ -124,7 +125,10 @@ struct CompactUnits {
 // 1, 2, ... in the order of this walk, 0 being the root; the board renumbers them in the
 // order they are queued before a scheduler sees them (Scheduler::Arrival).
 struct UnitPaths {
-  std::vector<std::uint32_t> of_unit;
+  // Per unit; left uninitialised before the walk, which writes every unit once (a zero fill
+  // of a frame's 26 million units was a pass of its own).
+  std::unique_ptr<std::uint32_t[]> of_unit;
+  std::size_t units = 0;
   std::vector<std::uint32_t> parent;  // per path
 };
 
@@ -132,8 +136,14 @@ template <typename Units>
 UnitPaths PathsOf(const Units& u, std::size_t units) {
   using Entry = typename Units::Entry;
   UnitPaths p;
-  p.of_unit.assign(units, 0);
+  p.of_unit.reset(new std::uint32_t[units]);
+  p.units = units;
   p.parent = {0};
+  // Per path, the child it was last asked for: (cell + 1) << 32 | child path, 0 for none. A
+  // ray's next visit usually takes the path its neighbour took, and the paths a ray creates
+  // are numbered one after another, so these are read from a few cache lines where the table's
+  // slots lie scattered: the table is looked up only when the memo misses (issue 43).
+  std::vector<std::uint64_t> last_child = {0};
   // (parent path, cell) -> path, open addressing (a lookup per unit entering another cell: a
   // std::unordered_map's node per path made this a tenth of a watching replay; issue 43).
   std::vector<std::uint64_t> keys(1024, ~std::uint64_t{0});
@@ -145,11 +155,19 @@ UnitPaths PathsOf(const Units& u, std::size_t units) {
     return i;
   };
   const auto path = [&](std::uint32_t parent, CellId c) {
+    const std::uint64_t memo = std::uint64_t{c.value()} + 1;
+    std::uint64_t& last = last_child[parent];
+    if (last >> 32 == memo) return std::uint32_t(last);
     const std::uint64_t key = std::uint64_t{parent} << 32 | c.value();
     std::size_t i = slot(key);
-    if (keys[i] == key) return values[i];
+    if (keys[i] == key) {
+      last = memo << 32 | values[i];
+      return values[i];
+    }
     const std::uint32_t id = std::uint32_t(p.parent.size());
+    last = memo << 32 | id;  // before the push below moves last_child
     p.parent.push_back(parent);
+    last_child.push_back(0);
     if (2 * p.parent.size() > keys.size()) {  // grow: at most half full
       std::vector<std::uint64_t> old_keys(2 * keys.size(), ~std::uint64_t{0});
       std::vector<std::uint32_t> old_values(old_keys.size());
@@ -201,28 +219,36 @@ struct NoWatch {
 class Watch {
  public:
   Watch(const UnitPaths& paths, Scheduler& scheduler)
-      : paths_(&paths), scheduler_(&scheduler), revealed_(paths.parent.size(), 0) {}
+      : of_unit_(paths.of_unit.get()), units_(paths.units), scheduler_(&scheduler) {
+    path_.resize(paths.parent.size());
+    for (std::size_t i = 0; i < path_.size(); ++i) path_[i].parent = paths.parent[i];
+  }
   // Unit x was queued at c: the scheduler is told its node, numbered as first queued.
   void Queued(UnitId x, CellId c, std::uint64_t q) {
-    const std::uint32_t path = paths_->of_unit[x];
-    std::uint32_t& id = revealed_[path];
-    if (id == 0) id = ++count_;
-    const std::uint32_t parent = paths_->parent[path];
-    RAYCELL_CHECK(parent == 0 || revealed_[parent] != 0);  // a parent is queued before
-    scheduler_->Arrived({id, revealed_[parent], c, q});
+    Path& p = path_[of_unit_[x]];
+    if (p.id == 0) p.id = ++count_;
+    const std::uint32_t parent = p.parent == 0 ? 0 : path_[p.parent].id;
+    RAYCELL_CHECK(p.parent == 0 || parent != 0);  // a parent is queued before
+    scheduler_->Arrived({p.id, parent, c, q});
   }
   void Taken(CellId c) { scheduler_->Taken(c); }
   // Starts loading the path of unit x, about to be queued: the units are scattered over a
   // frame's visits, so each lookup in of_unit would be a cache miss (half the watching board's
   // time at 1920x1080 before this; issue 43).
   void Prefetch(UnitId x) const {
-    if (x < paths_->of_unit.size()) __builtin_prefetch(paths_->of_unit.data() + x);
+    if (x < units_) __builtin_prefetch(of_unit_ + x);
   }
 
  private:
-  const UnitPaths* paths_;
+  // Per path its parent and its number as told (0: not queued yet), side by side: one cache
+  // miss per unit queued where two arrays made two.
+  struct Path {
+    std::uint32_t parent = 0, id = 0;
+  };
+  const std::uint32_t* of_unit_;
+  std::size_t units_;
   Scheduler* scheduler_;
-  std::vector<std::uint32_t> revealed_;  // per path: its number as told (0: not queued yet)
+  std::vector<Path> path_;
   std::uint32_t count_ = 0;
 };
 

@@ -194,6 +194,9 @@ void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
     level_.assign(cells_, 0);
     at_level_.Reset(cells_);
     top_level_ = 0;
+    level_best_.clear();
+    touched_.clear();
+    touched_at_.assign(cells_, 0);
     cost_ = {};
     heights_.reset();
     if (previous_ != nullptr) SetHeights(frame);
@@ -293,6 +296,12 @@ void BalancedScheduler::Arrived(const Arrival& a) {
   if (m != kNoNode && heights_->height[m.index()] > level_[a.cell.value()]) {
     SetLevel(a.cell, heights_->height[m.index()]);
   }
+  // Its queued rays grow: a candidate for its level's most queued cell (LevelBest).
+  const std::uint32_t l = level_[a.cell.value()];
+  if (l > 0 && touched_at_[a.cell.value()] != l) {
+    touched_at_[a.cell.value()] = l;
+    touched_[l].push_back(a.cell.value());
+  }
 }
 
 void BalancedScheduler::Taken(CellId cell) {
@@ -305,8 +314,44 @@ void BalancedScheduler::SetLevel(CellId cell, std::uint32_t level) {
   // Level 0 (no queued node) is in no list.
   const auto key = [](std::uint32_t l) { return l > 0 ? l : CellLists::kNone; };
   at_level_.Move(c, key(level_[c]), key(level));
+  Forget(cell);
   level_[c] = level;
+  if (level >= touched_.size()) {
+    touched_.resize(std::size_t{level} + 1);
+    level_best_.resize(std::size_t{level} + 1, kUnknownBest);
+  }
   top_level_ = std::max(top_level_, level);
+  // The highest level with a cell: Critical looks down from it, and levels emptied by takes
+  // would otherwise be looked at by every decision until the frame ends.
+  while (top_level_ > 0 && at_level_.at(top_level_).empty()) --top_level_;
+}
+
+void BalancedScheduler::Forget(CellId cell) {
+  const std::uint32_t l = level_[cell.value()];
+  if (l > 0 && level_best_[l] == cell.value()) level_best_[l] = kUnknownBest;
+}
+
+std::optional<CellId> BalancedScheduler::LevelBest(std::uint32_t l, const QueueView& queues) const {
+  const std::uint64_t* q = queues.queued_rays;
+  // Only the board's own view changes as this scheduler is told (a view made otherwise, the
+  // model's or a test's, is scanned).
+  if (queues.most_of != q) return MostQueuedOf(at_level_.at(l), q);
+  std::uint32_t best = level_best_[l];
+  if (best == kUnknownBest) {
+    const std::optional<CellId> b = MostQueuedOf(at_level_.at(l), q);
+    best = b ? b->value() : kNoBest;
+  } else {
+    for (const std::uint32_t c : touched_[l]) {
+      if (touched_at_[c] != l || level_[c] != l || q[c] == 0) continue;
+      if (best == kNoBest || q[c] > q[best] || (q[c] == q[best] && c < best)) best = c;
+    }
+  }
+  for (const std::uint32_t c : touched_[l]) {
+    if (touched_at_[c] == l) touched_at_[c] = 0;
+  }
+  touched_[l].clear();
+  level_best_[l] = best;
+  return best == kNoBest ? std::nullopt : std::optional<CellId>(CellId(best));
 }
 
 std::uint64_t BalancedScheduler::Bytes() const {
@@ -331,12 +376,16 @@ std::optional<CellId> BalancedScheduler::Critical(const QueueView& queues,
     // A cell of a level has queued nodes; only the busy ones (at most the other processors)
     // have none in view.
     for (std::uint32_t l = top_level_; l > level_[plan->value()]; --l) {
-      if (const std::optional<CellId> best = MostQueuedOf(at_level_.at(l), queues.queued_rays)) {
+      if (const std::optional<CellId> best = LevelBest(l, queues)) {
         return best;
       }
     }
     return std::nullopt;
   }
+  // No plan entry: the follower found no cell in view with work (then no cell has a level in
+  // view either; with several processors most calls find only busy cells with work, and a scan
+  // of the cells each time was the cost of this rule at thousands of cells).
+  if (queues.empty()) return std::nullopt;
   std::optional<CellId> best;
   for (std::uint32_t c = 0; c < queues.cells; ++c) {
     const std::uint64_t q = queues.queued_rays[c];
@@ -508,6 +557,7 @@ std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
     const std::optional<CellId> largest = BestOfAll(queues, Queued(queues));
     if (largest && !TooSmall(queues, *largest)) {
       reason_ = "largest (plan's batch too small)";
+      Locked(*largest);
       return largest;  // the plan keeps its place
     }
     reason_.clear();
@@ -521,6 +571,7 @@ std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
         Best(queues, Queued(queues), [&](std::uint32_t x) { return !TooSmall(queues, CellId(x)); });
     if (largest) {
       reason_ = "largest (join too small)";
+      Locked(*largest);
       return largest;
     }
     reason_.clear();
@@ -538,6 +589,7 @@ std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
     RAYCELL_CHECK(taken == c);
     reason_ = follower->Reason();
   }
+  Locked(*c);
   return c;
 }
 

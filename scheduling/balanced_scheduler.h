@@ -153,6 +153,17 @@ class BalancedScheduler : public Scheduler {
   };
   // Critical: sets `cell`'s level, keeping the cells of each level (at_level_).
   void SetLevel(CellId cell, std::uint32_t level);
+  // Critical: the most queued cell in view of level l (lowest number on ties), as MostQueuedOf
+  // over its list gives it, from the level's last answer and the cells that had arrivals there
+  // since (level_best_, touched_), when `queues` is the board's own view: it changes only by
+  // arrivals (told), takes (told) and the locks of the cells this scheduler returns.
+  std::optional<CellId> LevelBest(std::uint32_t l, const QueueView& queues) const;
+  // Critical: `cell` leaves its level's answer (moved, taken or locked).
+  void Forget(CellId cell);
+  // Critical: `cell` was returned by Next, so its queue leaves the view.
+  void Locked(CellId cell) {
+    if (options_.critical) Forget(cell);
+  }
   // Each cell's processor and one follower per processor over the plan's entries of its
   // cells (one follower, owner 0 everywhere, without partition).
   std::vector<std::uint32_t> owner_;
@@ -172,6 +183,14 @@ class BalancedScheduler : public Scheduler {
   // looks at the levels above the plan's entry's, from the top, not at every cell.
   CellLists at_level_;
   std::uint32_t top_level_ = 0;
+  // Per level its last answer of LevelBest (a cell, kNoBest: none in view, kUnknownBest: to be
+  // found by a scan), and the cells with arrivals at that level since (each once: per cell the
+  // level it was last listed at, 0: none).
+  static constexpr std::uint32_t kNoBest = ~std::uint32_t{0};
+  static constexpr std::uint32_t kUnknownBest = ~std::uint32_t{0} - 1;
+  mutable std::vector<std::uint32_t> level_best_;
+  mutable std::vector<std::vector<std::uint32_t>> touched_;
+  mutable std::vector<std::uint32_t> touched_at_;
   mutable DecisionCost cost_;  // the critical rule's own
 };
 
