@@ -952,8 +952,9 @@ FrameInfo MakeFrameInfo(const FrameTrees& frame, const ReplayConfig& config,
                         const Scheduler& scheduler) {
   FrameInfo info;
   info.frame_index = frame.frame_index;
-  // A scheduler that watches the frame unfold learns it only from what is queued.
-  info.current = scheduler.Watches() ? nullptr : frame.current;
+  // A scheduler that watches the frame unfold learns it only from what is queued (an oracle
+  // that watches, celltree-dag-oracle, is given it).
+  info.current = scheduler.Watches() && !scheduler.entry().oracle ? nullptr : frame.current;
   info.previous = frame.previous;
   info.cells = frame.cells;
   info.before_previous = frame.before_previous;

@@ -10,6 +10,7 @@
 #include "scheduling/balanced_scheduler.h"
 #include "scheduling/best_scheduler.h"
 #include "scheduling/cell_tree_scheduler.h"
+#include "scheduling/dag_scheduler.h"
 #include "scheduling/max_work.h"
 #include "scheduling/peel_oracle.h"
 #include "scheduling/random_scheduler.h"
@@ -164,6 +165,8 @@ const std::vector<std::reference_wrapper<const SchedulerEntry>>& SchedulerRegist
       kBalancedCriticalEntry,
       kBalancedAdaptiveEntry,
       kCellTreeAdaptiveEntry,
+      kCellTreeDagEntry,
+      kCellTreeDagOracleEntry,
       // The recommended one (auto_scheduler.h).
       kAutoEntry,
   };

@@ -223,12 +223,12 @@ TEST(LoadConfig, BadUnitsAndValuesNameFileAndLine) {
             "replay.toml:2:9: processors.count: must be in 1..1024, got 1025");
   EXPECT_EQ(LoadError("seed = -1\n"),
             "replay.toml:1:8: seed: must be in 0..18446744073709551615, got -1");
-  EXPECT_EQ(
-      LoadError("scheduler = \"fastest\"\n"),
-      "replay.toml:1:13: scheduler: unknown scheduler 'fastest' (expected maxwork, "
-      "roundrobin, random, peel, celltree, best, celltree-best, celltree-union, affinity, "
-      "partition, steal, partition-steal, share, balanced, celltree-2level, "
-      "celltree-2level-best, balanced-critical, balanced-adaptive, celltree-adaptive or auto)");
+  EXPECT_EQ(LoadError("scheduler = \"fastest\"\n"),
+            "replay.toml:1:13: scheduler: unknown scheduler 'fastest' (expected maxwork, "
+            "roundrobin, random, peel, celltree, best, celltree-best, celltree-union, affinity, "
+            "partition, steal, partition-steal, share, balanced, celltree-2level, "
+            "celltree-2level-best, balanced-critical, balanced-adaptive, celltree-adaptive, "
+            "celltree-dag, celltree-dag-oracle or auto)");
   EXPECT_EQ(
       LoadError("granularity = \"cell\"\n"),
       "replay.toml:1:15: granularity: unknown granularity 'cell' (expected ray, node or auto)");
@@ -411,12 +411,12 @@ TEST(ApplyOverride, ErrorsNameTheKeyAndLeaveTheConfigUnchanged) {
             "override 'level.board.bandwidth': bandwidth must be greater than zero: '0GB/s'");
   EXPECT_EQ(err("processors.prefetch", "yes"),
             "override 'processors.prefetch': expected true or false, got 'yes'");
-  EXPECT_EQ(
-      err("scheduler", "fastest"),
-      "override 'scheduler': unknown scheduler 'fastest' (expected maxwork, roundrobin, "
-      "random, peel, celltree, best, celltree-best, celltree-union, affinity, partition, "
-      "steal, partition-steal, share, balanced, celltree-2level, "
-      "celltree-2level-best, balanced-critical, balanced-adaptive, celltree-adaptive or auto)");
+  EXPECT_EQ(err("scheduler", "fastest"),
+            "override 'scheduler': unknown scheduler 'fastest' (expected maxwork, roundrobin, "
+            "random, peel, celltree, best, celltree-best, celltree-union, affinity, partition, "
+            "steal, partition-steal, share, balanced, celltree-2level, "
+            "celltree-2level-best, balanced-critical, balanced-adaptive, celltree-adaptive, "
+            "celltree-dag, celltree-dag-oracle or auto)");
   EXPECT_EQ(c, DefaultConfig());
 }
 

@@ -202,7 +202,8 @@ TEST_F(DriverTest, TheSeedIsKeptForEverySchedulerThatUsesIt) {
                         s == "celltree-union" || s == "partition" || s == "partition-steal" ||
                         s == "balanced" || s == "celltree-2level-best" ||
                         s == "celltree-adaptive" || s == "balanced-adaptive" ||
-                        s == "balanced-critical" || s == "auto";
+                        s == "balanced-critical" || s == "celltree-dag" ||
+                        s == "celltree-dag-oracle" || s == "auto";
     ReplayConfig a = Config(s.c_str(), 1), b = a;
     a.seed = 7, b.seed = 8;
     EXPECT_EQ(CanonicalConfig(a).seed, seeded ? 7u : 0u) << s;

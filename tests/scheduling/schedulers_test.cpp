@@ -419,7 +419,7 @@ TEST(MakeSchedulerTest, EveryNameRoundTrips) {
     ASSERT_NE(s, nullptr);
     EXPECT_EQ(s->Name(), name);
   }
-  EXPECT_EQ(SchedulerNames().size(), 20u);
+  EXPECT_EQ(SchedulerNames().size(), 22u);
   EXPECT_NE(dynamic_cast<RandomScheduler*>(MakeScheduler("random", 99).get()), nullptr);
   EXPECT_EQ(dynamic_cast<RandomScheduler&>(*MakeScheduler("random", 99)).seed(), 99u);
 }
@@ -454,6 +454,8 @@ TEST(SchedulerRegistryTest, EntriesKeepTheirFlagsAndNameWhatTheyMake) {
       {"balanced-critical", 1, true, true, false, false},
       {"balanced-adaptive", 2, true, true, false, false},
       {"celltree-adaptive", 2, true, true, false, true},
+      {"celltree-dag", 1, true, true, false, false},
+      {"celltree-dag-oracle", 0, true, true, true, false},
       {"auto", 2, true, true, false, false},
   };
   ASSERT_EQ(SchedulerRegistry().size(), std::size(expected));
@@ -479,7 +481,8 @@ TEST(SchedulerRegistryTest, EntriesKeepTheirFlagsAndNameWhatTheyMake) {
   EXPECT_EQ(&SchedulerByName("celltree-union", "test"), &kCellTreeUnionEntry);
   EXPECT_EQ(SeededSchedulerList(", "),
             "random, best, celltree-best, celltree-union, partition, partition-steal, balanced, "
-            "celltree-2level-best, balanced-critical, balanced-adaptive, celltree-adaptive, auto");
+            "celltree-2level-best, balanced-critical, balanced-adaptive, celltree-adaptive, "
+            "celltree-dag, celltree-dag-oracle, auto");
 }
 
 TEST(MakeSchedulerTest, UnknownNameListsTheValidOnes) {
@@ -491,7 +494,8 @@ TEST(MakeSchedulerTest, UnknownNameListsTheValidOnes) {
                  "scheduler: unknown scheduler 'MaxWork' (expected maxwork, roundrobin, random, "
                  "peel, celltree, best, celltree-best, celltree-union, affinity, partition, steal, "
                  "partition-steal, share, balanced, celltree-2level, celltree-2level-best, "
-                 "balanced-critical, balanced-adaptive, celltree-adaptive or auto)");
+                 "balanced-critical, balanced-adaptive, celltree-adaptive, celltree-dag, "
+                 "celltree-dag-oracle or auto)");
   }
   EXPECT_THROW(MakeScheduler("", 0), InputError);
 }
