@@ -9,14 +9,32 @@
 
 namespace raycell {
 
+namespace {
+
+template <typename T>
+void FitTo(std::vector<T>& v) {
+  v.shrink_to_fit();  // a no-op when the capacity is already the size
+}
+
+// to += add for a node's entering rays or visits, which a tree keeps in 32 bits.
+void AddCount(std::uint32_t& to, std::uint64_t add) {
+  if (add > CellTree::kMaxRays - to) {
+    throw InputError("a Cell Tree node with more than " + std::to_string(CellTree::kMaxRays) +
+                     " entering rays or visits (a tree counts them in 32 bits)");
+  }
+  to += static_cast<std::uint32_t>(add);
+}
+
+}  // namespace
+
 // ---------------------------------------------------------------------------- CellTree
 
 CellTree::CellTree()
     : cell_{kNoCell},
       parent_{kNoNode},
       enter_{0},
-      samples_{0},
       visits_{0},
+      samples_{0},
       generation_{0},
       first_child_{kNoNode},
       next_sibling_{kNoNode},
@@ -36,14 +54,32 @@ NodeId CellTree::FindChild(NodeId n, CellId cell) const {
   return kNoNode;
 }
 
+void CellTree::Reserve(std::size_t nodes) {
+  cell_.reserve(nodes);
+  parent_.reserve(nodes);
+  if (counted()) {
+    enter_.reserve(nodes);
+    visits_.reserve(nodes);
+    samples_.reserve(nodes);
+  }
+  first_child_.reserve(nodes);
+  next_sibling_.reserve(nodes);
+  last_child_.reserve(nodes);
+}
+
 NodeId CellTree::AddNode(NodeId parent, CellId cell) {
   RAYCELL_CHECK_LT(cell_.size(), std::size_t{kNoNode.index()});
+  // Growing by a quarter, not push_back's doubling: a tree being built holds at most 1.25 times
+  // its nodes (plus one array's copy while it grows), not twice (issue 43).
+  if (cell_.size() == cell_.capacity()) Reserve(cell_.size() + cell_.size() / 4 + 64);
   const NodeId id(static_cast<std::uint32_t>(cell_.size()));
   cell_.push_back(cell);
   parent_.push_back(parent);
-  enter_.push_back(0);
-  samples_.push_back(0);
-  visits_.push_back(0);
+  if (counted()) {
+    enter_.push_back(0);
+    samples_.push_back(0);
+    visits_.push_back(0);
+  }
   first_child_.push_back(kNoNode);
   next_sibling_.push_back(kNoNode);
   last_child_.push_back(kNoNode);
@@ -57,27 +93,52 @@ NodeId CellTree::AddNode(NodeId parent, CellId cell) {
   return id;
 }
 
-// Depth-first with a per-cell count of the nodes of that cell on the current path: O(nodes).
-CellTree UnionTree(const std::vector<const CellTree*>& trees) {
+// Each tree in two passes, so that the union's arrays are sized once: the first counts the
+// tree's nodes on paths the union lacks so far (those whose parent has no such child), the
+// second adds them, as AddNode one by one would. The count is exact but for a tree with two
+// children of one cell under one parent, which no builder makes (then Finish shrinks).
+CellTree Union(const std::vector<const CellTree*>& trees, bool counted) {
   CellTree u;
+  if (!counted) u.enter_ = u.visits_ = {}, u.samples_ = {};
+  std::uint64_t rays = 0;
+  for (const CellTree* t : trees) rays += t->rays();
+  if (counted && rays > CellTree::kMaxRays) {
+    throw InputError("the union of " + std::to_string(trees.size()) + " Cell Trees has " +
+                     std::to_string(rays) + " rays, more than a tree counts (" +
+                     std::to_string(CellTree::kMaxRays) + ")");
+  }
   for (const CellTree* t : trees) {
-    std::vector<NodeId> image(t->size(), kNoNode);  // t's node -> u's node
+    std::vector<NodeId> image(t->size(), kNoNode);  // t's node -> u's node (kNoNode: new)
     image[kRootNode.index()] = kRootNode;
+    std::size_t added = 0;
     for (NodeId n : t->nodes()) {  // parents before children
       const NodeId p = image[t->parent(n).index()];
-      NodeId m = u.FindChild(p, t->cell(n));
-      if (m == kNoNode) m = u.AddNode(p, t->cell(n));
-      image[n.index()] = m;
-      u.enter_[m.index()] += t->enter(n);
-      u.samples_[m.index()] += t->samples(n);
-      u.visits_[m.index()] += t->visits(n);
+      image[n.index()] = p == kNoNode ? kNoNode : u.FindChild(p, t->cell(n));
+      added += image[n.index()] == kNoNode;
     }
-    u.rays_ += t->rays();
+    u.Reserve(u.size() + added);
+    for (NodeId n : t->nodes()) {
+      NodeId m = image[n.index()];
+      if (m == kNoNode) {
+        const NodeId p = image[t->parent(n).index()];
+        m = u.FindChild(p, t->cell(n));
+        if (m == kNoNode) m = u.AddNode(p, t->cell(n));
+        image[n.index()] = m;
+      }
+      if (!counted) continue;
+      AddCount(u.enter_[m.index()], t->enter(n));
+      u.samples_[m.index()] += t->samples(n);
+      AddCount(u.visits_[m.index()], t->visits(n));
+    }
   }
-  u.last_child_.clear();
-  u.ComputeGenerations();
+  u.rays_ = rays;
+  u.Finish();
   return u;
 }
+
+CellTree UnionTree(const std::vector<const CellTree*>& trees) { return Union(trees, true); }
+
+CellTree UnionShape(const std::vector<const CellTree*>& trees) { return Union(trees, false); }
 
 CellTree ContractTree(const CellTree& tree, const std::vector<CellId>& coarse_of,
                       std::vector<NodeId>* image) {
@@ -92,21 +153,21 @@ CellTree ContractTree(const CellTree& tree, const std::vector<CellId>& coarse_of
     if (p == kRootNode || u.cell(p) != c) {  // a new coarse node, or one already made
       m = u.FindChild(p, c);
       if (m == kNoNode) m = u.AddNode(p, c);
-      u.enter_[m.index()] += tree.enter(n);
+      AddCount(u.enter_[m.index()], tree.enter(n));
     }
     to[n.index()] = m;
     u.samples_[m.index()] += tree.samples(n);
-    u.visits_[m.index()] += tree.visits(n);
+    AddCount(u.visits_[m.index()], tree.visits(n));
   }
   u.rays_ = tree.rays();
-  u.last_child_.clear();
-  u.ComputeGenerations();
+  u.Finish();
   if (image != nullptr) *image = std::move(to);
   return u;
 }
 
 CellTree SubTree(const CellTree& tree, const std::vector<NodeId>& nodes) {
   CellTree u;
+  u.Reserve(nodes.size() + 1);
   std::vector<NodeId> to(tree.size(), kNoNode);
   NodeId last = kRootNode;
   for (const NodeId n : nodes) {
@@ -115,13 +176,24 @@ CellTree SubTree(const CellTree& tree, const std::vector<NodeId>& nodes) {
     const NodeId p = to[tree.parent(n).index()];
     const NodeId m = u.AddNode(p == kNoNode ? kRootNode : p, tree.cell(n));
     to[n.index()] = m;
-    u.enter_[m.index()] = tree.enter(n);
+    u.enter_[m.index()] = static_cast<std::uint32_t>(tree.enter(n));
     u.samples_[m.index()] = tree.samples(n);
-    u.visits_[m.index()] = tree.visits(n);
+    u.visits_[m.index()] = static_cast<std::uint32_t>(tree.visits(n));
   }
-  u.last_child_.clear();
-  u.ComputeGenerations();
+  u.Finish();
   return u;
+}
+
+void CellTree::Finish() {
+  last_child_ = {};
+  FitTo(cell_);
+  FitTo(parent_);
+  FitTo(enter_);
+  FitTo(visits_);
+  FitTo(samples_);
+  FitTo(first_child_);
+  FitTo(next_sibling_);
+  ComputeGenerations();
 }
 
 void CellTree::ComputeGenerations() {
@@ -205,6 +277,9 @@ NodeId CellTreeBuilder::Child(NodeId parent, CellId cell) {
     if (it != child_index_.end()) return it->second;
   }
   const NodeId n = tree_.AddNode(parent, cell);
+  if (child_counts_.size() == child_counts_.capacity()) {
+    child_counts_.reserve(tree_.cell_.capacity());  // grows with the tree's arrays
+  }
   child_counts_.push_back(0);
   if (++child_counts_[parent.index()] == kScanChildren + 1) {
     for (NodeId c = tree_.first_child(parent); c != kNoNode; c = tree_.next_sibling(c)) {
@@ -267,6 +342,10 @@ void CellTreeBuilder::AddRay(const RayView& ray) {
   if (any_ray_ && ray.id <= last_id_) {
     RayError(ray.id, "ids must increase; previous ray was " + std::to_string(last_id_));
   }
+  if (tree_.rays_ == CellTree::kMaxRays) {
+    RayError(ray.id, "more than " + std::to_string(CellTree::kMaxRays) +
+                         " rays in one Cell Tree (a tree counts a node's rays in 32 bits)");
+  }
   any_ray_ = true;
   last_id_ = ray.id;
   ++tree_.rays_;
@@ -297,10 +376,8 @@ void CellTreeBuilder::AddRay(const RayView& ray) {
 
 CellTree CellTreeBuilder::Finish() {
   CellTree tree = std::move(tree_);
-  tree.last_child_.clear();
-  tree.last_child_.shrink_to_fit();
-  tree.ComputeGenerations();
-  *this = CellTreeBuilder();
+  *this = CellTreeBuilder();  // its lookups freed before the tree's arrays are shrunk
+  tree.Finish();
   return tree;
 }
 

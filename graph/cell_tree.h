@@ -2,7 +2,8 @@
 //
 // Nodes live in flat arrays indexed by NodeId. Node 0 (kRootNode) is the virtual root: it
 // has no cell, no parent and is never counted as work. Every other node is (parent, cell),
-// and a node is always created after its parent, so parent(n) < n.
+// and a node is always created after its parent, so parent(n) < n. A finished tree's arrays
+// hold exactly its nodes, 36 bytes each (issue 43: docs/design.md §2 "What a replay holds").
 //
 // CellTreeBuilder builds the tree while rays stream in, batch by batch, in ray id order.
 // Its memory grows with the nodes, plus, to place spawned rays, one NodeId per visit of
@@ -51,15 +52,21 @@ class CellTree {
   std::uint32_t cell_count() const { return cell_count_; }
   // Rays the tree was built from (rays with no visit included).
   std::uint64_t rays() const { return rays_; }
+  // The most rays a tree counts: a node's entering rays and visits are kept in 32 bits, and a
+  // ray visits a node at most once, so a tree of at most this many rays never overflows them.
+  // The builder refuses a frame of more rays, UnionTree trees of more rays in all, and
+  // ContractTree a coarse node of more visits (InputError).
+  static constexpr std::uint64_t kMaxRays = std::numeric_limits<std::uint32_t>::max();
 
   CellId cell(NodeId n) const { return cell_[n.index()]; }      // kNoCell for the root
   NodeId parent(NodeId n) const { return parent_[n.index()]; }  // kNoNode for the root
-  std::uint64_t enter(NodeId n) const {
-    return enter_[n.index()];
-  }  // rays entering from the parent
-  std::uint64_t samples(NodeId n) const { return samples_[n.index()]; }
+  // Rays entering from the parent.
+  std::uint64_t enter(NodeId n) const { return counted() ? enter_[n.index()] : 0; }
+  std::uint64_t samples(NodeId n) const { return counted() ? samples_[n.index()] : 0; }
   // Ray visits (segments) worked in the node: its entering rays plus rays spawned in it.
-  std::uint64_t visits(NodeId n) const { return visits_[n.index()]; }
+  std::uint64_t visits(NodeId n) const { return counted() ? visits_[n.index()] : 0; }
+  // Whether the tree keeps enter, samples and visits: false for UnionShape's, whose counts read 0.
+  bool counted() const { return !samples_.empty(); }
   // Nodes on the path root..n (inclusive) whose cell is cell(n); 0 for the root.
   std::uint32_t generation(NodeId n) const { return generation_[n.index()]; }
   // Children in creation order: first_child, then next_sibling until kNoNode.
@@ -75,20 +82,25 @@ class CellTree {
 
  private:
   friend class CellTreeBuilder;
-  friend CellTree UnionTree(const std::vector<const CellTree*>& trees);
+  friend CellTree Union(const std::vector<const CellTree*>& trees, bool counted);
   friend CellTree ContractTree(const CellTree& tree, const std::vector<CellId>& coarse_of,
                                std::vector<NodeId>* image);
   friend CellTree SubTree(const CellTree& tree, const std::vector<NodeId>& nodes);
   CellTree();
   NodeId AddNode(NodeId parent, CellId cell);
+  // Room for `nodes` nodes (root included) in every array, exactly.
+  void Reserve(std::size_t nodes);
+  // Done adding nodes: last_child_ freed, every array shrunk to its nodes, generations computed.
+  void Finish();
   void ComputeGenerations();
 
   std::vector<CellId> cell_;
   std::vector<NodeId> parent_;
-  std::vector<std::uint64_t> enter_, samples_, visits_;
+  std::vector<std::uint32_t> enter_, visits_;  // at most kMaxRays
+  std::vector<std::uint64_t> samples_;
   std::vector<std::uint32_t> generation_;
   std::vector<NodeId> first_child_, next_sibling_;
-  std::vector<NodeId> last_child_;  // for appending in creation order; cleared by Finish
+  std::vector<NodeId> last_child_;  // for appending in creation order; freed by Finish
   std::uint32_t cell_count_ = 0;
   std::uint64_t rays_ = 0;
 };
@@ -108,6 +120,11 @@ inline CellTree::NodeRange CellTree::nodes() const {
 // feasible for the union is feasible for each of them. Trees are merged in order: the
 // union of A and B numbers its nodes as a builder fed A's rays, then B's, would.
 CellTree UnionTree(const std::vector<const CellTree*>& trees);
+// UnionTree's nodes, numbered alike, without its counts (enter, samples and visits read 0,
+// counted() is false): what a plan or a prediction reads of it (cells, parents, children,
+// generations), in 20 bytes a node instead of 36 (issue 43: the union of two 4096-cell frames
+// has millions of nodes). rays() is still the sum.
+CellTree UnionShape(const std::vector<const CellTree*>& trees);
 
 // The tree a coarser subdivision gives (issue 23's two levels; docs/design.md §5 "Two-level
 // scheduling"): every node's cell mapped by `coarse_of` (per cell of the tree), and a node

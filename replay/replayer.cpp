@@ -920,7 +920,7 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
 
 SeenWork MakeSeenWork(const CellTree& tree, std::uint32_t cells) {
   SeenWork s;
-  s.work = NodeWork(tree, cells);
+  s.work = PackedNodeWork(tree, cells);  // records alone, as the walker's (issue 43)
   if (!s.work.packed.empty()) {
     s.paths =
         PathsOf(PackedUnits{s.work.packed.data(), UnitId(s.work.roots.size())}, s.work.size());

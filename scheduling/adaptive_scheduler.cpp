@@ -51,14 +51,27 @@ NodeId MatchNode(const CellTree& tree, const StandIns& stand_ins, NodeId parent,
 
 void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   cells_ = frame.cells;
+  // The last frame's per-node state freed before this frame's union and plan are made (issue
+  // 43; assign would keep its capacity).
   own_.reset();
+  own_start_.reset();
+  due_ = nullptr;
+  own_due_ = {};
+  match_ = {};
+  guess_ = {};
+  node_cell_ = {};
+  depth_ = {};
   predicted_ = frame.previous;
   one_processor_ = frame.processors <= 1;
   // Several processors predict by the union of frames i-2 and i-1, one by frame i-1 alone
   // (docs/design.md §5 "Adaptive scheduling" has the measurements).
   if (!one_processor_ && frame.previous != nullptr && frame.before_previous != nullptr) {
-    own_ = SharedUnion(frame.plans, *frame.before_previous, *frame.previous);
-    predicted_ = own_.get();
+    std::shared_ptr<const CellTree> both =
+        SharedUnion(frame.plans, *frame.before_previous, *frame.previous);
+    predicted_ = both.get();
+    // The frame's plan cache keeps the union while the frame is replayed: held here only without
+    // one, so that it goes with the cache at the frame's end, not at the next frame's start.
+    if (frame.plans == nullptr) own_ = std::move(both);
   }
   match_.assign(1, predicted_ != nullptr ? kRootNode : kNoNode);
   guess_.assign(1, false);
@@ -77,7 +90,6 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   plan_.clear();
   used_.Reset(0);
   cursor_ = 0;
-  due_.clear();
   if (predicted_ == nullptr) return;
   const CellTree& t = *predicted_;
   stand_in_ = SharedStandIns(frame.plans, t);
@@ -98,7 +110,8 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
         return s;
       });
   cost_.steps += start->steps;
-  Install(*start->plan, start->due);
+  if (frame.plans == nullptr) own_start_ = start;  // else the cache keeps it for the frame
+  Install(*start->plan, &start->due);
 }
 
 std::vector<std::uint32_t> AdaptiveScheduler::DueOf(const std::vector<CellId>& plan,
@@ -132,13 +145,13 @@ std::vector<std::uint32_t> AdaptiveScheduler::DueOf(const std::vector<CellId>& p
 
 void AdaptiveScheduler::SetPlan(std::vector<CellId> plan, const CellTree* planned,
                                 const std::vector<NodeId>* nodes) {
-  std::vector<std::uint32_t> due =
-      DueOf(plan, planned, nodes, predicted_->size(), cells_, &cost_.steps);
-  Install(std::move(plan), std::move(due));
+  own_due_ = {};  // the last re-plan's, freed first
+  own_due_ = DueOf(plan, planned, nodes, predicted_->size(), cells_, &cost_.steps);
+  Install(std::move(plan), &own_due_);
 }
 
-void AdaptiveScheduler::Install(std::vector<CellId> plan, std::vector<std::uint32_t> due) {
-  due_ = std::move(due);
+void AdaptiveScheduler::Install(std::vector<CellId> plan, const std::vector<std::uint32_t>* due) {
+  due_ = due;
   plan_ = std::move(plan);
   used_.Reset(plan_.size());
   cursor_ = 0;
@@ -156,7 +169,7 @@ void AdaptiveScheduler::RecomputeDue(CellId c) {
   std::uint32_t d = kNever;
   for (std::uint32_t r : queued_[c.value()]) {
     const NodeId m = match_[r];
-    d = std::min(d, m == kNoNode ? 0 : due_[m.index()] == kNever ? 0 : due_[m.index()]);
+    d = std::min(d, m == kNoNode ? 0 : (*due_)[m.index()] == kNever ? 0 : (*due_)[m.index()]);
   }
   min_due_[c.value()] = d;
   cost_.steps += queued_[c.value()].size();
@@ -174,7 +187,8 @@ void AdaptiveScheduler::Arrived(const Arrival& a) {
       guess = guess || stand_in;
     }
     guess_.push_back(guess);
-    depth_.push_back(depth_[a.parent] + 1);
+    // Depths for Shallowest (no prediction) and the one-processor orphans (ShallowestOrphan).
+    if (KeepsDepths()) depth_.push_back(depth_[a.parent] + 1);
     match_.push_back(m);
     node_cell_.push_back(a.cell);
   }
@@ -182,9 +196,11 @@ void AdaptiveScheduler::Arrived(const Arrival& a) {
   queued_[a.cell.value()].push_back(a.node);
   const NodeId m = match_[a.node];
   const std::uint32_t d =
-      m == kNoNode || due_.empty() || due_[m.index()] == kNever ? 0 : due_[m.index()];
+      m == kNoNode || due_ == nullptr || (*due_)[m.index()] == kNever ? 0 : (*due_)[m.index()];
   min_due_[a.cell.value()] = std::min(min_due_[a.cell.value()], d);
-  if (depth_[a.node] < min_depth_[a.cell.value()]) SetMinDepth(a.cell, depth_[a.node]);
+  if (KeepsDepths() && depth_[a.node] < min_depth_[a.cell.value()]) {
+    SetMinDepth(a.cell, depth_[a.node]);
+  }
 }
 
 void AdaptiveScheduler::Taken(CellId cell) {

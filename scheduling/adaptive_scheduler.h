@@ -93,7 +93,7 @@ class AdaptiveScheduler : public Scheduler {
                                           std::uint32_t cells, std::uint64_t* steps);
   // Sets the plan and the due entries (DueOf).
   void SetPlan(std::vector<CellId> plan, const CellTree* planned, const std::vector<NodeId>* nodes);
-  void Install(std::vector<CellId> plan, std::vector<std::uint32_t> due);
+  void Install(std::vector<CellId> plan, const std::vector<std::uint32_t>* due);
   // The earliest entry that work queued at `c` is due at (0: due now).
   std::uint32_t DueAt(CellId c) const;
   void RecomputeDue(CellId c);
@@ -123,7 +123,12 @@ class AdaptiveScheduler : public Scheduler {
   // FrameInfo::processors <= 1: the prediction is frame i-1's tree alone, orphans shallowest
   // first; with several, the union of frames i-2 and i-1, orphans most queued first.
   bool one_processor_ = true;
-  std::shared_ptr<const CellTree> own_;  // the union of the last two trees, when planned from it
+  // Whether queued nodes' depths are kept: for Shallowest (no prediction) and, with one
+  // processor, the shallowest orphan.
+  bool KeepsDepths() const { return predicted_ == nullptr || one_processor_; }
+  // The union of the last two trees, when planned from it without a plan cache (with one,
+  // predicted_ points into the cache's, which outlives the frame's replay).
+  std::shared_ptr<const CellTree> own_;
   const CellTree* predicted_ = nullptr;  // null: no earlier frame (Max Work)
   // Stand-ins of the predicted tree (shared, FrameInfo::plans).
   std::shared_ptr<const StandIns> stand_in_;
@@ -132,14 +137,20 @@ class AdaptiveScheduler : public Scheduler {
   UnusedEntries used_;
   std::vector<std::uint32_t> remaining_;  // per cell: entries of plan_ not used up
   std::size_t cursor_ = 0;
-  std::vector<std::uint32_t> due_;  // per predicted node: its entry in plan_, or kNever
+  // Per predicted node: its entry in plan_, or kNever; the start plan's (shared, as the union)
+  // or own_due_ (a re-plan's). null: no prediction.
+  const std::vector<std::uint32_t>* due_ = nullptr;
+  std::vector<std::uint32_t> own_due_;
+  std::shared_ptr<const void> own_start_;  // the start plan and its due, without a plan cache
 
   std::vector<NodeId> match_;      // per queued node (Arrival::node): its prediction
   std::vector<bool> guess_;        // per queued node: matched through a stand-in
   std::vector<CellId> node_cell_;  // per queued node: its cell
   std::vector<std::vector<std::uint32_t>> queued_;  // per cell: nodes queued, not yet taken
   std::vector<std::uint32_t> min_due_;              // per cell: the least due entry of queued_
-  std::vector<std::uint32_t> depth_;      // per queued node: its depth (the root's children 1)
+  // Per queued node: its depth (the root's children 1); kept only where it is read (KeepsDepths:
+  // Shallowest with no prediction, ShallowestOrphan with one processor).
+  std::vector<std::uint32_t> depth_;
   std::vector<std::uint32_t> min_depth_;  // per cell: the least depth of queued_
   // Per depth the cells whose min_depth_ it is, and the least depth whose list may have cells:
   // Shallowest looks at the shallowest lists, not at every cell (issue 43).

@@ -93,6 +93,10 @@ BestScheduleOptions PlanEffort(std::uint64_t seed, const CellTree& tree) {
   }
   // The local search's re-timings, a pass over every node each: a share of its work limit.
   o.local.max_retimes = std::max<std::uint64_t>(o.local.max_work / kPlanRetimeShare / nodes, 1);
+  // One re-timing is the local search's first (of its start): no idle entry can be deleted nor
+  // window tried after it, so it returns its start unchanged. No chain, and no forest built for
+  // it (issue 43: a tree of millions of nodes planned in Peel's memory, not the search's).
+  if (o.local.max_retimes <= 1) o.chains = 0;
   return o;
 }
 

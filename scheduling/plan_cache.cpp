@@ -36,7 +36,7 @@ std::shared_ptr<const std::vector<CellId>> SharedPeel(PlanCache* cache, const Ce
 std::shared_ptr<const CellTree> SharedUnion(PlanCache* cache, const CellTree& before,
                                             const CellTree& previous) {
   return Shared<CellTree>(cache, PlanKey(kUnionTree, {TreeKey(before), TreeKey(previous)}), [&] {
-    return UnionTree({&before, &previous});
+    return UnionShape({&before, &previous});
   });
 }
 

@@ -30,7 +30,9 @@ class PlanCache {
   PlanCache& operator=(const PlanCache&) = delete;
 
   // The value of `key`, made by make() (a T) the first time it is asked for; callers asking
-  // for it meanwhile on other threads wait for that one. Every caller of a key must ask for
+  // for it meanwhile on other threads wait for that one. The cache keeps it until it is
+  // destroyed (the runner's, when the frame's replays are done), so a scheduler may point into
+  // it for the frame and need not hold it past (issue 43). Every caller of a key must ask for
   // the same T and make the same value (the key names all it depends on).
   template <typename T, typename Make>
   std::shared_ptr<const T> Get(std::uint64_t key, Make make) {
@@ -97,8 +99,9 @@ enum PlanKind : std::uint64_t {
   kFramePaths,  // the paths of a frame's work graph's units, for the watching schedulers (replay/)
 };
 
-// Peel's schedule of `tree` (graph/peel.h), and the union of two trees (UnionTree), shared
-// through `cache` (null: made here).
+// Peel's schedule of `tree` (graph/peel.h), and the union of two trees (its shape, UnionShape:
+// what the planners and celltree-adaptive's prediction read of it), shared through `cache`
+// (null: made here).
 std::shared_ptr<const std::vector<CellId>> SharedPeel(PlanCache* cache, const CellTree& tree);
 std::shared_ptr<const CellTree> SharedUnion(PlanCache* cache, const CellTree& before,
                                             const CellTree& previous);

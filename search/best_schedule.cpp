@@ -1,6 +1,7 @@
 #include "search/best_schedule.h"
 
 #include <algorithm>
+#include <optional>
 #include <sstream>
 
 #include "base/check.h"
@@ -87,15 +88,20 @@ class Best {
     out_.peel_length = peel.schedule.size();
     Offer(peel.schedule, "peel");
     if (!Done() && o_.beam_width > 0 && BeamIsCut(peel.schedule.size())) RunTwoLevel();
-    const CellForest forest = CellForest::FromTree(tree_);
-    if (!Done() && o_.beam_width > 0) RunBeam(forest);
+    // The forest only for the searches that run on it (it costs about as much as the tree).
+    std::optional<CellForest> forest;
+    const auto forest_of_tree = [&]() -> const CellForest& {
+      if (!forest) forest = CellForest::FromTree(tree_);
+      return *forest;
+    };
+    if (!Done() && o_.beam_width > 0) RunBeam(forest_of_tree());
     // Small trees: the exact search first, which often proves the beam's schedule optimal;
     // if it does not, once more after the local search, with its (maybe shorter) schedule.
     const bool exact = o_.exact_states > 0 && tree_.node_count() <= o_.exact_max_nodes;
     if (exact) WaitForLateBound();  // the exact search prunes with it
     if (!Done() && exact) RunExact();
     const std::size_t before = out_.schedule.size();
-    if (!Done() && o_.chains > 0) RunLocal(forest);
+    if (!Done() && o_.chains > 0) RunLocal(forest_of_tree());
     if (!Done() && exact && out_.schedule.size() < before) RunExact();
     WaitForLateBound();
     out_.length = out_.schedule.size();

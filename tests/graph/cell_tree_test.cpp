@@ -225,7 +225,8 @@ std::vector<testing::TestRay> RandomRays(std::mt19937& rng, std::uint32_t cells,
   return out;
 }
 
-void ExpectSameTree(const CellTree& a, const CellTree& b) {
+// shape_only: b's counts are not compared (a's must read 0).
+void ExpectSameTree(const CellTree& a, const CellTree& b, bool shape_only = false) {
   ASSERT_EQ(a.size(), b.size());
   EXPECT_EQ(a.rays(), b.rays());
   EXPECT_EQ(a.cell_count(), b.cell_count());
@@ -233,9 +234,9 @@ void ExpectSameTree(const CellTree& a, const CellTree& b) {
     const NodeId n(i);
     EXPECT_EQ(a.cell(n), b.cell(n)) << n;
     EXPECT_EQ(a.parent(n), b.parent(n)) << n;
-    EXPECT_EQ(a.enter(n), b.enter(n)) << n;
-    EXPECT_EQ(a.samples(n), b.samples(n)) << n;
-    EXPECT_EQ(a.visits(n), b.visits(n)) << n;
+    EXPECT_EQ(a.enter(n), shape_only ? 0 : b.enter(n)) << n;
+    EXPECT_EQ(a.samples(n), shape_only ? 0 : b.samples(n)) << n;
+    EXPECT_EQ(a.visits(n), shape_only ? 0 : b.visits(n)) << n;
     EXPECT_EQ(a.generation(n), b.generation(n)) << n;
     EXPECT_EQ(a.first_child(n), b.first_child(n)) << n;
     EXPECT_EQ(a.next_sibling(n), b.next_sibling(n)) << n;
@@ -258,13 +259,20 @@ TEST(UnionTreeTest, EqualsTheTreeOfAllRaysAndItsSchedulesServeEach) {
     const CellTree ta = testing::TreeOf(testing::RaysOf(a, 2));
     const CellTree tb = testing::TreeOf(testing::RaysOf(b, 2));
     const CellTree u = UnionTree({&ta, &tb});
-    ExpectSameTree(u, testing::TreeOf(testing::RaysOf(both, 2)));
+    const CellTree all = testing::TreeOf(testing::RaysOf(both, 2));
+    ExpectSameTree(u, all);
+    EXPECT_TRUE(u.counted());
+    // The shape alone: the same nodes, numbers and generations, counts 0.
+    const CellTree shape = UnionShape({&ta, &tb});
+    EXPECT_FALSE(shape.counted());
+    ExpectSameTree(shape, all, /*shape_only=*/true);
     const std::vector<CellId> plan = Peel(u).schedule;
     EXPECT_TRUE(IsFeasible(ta, plan));
     EXPECT_TRUE(IsFeasible(tb, plan));
   }
   const CellTree empty = UnionTree({});
   EXPECT_EQ(empty.node_count(), 0u);
+  EXPECT_EQ(UnionShape({}).node_count(), 0u);
 }
 
 }  // namespace

@@ -329,6 +329,25 @@ TEST(BestSchedulersTest, PlanEffortFittedToALargeTreeDropsTheBeamAndLimitsRetime
   EXPECT_EQ(fitted.local.max_windows, PlanEffort(5).local.max_windows);
 }
 
+// Past 2*10^6 nodes (4*10^6 / nodes < 2) one re-timing is left, the local search's start, after
+// which it can change nothing (tests/search/local_search_test.cpp OneRetimeReturnsTheStart): no
+// chain, so BestSchedule builds no forest for it (issue 43: the plan of a union of two 4096-cell
+// frames, millions of nodes, in Peel's memory). A chain of 2,000,001 nodes over 4 cells.
+TEST(BestSchedulersTest, PlanEffortFittedToAHugeTreeRunsNoLocalSearch) {
+  testing::CellList chain;
+  for (std::uint32_t i = 0; i < 2'000'001; ++i) chain.push_back(CellId(i % 4));
+  const CellTree t = FromPaths({chain});
+  const BestScheduleOptions fitted = PlanEffort(5, t);
+  EXPECT_EQ(fitted.local.max_retimes, 1u);
+  EXPECT_EQ(fitted.chains, 0u);
+  EXPECT_EQ(fitted.beam_width, 0u);
+  // One node fewer: two re-timings (one deletion), and the chain runs.
+  chain.pop_back();
+  const BestScheduleOptions two = PlanEffort(5, FromPaths({chain}));
+  EXPECT_EQ(two.local.max_retimes, 2u);
+  EXPECT_EQ(two.chains, 1u);
+}
+
 TEST(BestSchedulersTest, TheOracleFollowsItsOwnTreesBestSchedule) {
   const CellTree t = FromPaths({{C, A, CellId(3), B}, {A, C, A}});
   BestOracleScheduler s(3);

@@ -42,6 +42,24 @@ TEST(LocalSearchTest, MaxRetimesStopsTheDeletionsAndTheWindows) {
   EXPECT_EQ(r.windows, 0u);
 }
 
+// One re-timing is the start's own: the search can neither delete an entry nor try a window
+// after it, so it returns its start, even where deletions (A A B B) or a window (the next
+// test's B C A B A, 4 entries at best) would shorten it. PlanEffort runs no local search then
+// (scheduling/best_scheduler.h).
+TEST(LocalSearchTest, OneRetimeReturnsTheStart) {
+  LocalSearchOptions o;
+  o.max_retimes = 1;
+  o.min_window = o.max_window = o.exact_window = 5;
+  for (const auto& [tree, start] :
+       {std::pair{FromPaths({{A, B}}), Schedule{A, A, B, B}},
+        std::pair{FromPaths({{C, B, A}, {B, A, B}}), Schedule{B, C, A, B, A}}}) {
+    const LocalSearchResult r = Improve(tree, start, o);
+    EXPECT_EQ(r.schedule, start);
+    EXPECT_EQ(r.retimes, 1u);
+    EXPECT_EQ(r.windows + r.deletions, 0u);
+  }
+}
+
 // Paths C B A and B A B (nodes C1 B1 A1, B2 A2 B3) run by B C A B A: every entry processes
 // a node no other entry can (B: B2; C: C1; A: A2; B: B1 and B3; A: A1), so nothing can be
 // deleted, yet C B A B (C1; B1 B2; A1 A2; B3) has 4 entries, the bound (B twice, A and C

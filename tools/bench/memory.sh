@@ -2,11 +2,12 @@
 # Peak memory against the number of frames (issue 43, "Memory that follows the frame"): the
 # built-in scene at 1920x1080 in 16x16x16 cells (4096), an orbit of 4 frames (4:20) and of 30
 # frames at the same 5 degrees a frame (30:150), recorded once (or reused when the capture
-# exists), then on each capture: record, analyze (no bracket), replay under Max Work, celltree
-# and celltree-adaptive at 1 and 8 processors, and a small sweep (2 schedulers x 2 processor
-# counts). Each step runs under nice and /usr/bin/time -f '%e %M' (wall seconds, peak resident
-# set size). Prints a table: command, frames, wall s, peak MB, and the ratio of the 30-frame
-# peak to the 4-frame one (the goal: at most 1.2, every peak at most 1 GiB).
+# exists), then on each capture: record, analyze (no bracket), replay under Max Work, celltree,
+# celltree-adaptive, celltree-union and auto at 1 and 8 processors, and a small sweep (2
+# schedulers x 2 processor counts). Each step runs under nice and /usr/bin/time -f '%e %M'
+# (wall seconds, peak resident set size). Prints a table: command, frames, wall s, peak MB, and
+# the ratio of the 30-frame peak to the 4-frame one (the goal: at most 1.2, every peak at most
+# 1 GiB).
 #
 # Usage: tools/bench/memory.sh [OUTDIR] [RES] [CELLS] [STEPS]
 # Default: out/scale, 1920x1080, 16x16x16, every step. The captures are OUTDIR/b4096.rct and
@@ -14,7 +15,7 @@
 # subset of: record analyze replay sweep (record only times a capture it makes).
 # RAYCELL=path/to/raycell measures another build (e.g. the one before a change);
 # SCHEDULERS="maxwork celltree" replays fewer schedulers (default: maxwork celltree
-# celltree-adaptive).
+# celltree-adaptive celltree-union auto).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 raycell=${RAYCELL:-$root/build/tools/raycell}
@@ -22,7 +23,7 @@ out=${1:-out/scale}
 res=${2:-1920x1080}
 cells=${3:-16x16x16}
 steps=${4:-record analyze replay sweep}
-schedulers=${SCHEDULERS:-maxwork celltree celltree-adaptive}
+schedulers=${SCHEDULERS:-maxwork celltree celltree-adaptive celltree-union auto}
 [ -x "$raycell" ] || { echo "needs $raycell: run tools/setup.sh" >&2; exit 2; }
 [ -x /usr/bin/time ] || { echo "needs /usr/bin/time (Debian package time)" >&2; exit 2; }
 mkdir -p "$out"
