@@ -8,6 +8,7 @@
 #
 # Usage: tools/bench/suite_hindsight.sh [SUITE_OUT] [PROCESSORS]   (default out/suite 8)
 # SUITE_OUT is a folder `raycell suite --out` wrote (its captures/ are read, never changed).
+# SCHEDULERS=a,b,... replaces the list (Max Work first).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 raycell=${RAYCELL:-$root/build/tools/raycell}
@@ -20,6 +21,7 @@ trap 'rm -rf "$work"' EXIT
 schedulers=maxwork,roundrobin,peel,celltree,best,celltree-best,celltree-union,affinity,partition
 schedulers+=,steal,partition-steal,share,balanced,celltree-2level,balanced-critical
 schedulers+=,balanced-adaptive,celltree-adaptive,auto
+schedulers=${SCHEDULERS:-$schedulers}
 for f in "$suite"/captures/*.rct; do
   name=$(basename "$f" .rct)
   cells=()
