@@ -183,8 +183,9 @@ class Scheduler {
   // Watching the frame unfold (docs/design.md §5 "Adaptive scheduling"). A scheduler that
   // watches is told, as the replay queues it, each unit of work released into a cell with the
   // Cell Tree node it belongs to, as a ray packet carrying its node would tell the board; and
-  // each time a processor takes a cell's queue. It is not given the frame's own tree
-  // (FrameInfo::current is null for it): what it knows of the frame is what was queued so far.
+  // each time a processor takes a cell's queue. Unless its entry is an oracle
+  // (celltree-dag-oracle), it is not given the frame's own tree (FrameInfo::current is null for
+  // it): what it knows of the frame is what was queued so far.
   // Nodes are numbered in the order they are first queued, from 1; 0 is the root.
   struct Arrival {
     std::uint32_t node = 0;    // the node the unit's rays enter
