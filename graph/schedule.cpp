@@ -27,15 +27,20 @@ void MakeReady(const CellTree& tree, NodeId parent, std::vector<std::vector<Node
 // of cell c (a ray's consecutive visits are to different cells, so the builder never makes
 // a child with its parent's cell; checked below), so processing them makes no further node
 // of c ready within the same entry.
-ScheduleRun RunSchedule(const CellTree& tree, const std::vector<CellId>& schedule) {
+ScheduleRun RunSchedule(const CellTree& tree, const std::vector<CellId>& schedule,
+                        std::vector<std::uint32_t>* fetch_of) {
   std::vector<std::vector<NodeId>> ready(tree.cell_count());
   MakeReady(tree, kRootNode, ready);
   ScheduleRun run;
+  if (fetch_of != nullptr) fetch_of->assign(tree.size(), kNoFetch);
   std::vector<NodeId> batch;
   for (CellId c : schedule) {
     if (c.value() >= tree.cell_count() || ready[c.value()].empty()) continue;
     batch.clear();
     std::swap(batch, ready[c.value()]);
+    if (fetch_of != nullptr) {
+      for (NodeId n : batch) (*fetch_of)[n.index()] = std::uint32_t(run.useful_fetches);
+    }
     ++run.useful_fetches;
     run.processed_nodes += batch.size();
     for (NodeId n : batch) MakeReady(tree, n, ready);

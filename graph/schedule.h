@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -20,8 +21,12 @@ struct ScheduleRun {
 
 // Runs `schedule` on `tree`: at each entry c, every unprocessed node of cell c whose parent
 // is processed (the root counts as processed) is processed. Cells >= tree.cell_count() are
-// allowed and process nothing. O(nodes + schedule length).
-ScheduleRun RunSchedule(const CellTree& tree, const std::vector<CellId>& schedule);
+// allowed and process nothing. O(nodes + schedule length). With `fetch_of`, also per node the
+// useful fetch that processed it, numbered from 0 in schedule order (kNoFetch: unprocessed,
+// and the root).
+inline constexpr std::uint32_t kNoFetch = ~std::uint32_t{0};
+ScheduleRun RunSchedule(const CellTree& tree, const std::vector<CellId>& schedule,
+                        std::vector<std::uint32_t>* fetch_of = nullptr);
 inline bool IsFeasible(const CellTree& tree, const std::vector<CellId>& schedule) {
   return RunSchedule(tree, schedule).feasible;
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "base/check.h"
+#include "graph/schedule.h"
 #include "scheduling/best_scheduler.h"
 
 namespace raycell {
@@ -40,29 +41,17 @@ constexpr SchedulerEntry kCellTreeDagOracleEntry = [] {
 }();
 
 PlanDag MakePlanDag(const CellTree& tree, const std::vector<CellId>& plan) {
-  // RunSchedule, keeping the entry that processes each node.
+  static_assert(PlanDag::kNoEntry == kNoFetch, "an unprocessed node has no entry");
+  // The plan's useful fetches are the DAG's entries (RunSchedule numbers them).
   PlanDag dag;
-  dag.entry_of.assign(tree.size(), PlanDag::kNoEntry);
-  std::vector<std::vector<NodeId>> ready(tree.cell_count());
-  const auto make_ready = [&](NodeId parent) {
-    for (NodeId c = tree.first_child(parent); c != kNoNode; c = tree.next_sibling(c))
-      ready[tree.cell(c).value()].push_back(c);
-  };
-  make_ready(kRootNode);
-  std::vector<NodeId> batch;
-  for (CellId c : plan) {
-    if (c.value() >= tree.cell_count() || ready[c.value()].empty()) continue;
-    const auto e = static_cast<std::uint32_t>(dag.cells.size());
-    batch.clear();
-    std::swap(batch, ready[c.value()]);
-    std::uint32_t parented = 0;
-    for (NodeId n : batch) {
-      dag.entry_of[n.index()] = e;
-      parented += tree.parent(n) != kRootNode;
-      make_ready(n);
-    }
-    dag.cells.push_back(c);
-    dag.parented.push_back(parented);
+  const ScheduleRun run = RunSchedule(tree, plan, &dag.entry_of);
+  dag.cells.assign(run.useful_fetches, kNoCell);
+  dag.parented.assign(run.useful_fetches, 0);
+  for (const NodeId n : tree.nodes()) {
+    const std::uint32_t e = dag.entry_of[n.index()];
+    if (e == PlanDag::kNoEntry) continue;
+    dag.cells[e] = tree.cell(n);
+    dag.parented[e] += tree.parent(n) != kRootNode;
   }
   return dag;
 }
