@@ -190,6 +190,21 @@ TEST(Adaptive, FrameZeroTakesTheShallowestWorkFirstHandWorked) {
   }
 }
 
+// Replays `w` under celltree-best and under celltree-adaptive (`config`'s other settings): the
+// adaptive scheduler fetches no more and plans nothing again.
+void ExpectNoMoreThanCellTreeBest(const WorkGraph& w, const std::vector<std::uint64_t>& footprints,
+                                  ReplayConfig config, const FrameTrees& info, const CellTree& tree,
+                                  int trial) {
+  config.scheduler = &SchedulerByName("celltree-best", "test");
+  auto best = MakeScheduler(*config.scheduler, config.seed);
+  const ReplayResult follow = ReplayFrame(w, footprints, config, *best, info, Bound(tree));
+  config.scheduler = &SchedulerByName("celltree-adaptive", "test");
+  AdaptiveScheduler adaptive(config.seed);
+  const ReplayResult r = ReplayFrame(w, footprints, config, adaptive, info, Bound(tree));
+  EXPECT_LE(r.fetches, follow.fetches) << "trial " << trial;
+  EXPECT_EQ(adaptive.replans(), 0u) << "trial " << trial;
+}
+
 // On a frame equal to its predecessor the adaptive scheduler fetches no more than following
 // the predecessor's best schedule (celltree-best), and has nothing to plan again.
 TEST(Adaptive, AFrameThatRepeatsItsPredecessorCostsNoMoreThanItsBestSchedule) {
@@ -208,14 +223,7 @@ TEST(Adaptive, AFrameThatRepeatsItsPredecessorCostsNoMoreThanItsBestSchedule) {
     const std::vector<std::uint64_t> footprints(cells, 50'000);
     // The predecessor is the frame itself; the one before it too, or none.
     const FrameTrees info{2, &tree, &tree, cells, trial % 3 == 0 ? nullptr : &tree};
-    config.scheduler = &SchedulerByName("celltree-best", "test");
-    auto best = MakeScheduler(*config.scheduler, config.seed);
-    const ReplayResult follow = ReplayFrame(w, footprints, config, *best, info, Bound(tree));
-    config.scheduler = &SchedulerByName("celltree-adaptive", "test");
-    AdaptiveScheduler adaptive(config.seed);
-    const ReplayResult r = ReplayFrame(w, footprints, config, adaptive, info, Bound(tree));
-    EXPECT_LE(r.fetches, follow.fetches) << "trial " << trial;
-    EXPECT_EQ(adaptive.replans(), 0u) << "trial " << trial;
+    ExpectNoMoreThanCellTreeBest(w, footprints, config, info, tree, trial);
     ++compared;
   }
   EXPECT_EQ(compared, 30);
@@ -269,14 +277,7 @@ TEST(Adaptive, OneProcessorPredictsByTheLastFrameAlone) {
     const WorkGraph w = NodeWork(tree, cells);
     const std::vector<std::uint64_t> footprints(cells, 50'000);
     const FrameTrees info{2, &tree, &tree, cells, &other};
-    config.scheduler = &SchedulerByName("celltree-best", "test");
-    auto best = MakeScheduler(*config.scheduler, config.seed);
-    const ReplayResult follow = ReplayFrame(w, footprints, config, *best, info, Bound(tree));
-    config.scheduler = &SchedulerByName("celltree-adaptive", "test");
-    AdaptiveScheduler adaptive(config.seed);
-    const ReplayResult r = ReplayFrame(w, footprints, config, adaptive, info, Bound(tree));
-    EXPECT_LE(r.fetches, follow.fetches) << "trial " << trial;
-    EXPECT_EQ(adaptive.replans(), 0u) << "trial " << trial;
+    ExpectNoMoreThanCellTreeBest(w, footprints, config, info, tree, trial);
   }
   EXPECT_GE(wider, 10);
 }
