@@ -161,8 +161,10 @@ struct AutoCells::Rule {
   std::vector<std::uint64_t> fp;
   std::unique_ptr<RayRegrouper> regrouper;
   CellPaths paths;
-  // Per frame given: its ratio to the baseline's estimate, NaN where it had no cells.
+  // Per frame given: its ratio to the baseline's estimate, NaN where it had no cells, and
+  // the ratio of its Max Work estimate alone.
   std::vector<double> ratio;
+  std::vector<double> mw_ratio;
 };
 
 AutoCells::AutoCells(std::uint32_t cells, FineCells fine, const std::string& what)
@@ -221,23 +223,27 @@ AutoCells::AutoCells(std::uint32_t cells, FineCells fine, const std::string& wha
   capacity_ = full.empty() ? 0 : full[(full.size() - 1) / 2];
 }
 
-std::size_t ChooseAutoRule(const std::vector<double>& before, const std::vector<double>& last,
-                           std::size_t current) {
-  RAYCELL_CHECK_EQ(before.size(), last.size());
-  const std::size_t n = last.size();
-  std::size_t chosen = 0;
-  double best = 1.0;
-  std::vector<double> score(n, 2.0), moved(n, 0.0);
-  for (std::size_t i = 1; i < n; ++i) {
-    if (std::isnan(last[i]) || std::isnan(before[i])) continue;
-    moved[i] = std::abs(last[i] - before[i]);
-    score[i] = std::max(last[i], before[i]) + moved[i];
-    if (score[i] < best) best = score[i], chosen = i;
-  }
-  // Cells that stay put unless another rule is cheaper by more than the frames seen vary.
-  if (current != 0 && current < n && chosen != 0 && current != chosen && score[current] < 1.0 &&
-      score[current] <= best + moved[current] + moved[chosen]) {
-    chosen = current;
+std::size_t ChooseAutoRule(const std::vector<std::vector<double>>& ratio,
+                           const std::vector<double>& switch_cost, std::size_t current) {
+  RAYCELL_CHECK_EQ(ratio.size(), switch_cost.size());
+  RAYCELL_CHECK_LT(current, ratio.size());
+  const std::size_t frames = ratio[0].size();
+  const auto r = [&](std::size_t i, std::size_t t) { return i == 0 ? 1.0 : ratio[i][t]; };
+  std::size_t chosen = current;
+  for (std::size_t j = 0; j < ratio.size(); ++j) {
+    if (j == current) continue;
+    RAYCELL_CHECK_EQ(ratio[j].size(), frames);
+    // The run of the latest frames on which j was cheaper than current, and what it saved.
+    double saved = 0;
+    std::size_t run = 0;
+    for (std::size_t t = frames; t-- > 0;) {
+      const double now = r(current, t), other = r(j, t);
+      if (!(other < now)) break;  // NaN included
+      saved += now - other;
+      ++run;
+    }
+    if (run < 2 || saved < switch_cost[j]) continue;
+    if (chosen == current || r(j, frames - 1) < r(chosen, frames - 1)) chosen = j;
   }
   return chosen;
 }
@@ -276,17 +282,29 @@ void AutoCells::Prepare() {
     rule->regrouper = std::make_unique<RayRegrouper>(NonEmptyMap(rule->sub, rule->fp));
     rule->paths = CellPaths();
   }
-  // The rule for frame k (ChooseAutoRule): nothing before two frames are seen.
-  const std::size_t current = chosen_;
-  chosen_ = 0;
-  if (k < 2) return;
-  std::vector<double> before, last;
-  for (const auto& rule : rules_) {
-    const bool seen = rule->has && rule->ratio.size() == k;
-    before.push_back(seen ? rule->ratio[k - 2] : std::numeric_limits<double>::quiet_NaN());
-    last.push_back(seen ? rule->ratio[k - 1] : std::numeric_limits<double>::quiet_NaN());
+  // The rule for frame k (ChooseAutoRule): the baseline before two frames are seen.
+  if (k < 2) {
+    chosen_ = 0;
+    return;
   }
-  chosen_ = ChooseAutoRule(before, last, current);
+  // What changing the cells to a rule costs, in frames of the baseline (design §1 "auto:N"):
+  // the changed frame is scheduled with no earlier tree, estimated halfway between Max Work's
+  // bytes and the tree's (the baseline's mw/tree from the last two frames, the larger), less
+  // the frame the rule would cost with a tree to follow (the lesser of its last two ratios).
+  const double no_tree = (1 + std::max(base_mw_over_tree_[k - 2], base_mw_over_tree_[k - 1])) / 2;
+  std::vector<std::vector<double>> ratio;
+  std::vector<double> switch_cost;
+  for (const auto& rule : rules_) {
+    ratio.push_back(rule->ratio);
+    double cost = std::numeric_limits<double>::infinity();
+    if (rule->has && rule->ratio.size() == k && !std::isnan(rule->ratio[k - 2]) &&
+        !std::isnan(rule->ratio[k - 1])) {
+      const double mw = std::max(rule->mw_ratio[k - 2], rule->mw_ratio[k - 1]);
+      cost = std::max(0.0, mw * no_tree - std::min(rule->ratio[k - 2], rule->ratio[k - 1]));
+    }
+    switch_cost.push_back(cost);
+  }
+  chosen_ = ChooseAutoRule(ratio, switch_cost, chosen_);
 }
 
 void AutoCells::AddBatch(const RayBatch& fine) {
@@ -308,15 +326,18 @@ void AutoCells::EndFrame() {
   const double base_mw = base.paths.MaxWorkBytes(base.fp, capacity_);
   const double base_tree = base.paths.TreeBytes(base.fp);
   for (auto& rule : rules_) {
-    double q = std::numeric_limits<double>::quiet_NaN();
+    double q = std::numeric_limits<double>::quiet_NaN(), q_mw = q;
     if (rule->has) {
       const double mw = rule->paths.MaxWorkBytes(rule->fp, capacity_);
       const double tree = rule->paths.TreeBytes(rule->fp);
-      q = std::max(base_mw > 0 ? mw / base_mw : 1.0, base_tree > 0 ? tree / base_tree : 1.0);
+      q_mw = base_mw > 0 ? mw / base_mw : 1.0;
+      q = std::max(q_mw, base_tree > 0 ? tree / base_tree : 1.0);
       out.ratios.push_back({rule->name, q});
     }
     rule->ratio.push_back(q);
+    rule->mw_ratio.push_back(q_mw);
   }
+  base_mw_over_tree_.push_back(base_tree > 0 ? base_mw / base_tree : 1.0);
   frames_.push_back(std::move(out));
   if (frame_samples_.empty()) frame_samples_.assign(fine_.count(), 0);
   samples_.push_back(std::move(frame_samples_));

@@ -1,10 +1,10 @@
 // auto:N, the recommended subdivision into N cells (issue 42; docs/design.md §1
 // "Subdivisions", "auto:N"): per frame, from the frames before it only, either the baseline
 // (the uniform grid of N cells nearest a cube, CubicGrid) or an adaptive candidate, whichever
-// the frames seen estimate cheaper, the candidate only when it wins by a margin that the frames
-// seen give. Fed a fine capture's frames in order (AddBatch, EndFrame), it gives each next
-// frame's cells (next()) from them alone, so the same frames give the same cells on every
-// machine, and frame i's cells do not depend on the frames after it.
+// the frames seen estimate cheaper, the cells changing only when what the change saved on the
+// latest frames seen pays for it (ChooseAutoRule). Fed a fine capture's frames in order (AddBatch,
+// EndFrame), it gives each next frame's cells (next()) from them alone, so the same frames give the
+// same cells on every machine, and frame i's cells do not depend on the frames after it.
 #pragma once
 
 #include <cstdint>
@@ -47,14 +47,16 @@ class CellPaths {
   std::uint32_t cells_ = 0;  // 1 + the largest cell seen
 };
 
-// auto:N's choice for the next frame (docs/design.md §1 "auto:N", the fallback rule), from
-// each rule's estimate over the baseline's on the last two frames seen (`before`, `last`; NaN
-// where the rule was not evaluated; rule 0 is the baseline) and the rule chosen for the frame
-// before (`current`). A candidate qualifies when the worse of its two ratios plus how much they
-// moved is below 1; of those the least such score wins, but `current` is kept while its own
-// score is within the two rules' movements of the least. 0 (the baseline) when none qualifies.
-std::size_t ChooseAutoRule(const std::vector<double>& before, const std::vector<double>& last,
-                           std::size_t current);
+// auto:N's choice for the next frame (docs/design.md §1 "auto:N", the switching rule), from
+// every rule's estimate over the baseline's on each frame seen (`ratio[i][t]`, NaN where rule i
+// had no cells for frame t; rule 0 is the baseline, 1 throughout), what changing the cells to
+// rule i would cost (`switch_cost[i]`, in frames of the baseline: a frame whose cells changed is
+// scheduled with no earlier tree) and the rule of the frame before (`current`). Rule j replaces
+// `current` when it was cheaper than `current` on each of the last w >= 2 frames seen and
+// what it saved over them adds up to its switch cost; of such rules, the least ratio on the
+// last frame wins (ties to the lowest). Otherwise `current` stays.
+std::size_t ChooseAutoRule(const std::vector<std::vector<double>>& ratio,
+                           const std::vector<double>& switch_cost, std::size_t current);
 
 class AutoCells {
  public:
@@ -96,6 +98,8 @@ class AutoCells {
   // The frames given: per frame the samples per fine cell.
   std::vector<std::vector<std::uint64_t>> samples_;
   std::vector<std::uint64_t> frame_samples_;
+  // Per frame given: the baseline's Max Work estimate over its tree estimate.
+  std::vector<double> base_mw_over_tree_;
 
   std::vector<Frame> frames_;
 };

@@ -127,28 +127,37 @@ TEST(AutoCells, TakesACandidateThatWinsOnTheFramesSeen) {
   EXPECT_EQ(a.next().coarse_of_fine[1], a.next().coarse_of_fine[2]);
 }
 
-// The choice among rules from their ratios on the last two frames (rule 0 the baseline).
-TEST(AutoCells, ChoosesTheCandidateClearlyCheapestAndKeepsOneWithinTheFramesVariation) {
+// The choice among rules from their ratios on the frames seen and their switch costs (rule 0
+// the baseline, its ratios 1).
+TEST(AutoCells, SwitchesOnlyToARuleWhoseSavingsOnTheLatestFramesPayItsSwitch) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  // No candidate below 1 (after adding how much its ratio moved): the baseline.
-  EXPECT_EQ(ChooseAutoRule({1, 1.2, 0.95}, {1, 0.9, 1.02}, 0), 0u);
-  // 0.95 and 0.93 moved 0.02: score 0.97 < 1, taken.
-  EXPECT_EQ(ChooseAutoRule({1, 0.95, nan}, {1, 0.93, nan}, 0), 1u);
-  // A rule evaluated on one frame only does not qualify.
-  EXPECT_EQ(ChooseAutoRule({1, 0.99, nan}, {1, 0.99, 0.5}, 1), 1u);
-  // Rule 1 chosen before (score 0.98) and rule 2 cheaper by far (0.65, steady): switch, as
-  // the frames seen vary by nothing near the difference. (Before, rule 1 was kept while it
-  // stayed below 1, whatever else became cheaper.)
-  EXPECT_EQ(ChooseAutoRule({1, 0.98, 0.65}, {1, 0.98, 0.65}, 1), 2u);
-  // Rule 1 (0.80, 0.84: score 0.88) against rule 2 (0.85, 0.85): chosen before, rule 1 stays,
-  // 0.03 dearer within its movement of 0.04; otherwise the least score wins.
-  EXPECT_EQ(ChooseAutoRule({1, 0.80, 0.85}, {1, 0.84, 0.85}, 1), 1u);
-  EXPECT_EQ(ChooseAutoRule({1, 0.80, 0.85}, {1, 0.84, 0.85}, 2), 2u);
-  EXPECT_EQ(ChooseAutoRule({1, 0.80, 0.85}, {1, 0.84, 0.85}, 0), 2u);
-  // Rule 1 0.06 dearer (0.90, 0.86: score 0.94): beyond its movement, rule 2 is taken.
-  EXPECT_EQ(ChooseAutoRule({1, 0.90, 0.85}, {1, 0.86, 0.85}, 1), 2u);
-  // The rule chosen before no longer below 1: the least score, not it.
-  EXPECT_EQ(ChooseAutoRule({1, 0.99, 0.9}, {1, 1.01, 0.9}, 1), 2u);
+  const std::vector<double> cheap{0, 0.1, 0.1};
+  // Rule 1 cheaper on the last two frames by 0.1 each (0.2 in all): pays a switch of 0.1, not
+  // one of 0.3.
+  EXPECT_EQ(ChooseAutoRule({{1, 1}, {0.9, 0.9}, {nan, nan}}, cheap, 0), 1u);
+  EXPECT_EQ(ChooseAutoRule({{1, 1}, {0.9, 0.9}, {nan, nan}}, {0, 0.3, 0}, 0), 0u);
+  // A longer run of cheaper frames pays more: 0.1 on each of four frames pays 0.3.
+  EXPECT_EQ(
+      ChooseAutoRule({{1, 1, 1, 1}, {0.9, 0.9, 0.9, 0.9}, {nan, nan, nan, nan}}, {0, 0.3, 0}, 0),
+      1u);
+  // ...but the run ends at the latest frame on which the rule was not cheaper.
+  EXPECT_EQ(
+      ChooseAutoRule({{1, 1, 1, 1}, {0.9, 0.9, 1.0, 0.9}, {nan, nan, nan, nan}}, {0, 0.15, 0}, 0),
+      0u);
+  // One frame is no run, however cheap: a rule with one ratio (NaN before) or one cheap frame.
+  EXPECT_EQ(ChooseAutoRule({{1, 1}, {nan, 0.5}, {1.1, 0.5}}, cheap, 0), 0u);
+  // Of two rules that pay, the least ratio on the last frame; ties to the lowest.
+  EXPECT_EQ(ChooseAutoRule({{1, 1}, {0.8, 0.8}, {0.9, 0.7}}, cheap, 0), 2u);
+  EXPECT_EQ(ChooseAutoRule({{1, 1}, {0.8, 0.7}, {0.9, 0.7}}, cheap, 0), 1u);
+  // The rule chosen before stays while no other pays its switch against it, the baseline
+  // included: rule 1 dearer than the baseline on the last frame only...
+  EXPECT_EQ(ChooseAutoRule({{1, 1, 1}, {0.8, 0.9, 1.2}, {nan, nan, nan}}, {0.1, 0, 0}, 1), 1u);
+  // ...and on two (0.1 + 0.2 saved by falling back pays 0.25), or by too little (0.01 each).
+  EXPECT_EQ(ChooseAutoRule({{1, 1, 1}, {0.8, 1.1, 1.2}, {nan, nan, nan}}, {0.25, 0, 0}, 1), 0u);
+  EXPECT_EQ(ChooseAutoRule({{1, 1, 1}, {0.8, 1.01, 1.01}, {nan, nan, nan}}, {0.25, 0, 0}, 1), 1u);
+  // Against the rule chosen before, not the baseline: rule 2 must be cheaper than rule 1.
+  EXPECT_EQ(ChooseAutoRule({{1, 1}, {0.7, 0.7}, {0.8, 0.8}}, cheap, 1), 1u);
+  EXPECT_EQ(ChooseAutoRule({{1, 1}, {0.7, 0.7}, {0.6, 0.6}}, cheap, 1), 2u);
 }
 
 // A regroupable capture of Row()'s fine cells, one frame per letter of `frames`: 'W' frames
@@ -214,8 +223,9 @@ TEST_F(AutoCellsCapture, UsesNoFutureInformation) {
     }
   }
   EXPECT_NE(boxes(a, 2), uniform);
-  // Frame 3's 'L' rays cost the candidate more: frames 4 and 5 fall back to the baseline.
-  EXPECT_EQ(boxes(other, 4), uniform);
+  // Frames 3 and 4's 'L' rays cost the candidate more: one frame is not enough to change the
+  // cells again (frame 4 keeps the candidate's), two are, frame 5 falls back to the baseline.
+  EXPECT_EQ(boxes(other, 4), boxes(a, 2));
   EXPECT_EQ(boxes(other, 5), uniform);
   EXPECT_EQ(boxes(a, 5), boxes(a, 2));
 }
