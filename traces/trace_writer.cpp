@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstring>
 #include <iterator>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -209,7 +210,8 @@ struct BatchColumns {
   HeadRunBuilder heads;
   ColumnBuilder parents, spawns, pixels, primary_paths, secondary_paths;
   ZeroRunColumnBuilder primary_samples, secondary_samples, shadow_samples;
-  SampleEncoder samples;  // version 6: Batch.sampleCode
+  SampleEncoder samples;              // version 6 and 7: Batch.sampleCode
+  std::unique_ptr<VisitTable> table;  // version 7
   static constexpr std::size_t kNone = ~std::size_t{0};
   CellGrid grid;
   unsigned rule;
@@ -226,7 +228,11 @@ struct BatchColumns {
 
   BatchColumns(const RayBatch& b, const CellGrid& g, unsigned reference_rule,
                std::uint32_t format_version)
-      : grid(g), rule(reference_rule), version(format_version) {
+      : samples(format_version >= 7 ? SampleContext::kCount7 : SampleContext::kCount),
+        grid(g),
+        rule(reference_rule),
+        version(format_version) {
+    if (version >= 7) table = std::make_unique<VisitTable>();
     for (auto& starts : group_start) std::fill(std::begin(starts), std::end(starts), kNone);
     ordinals.reserve(b.size());
     for (std::size_t i = 0; i < b.size(); ++i) AddRay(b, i);
@@ -277,7 +283,9 @@ struct BatchColumns {
       const std::uint64_t value =
           matched ? ZigZag(Delta(r.samples[v], reference.samples[k])) : r.samples[v];
       if (matched) next = k + 1;
-      if (version >= 6) {
+      if (version >= 7) {
+        AddSamplesV7(r, v, matched, matched ? reference.samples[k] : 0, new_path, context);
+      } else if (version == 6) {
         const unsigned c =
             context.Of(matched, matched ? reference.samples[k] : 0, v + 1 == r.visit_count);
         samples.Add(c, value);
@@ -290,6 +298,29 @@ struct BatchColumns {
     if (r.is_primary()) last_primary = i;
     if (r.kind != RayKind::kShadow) last_non_shadow = r.id;
     if (r.visit_count > 0) last_first_cell = r.cells[0].value();
+  }
+
+  // Version 7: codes visit v of ray r against its prediction (PredictSamples) and enters it in
+  // the visit table.
+  void AddSamplesV7(const RayView& r, std::size_t v, bool matched, std::uint64_t reference,
+                    bool new_path, SampleContext& context) {
+    const bool last = v + 1 == r.visit_count;
+    const std::uint32_t cell = r.cells[v].value();
+    const unsigned in =
+        v == 0 ? VisitTable::kNoStep : VisitTable::StepClass(r.cells[v - 1].value(), cell, grid);
+    const unsigned out =
+        last ? VisitTable::kNoStep : VisitTable::StepClass(cell, r.cells[v + 1].value(), grid);
+    const std::uint64_t key =
+        VisitTable::Key(SampleGroup(static_cast<unsigned>(r.kind)), cell, in, out);
+    const std::size_t slot = table->SlotOf(key);
+    std::uint64_t known = 0;
+    const bool hit = table->Find(slot, key, known);
+    const SamplePrediction p = PredictSamples(matched, reference, new_path, hit, known);
+    const std::uint64_t n = r.samples[v];
+    const std::uint64_t value = p.residual ? ZigZag(Delta(n, p.predicted)) : n;
+    samples.Add(context.Of(p.residual, p.predicted, last, p.predictor), value);
+    context.Next(p.residual, value, n);
+    table->Set(slot, key, r.samples[v]);
   }
 
   // Index of the reference ray of ray i (see "Column encoding" in trace.capnp), or kNone.
@@ -762,7 +793,7 @@ void TraceWriter::BeginFrame(std::int32_t frame) {
 void TraceWriter::Append(const RayBatch& rays) {
   Impl& w = *impl_;
   RAYCELL_CHECK(w.in_frame);
-  RAYCELL_CHECK_LE(5u, w.options.format_version);  // encodes only versions 5 and 6
+  RAYCELL_CHECK_LE(5u, w.options.format_version);  // encodes only versions 5 to 7
   RAYCELL_CHECK_EQ(rays.first_id(), w.frame.rays());
   for (std::size_t i = 0; i < rays.size(); ++i) w.AddRay(rays.ray(i));
 }
