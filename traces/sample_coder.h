@@ -14,6 +14,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -92,14 +93,17 @@ class VisitTable {
   VisitTable() : keys_(kSlots, 0), samples_(kSlots, 0) {}
   // Empties every slot (a new batch).
   void Clear() { std::fill(keys_.begin(), keys_.end(), 0); }
-  // The class of the step from cell `from` to cell `to` of `grid`: the sign of each axis's
+  // A cell's coordinates (x, y, z) in `grid` (cell = x + nx * (y + ny * z)).
+  using Coordinates = std::array<std::uint32_t, 3>;
+  static Coordinates CoordinatesOf(std::uint32_t cell, const CellGrid& grid) {
+    const std::uint32_t row = cell / grid[0];
+    return {cell - row * grid[0], row % grid[1], row / grid[1]};
+  }
+  // The class of the step from the cell at `from` to the cell at `to`: the sign of each axis's
   // difference, (sx + 1) + 3 * (sy + 1) + 9 * (sz + 1), 0..26.
-  static unsigned StepClass(std::uint32_t from, std::uint32_t to, const CellGrid& grid) {
-    const std::uint32_t nx = grid[0], nxy = grid[0] * grid[1];
-    const std::uint32_t fx = from % nx, tx = to % nx, fy = from % nxy / nx, ty = to % nxy / nx;
-    const std::uint32_t fz = from / nxy, tz = to / nxy;
+  static unsigned StepClass(const Coordinates& from, const Coordinates& to) {
     auto sign = [](std::uint32_t a, std::uint32_t b) { return a < b ? 2u : a == b ? 1u : 0u; };
-    return sign(fx, tx) + 3 * sign(fy, ty) + 9 * sign(fz, tz);
+    return sign(from[0], to[0]) + 3 * sign(from[1], to[1]) + 9 * sign(from[2], to[2]);
   }
   // The key of a visit of `cell` by a ray of group `group` (0..2) entered and left by steps
   // of classes `in` and `out` (0..kNoStep).

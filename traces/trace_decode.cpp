@@ -626,10 +626,12 @@ class FrameDecoder {
     if (v7_) {
       // The whole path first: a visit's samples are predicted from its step out too.
       path_.resize(count);
+      coordinates_.resize(count);
       for (std::uint64_t v = 0; v < count; ++v) {
         cell = new_path ? ReadStep(paths, cell, grid) : out.cells()[ref_begin + v].value();
         if (cell == kBadStep) throw BadData("ray " + Str(id) + ": bad cell");
         path_[v] = cell;
+        coordinates_[v] = VisitTable::CoordinatesOf(cell, grid);
       }
     }
     const unsigned group = SampleGroup(static_cast<unsigned>(kind));
@@ -641,10 +643,11 @@ class FrameDecoder {
         while (k < end && out.cells()[ref_begin + k].value() != cell) ++k;
         const bool matched = k < end;
         const bool last = v + 1 == count;
-        const unsigned in =
-            v == 0 ? VisitTable::kNoStep : VisitTable::StepClass(path_[v - 1], cell, grid);
-        const unsigned step_out =
-            last ? VisitTable::kNoStep : VisitTable::StepClass(cell, path_[v + 1], grid);
+        const unsigned in = v == 0 ? VisitTable::kNoStep
+                                   : VisitTable::StepClass(coordinates_[v - 1], coordinates_[v]);
+        const unsigned step_out = last
+                                      ? VisitTable::kNoStep
+                                      : VisitTable::StepClass(coordinates_[v], coordinates_[v + 1]);
         const std::uint64_t key = VisitTable::Key(group, cell, in, step_out);
         const std::size_t slot = table_->SlotOf(key);
         std::uint64_t known = 0;
@@ -745,6 +748,7 @@ class FrameDecoder {
   bool v7_;                            // ... predicted from the visit table too
   std::unique_ptr<VisitTable> table_;  // version 7, cleared for every batch
   std::vector<std::uint32_t> path_;    // version 7: the cells of the ray being decoded
+  std::vector<VisitTable::Coordinates> coordinates_;  // ... and their coordinates
   std::vector<std::uint32_t> ordinals_;
   std::vector<std::size_t> corresponding_[kRayKindCount][kRayKindCount];
   std::uint32_t last_first_cell_ = 0;

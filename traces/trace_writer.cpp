@@ -210,8 +210,9 @@ struct BatchColumns {
   HeadRunBuilder heads;
   ColumnBuilder parents, spawns, pixels, primary_paths, secondary_paths;
   ZeroRunColumnBuilder primary_samples, secondary_samples, shadow_samples;
-  SampleEncoder samples;              // version 6 and 7: Batch.sampleCode
-  std::unique_ptr<VisitTable> table;  // version 7
+  SampleEncoder samples;                             // version 6 and 7: Batch.sampleCode
+  std::unique_ptr<VisitTable> table;                 // version 7
+  std::vector<VisitTable::Coordinates> coordinates;  // version 7: of the ray's cells
   static constexpr std::size_t kNone = ~std::size_t{0};
   CellGrid grid;
   unsigned rule;
@@ -306,10 +307,16 @@ struct BatchColumns {
                     bool new_path, SampleContext& context) {
     const bool last = v + 1 == r.visit_count;
     const std::uint32_t cell = r.cells[v].value();
+    if (v == 0) {
+      coordinates.resize(r.visit_count);
+      for (std::size_t u = 0; u < r.visit_count; ++u) {
+        coordinates[u] = VisitTable::CoordinatesOf(r.cells[u].value(), grid);
+      }
+    }
     const unsigned in =
-        v == 0 ? VisitTable::kNoStep : VisitTable::StepClass(r.cells[v - 1].value(), cell, grid);
+        v == 0 ? VisitTable::kNoStep : VisitTable::StepClass(coordinates[v - 1], coordinates[v]);
     const unsigned out =
-        last ? VisitTable::kNoStep : VisitTable::StepClass(cell, r.cells[v + 1].value(), grid);
+        last ? VisitTable::kNoStep : VisitTable::StepClass(coordinates[v], coordinates[v + 1]);
     const std::uint64_t key =
         VisitTable::Key(SampleGroup(static_cast<unsigned>(r.kind)), cell, in, out);
     const std::size_t slot = table->SlotOf(key);
