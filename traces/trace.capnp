@@ -105,7 +105,8 @@
 # value: 0 at its first visit, 1 when that was not a residual, else its residual clamped to
 # -2..3, plus 4. Each context has its own length bits and its own tree for each length up
 # to 12 (longer lengths share the tree of 12). All models start anew in every batch.
-# Version 7: version 6 but for what some values are predicted from. Each batch keeps a visit
+# Version 7: version 6 but for what some values are predicted from, in a batch whose
+# visitTable is set (else the batch's samples are coded as version 6's). Each batch keeps a visit
 # table, empty at its start: per key (the ray's group g, the visit's cell, and the classes of
 # the steps into and out of it: the sign of each axis's difference, (sx+1) + 3(sy+1) + 9(sz+1),
 # or 27 at the ray's first visit for the step in and at its last for the step out), the
@@ -432,6 +433,11 @@ struct Batch {
   # Versions 6 and 7: the samples of every visit of the batch, in ray and visit order, range coded
   # (see "Samples"); primarySamples, secondarySamples and shadowSamples are then empty.
   # Empty before version 6.
+  visitTable @16 :Bool;
+  # Version 7: the samples are also predicted from the visit table (see "Samples"); false,
+  # they are coded as version 6 codes them. The writer codes each batch both ways (with the
+  # reference rule chosen with the table) and keeps the smaller sample code. False before
+  # version 7.
 }
 
 # Totals of one frame, written after its last batch (and repeated in the index).

@@ -325,7 +325,8 @@ struct BatchColumns {
   capnp::List<float>::Reader t_enter, t_exit;
   std::optional<SampleDecoder> sample_code;  // version 6 and 7
 
-  BatchColumns(schema::Batch::Reader b, bool v6, bool v7)
+  // `table`: a version 7 batch with Batch.visitTable (its contexts are SampleContext::kCount7).
+  BatchColumns(schema::Batch::Reader b, bool v6, bool table)
       : heads(b.getHeads()),
         head_runs(b.getHeadRuns(), heads.size(), "headRuns"),
         parents(b.getParents(), "parents"),
@@ -341,7 +342,7 @@ struct BatchColumns {
     const capnp::Data::Reader code = b.getSampleCode();
     if (v6) {
       sample_code.emplace(code.begin(), code.size(),
-                          v7 ? SampleContext::kCount7 : SampleContext::kCount);
+                          table ? SampleContext::kCount7 : SampleContext::kCount);
     } else if (code.size() != 0) {
       throw BadData("sampleCode in a batch of format version 5 or earlier");
     }
@@ -392,8 +393,12 @@ class FrameDecoder {
       throw BadData("batch starts at ray " + Str(b.getFirstId()) + ", expected " +
                     Str(acc_.rays()));
     }
-    BatchColumns c(b, v6_, v7_);
-    if (v7_) {
+    if (b.getVisitTable() && !v7_) {
+      throw BadData("visitTable in a batch of format version 6 or earlier");
+    }
+    use_table_ = v7_ && b.getVisitTable();
+    BatchColumns c(b, v6_, use_table_);
+    if (use_table_) {
       if (!table_) table_ = std::make_unique<VisitTable>();
       table_->Clear();
     }
@@ -623,7 +628,7 @@ class FrameDecoder {
     const bool t = header_.settings.store_t;
     std::size_t next = 0;  // the reference's visit after the last matched
     SampleContext context(static_cast<unsigned>(kind), new_path);
-    if (v7_) {
+    if (use_table_) {
       // The whole path first: a visit's samples are predicted from its step out too.
       path_.resize(count);
       coordinates_.resize(count);
@@ -636,7 +641,7 @@ class FrameDecoder {
     }
     const unsigned group = SampleGroup(static_cast<unsigned>(kind));
     for (std::uint64_t v = 0; v < count; ++v) {
-      if (v7_) {
+      if (use_table_) {
         cell = path_[v];
         const std::size_t end = std::min(ref_count, next + kSampleMatchWindow);
         std::size_t k = next;
@@ -746,6 +751,7 @@ class FrameDecoder {
   bool v5_;
   bool v6_;                            // samples in Batch.sampleCode
   bool v7_;                            // ... predicted from the visit table too
+  bool use_table_ = false;             // in this batch (Batch.visitTable)
   std::unique_ptr<VisitTable> table_;  // version 7, cleared for every batch
   std::vector<std::uint32_t> path_;    // version 7: the cells of the ray being decoded
   std::vector<VisitTable::Coordinates> coordinates_;  // ... and their coordinates

@@ -14,6 +14,7 @@
 #include <cstring>
 #include <iterator>
 #include <memory>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -216,7 +217,8 @@ struct BatchColumns {
   static constexpr std::size_t kNone = ~std::size_t{0};
   CellGrid grid;
   unsigned rule;
-  std::uint32_t version;
+  std::uint32_t version;             // 6 for a version 7 batch without the visit table
+  bool uses_table;                   // Batch.visitTable
   std::size_t last_primary = kNone;  // index in the batch of the last primary ray
   // Sibling rule: index of the last group start by [kind][kind of its parent].
   std::size_t group_start[kRayKindCount][kRayKindCount];
@@ -227,13 +229,17 @@ struct BatchColumns {
   RayId last_non_shadow = kNoParent;    // id of the last ray whose kind is not shadow
   std::uint32_t last_first_cell = 0;    // first cell of the last ray with a visit
 
+  // `visit_table` (version 7): the samples predicted from the visit table too (Batch.visitTable);
+  // else a version 7 batch's samples are coded as version 6's.
   BatchColumns(const RayBatch& b, const CellGrid& g, unsigned reference_rule,
-               std::uint32_t format_version)
-      : samples(format_version >= 7 ? SampleContext::kCount7 : SampleContext::kCount),
+               std::uint32_t format_version, bool visit_table = true)
+      : samples(format_version >= 7 && visit_table ? SampleContext::kCount7
+                                                   : SampleContext::kCount),
         grid(g),
         rule(reference_rule),
-        version(format_version) {
-    if (version >= 7) table = std::make_unique<VisitTable>();
+        version(format_version >= 7 && !visit_table ? 6 : format_version),
+        uses_table(format_version >= 7 && visit_table) {
+    if (uses_table) table = std::make_unique<VisitTable>();
     for (auto& starts : group_start) std::fill(std::begin(starts), std::end(starts), kNone);
     ordinals.reserve(b.size());
     for (std::size_t i = 0; i < b.size(); ++i) AddRay(b, i);
@@ -415,6 +421,7 @@ void FillBatch(schema::Batch::Builder out, const RayBatch& b, const BatchColumns
   out.setFrame(frame);
   out.setReferenceRule(static_cast<std::uint8_t>(c.rule));
   out.setFirstId(b.first_id());
+  out.setVisitTable(c.uses_table);
   c.heads.Fill(out);
   c.parents.Fill(out.initParents());
   c.spawns.Fill(out.initSpawns());
@@ -702,8 +709,16 @@ struct TraceWriter::Impl {
     const std::uint32_t version = options.format_version;
     const BatchColumns sibling(pending, header.cells, kReferenceSibling, version);
     const BatchColumns corresponding(pending, header.cells, kReferenceCorresponding, version);
-    const BatchColumns& columns =
+    const BatchColumns& chosen =
         corresponding.EntropyBits() < sibling.EntropyBits() ? corresponding : sibling;
+    // Format 7: the chosen rule's samples also coded without the visit table; the batch keeps
+    // the smaller sample code (the table on a tie).
+    std::optional<BatchColumns> without_table;
+    if (version >= 7) {
+      without_table.emplace(pending, header.cells, chosen.rule, version, false);
+      if (without_table->samples.bytes() >= chosen.samples.bytes()) without_table.reset();
+    }
+    const BatchColumns& columns = without_table ? *without_table : chosen;
     const std::size_t t_bytes = header.settings.store_t ? 8 * pending.visit_count() : 0;
     capnp::MallocMessageBuilder message(MessageWordsHint(columns.bytes() + t_bytes));
     FillBatch(message.initRoot<schema::Record>().initBatch(), pending, columns,
