@@ -94,9 +94,9 @@ class VisitTable {
   static constexpr std::size_t kSlots = std::size_t{1} << kSlotBits;
   static constexpr unsigned kNoStep = 27;  // the step class at a ray's first or last visit
 
-  VisitTable() : keys_(kSlots, 0), samples_(kSlots, 0) {}
+  VisitTable() : slots_(kSlots) {}
   // Empties every slot (a new batch).
-  void Clear() { std::fill(keys_.begin(), keys_.end(), 0); }
+  void Clear() { std::fill(slots_.begin(), slots_.end(), Slot{}); }
   // A cell's coordinates (x, y, z) in `grid` (cell = x + nx * (y + ny * z)).
   using Coordinates = std::array<std::uint32_t, 3>;
   static Coordinates CoordinatesOf(std::uint32_t cell, const CellGrid& grid) {
@@ -119,18 +119,20 @@ class VisitTable {
     return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> (64 - kSlotBits));
   }
   bool Find(std::size_t slot, std::uint64_t key, std::uint64_t& samples) const {
-    if (keys_[slot] != key) return false;
-    samples = samples_[slot];
+    if (slots_[slot].key != key) return false;
+    samples = slots_[slot].samples;
     return true;
   }
   void Set(std::size_t slot, std::uint64_t key, std::uint32_t samples) {
-    keys_[slot] = key;
-    samples_[slot] = samples;
+    slots_[slot] = {key, samples};
   }
 
  private:
-  std::vector<std::uint64_t> keys_;
-  std::vector<std::uint32_t> samples_;
+  struct Slot {  // a key and its samples in one cache line
+    std::uint64_t key = 0;
+    std::uint32_t samples = 0;
+  };
+  std::vector<Slot> slots_;
 };
 
 // What version 7 codes a visit's samples against (see "Samples" in trace.capnp): with
