@@ -192,9 +192,10 @@ void AddRecordCommand(CLI::App& app) {
                 "empty cells they cross, and the trace holds each cell's leaves; e.g. "
                 "--cells 12x12x12 --regroupable");
   cmd->add_option("--trace-format", o.trace_format,
-                  "the trace's format version: 5 (the faster to read) or 6 (each visit's samples "
-                  "range coded: files about a sixth smaller, read with about a quarter more CPU)")
-      ->check(CLI::IsMember({5, 6}))
+                  "the trace's format version: 5 (the faster to read), 6 (each visit's samples "
+                  "range coded: files about a sixth smaller, read with about a quarter more CPU) "
+                  "or 7 (6 with samples also predicted from earlier visits of the cell)")
+      ->check(CLI::IsMember({5, 6, 7}))
       ->capture_default_str();
   cmd->add_option("--out", o.out, "trace file to write")->capture_default_str();
   cmd->add_option("--images", o.images_dir, "folder for frame_NNNN.png")->capture_default_str();

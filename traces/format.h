@@ -23,8 +23,10 @@ struct TraceHeader;
 // subdivision of a regrouped trace (Header.subdivision); version 5 a new batch encoding (rays
 // predicted from the corresponding ray of the previous group, paths as cell steps, shadow
 // rays' samples in their own column); version 6 the samples range coded under contexts
-// (Batch.sampleCode, traces/sample_coder.h); see trace.capnp.
-inline constexpr std::uint32_t kTraceFormatVersion = 6;
+// (Batch.sampleCode, traces/sample_coder.h); version 7 those samples also predicted from the
+// batch's last visit of the cell entered and left by the same steps (VisitTable); see
+// trace.capnp.
+inline constexpr std::uint32_t kTraceFormatVersion = 7;
 // The version written unless another is asked for (TraceWriterOptions::format_version, `record
 // --trace-format`): 5. Format 6's files are about a sixth smaller, but reading them takes about
 // a quarter more CPU (a Max Work replay at 1920x1080, 512 cells: +22-27%; BENCHMARKS.md "Trace

@@ -18,9 +18,9 @@ unsigned LengthOf(std::uint64_t u) {  // floor(log2(u)), u >= 1
 
 }  // namespace
 
-SampleModels::SampleModels()
-    : hot_(std::size_t{SampleContext::kCount} * kHot, 1u << (kProbBits - 1)),
-      cold_(std::size_t{SampleContext::kCount} * kCold, 1u << (kProbBits - 1)) {}
+SampleModels::SampleModels(unsigned contexts)
+    : hot_(std::size_t{contexts} * kHot, 1u << (kProbBits - 1)),
+      cold_(std::size_t{contexts} * kCold, 1u << (kProbBits - 1)) {}
 
 // ---- Encoder -----------------------------------------------------------------------------
 
@@ -67,7 +67,7 @@ void SampleEncoder::Direct(std::uint64_t value, unsigned bits) {
 }
 
 void SampleEncoder::Add(unsigned context, std::uint64_t value) {
-  RAYCELL_CHECK_LT(context, SampleContext::kCount);
+  RAYCELL_CHECK_LT(context, contexts_);
   RAYCELL_CHECK_LE(value, SampleModels::kMaxValue);
   // u = value + 1 >= 1: its length e (unary, adaptive), then its e bits below the leading
   // one: the first kTreeBits by a bit tree, the rest direct.
@@ -92,8 +92,8 @@ void SampleEncoder::Finish() {
 
 // ---- Decoder -----------------------------------------------------------------------------
 
-SampleDecoder::SampleDecoder(const std::uint8_t* data, std::size_t size)
-    : data_(data), size_(size) {
+SampleDecoder::SampleDecoder(const std::uint8_t* data, std::size_t size, unsigned contexts)
+    : models_(contexts), data_(data), size_(size) {
   for (; pos_ < 5; ++pos_) code_ = (code_ << 8) | (pos_ < size_ ? data_[pos_] : 0u);
 }
 

@@ -8,11 +8,17 @@
 // its own. Order-0 coding (zstd's literals) cannot use these; measured over the suite's
 // scenes, they take a sample's entropy down by a quarter to a third.
 //
+// Version 7 (VisitTable, PredictSamples) also predicts a visit's samples from the batch's
+// last visit of the same cell entered and left by the same steps, in a batch whose
+// Batch.visitTable is set, under 4 times the contexts.
+//
 // Writer and reader share this code. The decoder never reads outside its bytes and never
 // loops more than a fixed number of steps per value, whatever the bytes; a code that does
 // not end exactly at its last byte is BadTraceData.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -21,12 +27,22 @@
 
 namespace raycell {
 
+// The group of a ray of kind `kind` (as in a head byte): 0 primary, 1 reflection or
+// refraction, 2 shadow.
+inline unsigned SampleGroup(unsigned kind) { return kind == 0 ? 0u : kind == 3 ? 2u : 1u; }
+
 // The context of a ray's visits, visit by visit: construct per ray, Of() for each visit,
 // Next() after it.
 class SampleContext {
  public:
   // 3 groups x residual or not x 7 sizes x last or not x 8 previous values x new path or not.
   static constexpr unsigned kCount = 3 * 2 * 7 * 2 * 8 * 2;
+  // Version 7: every context of version 6 times 4 predictors (the `predictor` of Of()): 0 as
+  // version 6; 1 the visit table's value where the reference has no visit of the cell; 2 and 3
+  // the visit table's value where the reference has one on another path, it differing (2) or
+  // not (3) from the table's.
+  static constexpr unsigned kPredictors = 4;
+  static constexpr unsigned kCount7 = kCount * kPredictors;
 
   // `kind` as in a head byte (0 primary, 1 reflection, 2 refraction, 3 shadow); `new_path`
   // the ray's new-path bit.
@@ -37,10 +53,12 @@ class SampleContext {
                   2 +
               new_path) {}
   // The context of a visit: `matched` when its value is a residual against `predicted`
-  // samples; `last` when it is the ray's last visit.
-  unsigned Of(bool matched, std::uint64_t predicted, bool last) const {
+  // samples; `last` when it is the ray's last visit; `predictor` (version 7) which prediction
+  // the residual is against (see kPredictors).
+  unsigned Of(bool matched, std::uint64_t predicted, bool last, unsigned predictor = 0) const {
     const std::uint64_t size = matched ? predicted : previous_samples_;
-    return (((base_ * 2 + matched) * 7 + SizeClass(size)) * 2 + last) * 8 + previous_;
+    return predictor * kCount + (((base_ * 2 + matched) * 7 + SizeClass(size)) * 2 + last) * 8 +
+           previous_;
   }
   // After a visit coded with `value` (a zigzag residual when `matched`) and `samples`.
   void Next(bool matched, std::uint64_t value, std::uint64_t samples) {
@@ -65,6 +83,73 @@ class SampleContext {
   std::uint64_t previous_samples_ = 0;  // the previous visit's samples (0: none)
 };
 
+// Version 7's visit table (see "Samples" in trace.capnp): per batch, the samples of the last
+// visit of each key: the ray's group, the cell, and the steps into and out of the cell (each
+// axis's sign, or none at the ray's first or last visit), which bound the ray's chord through
+// the cell. Direct-mapped on a hash of the key, kSlots slots: a slot holding another key is a
+// miss, and the visit's key replaces it.
+class VisitTable {
+ public:
+  static constexpr unsigned kSlotBits = 15;
+  static constexpr std::size_t kSlots = std::size_t{1} << kSlotBits;
+  static constexpr unsigned kNoStep = 27;  // the step class at a ray's first or last visit
+
+  VisitTable() : slots_(kSlots) {}
+  // Empties every slot (a new batch).
+  void Clear() { std::fill(slots_.begin(), slots_.end(), Slot{}); }
+  // A cell's coordinates (x, y, z) in `grid` (cell = x + nx * (y + ny * z)).
+  using Coordinates = std::array<std::uint32_t, 3>;
+  static Coordinates CoordinatesOf(std::uint32_t cell, const CellGrid& grid) {
+    const std::uint32_t row = cell / grid[0];
+    return {cell - row * grid[0], row % grid[1], row / grid[1]};
+  }
+  // The class of the step from the cell at `from` to the cell at `to`: the sign of each axis's
+  // difference, (sx + 1) + 3 * (sy + 1) + 9 * (sz + 1), 0..26.
+  static unsigned StepClass(const Coordinates& from, const Coordinates& to) {
+    auto sign = [](std::uint32_t a, std::uint32_t b) { return a < b ? 2u : a == b ? 1u : 0u; };
+    return sign(from[0], to[0]) + 3 * sign(from[1], to[1]) + 9 * sign(from[2], to[2]);
+  }
+  // The key of a visit of `cell` by a ray of group `group` (0..2) entered and left by steps
+  // of classes `in` and `out` (0..kNoStep).
+  static std::uint64_t Key(unsigned group, std::uint32_t cell, unsigned in, unsigned out) {
+    return ((std::uint64_t{cell} * 3 + group) * 28 + in) * 28 + out + 1;  // never 0 (empty)
+  }
+  // The slot of `key`; Find() gives its samples if it holds that key.
+  std::size_t SlotOf(std::uint64_t key) const {
+    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> (64 - kSlotBits));
+  }
+  bool Find(std::size_t slot, std::uint64_t key, std::uint64_t& samples) const {
+    if (slots_[slot].key != key) return false;
+    samples = slots_[slot].samples;
+    return true;
+  }
+  void Set(std::size_t slot, std::uint64_t key, std::uint32_t samples) {
+    slots_[slot] = {key, samples};
+  }
+
+ private:
+  struct Slot {  // a key and its samples in one cache line
+    std::uint64_t key = 0;
+    std::uint32_t samples = 0;
+  };
+  std::vector<Slot> slots_;
+};
+
+// What version 7 codes a visit's samples against (see "Samples" in trace.capnp): with
+// `matched` and `reference` the version 6 prediction (the reference ray's visit of the
+// cell), `new_path` the ray's bit, and `hit` and `table` the visit table's.
+struct SamplePrediction {
+  bool residual;            // the value is zigzag(samples - predicted)
+  std::uint64_t predicted;  // 0 when not a residual
+  unsigned predictor;       // SampleContext::Of's
+};
+inline SamplePrediction PredictSamples(bool matched, std::uint64_t reference, bool new_path,
+                                       bool hit, std::uint64_t table) {
+  if (hit && !matched) return {true, table, 1};
+  if (hit && new_path) return {true, table, reference == table ? 3u : 2u};
+  return {matched, matched ? reference : 0, 0};
+}
+
 // The adaptive models of every context: per context, the bits of a value's length (unary)
 // and the top 3 bits below its leading one (a bit tree per length). What most values use (the
 // first 12 length bits, the trees of lengths 1 to 3) is one 64-byte line per context.
@@ -80,7 +165,8 @@ class SampleModels {
   static constexpr unsigned kProbBits = 11;
   static constexpr unsigned kMoveBits = 4;
 
-  SampleModels();
+  // The models of `contexts` contexts (SampleContext::kCount, or kCount7 for version 7).
+  explicit SampleModels(unsigned contexts = SampleContext::kCount);
   // The model of length bit i (is the length more than i?).
   std::uint16_t& length(unsigned context, unsigned i) {
     return i < kHotLengths ? hot_[context * kHot + i] : cold_[context * kCold + (i - kHotLengths)];
@@ -106,6 +192,8 @@ class SampleModels {
 // Encodes the values of one batch.
 class SampleEncoder {
  public:
+  explicit SampleEncoder(unsigned contexts = SampleContext::kCount)
+      : models_(contexts), contexts_(contexts) {}
   void Add(unsigned context, std::uint64_t value);
   // Ends the code; call once, before code().
   void Finish();
@@ -119,6 +207,7 @@ class SampleEncoder {
   void ShiftLow();
 
   SampleModels models_;
+  unsigned contexts_;
   std::uint64_t low_ = 0;
   std::uint32_t range_ = 0xFFFFFFFF;
   std::uint8_t cache_ = 0;
@@ -129,7 +218,9 @@ class SampleEncoder {
 // Decodes the values of one batch from its Batch.sampleCode.
 class SampleDecoder {
  public:
-  SampleDecoder(const std::uint8_t* data, std::size_t size);
+  // `contexts` as the encoder's; every context Next() is given must be below it.
+  SampleDecoder(const std::uint8_t* data, std::size_t size,
+                unsigned contexts = SampleContext::kCount);
   std::uint64_t Next(unsigned context) {
     // The coder's state in locals (registers) while a value is decoded.
     State s{range_, code_, pos_};

@@ -1,4 +1,4 @@
-# raycell trace file schema, format version 6 (docs/design.md §3 "The trace"). The format's
+# raycell trace file schema, format version 7 (docs/design.md §3 "The trace"). The format's
 # constants and limits are in traces/format.h.
 #
 # A trace file (".rct") is a sequence of zstd frames:
@@ -105,6 +105,21 @@
 # value: 0 at its first visit, 1 when that was not a residual, else its residual clamped to
 # -2..3, plus 4. Each context has its own length bits and its own tree for each length up
 # to 12 (longer lengths share the tree of 12). All models start anew in every batch.
+# Version 7: version 6 but for what some values are predicted from, in a batch whose
+# visitTable is set (else the batch's samples are coded as version 6's). Each batch keeps a visit
+# table, empty at its start: per key (the ray's group g, the visit's cell, and the classes of
+# the steps into and out of it: the sign of each axis's difference, (sx+1) + 3(sy+1) + 9(sz+1),
+# or 27 at the ray's first visit for the step in and at its last for the step out), the
+# samples of the last visit of the batch with that key. The table has 2^15 slots; key
+# k = ((cell * 3 + g) * 28 + in) * 28 + out + 1 goes to slot (k * 0x9E3779B97F4A7C15 mod 2^64)
+# >> 49, which holds one key: a slot holding another key is a miss. After each visit is
+# decoded its key and samples replace the slot's. A visit whose key is found (samples t):
+# if the reference has no visit of the cell (no version 6 residual), the value is
+# zigzag(samples - t), coded as a residual predicted from t (m = 1, s of t) with p = 1; if it
+# has one (samples r) and the ray has a path of its own, the value is zigzag(samples - t) with
+# p = 3 when r = t, else p = 2; otherwise (a miss, or the ray repeats its reference's path) the
+# value and context are version 6's with p = 0. The context is c + 1344 * p (c as version 6's,
+# m and s those of the value coded), and q after the visit follows the value coded.
 # Versions 1-5: each samples column is zero-run coded: a run of n >= 1
 # consecutive zero residuals is written as the digits of n in bijective base 2, least
 # significant first, digit 1 as the value 0 and digit 2 as the value 1; any other residual r
@@ -131,8 +146,9 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("raycell::schema");
 
-const formatVersion :UInt32 = 6;
+const formatVersion :UInt32 = 7;
 # The format version this schema describes; Header.formatVersion of files written with it.
+# Version 6 differs only in its sample code's predictions (no visit table; see "Samples").
 # Version 5 differs only in its samples: in primarySamples, secondarySamples and
 # shadowSamples, zero-run coded, and no Batch.sampleCode (see "Samples").
 # Version 4 differs only in its batch encoding (see "Column encoding": reference rays, paths
@@ -414,9 +430,14 @@ struct Batch {
   # corresponding ray is the nearer at high resolutions, the sibling at low ones). 0 before
   # version 5.
   sampleCode @15 :Data;
-  # Version 6: the samples of every visit of the batch, in ray and visit order, range coded
+  # Versions 6 and 7: the samples of every visit of the batch, in ray and visit order, range coded
   # (see "Samples"); primarySamples, secondarySamples and shadowSamples are then empty.
   # Empty before version 6.
+  visitTable @16 :Bool;
+  # Version 7: the samples are also predicted from the visit table (see "Samples"); false,
+  # they are coded as version 6 codes them. The writer codes each batch both ways (with the
+  # reference rule chosen with the table) and keeps the smaller sample code. False before
+  # version 7.
 }
 
 # Totals of one frame, written after its last batch (and repeated in the index).

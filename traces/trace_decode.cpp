@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstring>
 #include <iterator>
+#include <memory>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -322,9 +323,10 @@ struct BatchColumns {
   ColumnReader head_runs, parents, spawns, pixels, primary_paths, secondary_paths;
   ZeroRunColumnReader primary_samples, secondary_samples, shadow_samples;
   capnp::List<float>::Reader t_enter, t_exit;
-  std::optional<SampleDecoder> sample_code;  // version 6
+  std::optional<SampleDecoder> sample_code;  // version 6 and 7
 
-  BatchColumns(schema::Batch::Reader b, bool v6)
+  // `table`: a version 7 batch with Batch.visitTable (its contexts are SampleContext::kCount7).
+  BatchColumns(schema::Batch::Reader b, bool v6, bool table)
       : heads(b.getHeads()),
         head_runs(b.getHeadRuns(), heads.size(), "headRuns"),
         parents(b.getParents(), "parents"),
@@ -339,7 +341,8 @@ struct BatchColumns {
         t_exit(b.getTExit()) {
     const capnp::Data::Reader code = b.getSampleCode();
     if (v6) {
-      sample_code.emplace(code.begin(), code.size());
+      sample_code.emplace(code.begin(), code.size(),
+                          table ? SampleContext::kCount7 : SampleContext::kCount);
     } else if (code.size() != 0) {
       throw BadData("sampleCode in a batch of format version 5 or earlier");
     }
@@ -381,7 +384,8 @@ class FrameDecoder {
         frame_(frame),
         expected_(expected),
         v5_(header.format_version >= 5),
-        v6_(header.format_version >= 6) {}
+        v6_(header.format_version >= 6),
+        v7_(header.format_version >= 7) {}
 
   void Decode(schema::Batch::Reader b, RayBatch& out) {
     if (b.getFrame() != frame_) throw BadData("batch of frame " + Str(b.getFrame()));
@@ -389,7 +393,15 @@ class FrameDecoder {
       throw BadData("batch starts at ray " + Str(b.getFirstId()) + ", expected " +
                     Str(acc_.rays()));
     }
-    BatchColumns c(b, v6_);
+    if (b.getVisitTable() && !v7_) {
+      throw BadData("visitTable in a batch of format version 6 or earlier");
+    }
+    use_table_ = v7_ && b.getVisitTable();
+    BatchColumns c(b, v6_, use_table_);
+    if (use_table_) {
+      if (!table_) table_ = std::make_unique<VisitTable>();
+      table_->Clear();
+    }
     CheckTimeLengths(c);
     const std::size_t rays = c.RayCount(b);
     out.Clear();
@@ -616,7 +628,54 @@ class FrameDecoder {
     const bool t = header_.settings.store_t;
     std::size_t next = 0;  // the reference's visit after the last matched
     SampleContext context(static_cast<unsigned>(kind), new_path);
+    if (use_table_) {
+      // The whole path first: a visit's samples are predicted from its step out too.
+      path_.resize(count);
+      coordinates_.resize(count);
+      for (std::uint64_t v = 0; v < count; ++v) {
+        cell = new_path ? ReadStep(paths, cell, grid) : out.cells()[ref_begin + v].value();
+        if (cell == kBadStep) throw BadData("ray " + Str(id) + ": bad cell");
+        path_[v] = cell;
+        coordinates_[v] = VisitTable::CoordinatesOf(cell, grid);
+      }
+    }
+    const unsigned group = SampleGroup(static_cast<unsigned>(kind));
     for (std::uint64_t v = 0; v < count; ++v) {
+      if (use_table_) {
+        cell = path_[v];
+        const std::size_t end = std::min(ref_count, next + kSampleMatchWindow);
+        std::size_t k = next;
+        while (k < end && out.cells()[ref_begin + k].value() != cell) ++k;
+        const bool matched = k < end;
+        const bool last = v + 1 == count;
+        const unsigned in = v == 0 ? VisitTable::kNoStep
+                                   : VisitTable::StepClass(coordinates_[v - 1], coordinates_[v]);
+        const unsigned step_out = last
+                                      ? VisitTable::kNoStep
+                                      : VisitTable::StepClass(coordinates_[v], coordinates_[v + 1]);
+        const std::uint64_t key = VisitTable::Key(group, cell, in, step_out);
+        const std::size_t slot = table_->SlotOf(key);
+        std::uint64_t known = 0;
+        const bool hit = table_->Find(slot, key, known);
+        const SamplePrediction p = PredictSamples(
+            matched, matched ? out.samples()[ref_begin + k] : 0, new_path, hit, known);
+        const std::uint64_t code =
+            c.sample_code->Next(context.Of(p.residual, p.predicted, last, p.predictor));
+        std::uint64_t n = code;
+        if (p.residual) {
+          n = ApplyDelta(p.predicted, code, "samples");
+        } else if (code > 0xFFFFFFFF) {
+          throw BadData("ray " + Str(id) + ": bad samples");
+        }
+        if (matched) next = k + 1;
+        context.Next(p.residual, code, n);
+        table_->Set(slot, key, static_cast<std::uint32_t>(n));
+        const std::size_t at = out.visit_count();
+        if (t && at >= c.t_enter.size()) throw BadData("t columns have bad length");
+        out.AddVisit(CellId(cell), static_cast<std::uint32_t>(n), t ? c.t_enter[at] : 0.f,
+                     t ? c.t_exit[at] : 0.f);
+        continue;
+      }
       cell = new_path ? ReadStep(paths, cell, grid) : out.cells()[ref_begin + v].value();
       if (cell == kBadStep) throw BadData("ray " + Str(id) + ": bad cell");
       const std::size_t end = std::min(ref_count, next + kSampleMatchWindow);
@@ -690,7 +749,12 @@ class FrameDecoder {
   // of the batch, its ordinal; by [kind][kind of its parent][ordinal], the last ray of the
   // batch with them whose parent is in the batch; the first cell of the last ray with a visit.
   bool v5_;
-  bool v6_;  // samples in Batch.sampleCode
+  bool v6_;                            // samples in Batch.sampleCode
+  bool v7_;                            // ... predicted from the visit table too
+  bool use_table_ = false;             // in this batch (Batch.visitTable)
+  std::unique_ptr<VisitTable> table_;  // version 7, cleared for every batch
+  std::vector<std::uint32_t> path_;    // version 7: the cells of the ray being decoded
+  std::vector<VisitTable::Coordinates> coordinates_;  // ... and their coordinates
   std::vector<std::uint32_t> ordinals_;
   std::vector<std::size_t> corresponding_[kRayKindCount][kRayKindCount];
   std::uint32_t last_first_cell_ = 0;

@@ -13,6 +13,8 @@
 #include <cstdio>
 #include <cstring>
 #include <iterator>
+#include <memory>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -209,11 +211,14 @@ struct BatchColumns {
   HeadRunBuilder heads;
   ColumnBuilder parents, spawns, pixels, primary_paths, secondary_paths;
   ZeroRunColumnBuilder primary_samples, secondary_samples, shadow_samples;
-  SampleEncoder samples;  // version 6: Batch.sampleCode
+  SampleEncoder samples;                             // version 6 and 7: Batch.sampleCode
+  std::unique_ptr<VisitTable> table;                 // version 7
+  std::vector<VisitTable::Coordinates> coordinates;  // version 7: of the ray's cells
   static constexpr std::size_t kNone = ~std::size_t{0};
   CellGrid grid;
   unsigned rule;
-  std::uint32_t version;
+  std::uint32_t version;             // 6 for a version 7 batch without the visit table
+  bool uses_table;                   // Batch.visitTable
   std::size_t last_primary = kNone;  // index in the batch of the last primary ray
   // Sibling rule: index of the last group start by [kind][kind of its parent].
   std::size_t group_start[kRayKindCount][kRayKindCount];
@@ -224,9 +229,17 @@ struct BatchColumns {
   RayId last_non_shadow = kNoParent;    // id of the last ray whose kind is not shadow
   std::uint32_t last_first_cell = 0;    // first cell of the last ray with a visit
 
+  // `visit_table` (version 7): the samples predicted from the visit table too (Batch.visitTable);
+  // else a version 7 batch's samples are coded as version 6's.
   BatchColumns(const RayBatch& b, const CellGrid& g, unsigned reference_rule,
-               std::uint32_t format_version)
-      : grid(g), rule(reference_rule), version(format_version) {
+               std::uint32_t format_version, bool visit_table = true)
+      : samples(format_version >= 7 && visit_table ? SampleContext::kCount7
+                                                   : SampleContext::kCount),
+        grid(g),
+        rule(reference_rule),
+        version(format_version >= 7 && !visit_table ? 6 : format_version),
+        uses_table(format_version >= 7 && visit_table) {
+    if (uses_table) table = std::make_unique<VisitTable>();
     for (auto& starts : group_start) std::fill(std::begin(starts), std::end(starts), kNone);
     ordinals.reserve(b.size());
     for (std::size_t i = 0; i < b.size(); ++i) AddRay(b, i);
@@ -277,7 +290,9 @@ struct BatchColumns {
       const std::uint64_t value =
           matched ? ZigZag(Delta(r.samples[v], reference.samples[k])) : r.samples[v];
       if (matched) next = k + 1;
-      if (version >= 6) {
+      if (version >= 7) {
+        AddSamplesV7(r, v, matched, matched ? reference.samples[k] : 0, new_path, context);
+      } else if (version == 6) {
         const unsigned c =
             context.Of(matched, matched ? reference.samples[k] : 0, v + 1 == r.visit_count);
         samples.Add(c, value);
@@ -290,6 +305,35 @@ struct BatchColumns {
     if (r.is_primary()) last_primary = i;
     if (r.kind != RayKind::kShadow) last_non_shadow = r.id;
     if (r.visit_count > 0) last_first_cell = r.cells[0].value();
+  }
+
+  // Version 7: codes visit v of ray r against its prediction (PredictSamples) and enters it in
+  // the visit table.
+  void AddSamplesV7(const RayView& r, std::size_t v, bool matched, std::uint64_t reference,
+                    bool new_path, SampleContext& context) {
+    const bool last = v + 1 == r.visit_count;
+    const std::uint32_t cell = r.cells[v].value();
+    if (v == 0) {
+      coordinates.resize(r.visit_count);
+      for (std::size_t u = 0; u < r.visit_count; ++u) {
+        coordinates[u] = VisitTable::CoordinatesOf(r.cells[u].value(), grid);
+      }
+    }
+    const unsigned in =
+        v == 0 ? VisitTable::kNoStep : VisitTable::StepClass(coordinates[v - 1], coordinates[v]);
+    const unsigned out =
+        last ? VisitTable::kNoStep : VisitTable::StepClass(coordinates[v], coordinates[v + 1]);
+    const std::uint64_t key =
+        VisitTable::Key(SampleGroup(static_cast<unsigned>(r.kind)), cell, in, out);
+    const std::size_t slot = table->SlotOf(key);
+    std::uint64_t known = 0;
+    const bool hit = table->Find(slot, key, known);
+    const SamplePrediction p = PredictSamples(matched, reference, new_path, hit, known);
+    const std::uint64_t n = r.samples[v];
+    const std::uint64_t value = p.residual ? ZigZag(Delta(n, p.predicted)) : n;
+    samples.Add(context.Of(p.residual, p.predicted, last, p.predictor), value);
+    context.Next(p.residual, value, n);
+    table->Set(slot, key, r.samples[v]);
   }
 
   // Index of the reference ray of ray i (see "Column encoding" in trace.capnp), or kNone.
@@ -377,6 +421,7 @@ void FillBatch(schema::Batch::Builder out, const RayBatch& b, const BatchColumns
   out.setFrame(frame);
   out.setReferenceRule(static_cast<std::uint8_t>(c.rule));
   out.setFirstId(b.first_id());
+  out.setVisitTable(c.uses_table);
   c.heads.Fill(out);
   c.parents.Fill(out.initParents());
   c.spawns.Fill(out.initSpawns());
@@ -664,8 +709,16 @@ struct TraceWriter::Impl {
     const std::uint32_t version = options.format_version;
     const BatchColumns sibling(pending, header.cells, kReferenceSibling, version);
     const BatchColumns corresponding(pending, header.cells, kReferenceCorresponding, version);
-    const BatchColumns& columns =
+    const BatchColumns& chosen =
         corresponding.EntropyBits() < sibling.EntropyBits() ? corresponding : sibling;
+    // Format 7: the chosen rule's samples also coded without the visit table; the batch keeps
+    // the smaller sample code (the table on a tie).
+    std::optional<BatchColumns> without_table;
+    if (version >= 7) {
+      without_table.emplace(pending, header.cells, chosen.rule, version, false);
+      if (without_table->samples.bytes() >= chosen.samples.bytes()) without_table.reset();
+    }
+    const BatchColumns& columns = without_table ? *without_table : chosen;
     const std::size_t t_bytes = header.settings.store_t ? 8 * pending.visit_count() : 0;
     capnp::MallocMessageBuilder message(MessageWordsHint(columns.bytes() + t_bytes));
     FillBatch(message.initRoot<schema::Record>().initBatch(), pending, columns,
@@ -762,7 +815,7 @@ void TraceWriter::BeginFrame(std::int32_t frame) {
 void TraceWriter::Append(const RayBatch& rays) {
   Impl& w = *impl_;
   RAYCELL_CHECK(w.in_frame);
-  RAYCELL_CHECK_LE(5u, w.options.format_version);  // encodes only versions 5 and 6
+  RAYCELL_CHECK_LE(5u, w.options.format_version);  // encodes only versions 5 to 7
   RAYCELL_CHECK_EQ(rays.first_id(), w.frame.rays());
   for (std::size_t i = 0; i < rays.size(); ++i) w.AddRay(rays.ray(i));
 }

@@ -240,10 +240,10 @@ TEST(TraceRegroupCommand, AutoRecordedDirectlyEqualsTheFineCaptureRegrouped) {
 namespace raycell {
 namespace {
 
-// `record --trace-format 6` writes format 6 (samples range coded), the default format 5; both
-// hold the same rays (LoadFrame checks each frame's checksum of its decoded rays, the same
-// hash in both), format 6 in fewer bytes; `trace regroup` keeps its input's format; another
-// format is refused (exit 2) and nothing is written.
+// `record --trace-format 6` (and 7) writes format 6 (samples range coded; 7), the default format 5;
+// all hold the same rays (LoadFrame checks each frame's checksum of its decoded rays, the same hash
+// in both), format 6 in fewer bytes; `trace regroup` keeps its input's format; another format is
+// refused (exit 2) and nothing is written.
 TEST(TraceFormatFlag, RecordWritesTheFormatAskedAndRegroupKeepsIt) {
   const std::string dir = testing::TempDir("trace_format").string();
   const std::string args =
@@ -253,19 +253,26 @@ TEST(TraceFormatFlag, RecordWritesTheFormatAskedAndRegroupKeepsIt) {
   ASSERT_EQ(r.code, 0) << r.err;
   r = Raycell(args + dir + "/v6.rct --trace-format 6");
   ASSERT_EQ(r.code, 0) << r.err;
+  r = Raycell(args + dir + "/v7.rct --trace-format 7");
+  ASSERT_EQ(r.code, 0) << r.err;
   const TraceReader v5 = TraceReader::Open(dir + "/v5.rct"),
-                    v6 = TraceReader::Open(dir + "/v6.rct");
+                    v6 = TraceReader::Open(dir + "/v6.rct"),
+                    v7 = TraceReader::Open(dir + "/v7.rct");
   EXPECT_EQ(v5.header().format_version, 5u);
   EXPECT_EQ(v6.header().format_version, 6u);
+  EXPECT_EQ(v7.header().format_version, 7u);
   ASSERT_EQ(v5.frames().size(), 2u);
   ASSERT_EQ(v6.frames().size(), 2u);
+  ASSERT_EQ(v7.frames().size(), 2u);
   for (std::size_t f = 0; f < 2; ++f) {
     EXPECT_EQ(v5.frames()[f].checksum, v6.frames()[f].checksum);
+    EXPECT_EQ(v5.frames()[f].checksum, v7.frames()[f].checksum);
     EXPECT_TRUE(v5.LoadFrame(f) == v6.LoadFrame(f));
+    EXPECT_TRUE(v5.LoadFrame(f) == v7.LoadFrame(f));
   }
   EXPECT_LT(std::filesystem::file_size(dir + "/v6.rct"),
             std::filesystem::file_size(dir + "/v5.rct"));
-  for (const std::string v : {"5", "6"}) {
+  for (const std::string v : {"5", "6", "7"}) {
     r = Raycell("trace regroup " + dir + "/v" + v + ".rct --cells 3x3x3 --out " + dir + "/r" + v +
                 ".rct");
     ASSERT_EQ(r.code, 0) << r.err;

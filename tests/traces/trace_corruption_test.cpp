@@ -259,6 +259,7 @@ struct RawBatch {
       primary_samples, secondary_samples, shadow_samples;
   std::uint8_t reference_rule = 0;
   std::vector<std::uint8_t> sample_code;  // format 6
+  bool visit_table = false;               // format 7
   std::size_t t_values = 3;               // entries of tEnter and tExit
   bool drop_wide_pixels = false;          // leave the pixels' escaped values out
 };
@@ -298,6 +299,7 @@ std::string BatchMessage(const RawBatch& b) {
   FillColumn(out.initShadowSamples(), b.shadow_samples);
   out.setReferenceRule(b.reference_rule);
   out.setSampleCode(capnp::Data::Reader(b.sample_code.data(), b.sample_code.size()));
+  out.setVisitTable(b.visit_table);
   out.initTEnter(static_cast<unsigned>(b.t_values));
   out.initTExit(static_cast<unsigned>(b.t_values));
   return Flat(message);
@@ -662,6 +664,36 @@ TEST_F(InvalidContentV6Test, SamplesAreInTheSampleCodeOnly) {
   ExpectRejected({b}, "ray 0: bad samples");
 }
 
+class InvalidContentV7Test : public InvalidContentTest {
+ protected:
+  InvalidContentV7Test() : InvalidContentTest(7) {}
+};
+
+// A version 7 batch without visitTable is coded as version 6's. With it, no visit of
+// GoodBatchV6 finds its key in the visit table (the shadow ray's visit of cell 2 is another
+// group's), so the same code reads too: the contexts of predictor 0 are version 6's.
+TEST_F(InvalidContentV7Test, CraftedGoodFrameReads) {
+  for (const bool table : {false, true}) {
+    SCOPED_TRACE(table);
+    RawBatch b = GoodBatchV6();
+    b.visit_table = table;
+    const TraceReader reader = Read({b}, GoodSummary());
+    EXPECT_EQ(reader.header().format_version, 7u);
+    ASSERT_EQ(reader.frames().size(), 1u) << reader.warning();
+    const RayBatch frame = reader.LoadFrame(0);
+    EXPECT_EQ(frame.cells(), (testing::CellList{3, 2, 2}));
+    EXPECT_EQ(frame.samples(), (std::vector<std::uint32_t>{5, 6, 7}));
+    b.sample_code.push_back(0);
+    ExpectRejected({b}, "sampleCode of 8 bytes ends at byte 7");
+  }
+}
+
+TEST_F(InvalidContentV6Test, VisitTableIsRefused) {
+  RawBatch b = GoodBatchV6();
+  b.visit_table = true;
+  ExpectRejected({b}, "visitTable in a batch of format version 6 or earlier");
+}
+
 TEST_F(InvalidContentV5Test, SampleCodeIsRefused) {
   RawBatch b = GoodBatchV5();
   b.sample_code = GoodBatchV6().sample_code;
@@ -776,12 +808,12 @@ TEST_F(InvalidHeaderTest, VersionsAndLimitsAreChecked) {
   ExpectRejected(HeaderMessage(1, {2, 1, 1}, {5, 6}) + FootprintsMessage(0, {5}, {1}),
                  "more than one message in the header frame");
   ExpectRejected(HeaderMessage(1, {2, 1, 1}, {5}), "1 footprints for 2 cells");
-  ExpectRejected(HeaderMessage(7, {2, 1, 1}),
-                 "format version 7 is not supported (this reader "
-                 "reads 1..6)");
+  ExpectRejected(HeaderMessage(8, {2, 1, 1}),
+                 "format version 8 is not supported (this reader "
+                 "reads 1..7)");
   ExpectRejected(HeaderMessage(0, {2, 1, 1}),
                  "format version 0 is not supported (this reader "
-                 "reads 1..6)");
+                 "reads 1..7)");
   // A grid beyond the limit is refused before anything is allocated for its cells.
   ExpectRejected(HeaderMessage(2, {4096, 4096, 4096}) + FootprintsMessage(0, {5}, {0}),
                  "cell grid 4096x4096x4096 = 68719476736 cells exceeds the trace format's limit "

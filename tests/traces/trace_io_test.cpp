@@ -108,9 +108,9 @@ void ExpectSummaryOf(const FrameSummary& s, const Frame& f) {
   EXPECT_EQ(s.samples, samples);
 }
 
-// With and without t; in the current format (6) and in format 5, which the writer still
-// writes when asked (options.format_version), so that files of the previous writer are
-// known to read.
+// With and without t; in the current format (7) and in formats 6 and 5, which the writer
+// still writes when asked (options.format_version), so that files of the previous writers
+// are known to read.
 class RoundTripTest : public ::testing::TestWithParam<std::tuple<bool, std::uint32_t>> {};
 
 TEST_P(RoundTripTest, WhatIsReadEqualsWhatWasWritten) {
@@ -145,7 +145,7 @@ TEST_P(RoundTripTest, WhatIsReadEqualsWhatWasWritten) {
 }
 
 INSTANTIATE_TEST_SUITE_P(WithAndWithoutT, RoundTripTest,
-                         ::testing::Combine(::testing::Bool(), ::testing::Values(6u, 5u)));
+                         ::testing::Combine(::testing::Bool(), ::testing::Values(7u, 6u, 5u)));
 
 TEST(TraceIoTest, ForEachBatchStreamsBatchesOfBoundedSize) {
   const std::string path = TempPath("batches.rct");
@@ -706,6 +706,42 @@ TEST(TraceIoTest, Format6RangeCodesTheSamples) {
   // 12 values: a range code of at least 5 bytes (its flush), far fewer than 12 values' bytes.
   EXPECT_GE(batch.getSampleCode().size(), 5u);
   EXPECT_LE(batch.getSampleCode().size(), 12u);
+}
+
+// Primary rays alternating between two paths that share no cell, each cell's samples always
+// the same (and large): a ray's reference (the previous primary ray) never visits its cells,
+// so format 6 codes every visit's samples whole; format 7 finds them in its visit table (the
+// same cell entered and left by the same steps) and codes zero residuals.
+TEST(TraceIoTest, Format7PredictsSamplesFromTheVisitTable) {
+  RayBatch frame(false);
+  const std::vector<std::vector<std::uint32_t>> paths = {{0, 1, 2}, {48, 52}};
+  for (std::uint32_t x = 0; x < 400; ++x) {
+    frame.BeginRay(RayKind::kPrimary, kNoParent, 0, x, 0);
+    for (const std::uint32_t cell : paths[x % 2])
+      frame.AddVisit(CellId(cell), 1000 + 37 * cell, 0, 0);
+  }
+  std::size_t code_bytes[2] = {0, 0};
+  for (const std::uint32_t version : {6u, 7u}) {
+    SCOPED_TRACE(version);
+    const std::string path = TempPath("table" + std::to_string(version) + ".rct");
+    TraceWriterOptions options;
+    options.format_version = version;
+    const std::vector<FrameSummary> written =
+        WriteTrace(path, TestHeader({4, 4, 4}, false), {{0, frame}}, options);
+    const TraceReader reader = TraceReader::Open(path);
+    EXPECT_EQ(reader.header().format_version, version);
+    EXPECT_TRUE(reader.LoadFrame(0) == frame);
+    const kj::Array<capnp::word> words = FrameMessages(path, written[0]);
+    capnp::FlatArrayMessageReader message(words);
+    const auto batch = message.getRoot<schema::Record>().getBatch();
+    EXPECT_EQ(batch.getVisitTable(), version == 7);  // the smaller code
+    code_bytes[version - 6] = batch.getSampleCode().size();
+    std::remove(path.c_str());
+  }
+  // 1000 values of 10 bits or more: format 6 stores their low bits as they are (over 600
+  // bytes); format 7 only the first ray of each path's (about 10 bytes) and 998 zeros.
+  EXPECT_GT(code_bytes[0], 600u);
+  EXPECT_LT(code_bytes[1], 60u);
 }
 
 }  // namespace

@@ -16,7 +16,7 @@
 // coded samples (sampleCode) count as one more column.
 //
 // bench_trace_size --recode IN OUT [VERSION]: IN's frames written anew by this build's writer
-// as format VERSION (5 or 6, default the current), to compare the formats on one capture: both
+// as format VERSION (5, 6 or 7, default the current), to compare the formats on one capture: both
 // files' bytes per visit, the encoding time, and each file's read time (every frame decoded
 // and checked, as `raycell trace verify` does).
 #include <capnp/serialize.h>
