@@ -85,6 +85,8 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   done_cells_.clear();
   told_.assign(cells_, 0);
   orphans_.clear();
+  touched_.clear();
+  touched_at_.assign(cells_, 0);
   replans_ = 0;
   last_how_ = 0;
   cost_ = {};
@@ -184,7 +186,13 @@ bool AdaptiveScheduler::Stale(const OrphanKey& k) const {
   return remaining_[k.cell] != 0 || now.rays == 0 || now.rays != k.rays || now.depth != k.depth;
 }
 
-void AdaptiveScheduler::PushOrphan(std::uint32_t c) {
+void AdaptiveScheduler::Touch(std::uint32_t c) {
+  if (touched_at_[c] != 0 || remaining_[c] != 0) return;
+  touched_at_[c] = 1;
+  touched_.push_back(c);
+}
+
+void AdaptiveScheduler::PushOrphan(std::uint32_t c) const {
   if (remaining_[c] != 0 || told_[c] == 0) return;
   if (orphans_.size() >= 2 * std::size_t{cells_} + 64) {
     RebuildOrphans();  // pushes c's key too
@@ -194,7 +202,8 @@ void AdaptiveScheduler::PushOrphan(std::uint32_t c) {
   std::push_heap(orphans_.begin(), orphans_.end(), After<OrphanKey>);
 }
 
-void AdaptiveScheduler::RebuildOrphans() {
+void AdaptiveScheduler::RebuildOrphans() const {
+  // (Cells touched stay listed: their keys pushed again at the next look are duplicates.)
   orphans_.clear();
   for (const std::uint32_t c : done_cells_) {
     if (told_[c] > 0) orphans_.push_back(KeyOf(c));
@@ -203,6 +212,12 @@ void AdaptiveScheduler::RebuildOrphans() {
 }
 
 std::optional<CellId> AdaptiveScheduler::TopOrphan(const QueueView& queues) const {
+  // The cells touched since the last look, each pushed once with its key now.
+  for (const std::uint32_t c : touched_) {
+    touched_at_[c] = 0;
+    PushOrphan(c);
+  }
+  touched_.clear();
   std::optional<CellId> found;
   std::vector<OrphanKey>& busy = passed_;  // passed over: at most the other processors' cells
   busy.clear();
@@ -261,7 +276,7 @@ void AdaptiveScheduler::Arrived(const Arrival& a) {
   if (KeepsDepths() && depth_[a.node] < min_depth_[a.cell.value()]) {
     SetMinDepth(a.cell, depth_[a.node]);
   }
-  if (predicted_ != nullptr) PushOrphan(a.cell.value());
+  if (predicted_ != nullptr) Touch(a.cell.value());
 }
 
 void AdaptiveScheduler::Taken(CellId cell) {
@@ -403,7 +418,7 @@ void AdaptiveScheduler::Use(std::size_t i) {
   used_.Use(i);
   if (--remaining_[plan_[i].value()] == 0) {
     done_cells_.push_back(plan_[i].value());
-    PushOrphan(plan_[i].value());
+    Touch(plan_[i].value());
   }
 }
 

@@ -165,11 +165,11 @@ class AdaptiveScheduler : public Scheduler {
   // cell (a busy one shows 0).
   std::vector<std::uint64_t> told_;
   // The orphans in order (issue 43): a heap of the done cells with told work, each pushed when
-  // it becomes done or work arrives there, keyed by (min_depth_ with one processor, else 0;
-  // told_; cell). An entry whose key is no longer its cell's is stale and dropped when met
-  // (lazy deletion); the heap is rebuilt from done_cells_ when it holds more than twice the
-  // cells, so it stays within 2 x cells entries. Orphan reads its top instead of looking at
-  // every done cell (a view not the board's own is scanned).
+  // it becomes done or work arrives there (once per look: touched_), keyed by (min_depth_ with one
+  // processor, else 0; told_; cell). An entry whose key is no longer its cell's is stale and
+  // dropped when met (lazy deletion); the heap is rebuilt from done_cells_ when it holds more than
+  // twice the cells, so it stays within 2 x cells entries. Orphan reads its top instead of looking
+  // at every done cell (a view not the board's own is scanned).
   struct OrphanKey {
     std::uint32_t depth;
     std::uint32_t cell;
@@ -181,9 +181,14 @@ class AdaptiveScheduler : public Scheduler {
     return {one_processor_ ? min_depth_[c] : 0, c, told_[c]};
   }
   bool Stale(const OrphanKey& k) const;
+  // Done cells whose key may have changed since the heap was last looked at (each once:
+  // touched_at_ 1), pushed by the next look rather than at every arrival.
+  mutable std::vector<std::uint32_t> touched_;
+  mutable std::vector<std::uint8_t> touched_at_;
+  void Touch(std::uint32_t c);
   // Pushes cell c's key when it is done and has told work.
-  void PushOrphan(std::uint32_t c);
-  void RebuildOrphans();
+  void PushOrphan(std::uint32_t c) const;
+  void RebuildOrphans() const;
   // The first orphan by the heap: the least key whose cell has work in view (busy cells, with
   // none in view, are passed over and kept); none when there is none.
   std::optional<CellId> TopOrphan(const QueueView& queues) const;
