@@ -83,6 +83,10 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   at_depth_.Reset(cells_);
   low_depth_ = 0;
   done_cells_.clear();
+  told_.assign(cells_, 0);
+  orphans_.clear();
+  touched_.clear();
+  touched_at_.assign(cells_, 0);
   replans_ = 0;
   last_how_ = 0;
   cost_ = {};
@@ -162,7 +166,77 @@ void AdaptiveScheduler::Install(std::vector<CellId> plan, const std::vector<std:
     if (remaining_[c] == 0) done_cells_.push_back(c);
   }
   for (std::uint32_t c = 0; c < cells_; ++c) RecomputeDue(CellId(c));
+  RebuildOrphans();
   CountBytes();
+}
+
+namespace {
+// Whether orphan key a comes after b: the least depth, then the most rays, then the lowest cell
+// first (a max-heap under this order has the first orphan on top).
+template <typename Key>
+bool After(const Key& a, const Key& b) {
+  if (a.depth != b.depth) return a.depth > b.depth;
+  if (a.rays != b.rays) return a.rays < b.rays;
+  return a.cell > b.cell;
+}
+}  // namespace
+
+bool AdaptiveScheduler::Stale(const OrphanKey& k) const {
+  const OrphanKey now = KeyOf(k.cell);
+  return remaining_[k.cell] != 0 || now.rays == 0 || now.rays != k.rays || now.depth != k.depth;
+}
+
+void AdaptiveScheduler::Touch(std::uint32_t c) {
+  if (touched_at_[c] != 0 || remaining_[c] != 0) return;
+  touched_at_[c] = 1;
+  touched_.push_back(c);
+}
+
+void AdaptiveScheduler::PushOrphan(std::uint32_t c) const {
+  if (remaining_[c] != 0 || told_[c] == 0) return;
+  if (orphans_.size() >= 2 * std::size_t{cells_} + 64) {
+    RebuildOrphans();  // pushes c's key too
+    return;
+  }
+  orphans_.push_back(KeyOf(c));
+  std::push_heap(orphans_.begin(), orphans_.end(), After<OrphanKey>);
+}
+
+void AdaptiveScheduler::RebuildOrphans() const {
+  // (Cells touched stay listed: their keys pushed again at the next look are duplicates.)
+  orphans_.clear();
+  for (const std::uint32_t c : done_cells_) {
+    if (told_[c] > 0) orphans_.push_back(KeyOf(c));
+  }
+  std::make_heap(orphans_.begin(), orphans_.end(), After<OrphanKey>);
+}
+
+std::optional<CellId> AdaptiveScheduler::TopOrphan(const QueueView& queues) const {
+  // The cells touched since the last look, each pushed once with its key now.
+  for (const std::uint32_t c : touched_) {
+    touched_at_[c] = 0;
+    PushOrphan(c);
+  }
+  touched_.clear();
+  std::optional<CellId> found;
+  std::vector<OrphanKey>& busy = passed_;  // passed over: at most the other processors' cells
+  busy.clear();
+  while (!orphans_.empty()) {
+    const OrphanKey k = orphans_.front();
+    std::pop_heap(orphans_.begin(), orphans_.end(), After<OrphanKey>);
+    orphans_.pop_back();
+    if (Stale(k)) continue;
+    busy.push_back(k);  // kept, found or not
+    if (queues.queued(CellId(k.cell)) > 0) {
+      found = CellId(k.cell);
+      break;
+    }
+  }
+  for (const OrphanKey& k : busy) {
+    orphans_.push_back(k);
+    std::push_heap(orphans_.begin(), orphans_.end(), After<OrphanKey>);
+  }
+  return found;
 }
 
 void AdaptiveScheduler::RecomputeDue(CellId c) {
@@ -194,6 +268,7 @@ void AdaptiveScheduler::Arrived(const Arrival& a) {
   }
   RAYCELL_CHECK_LT(a.node, match_.size());
   queued_[a.cell.value()].push_back(a.node);
+  told_[a.cell.value()] += a.rays;
   const NodeId m = match_[a.node];
   const std::uint32_t d =
       m == kNoNode || due_ == nullptr || (*due_)[m.index()] == kNever ? 0 : (*due_)[m.index()];
@@ -201,10 +276,12 @@ void AdaptiveScheduler::Arrived(const Arrival& a) {
   if (KeepsDepths() && depth_[a.node] < min_depth_[a.cell.value()]) {
     SetMinDepth(a.cell, depth_[a.node]);
   }
+  if (predicted_ != nullptr) Touch(a.cell.value());
 }
 
 void AdaptiveScheduler::Taken(CellId cell) {
   queued_[cell.value()].clear();
+  told_[cell.value()] = 0;
   min_due_[cell.value()] = kNever;
   SetMinDepth(cell, kNever);
 }
@@ -339,20 +416,27 @@ std::optional<CellId> AdaptiveScheduler::Shallowest(const QueueView& queues) con
 
 void AdaptiveScheduler::Use(std::size_t i) {
   used_.Use(i);
-  if (--remaining_[plan_[i].value()] == 0) done_cells_.push_back(plan_[i].value());
+  if (--remaining_[plan_[i].value()] == 0) {
+    done_cells_.push_back(plan_[i].value());
+    Touch(plan_[i].value());
+  }
 }
 
 std::optional<CellId> AdaptiveScheduler::Orphan(const QueueView& queues) const {
   if (cursor_ == plan_.size()) return std::nullopt;  // the plan is used up: planned again
   // Counted as the hardware's mask of the cells with work and no entry left.
   cost_.steps += cells_;
-  if (one_processor_) return ShallowestOrphan(queues);
+  // The board's own view shows every free cell's told rays: the heap answers (the loops below
+  // are its reference, for any other view).
+  const bool own_view = queues.most_of != nullptr && queues.most_of == queues.queued_rays;
+  if (one_processor_) return own_view ? TopOrphan(queues) : ShallowestOrphan(queues);
   // Several processors: the most queued cell in view with no entry left (lowest number on ties):
   // the most queued of all when the plan is done with it (the replay keeps it,
   // QueueView::most), else the most queued of the cells the plan is done with.
   const std::optional<CellId> top = MostQueuedCell(queues);
   if (!top) return std::nullopt;
   if (top->value() < cells_ && remaining_[top->value()] == 0) return top;
+  if (own_view) return TopOrphan(queues);
   std::optional<CellId> orphan;
   std::uint64_t most = 0;
   for (const std::uint32_t c : done_cells_) {

@@ -160,6 +160,38 @@ class AdaptiveScheduler : public Scheduler {
   // Cells no entry left in the plan fetches (remaining_ 0), in any order: where Orphan looks
   // when the most queued cell is not one of them.
   std::vector<std::uint32_t> done_cells_;
+  // Per cell the rays queued there as told (Arrival::rays since its last Taken): the board's
+  // queued rays, which its own view (QueueView::most_of == queued_rays) shows for every free
+  // cell (a busy one shows 0).
+  std::vector<std::uint64_t> told_;
+  // The orphans in order (issue 43): a heap of the done cells with told work, each pushed when
+  // it becomes done or work arrives there (once per look: touched_), keyed by (min_depth_ with one
+  // processor, else 0; told_; cell). An entry whose key is no longer its cell's is stale and
+  // dropped when met (lazy deletion); the heap is rebuilt from done_cells_ when it holds more than
+  // twice the cells, so it stays within 2 x cells entries. Orphan reads its top instead of looking
+  // at every done cell (a view not the board's own is scanned).
+  struct OrphanKey {
+    std::uint32_t depth;
+    std::uint32_t cell;
+    std::uint64_t rays;
+  };
+  mutable std::vector<OrphanKey> orphans_;
+  mutable std::vector<OrphanKey> passed_;  // TopOrphan's scratch
+  OrphanKey KeyOf(std::uint32_t c) const {
+    return {one_processor_ ? min_depth_[c] : 0, c, told_[c]};
+  }
+  bool Stale(const OrphanKey& k) const;
+  // Done cells whose key may have changed since the heap was last looked at (each once:
+  // touched_at_ 1), pushed by the next look rather than at every arrival.
+  mutable std::vector<std::uint32_t> touched_;
+  mutable std::vector<std::uint8_t> touched_at_;
+  void Touch(std::uint32_t c);
+  // Pushes cell c's key when it is done and has told work.
+  void PushOrphan(std::uint32_t c) const;
+  void RebuildOrphans() const;
+  // The first orphan by the heap: the least key whose cell has work in view (busy cells, with
+  // none in view, are passed over and kept); none when there is none.
+  std::optional<CellId> TopOrphan(const QueueView& queues) const;
 
   std::uint64_t replans_ = 0;
   // 0 none, 1 followed, 2 re-planned, 3 max work, 4 orphan, 5 shallowest (no earlier frame)

@@ -322,6 +322,87 @@ TEST(Adaptive, OneProcessorTakesTheShallowestOrphanFirst) {
   }
 }
 
+// The board's own view (QueueView::most_of == queued_rays) lets the scheduler answer from what
+// it was told (the orphans' heap) instead of looking at every cell: on random frames unfolding
+// at random, with cells locked by other processors, a scheduler given the board's view and one
+// given the same counts as a plain view (scanned) choose the same cells, count the same steps
+// and predict the same (Peek).
+TEST(Adaptive, TheBoardsViewChoosesAsAScan) {
+  std::mt19937 rng(4343);
+  int orphans = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const std::uint32_t cells = 3 + rng() % 10;
+    const std::uint32_t processors = 1 + trial % 3;
+    const CellTree previous = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 12));
+    const CellTree before = testing::TreeOf(testing::RandomReplayFrame(rng, cells, 12));
+    FrameInfo info{2, nullptr, &previous, cells, &before};
+    info.processors = processors;
+    AdaptiveScheduler fast(trial), scan(trial);
+    fast.BeginFrame(info);
+    scan.BeginFrame(info);
+    std::vector<std::uint64_t> queued(cells, 0), view(cells, 0), open(cells, 1);
+    std::vector<CellId> node_cell = {kNoCell};
+    std::vector<CellId> locked;  // cells the other processors work
+    const auto arrive = [&] {
+      const std::uint32_t parent = std::uint32_t(rng() % node_cell.size());
+      const bool known = node_cell.size() > 1 && rng() % 3 == 0;
+      const std::uint32_t node = known ? 1 + std::uint32_t(rng() % (node_cell.size() - 1))
+                                       : std::uint32_t(node_cell.size());
+      const CellId c = known ? node_cell[node] : CellId(std::uint32_t(rng() % cells));
+      if (!known) node_cell.push_back(c);
+      const std::uint64_t rays = 1 + rng() % 5;
+      const Scheduler::Arrival a{node, known ? 0 : parent, c, rays};
+      fast.Arrived(a);
+      scan.Arrived(a);
+      queued[c.value()] += rays;
+      view[c.value()] = queued[c.value()] * open[c.value()];
+    };
+    for (int i = 0; i < 6; ++i) arrive();
+    for (int step = 0; step < 200; ++step) {
+      QueueView own = QueueView::Of(view);
+      own.open = open.data();
+      own.processor = 0;
+      own.working = std::uint32_t(locked.size());
+      own.most_of = view.data();
+      own.most_cells = cells;
+      own.most = ScanMostQueued(view.data(), cells);
+      QueueView plain = own;
+      plain.most_of = nullptr;
+      ASSERT_EQ(fast.Peek(own), scan.Peek(plain)) << trial << " " << step;
+      const std::optional<CellId> c = fast.Next(own);
+      ASSERT_EQ(c, scan.Next(plain)) << trial << " " << step;
+      ASSERT_EQ(fast.Reason(), scan.Reason()) << trial << " " << step;
+      ASSERT_EQ(fast.Cost().steps, scan.Cost().steps) << trial << " " << step;
+      orphans += fast.Reason() == "orphan";
+      if (c) {  // taken at once, or locked by another processor for a while
+        fast.Taken(*c);
+        scan.Taken(*c);
+        queued[c->value()] = 0;
+        view[c->value()] = 0;
+        if (processors > 1 && locked.size() + 1 < processors && rng() % 2 == 0) {
+          open[c->value()] = 0;
+          locked.push_back(*c);
+        }
+      }
+      if (!locked.empty() && (rng() % 3 == 0 || !c)) {  // another processor is done
+        const std::size_t k = rng() % locked.size();
+        const CellId d = locked[k];
+        locked.erase(locked.begin() + std::ptrdiff_t(k));
+        if (queued[d.value()] > 0 && rng() % 2 == 0) {  // it takes what arrived meanwhile
+          fast.Taken(d);
+          scan.Taken(d);
+          queued[d.value()] = 0;
+        }
+        open[d.value()] = 1;
+        view[d.value()] = queued[d.value()];
+      }
+      const int arrivals = int(rng() % 4);
+      for (int i = 0; i < arrivals && node_cell.size() < 400; ++i) arrive();
+    }
+  }
+  EXPECT_GT(orphans, 1000) << orphans;  // the heap was asked
+}
+
 // Frames unlike their predecessors: the plan runs out and the rest is planned again; every
 // ray, segment and sample is processed once (also for several processors: balance_test), and
 // the choices and their counted cost are the same on every run.
