@@ -804,9 +804,9 @@ class SeenReplayer : public SeenFrameReplayer {
     // the replay's own frame, the other seen replays and the other configurations, and so are
     // the tree's work per node and its units' paths (docs/design.md §5 "Sharing plans").
     const FrameTrees frame{frame_index, &tree, previous, cells, before_previous, plans_};
-    const std::shared_ptr<const SeenWork> work =
-        Shared<SeenWork>(plans_, PlanKey(kSeenWork, {TreeKey(tree), cells}),
-                         [&] { return MakeSeenWork(tree, cells); });
+    const std::shared_ptr<const SeenWork> work = Shared<SeenWork>(
+        plans_, PlanKey(kSeenWork, {TreeKey(tree), cells}),
+        [&] { return MakeSeenWork(tree, cells); }, /*begin_only=*/true);
     MemoryState memory = start_;
     const ReplayResult r = SeenReplay(*work, footprints_, config_, scheduler, frame,
                                       start_.empty() ? nullptr : &memory, units_);
@@ -897,25 +897,32 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
     std::size_t size;
     UnitPaths paths;
   };
+  // Made at the first Watch, after the scheduler's BeginFrame, so that what only BeginFrame
+  // reads (frame i-2's tree, the frames seen) may be freed before (issue 43).
   std::shared_ptr<const FramePaths> shared;
   UnitPaths made;
-  if (given == nullptr && frame.plans != nullptr) {
-    const WorkGraph::Totals& t = work.totals;
-    shared = Shared<FramePaths>(
-        frame.plans,
-        PlanKey(kFramePaths, {std::uint64_t(reinterpret_cast<std::uintptr_t>(&work)), work.size(),
-                              work.cells, t.rays, t.segments, t.samples}),
-        [&] {
-          return FramePaths{&work, work.size(), PathsOf(graph_units, work.size())};
-        });
-    RAYCELL_CHECK(shared->work == &work && shared->size == work.size());
-    given = &shared->paths;
-  }
-  if (given == nullptr) made = PathsOf(graph_units, work.size());
-  const UnitPaths& paths = given != nullptr ? *given : made;
+  const auto paths = [&]() -> const UnitPaths& {
+    if (given == nullptr && frame.plans != nullptr) {
+      const WorkGraph::Totals& t = work.totals;
+      shared = Shared<FramePaths>(
+          frame.plans,
+          PlanKey(kFramePaths, {std::uint64_t(reinterpret_cast<std::uintptr_t>(&work)), work.size(),
+                                work.cells, t.rays, t.segments, t.samples}),
+          [&] {
+            return FramePaths{&work, work.size(), PathsOf(graph_units, work.size())};
+          });
+      RAYCELL_CHECK(shared->work == &work && shared->size == work.size());
+      given = &shared->paths;
+    }
+    if (given == nullptr) {
+      made = PathsOf(graph_units, work.size());
+      given = &made;
+    }
+    return *given;
+  };
   return Replay<Units, Watch>(
       work, graph_units, footprints, config, scheduler, frame, bound, observer, memory, units, seen,
-      [&] { return Watch(paths, scheduler); }, time_bound);
+      [&] { return Watch(paths(), scheduler); }, time_bound);
 }
 
 SeenWork MakeSeenWork(const CellTree& tree, std::uint32_t cells) {
