@@ -145,45 +145,45 @@ UnitPaths PathsOf(const Units& u, std::size_t units) {
   // slots lie scattered: the table is looked up only when the memo misses (issue 43).
   std::vector<std::uint64_t> last_child = {0};
   // (parent path, cell) -> path, open addressing (a lookup per unit entering another cell: a
-  // std::unordered_map's node per path made this a tenth of a watching replay; issue 43).
-  std::vector<std::uint64_t> keys(1024, ~std::uint64_t{0});
-  std::vector<std::uint32_t> values(1024);
-  std::size_t mask = keys.size() - 1;
-  const auto slot = [&](std::uint64_t key) {
+  // std::unordered_map's node per path made this a tenth of a watching replay; issue 43). A slot
+  // holds a path's number (0, the root's, for none: the root is no path's child), its key read
+  // back from parent and cell_of: 4 bytes a slot and 4 a path, where keys and values beside them
+  // took 12 a slot (~300 MB at a frame's 4.5M paths, the peak of a watching replay).
+  std::vector<std::uint32_t> cell_of = {0};  // per path, its cell (the root's unused)
+  std::vector<std::uint32_t> table(1024, 0);
+  std::size_t mask = table.size() - 1;
+  const auto slot = [&](std::uint32_t parent, std::uint32_t cell) {
+    const std::uint64_t key = std::uint64_t{parent} << 32 | cell;
     std::size_t i = std::size_t(SplitMix64(key).Next()) & mask;
-    while (keys[i] != key && keys[i] != ~std::uint64_t{0}) i = (i + 1) & mask;
+    while (table[i] != 0 && (p.parent[table[i]] != parent || cell_of[table[i]] != cell)) {
+      i = (i + 1) & mask;
+    }
     return i;
   };
   const auto path = [&](std::uint32_t parent, CellId c) {
     const std::uint64_t memo = std::uint64_t{c.value()} + 1;
     std::uint64_t& last = last_child[parent];
     if (last >> 32 == memo) return std::uint32_t(last);
-    const std::uint64_t key = std::uint64_t{parent} << 32 | c.value();
-    std::size_t i = slot(key);
-    if (keys[i] == key) {
-      last = memo << 32 | values[i];
-      return values[i];
+    std::size_t i = slot(parent, c.value());
+    if (table[i] != 0) {
+      last = memo << 32 | table[i];
+      return table[i];
     }
     const std::uint32_t id = std::uint32_t(p.parent.size());
     last = memo << 32 | id;  // before the push below moves last_child
     p.parent.push_back(parent);
+    cell_of.push_back(c.value());
     last_child.push_back(0);
-    if (2 * p.parent.size() > keys.size()) {  // grow: at most half full
-      std::vector<std::uint64_t> old_keys(2 * keys.size(), ~std::uint64_t{0});
-      std::vector<std::uint32_t> old_values(old_keys.size());
-      old_keys.swap(keys);
-      old_values.swap(values);
-      mask = keys.size() - 1;
-      for (std::size_t k = 0; k < old_keys.size(); ++k) {
-        if (old_keys[k] == ~std::uint64_t{0}) continue;
-        const std::size_t j = slot(old_keys[k]);
-        keys[j] = old_keys[k];
-        values[j] = old_values[k];
+    if (2 * p.parent.size() > table.size()) {  // grow: at most half full
+      std::vector<std::uint32_t> old(2 * table.size(), 0);
+      old.swap(table);
+      mask = table.size() - 1;
+      for (const std::uint32_t q : old) {
+        if (q != 0) table[slot(p.parent[q], cell_of[q])] = q;
       }
-      i = slot(key);
+      i = slot(parent, c.value());
     }
-    keys[i] = key;
-    values[i] = id;
+    table[i] = id;
     return id;
   };
   struct Item {
@@ -804,9 +804,9 @@ class SeenReplayer : public SeenFrameReplayer {
     // the replay's own frame, the other seen replays and the other configurations, and so are
     // the tree's work per node and its units' paths (docs/design.md §5 "Sharing plans").
     const FrameTrees frame{frame_index, &tree, previous, cells, before_previous, plans_};
-    const std::shared_ptr<const SeenWork> work =
-        Shared<SeenWork>(plans_, PlanKey(kSeenWork, {TreeKey(tree), cells}),
-                         [&] { return MakeSeenWork(tree, cells); });
+    const std::shared_ptr<const SeenWork> work = Shared<SeenWork>(
+        plans_, PlanKey(kSeenWork, {TreeKey(tree), cells}),
+        [&] { return MakeSeenWork(tree, cells); }, /*begin_only=*/true);
     MemoryState memory = start_;
     const ReplayResult r = SeenReplay(*work, footprints_, config_, scheduler, frame,
                                       start_.empty() ? nullptr : &memory, units_);
@@ -897,25 +897,32 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
     std::size_t size;
     UnitPaths paths;
   };
+  // Made at the first Watch, after the scheduler's BeginFrame, so that what only BeginFrame
+  // reads (frame i-2's tree, the frames seen) may be freed before (issue 43).
   std::shared_ptr<const FramePaths> shared;
   UnitPaths made;
-  if (given == nullptr && frame.plans != nullptr) {
-    const WorkGraph::Totals& t = work.totals;
-    shared = Shared<FramePaths>(
-        frame.plans,
-        PlanKey(kFramePaths, {std::uint64_t(reinterpret_cast<std::uintptr_t>(&work)), work.size(),
-                              work.cells, t.rays, t.segments, t.samples}),
-        [&] {
-          return FramePaths{&work, work.size(), PathsOf(graph_units, work.size())};
-        });
-    RAYCELL_CHECK(shared->work == &work && shared->size == work.size());
-    given = &shared->paths;
-  }
-  if (given == nullptr) made = PathsOf(graph_units, work.size());
-  const UnitPaths& paths = given != nullptr ? *given : made;
+  const auto paths = [&]() -> const UnitPaths& {
+    if (given == nullptr && frame.plans != nullptr) {
+      const WorkGraph::Totals& t = work.totals;
+      shared = Shared<FramePaths>(
+          frame.plans,
+          PlanKey(kFramePaths, {std::uint64_t(reinterpret_cast<std::uintptr_t>(&work)), work.size(),
+                                work.cells, t.rays, t.segments, t.samples}),
+          [&] {
+            return FramePaths{&work, work.size(), PathsOf(graph_units, work.size())};
+          });
+      RAYCELL_CHECK(shared->work == &work && shared->size == work.size());
+      given = &shared->paths;
+    }
+    if (given == nullptr) {
+      made = PathsOf(graph_units, work.size());
+      given = &made;
+    }
+    return *given;
+  };
   return Replay<Units, Watch>(
       work, graph_units, footprints, config, scheduler, frame, bound, observer, memory, units, seen,
-      [&] { return Watch(paths, scheduler); }, time_bound);
+      [&] { return Watch(paths(), scheduler); }, time_bound);
 }
 
 SeenWork MakeSeenWork(const CellTree& tree, std::uint32_t cells) {

@@ -1,17 +1,37 @@
 #include "runner/driver.h"
 
 #include <algorithm>
+#include <atomic>
+#include <functional>
 #include <map>
+#include <optional>
+#include <string>
+#include <utility>
+
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include "base/check.h"
 #include "base/checked.h"
 #include "base/parallel.h"
 #include "graph/frame_tree.h"
 #include "replay/level_units.h"
+#include "replay/replacement.h"
 #include "scheduling/scheduler.h"
 
 namespace raycell {
 namespace {
+
+// Gives the pages of the heap's free chunks back to the system (glibc; elsewhere nothing): the
+// large arrays of one frame, freed, leave holes that the next frame's, of other sizes, do not
+// fill exactly, and a process walking many frames would otherwise keep them all resident
+// (issue 43: the peak grew with the frames walked).
+void ReturnFreedMemory() {
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
+}
 
 std::unique_ptr<CellTree> TreeOf(const RayBatch& rays) {
   CellTreeBuilder builder;
@@ -37,6 +57,29 @@ void ScaleBack(ReplayResult& r, std::uint32_t k, std::uint32_t processors) {
   r.time = r.time + spread;
   r.time_bound = r.time_bound + spread;
 }
+
+// `inner`, told `begun()` after its first BeginFrame of the frame (where schedulers read frame
+// i-2's tree and the frames seen), forwarding every call unchanged.
+class BeginSignal final : public Scheduler {
+ public:
+  BeginSignal(Scheduler& inner, std::function<void()> begun)
+      : Scheduler(inner.entry()), inner_(inner), begun_(std::move(begun)) {}
+  void BeginFrame(const FrameInfo& frame) override {
+    inner_.BeginFrame(frame);
+    if (begun_) std::exchange(begun_, nullptr)();
+  }
+  std::optional<CellId> Next(const QueueView& queues) override { return inner_.Next(queues); }
+  std::optional<CellId> Peek(const QueueView& queues) const override { return inner_.Peek(queues); }
+  std::string Reason() const override { return inner_.Reason(); }
+  bool Watches() const override { return inner_.Watches(); }
+  void Arrived(const Arrival& arrival) override { inner_.Arrived(arrival); }
+  void Taken(CellId cell) override { inner_.Taken(cell); }
+  DecisionCost Cost() const override { return inner_.Cost(); }
+
+ private:
+  Scheduler& inner_;
+  std::function<void()> begun_;
+};
 
 }  // namespace
 
@@ -127,6 +170,9 @@ const LoadedFrame* FrameWalker::Next() {
   } else {
     f.previous = LoadTree(reader_, i - 1, k_);
   }
+  // What the frame before held, before this one's arrays are made; only where trees are kept
+  // across frames (the holes' cause; Max Work per segment ran ~10% longer with it).
+  if (history_ > 0) ReturnFreedMemory();
   // The tree: for the work per node, the bound, the oracles, and the next frame's previous.
   const bool need_tree = need_nodes_ || keep_tree_;
   if (!need_segments_ && k_ == 1) {  // per node the tree is all the replay needs: stream it
@@ -248,6 +294,11 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
   // What each distinct configuration's levels hold; checked before any frame is read.
   std::vector<MemoryUnits> units;
   for (const ReplayConfig& c : distinct) units.push_back(LevelUnitsOf(c, reader));
+  // Whether some replay begins a frame again (a level's policy needs its future requests).
+  bool again = false;
+  for (const ReplayConfig& c : distinct) {
+    for (const LevelConfig& l : c.levels) again = again || l.replacement->needs_future;
+  }
   const TraceHeader& header = reader.header();
   FrameWalker walker(reader, frame_indices, need_segments, need_nodes, options.sample_every,
                      history, options.compact_above_visits, !warm.empty(), own_tree);
@@ -284,11 +335,25 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
     PlanCache shared(true);
     std::vector<std::unique_ptr<PlanCache>> own(options.share_plans ? 0 : distinct.size());
     for (auto& p : own) p = std::make_unique<PlanCache>(false);
+    // Frame i-2's tree and the replays of frames seen are read only in BeginFrame: freed once
+    // every replay of the frame began (issue 43), unless a policy that needs its future
+    // requests (MIN) begins the frame again.
+    const bool release = frame->before_previous != nullptr && !again;
+    std::atomic<std::size_t> to_begin{run.size()};
+    const std::function<void()> begun = [&] {
+      if (to_begin.fetch_sub(1, std::memory_order_acq_rel) != 1) return;
+      walker.ReleaseBeforePrevious();
+      shared.ReleaseBeginOnly();
+      for (const auto& p : own) p->ReleaseBeginOnly();
+      ReturnFreedMemory();
+    };
     pool.ParallelFor(run.size(), [&](std::size_t n) {
       const std::size_t d = run[n];
+      BeginSignal signal(*schedulers[d], release ? begun : nullptr);
+      Scheduler& scheduler = release ? static_cast<Scheduler&>(signal) : *schedulers[d];
       distinct_results[d] = ReplayLoadedFrame(
-          *frame, header, distinct[d], *schedulers[d], options.sample_every, observer,
-          memory[d].get(), &units[d], options.share_plans ? &shared : own[d].get());
+          *frame, header, distinct[d], scheduler, options.sample_every, observer, memory[d].get(),
+          &units[d], options.share_plans ? &shared : own[d].get());
     });
     stats.plans += shared.made();
     for (const auto& p : own) stats.plans += p->made();

@@ -77,6 +77,10 @@ class FrameWalker {
               bool keep_tree = true);
   // The next frame, or nullptr after the last. Valid until the next call.
   const LoadedFrame* Next();
+  // Frees the current frame's before_previous (frame i-2's tree) once no replay of the frame
+  // will read it again: schedulers read it only in BeginFrame (ReplayFrames calls this after
+  // the last replay of the frame began; issue 43). The next frame loads it again if it needs it.
+  void ReleaseBeforePrevious() { frame_.before_previous.reset(); }
   // Frames asked for; frames walked (with the warm-up ones).
   std::size_t size() const { return asked_; }
   std::size_t walked() const { return indices_.size(); }

@@ -10,6 +10,7 @@
 #include <random>
 #include <sstream>
 
+#include "replay/replacement.h"
 #include "scheduling/scheduler.h"
 #include "tests/graph/test_trees.h"
 #include "tests/replay/random_frame.h"
@@ -211,6 +212,30 @@ TEST_F(DriverTest, TheSeedIsKeptForEverySchedulerThatUsesIt) {
         ReplayFrames(*reader_, {1}, {a, b}, {},
                      [](const LoadedFrame&, const std::vector<ReplayResult>&) { return true; });
     EXPECT_EQ(stats.distinct, seeded ? 2u : 1u) << s;
+  }
+}
+
+// Frame i-2's tree is read only in BeginFrame (issue 43): once every replay of the frame began
+// it is freed, before the frame's results are told; a replay that begins the frame again
+// (Belady's MIN, a pass per level) keeps it. The results stay those built by hand
+// (EveryFrameEqualsItsReplayBuiltByHand, with auto and celltree-union).
+TEST_F(DriverTest, FrameBeforePreviousGoesOnceEveryReplayBegan) {
+  for (const bool min : {false, true}) {
+    std::vector<ReplayConfig> configs = {Config("celltree-union", 1), Config("auto", 2),
+                                         Config("maxwork", 3)};
+    if (min) configs[1].levels[0].replacement = &kMinReplacement;
+    ReplayFramesOptions options;
+    options.jobs = 2;
+    std::size_t frames = 0;
+    ReplayFrames(*reader_, {0, 1, 2, 4}, configs, options,
+                 [&](const LoadedFrame& f, const std::vector<ReplayResult>& results) {
+                   ++frames;
+                   EXPECT_EQ(results.size(), configs.size());
+                   EXPECT_EQ(f.before_previous != nullptr, min && f.index >= 2) << f.index;
+                   EXPECT_EQ(f.previous != nullptr, f.index >= 1) << f.index;
+                   return true;
+                 });
+    EXPECT_EQ(frames, 4u);
   }
 }
 

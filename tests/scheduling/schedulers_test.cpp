@@ -10,6 +10,7 @@
 #include "scheduling/cell_tree_scheduler.h"
 #include "scheduling/max_work.h"
 #include "scheduling/peel_oracle.h"
+#include "scheduling/plan_cache.h"
 #include "scheduling/random_scheduler.h"
 #include "scheduling/round_robin.h"
 #include "tests/cell_list.h"
@@ -569,6 +570,27 @@ TEST(SchedulerPeek, ForetellsNextAndChangesNothing) {
   auto random = MakeScheduler("random", 1);
   random->BeginFrame(Frame(0, 3));
   EXPECT_EQ(random->Peek(QueueView::Of(Queues{1, 1, 1})), std::nullopt);
+}
+
+// A plan cache makes each value once; ReleaseBeginOnly forgets only the values asked for as
+// begin_only (the replays of frames seen), which a holder keeps while it holds them and which
+// are made again when asked for again (issue 43).
+TEST(PlanCache, ReleaseBeginOnlyForgetsOnlyThoseValues) {
+  PlanCache cache;
+  int made = 0;
+  const auto make = [&] { return ++made; };
+  const std::shared_ptr<const int> seen = cache.Get<int>(1, make, /*begin_only=*/true);
+  const std::shared_ptr<const int> plan = cache.Get<int>(2, make);
+  EXPECT_EQ(*cache.Get<int>(1, make, true), 1);
+  EXPECT_EQ(*cache.Get<int>(2, make), 2);
+  EXPECT_EQ(cache.made(), 2u);
+  cache.ReleaseBeginOnly();
+  EXPECT_EQ(*seen, 1);  // still held here
+  EXPECT_EQ(*cache.Get<int>(2, make), 2);
+  EXPECT_EQ(cache.made(), 2u);
+  EXPECT_EQ(*cache.Get<int>(1, make, true), 3);  // made again
+  EXPECT_EQ(cache.made(), 3u);
+  EXPECT_EQ(made, 3);
 }
 
 }  // namespace
