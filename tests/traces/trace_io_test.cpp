@@ -654,21 +654,26 @@ RayBatch TwoPixelsWithShadowRays() {
   return frame;
 }
 
-// TwoPixelsWithShadowRays written in format `version`: checks that the file says that version
-// and reads back the same rays, removes it, and returns the frame's messages as stored.
-kj::Array<capnp::word> TwoPixelsWrittenIn(std::uint32_t version) {
-  const RayBatch frame = TwoPixelsWithShadowRays();
-  const std::string path = TempPath("corresponding" + std::to_string(version) + ".rct");
+// `frame` written in format `version` on a grid of `cells` (file NAME + version): checks that
+// the file says that version and reads back the same rays, removes it, and returns the frame's
+// messages as stored.
+kj::Array<capnp::word> WrittenIn(const RayBatch& frame, std::array<std::uint32_t, 3> cells,
+                                 std::uint32_t version, const std::string& name) {
+  const std::string path = TempPath(name + std::to_string(version) + ".rct");
   TraceWriterOptions options;
   options.format_version = version;
   const std::vector<FrameSummary> written =
-      WriteTrace(path, TestHeader({2, 2, 1}, false), {{0, frame}}, options);
+      WriteTrace(path, TestHeader(cells, false), {{0, frame}}, options);
   const TraceReader reader = TraceReader::Open(path);
   EXPECT_EQ(reader.header().format_version, version);
   EXPECT_TRUE(reader.LoadFrame(0) == frame);
   kj::Array<capnp::word> words = FrameMessages(path, written[0]);
   std::remove(path.c_str());
   return words;
+}
+
+kj::Array<capnp::word> TwoPixelsWrittenIn(std::uint32_t version) {
+  return WrittenIn(TwoPixelsWithShadowRays(), {2, 2, 1}, version, "corresponding");
 }
 
 // Format 5, as the previous writer wrote it (options.format_version = 5): every column as
@@ -723,20 +728,11 @@ TEST(TraceIoTest, Format7PredictsSamplesFromTheVisitTable) {
   std::size_t code_bytes[2] = {0, 0};
   for (const std::uint32_t version : {6u, 7u}) {
     SCOPED_TRACE(version);
-    const std::string path = TempPath("table" + std::to_string(version) + ".rct");
-    TraceWriterOptions options;
-    options.format_version = version;
-    const std::vector<FrameSummary> written =
-        WriteTrace(path, TestHeader({4, 4, 4}, false), {{0, frame}}, options);
-    const TraceReader reader = TraceReader::Open(path);
-    EXPECT_EQ(reader.header().format_version, version);
-    EXPECT_TRUE(reader.LoadFrame(0) == frame);
-    const kj::Array<capnp::word> words = FrameMessages(path, written[0]);
+    const kj::Array<capnp::word> words = WrittenIn(frame, {4, 4, 4}, version, "table");
     capnp::FlatArrayMessageReader message(words);
     const auto batch = message.getRoot<schema::Record>().getBatch();
     EXPECT_EQ(batch.getVisitTable(), version == 7);  // the smaller code
     code_bytes[version - 6] = batch.getSampleCode().size();
-    std::remove(path.c_str());
   }
   // 1000 values of 10 bits or more: format 6 stores their low bits as they are (over 600
   // bytes); format 7 only the first ray of each path's (about 10 bytes) and 998 zeros.
