@@ -297,8 +297,7 @@ void AutoCells::Prepare() {
   for (const auto& rule : rules_) {
     ratio.push_back(rule->ratio);
     double cost = std::numeric_limits<double>::infinity();
-    if (rule->has && rule->ratio.size() == k && !std::isnan(rule->ratio[k - 2]) &&
-        !std::isnan(rule->ratio[k - 1])) {
+    if (!std::isnan(rule->ratio[k - 2]) && !std::isnan(rule->ratio[k - 1])) {
       const double mw = std::max(rule->mw_ratio[k - 2], rule->mw_ratio[k - 1]);
       cost = std::max(0.0, mw * no_tree - std::min(rule->ratio[k - 2], rule->ratio[k - 1]));
     }
