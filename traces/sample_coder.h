@@ -114,6 +114,15 @@ class VisitTable {
   static std::uint64_t Key(unsigned group, std::uint32_t cell, unsigned in, unsigned out) {
     return ((std::uint64_t{cell} * 3 + group) * 28 + in) * 28 + out + 1;  // never 0 (empty)
   }
+  // The key of visit v of a ray of group `group` whose `count` visits have the cells at
+  // `path[0..count)`: its cell, entered and left by the steps from the visit before and to the
+  // one after (kNoStep at the first and last). The writer and the reader both key by this.
+  static std::uint64_t KeyOfVisit(unsigned group, std::uint32_t cell, const Coordinates* path,
+                                  std::size_t v, std::size_t count) {
+    const unsigned in = v == 0 ? kNoStep : StepClass(path[v - 1], path[v]);
+    const unsigned out = v + 1 == count ? kNoStep : StepClass(path[v], path[v + 1]);
+    return Key(group, cell, in, out);
+  }
   // The slot of `key`; Find() gives its samples if it holds that key.
   std::size_t SlotOf(std::uint64_t key) const {
     return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> (64 - kSlotBits));

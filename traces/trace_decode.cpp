@@ -648,12 +648,8 @@ class FrameDecoder {
         while (k < end && out.cells()[ref_begin + k].value() != cell) ++k;
         const bool matched = k < end;
         const bool last = v + 1 == count;
-        const unsigned in = v == 0 ? VisitTable::kNoStep
-                                   : VisitTable::StepClass(coordinates_[v - 1], coordinates_[v]);
-        const unsigned step_out = last
-                                      ? VisitTable::kNoStep
-                                      : VisitTable::StepClass(coordinates_[v], coordinates_[v + 1]);
-        const std::uint64_t key = VisitTable::Key(group, cell, in, step_out);
+        const std::uint64_t key =
+            VisitTable::KeyOfVisit(group, cell, coordinates_.data(), v, count);
         const std::size_t slot = table_->SlotOf(key);
         std::uint64_t known = 0;
         const bool hit = table_->Find(slot, key, known);

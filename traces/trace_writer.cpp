@@ -319,12 +319,8 @@ struct BatchColumns {
         coordinates[u] = VisitTable::CoordinatesOf(r.cells[u].value(), grid);
       }
     }
-    const unsigned in =
-        v == 0 ? VisitTable::kNoStep : VisitTable::StepClass(coordinates[v - 1], coordinates[v]);
-    const unsigned out =
-        last ? VisitTable::kNoStep : VisitTable::StepClass(coordinates[v], coordinates[v + 1]);
-    const std::uint64_t key =
-        VisitTable::Key(SampleGroup(static_cast<unsigned>(r.kind)), cell, in, out);
+    const std::uint64_t key = VisitTable::KeyOfVisit(SampleGroup(static_cast<unsigned>(r.kind)),
+                                                     cell, coordinates.data(), v, r.visit_count);
     const std::size_t slot = table->SlotOf(key);
     std::uint64_t known = 0;
     const bool hit = table->Find(slot, key, known);
