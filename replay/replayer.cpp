@@ -22,10 +22,8 @@ namespace {
 // record is then in cache, being read for the unit's cell), so working a unit reads only
 // its successors' records, which lie together: one cache miss per unit, not three. Without
 // packed records (values beyond 32 bits), an entry is the unit id and the columns are read.
-// Either way ForEachChild(e, f) calls f(child entry, child's cell, child's queued rays, child's
-// index) in the work graph's successor order; the index (the packed record, the unit id, the
-// compact visit) numbers the units 0 .. size() - 1, for the Cell Tree paths of a scheduler that
-// watches the frame unfold (UnitPaths).
+// Either way ForEachChild(e, f) calls f(child entry, child's cell, child's queued rays) in the
+// work graph's successor order.
 
 struct PackedUnits {
   struct Entry {
@@ -38,21 +36,18 @@ struct PackedUnits {
   template <typename F>
   void ForEachRoot(F f) const {
     for (UnitId x = 0; x < roots; ++x) {
-      f(MakeEntry(x), p[x].cell, std::uint64_t{p[x].queued_rays}, x);
+      f(MakeEntry(x), p[x].cell, std::uint64_t{p[x].queued_rays});
     }
   }
   template <typename F>
   void ForEachChild(const Entry& e, F f) const {
     for (UnitId x = e.first_child; x < e.end_child; ++x) {
-      f(MakeEntry(x), p[x].cell, std::uint64_t{p[x].queued_rays}, x);
+      f(MakeEntry(x), p[x].cell, std::uint64_t{p[x].queued_rays});
     }
   }
   std::uint64_t samples(const Entry& e) const { return e.samples; }
   // Starts loading the successors' records of a unit about to be worked.
   void Prefetch(const Entry& e) const { __builtin_prefetch(p + e.first_child); }
-  // The index of a unit's first successor, if it has one (else any index): what a watch
-  // prefetches (Watch::Prefetch).
-  static UnitId FirstChild(const Entry& e) { return e.first_child; }
 };
 
 struct ColumnUnits {
@@ -61,18 +56,17 @@ struct ColumnUnits {
 
   template <typename F>
   void ForEachRoot(F f) const {
-    for (UnitId u : w->roots) f(u, w->cell[u], w->queued_rays[u], u);
+    for (UnitId u : w->roots) f(u, w->cell[u], w->queued_rays[u]);
   }
   template <typename F>
   void ForEachChild(UnitId u, F f) const {
     for (UnitId i = w->succ_begin[u]; i < w->succ_begin[u + 1]; ++i) {
       const UnitId s = w->succ[i];
-      f(s, w->cell[s], w->queued_rays[s], s);
+      f(s, w->cell[s], w->queued_rays[s]);
     }
   }
   std::uint64_t samples(UnitId u) const { return w->samples[u]; }
   void Prefetch(UnitId) const {}
-  static UnitId FirstChild(UnitId u) { return u; }  // successors are scattered: no better guess
 };
 
 // The Compact form (work.h): a unit is its record's offset in the stream, its visit's
@@ -89,7 +83,7 @@ struct CompactUnits {
 
   template <typename F>
   void ForEachRoot(F f) const {
-    for (const Entry& e : c->roots) f(e, CellAt(e.offset), std::uint64_t{1}, UnitId(e.visit));
+    for (const Entry& e : c->roots) f(e, CellAt(e.offset), std::uint64_t{1});
   }
   template <typename F>
   void ForEachChild(const Entry& e, F f) const {
@@ -100,9 +94,9 @@ struct CompactUnits {
     const std::uint32_t n = std::uint32_t(c->spawned.size());
     std::uint32_t end = e.spawned;
     while (end < n && s[end].at == e.visit) ++end;
-    if (!last) f(Entry{at, e.visit + 1, end}, CellAt(at), std::uint64_t{1}, UnitId(e.visit + 1));
+    if (!last) f(Entry{at, e.visit + 1, end}, CellAt(at), std::uint64_t{1});
     for (std::uint32_t k = e.spawned; k < end; ++k) {
-      f(s[k].unit, CellAt(s[k].unit.offset), std::uint64_t{0}, UnitId(s[k].unit.visit));
+      f(s[k].unit, CellAt(s[k].unit.offset), std::uint64_t{0});
     }
   }
   std::uint64_t samples(const Entry& e) const {
@@ -114,142 +108,123 @@ struct CompactUnits {
     __builtin_prefetch(stream + e.offset);
     __builtin_prefetch(c->spawned.data() + e.spawned);
   }
-  // The ray's next visit (the usual successor; spawned rays' visits lie elsewhere).
-  static UnitId FirstChild(const Entry& e) { return UnitId(e.visit + 1); }
 };
 
 // ---- Paths, for schedulers that watch the frame unfold ---------------------------------
-// Per unit (its index), the Cell Tree node it belongs to, named by its path: a unit in its
-// predecessor's cell (a spawned ray's first visit) is in the predecessor's node, any other in
-// the child of that node for its cell (docs/design.md §1 "Cell Tree"). Paths are numbered
-// 1, 2, ... in the order of this walk, 0 being the root; the board renumbers them in the
-// order they are queued before a scheduler sees them (Scheduler::Arrival).
-struct UnitPaths {
-  // Per unit; left uninitialised before the walk, which writes every unit once (a zero fill
-  // of a frame's 26 million units was a pass of its own).
-  std::unique_ptr<std::uint32_t[]> of_unit;
-  std::size_t units = 0;
-  std::vector<std::uint32_t> parent;  // per path
-};
-
-template <typename Units>
-UnitPaths PathsOf(const Units& u, std::size_t units) {
-  using Entry = typename Units::Entry;
-  UnitPaths p;
-  p.of_unit.reset(new std::uint32_t[units]);
-  p.units = units;
-  p.parent = {0};
-  // Per path, the child it was last asked for: (cell + 1) << 32 | child path, 0 for none. A
-  // ray's next visit usually takes the path its neighbour took, and the paths a ray creates
-  // are numbered one after another, so these are read from a few cache lines where the table's
-  // slots lie scattered: the table is looked up only when the memo misses (issue 43).
-  std::vector<std::uint64_t> last_child = {0};
-  // (parent path, cell) -> path, open addressing (a lookup per unit entering another cell: a
-  // std::unordered_map's node per path made this a tenth of a watching replay; issue 43). A slot
-  // holds a path's number (0, the root's, for none: the root is no path's child), its key read
-  // back from parent and cell_of: 4 bytes a slot and 4 a path, where keys and values beside them
-  // took 12 a slot (~300 MB at a frame's 4.5M paths, the peak of a watching replay).
-  std::vector<std::uint32_t> cell_of = {0};  // per path, its cell (the root's unused)
-  std::vector<std::uint32_t> table(1024, 0);
-  std::size_t mask = table.size() - 1;
-  const auto slot = [&](std::uint32_t parent, std::uint32_t cell) {
-    const std::uint64_t key = std::uint64_t{parent} << 32 | cell;
-    std::size_t i = std::size_t(SplitMix64(key).Next()) & mask;
-    while (table[i] != 0 && (p.parent[table[i]] != parent || cell_of[table[i]] != cell)) {
-      i = (i + 1) & mask;
-    }
-    return i;
-  };
-  const auto path = [&](std::uint32_t parent, CellId c) {
-    const std::uint64_t memo = std::uint64_t{c.value()} + 1;
-    std::uint64_t& last = last_child[parent];
-    if (last >> 32 == memo) return std::uint32_t(last);
-    std::size_t i = slot(parent, c.value());
-    if (table[i] != 0) {
-      last = memo << 32 | table[i];
-      return table[i];
-    }
-    const std::uint32_t id = std::uint32_t(p.parent.size());
-    last = memo << 32 | id;  // before the push below moves last_child
-    p.parent.push_back(parent);
-    cell_of.push_back(c.value());
-    last_child.push_back(0);
-    if (2 * p.parent.size() > table.size()) {  // grow: at most half full
-      std::vector<std::uint32_t> old(2 * table.size(), 0);
-      old.swap(table);
-      mask = table.size() - 1;
-      for (const std::uint32_t q : old) {
-        if (q != 0) table[slot(p.parent[q], cell_of[q])] = q;
-      }
-      i = slot(parent, c.value());
-    }
-    table[i] = id;
-    return id;
-  };
+// What the board tells a scheduler that watches (Scheduler::Arrived, Taken). The board is a
+// template on it: NoWatch, for every other scheduler, is empty and does nothing, and its queued
+// items are the units' entries alone, so that their replay core is the same code as if
+// watching did not exist.
+struct NoWatch {
+  template <typename Entry>
   struct Item {
     Entry e;
-    UnitId x;
-    CellId c;
   };
-  std::vector<Item> stack;
-  u.ForEachRoot([&](const Entry& e, CellId c, std::uint64_t, UnitId x) {
-    p.of_unit[x] = path(0, c);
-    stack.push_back({e, x, c});
-  });
-  while (!stack.empty()) {
-    const Item it = stack.back();
-    stack.pop_back();
-    u.ForEachChild(it.e, [&](const Entry& e, CellId c, std::uint64_t, UnitId x) {
-      p.of_unit[x] = c == it.c ? p.of_unit[it.x] : path(p.of_unit[it.x], c);
-      stack.push_back({e, x, c});
-    });
+  template <typename Entry>
+  Item<Entry> Root(const Entry& e, CellId) {
+    return {e};
   }
-  return p;
-}
-
-// What the board tells a scheduler that watches (Scheduler::Arrived, Taken). The board is a
-// template on it: NoWatch, for every other scheduler, is empty and does nothing, so that their
-// replay core is the same code as if watching did not exist.
-struct NoWatch {
-  void Queued(UnitId, CellId, std::uint64_t) {}
+  template <typename Entry>
+  Item<Entry> Child(const Item<Entry>&, CellId, const Entry& e, CellId) {
+    return {e};
+  }
+  template <typename I>
+  void Queued(const I&, CellId, std::uint64_t) {}
   void Taken(CellId) {}
-  void Prefetch(UnitId) const {}
 };
 
+// Each queued unit carries its Cell Tree node, named by its path: a unit in its predecessor's
+// cell (a spawned ray's first visit) is in the predecessor's node, any other in the child of
+// that node for its cell (docs/design.md §1 "Cell Tree"). The path is found when the unit is
+// released, from its predecessor's (in hand then) and its cell: one lookup in an
+// open-addressing table of (parent path, cell) per unit entering another cell, after a memo
+// of the child last asked for, which neighbouring rays mostly hit. A path is numbered when it
+// is first met, 1, 2, ... (0 the root); only a unit entering another cell makes one, and it is
+// queued at once, so the numbers are the order in which paths are first queued, as a scheduler
+// is told them (Scheduler::Arrival). Work per node (WorkGraph::per_node) needs no lookup: each
+// unit is a node of its own. Before (issue 43), a pass over the frame's units gave every unit
+// its path in a table of 4 bytes a unit, read back when the unit was queued: a cache miss per
+// unit, 180 MB and 13% of a watching replay's CPU at 1920x1080 and 4096 cells.
 class Watch {
  public:
-  Watch(const UnitPaths& paths, Scheduler& scheduler)
-      : of_unit_(paths.of_unit.get()), units_(paths.units), scheduler_(&scheduler) {
-    path_.resize(paths.parent.size());
-    for (std::size_t i = 0; i < path_.size(); ++i) path_[i].parent = paths.parent[i];
+  template <typename Entry>
+  struct Item {
+    Entry e;
+    std::uint32_t path;
+  };
+
+  // per_node: each unit is a node of its own (WorkGraph::per_node), so it makes a path, in the
+  // order it is queued, without a lookup.
+  Watch(Scheduler& scheduler, bool per_node) : scheduler_(&scheduler), per_node_(per_node) {}
+
+  template <typename Entry>
+  Item<Entry> Root(const Entry& e, CellId c) {
+    return {e, PathOf(0, c)};
   }
-  // Unit x was queued at c: the scheduler is told its node, numbered as first queued.
-  void Queued(UnitId x, CellId c, std::uint64_t q) {
-    Path& p = path_[of_unit_[x]];
-    if (p.id == 0) p.id = ++count_;
-    const std::uint32_t parent = p.parent == 0 ? 0 : path_[p.parent].id;
-    RAYCELL_CHECK(p.parent == 0 || parent != 0);  // a parent is queued before
-    scheduler_->Arrived({p.id, parent, c, q});
+  // A successor `e`, in cell c, of `from`, worked in `cell`.
+  template <typename Entry>
+  Item<Entry> Child(const Item<Entry>& from, CellId cell, const Entry& e, CellId c) {
+    if (c != cell) return {e, PathOf(from.path, c)};
+    RAYCELL_CHECK(!per_node_);  // a node's children lie in other cells than its own
+    return {e, from.path};
+  }
+  template <typename I>
+  void Queued(const I& item, CellId c, std::uint64_t q) {
+    scheduler_->Arrived({item.path, parent_[item.path], c, q});
   }
   void Taken(CellId c) { scheduler_->Taken(c); }
-  // Starts loading the path of unit x, about to be queued: the units are scattered over a
-  // frame's visits, so each lookup in of_unit would be a cache miss (half the watching board's
-  // time at 1920x1080 before this; issue 43).
-  void Prefetch(UnitId x) const {
-    if (x < units_) __builtin_prefetch(of_unit_ + x);
-  }
 
  private:
-  // Per path its parent and its number as told (0: not queued yet), side by side: one cache
-  // miss per unit queued where two arrays made two.
-  struct Path {
-    std::uint32_t parent = 0, id = 0;
-  };
-  const std::uint32_t* of_unit_;
-  std::size_t units_;
+  std::size_t Slot(std::uint32_t parent, std::uint32_t cell) const {
+    // Fibonacci hashing of the key: its high bits index the table.
+    const std::uint64_t key = std::uint64_t{parent} << 32 | cell;
+    std::size_t i = std::size_t((key * 0x9E3779B97F4A7C15ull) >> shift_);
+    while (table_[i] != 0 && (parent_[table_[i]] != parent || cell_[table_[i]] != cell)) {
+      i = (i + 1) & mask_;
+    }
+    return i;
+  }
+
+  // The child of path `parent` for cell c, made if new.
+  std::uint32_t PathOf(std::uint32_t parent, CellId c) {
+    if (per_node_) {
+      RAYCELL_CHECK_LT(parent_.size(), std::size_t{UINT32_MAX});
+      parent_.push_back(parent);
+      return std::uint32_t(parent_.size() - 1);
+    }
+    std::uint32_t& last = last_child_[parent];
+    if (last != 0 && cell_[last] == c.value()) return last;
+    std::size_t i = Slot(parent, c.value());
+    if (table_[i] != 0) return last = table_[i];
+    const std::uint32_t id = std::uint32_t(parent_.size());
+    RAYCELL_CHECK_LT(parent_.size(), std::size_t{UINT32_MAX});
+    last = id;  // before the push below moves last_child_
+    parent_.push_back(parent);
+    cell_.push_back(c.value());
+    last_child_.push_back(0);
+    if (2 * parent_.size() > table_.size()) {  // grow: at most half full
+      std::vector<std::uint32_t> old(2 * table_.size(), 0);
+      old.swap(table_);
+      mask_ = table_.size() - 1;
+      --shift_;
+      for (const std::uint32_t q : old) {
+        if (q != 0) table_[Slot(parent_[q], cell_[q])] = q;
+      }
+      i = Slot(parent, c.value());
+    }
+    table_[i] = id;
+    return id;
+  }
+
   Scheduler* scheduler_;
-  std::vector<Path> path_;
-  std::uint32_t count_ = 0;
+  bool per_node_;
+  // Per path: its parent, its cell (the root's unused) and the child last asked for (0: none).
+  std::vector<std::uint32_t> parent_ = {0}, cell_ = {0}, last_child_ = {0};
+  // (parent, cell) -> path, 0 for none (the root is no path's child): 4 bytes a slot, the key
+  // read back from parent_ and cell_.
+  std::vector<std::uint32_t> table_ = std::vector<std::uint32_t>(1024, 0);
+  std::size_t mask_ = 1023;
+  int shift_ = 64 - 10;  // 64 - log2 of the table's size
 };
 
 // ---- Pending events -------------------------------------------------------------------
@@ -263,12 +238,12 @@ enum class Kind : std::uint8_t { kNone, kIdle, kFetched, kUnitDone };
 
 // ---- The board ------------------------------------------------------------------------
 
-template <typename Entry>
+template <typename Item>
 struct Processor {
-  std::optional<CellId> cell;   // locked and loaded while working; the last one after
-  std::vector<Entry> worklist;  // units of `cell` to work in this fetch, from `head` on
+  std::optional<CellId> cell;  // locked and loaded while working; the last one after
+  std::vector<Item> worklist;  // units of `cell` to work in this fetch, from `head` on
   std::size_t head = 0;
-  Entry unit{};          // the unit being worked
+  Item unit{};           // the unit being worked
   bool holding = false;  // `cell` is locked by this processor (fetching or working it)
   SimTime work, stall;
 };
@@ -282,6 +257,7 @@ template <typename Units, typename W>
 class Board {
  public:
   using Entry = typename Units::Entry;
+  using Item = typename W::template Item<Entry>;  // a queued unit
 
   Board(const WorkGraph& w, Units graph_units, const std::vector<std::uint64_t>& footprints,
         const ReplayConfig& config, Scheduler& scheduler, const MemoryHierarchy::Requests& futures,
@@ -307,7 +283,7 @@ class Board {
         obs_(observer),
         watch_(std::move(watch)) {
     u_.ForEachRoot(
-        [this](const Entry& e, CellId c, std::uint64_t q, UnitId x) { Enqueue(e, c, q, x); });
+        [this](const Entry& e, CellId c, std::uint64_t q) { Enqueue(watch_.Root(e, c), c, q); });
     memory_.set_observer(obs_);
   }
 
@@ -372,9 +348,9 @@ class Board {
   // handled (its slot is brought up to date after the handler), or one that was waiting.
   void Schedule(std::uint32_t p, SimTime when, Kind kind) { slots_.Schedule(p, when, kind); }
 
-  void Enqueue(const Entry& e, CellId c, std::uint64_t q, UnitId x) {
-    watch_.Queued(x, c, q);
-    queues_[c.value()].push_back(e);
+  void Enqueue(const Item& item, CellId c, std::uint64_t q) {
+    watch_.Queued(item, c, q);
+    queues_[c.value()].push_back(item);
     const bool starts = (queued_rays_[c.value()] == 0) & (q != 0);
     available_ += starts & (open_[c.value()] != 0);
     joinable_ += starts & (open_[c.value()] == 0);
@@ -477,9 +453,9 @@ class Board {
   // Moves the queue of p's cell to the end of its worklist: a swap of arrays when the
   // worklist is used up, as it is whenever a queue is taken.
   void TakeQueue(std::uint32_t p) {
-    Processor<Entry>& ps = processors_[p];
+    Processor<Item>& ps = processors_[p];
     const CellId c = *ps.cell;
-    std::vector<Entry>& q = queues_[c.value()];
+    std::vector<Item>& q = queues_[c.value()];
     if (q.empty()) return;
     if (obs_) obs_->QueueTaken(p, c, queued_rays_[c.value()], now_);
     watch_.Taken(c);
@@ -498,13 +474,10 @@ class Board {
       ps.worklist.swap(q);
       // The cell's queue now has the old worklist's room; a long one is freed, else the
       // rooms of long worklists would pile up in the queues of every cell.
-      if (q.capacity() > kDropWorked) std::vector<Entry>().swap(q);
+      if (q.capacity() > kDropWorked) std::vector<Item>().swap(q);
       // WorkNext prefetches kPrefetch units ahead: start the first ones here.
       const std::size_t n = std::min(kPrefetch, ps.worklist.size());
-      for (std::size_t i = 0; i < n; ++i) {
-        u_.Prefetch(ps.worklist[i]);
-        watch_.Prefetch(Units::FirstChild(ps.worklist[i]));
-      }
+      for (std::size_t i = 0; i < n; ++i) u_.Prefetch(ps.worklist[i].e);
     } else {
       ps.worklist.insert(ps.worklist.end(), q.begin(), q.end());
       q.clear();
@@ -521,7 +494,7 @@ class Board {
   }
 
   void StartNext(std::uint32_t p) {
-    Processor<Entry>& ps = processors_[p];
+    Processor<Item>& ps = processors_[p];
     if (ps.head == ps.worklist.size()) TakeQueue(p);  // units that arrived meanwhile
     if (ps.head == ps.worklist.size() && holders_[ps.cell->value()] > 1) Split(p);
     if (ps.head == ps.worklist.size()) {
@@ -540,17 +513,17 @@ class Board {
   // p shares its cell and has nothing left: it takes the later half of the units not yet
   // started of the holder with the most (lowest number on ties), if it has two or more.
   void Split(std::uint32_t p) {
-    Processor<Entry>& ps = processors_[p];
+    Processor<Item>& ps = processors_[p];
     std::uint32_t victim = p;
     std::size_t most = 1;
     for (std::uint32_t q = 0; q < processors_.size(); ++q) {
-      const Processor<Entry>& qs = processors_[q];
+      const Processor<Item>& qs = processors_[q];
       if (q == p || !qs.holding || qs.cell != ps.cell) continue;
       const std::size_t left = qs.worklist.size() - qs.head;
       if (left > most) victim = q, most = left;
     }
     if (victim == p) return;
-    std::vector<Entry>& from = processors_[victim].worklist;
+    std::vector<Item>& from = processors_[victim].worklist;
     const std::size_t n = most / 2;
     ps.worklist.clear();
     ps.head = 0;
@@ -560,7 +533,7 @@ class Board {
 
   // Starts working the unit at the head of p's worklist.
   void WorkNext(std::uint32_t p) {
-    Processor<Entry>& ps = processors_[p];
+    Processor<Item>& ps = processors_[p];
     // Units worked are dropped from the front once they are half of a long worklist, so
     // that a batch that keeps spawning units in its cell (millions in a large frame) holds
     // those still to work, not every unit of the batch; the order is unchanged.
@@ -570,12 +543,9 @@ class Board {
     }
     // The units a few places ahead are known: load their successors while this one is
     // worked (the records are scattered over the frame, so each would be a cache miss).
-    if (ps.head + kPrefetch < ps.worklist.size()) {
-      u_.Prefetch(ps.worklist[ps.head + kPrefetch]);
-      watch_.Prefetch(Units::FirstChild(ps.worklist[ps.head + kPrefetch]));
-    }
+    if (ps.head + kPrefetch < ps.worklist.size()) u_.Prefetch(ps.worklist[ps.head + kPrefetch].e);
     ps.unit = ps.worklist[ps.head++];
-    const SimTime dt = tps_ * u_.samples(ps.unit);
+    const SimTime dt = tps_ * u_.samples(ps.unit.e);
     ps.work = ps.work + dt;
     Schedule(p, now_ + dt, Kind::kUnitDone);
   }
@@ -583,9 +553,9 @@ class Board {
   void OnUnitDone(std::uint32_t p) {
     events_since_progress_ = 0;
     ++done_;
-    Processor<Entry>& ps = processors_[p];
+    Processor<Item>& ps = processors_[p];
     const CellId cell = *ps.cell;  // the unit's, as every unit of the worklist
-    const Entry unit = ps.unit;
+    const Item unit = ps.unit;
     // When the next unit is already in the worklist and no processor waits (so releasing
     // successors schedules no event and takes no seq), p's next event is the same whether it
     // is scheduled before or after the successors are released. Scheduling it first lets the
@@ -598,11 +568,12 @@ class Board {
       updated_ = true;
     }
     bool released = false;
-    u_.ForEachChild(unit, [&](const Entry& e, CellId c, std::uint64_t q, UnitId x) {
+    u_.ForEachChild(unit.e, [&](const Entry& e, CellId c, std::uint64_t q) {
+      const Item child = watch_.Child(unit, cell, e, c);
       if (c == cell) {
-        ps.worklist.push_back(e);  // spawned in the loaded cell: worked now
+        ps.worklist.push_back(child);  // spawned in the loaded cell: worked now
       } else {
-        Enqueue(e, c, q, x);
+        Enqueue(child, c, q);
         released = true;
       }
     });
@@ -692,7 +663,7 @@ class Board {
   SimTime tps_;
   Scheduler& scheduler_;
   MemoryHierarchy memory_;
-  std::vector<std::vector<Entry>> queues_;
+  std::vector<std::vector<Item>> queues_;
   // view_[c] = queued_rays_[c] & open_[c], kept so (the queues in a scheduler's view).
   std::vector<std::uint64_t> queued_rays_, view_;
   // The cell with the most queued rays in view_, lowest number on ties (kNoCell: none), when
@@ -715,7 +686,7 @@ class Board {
   // busy cells with queued rays, which a scheduler may join.
   std::vector<std::uint32_t> holders_;
   std::uint32_t joinable_ = 0;
-  std::vector<Processor<Entry>> processors_;
+  std::vector<Processor<Item>> processors_;
   SlotQueue<Kind> slots_;
   // Bit sets of processors, words_ 64-bit words each: waiting (idle, no cell had work), and
   // whose last cell has queued rays; per cell, the processors whose last cell it is.
@@ -751,7 +722,7 @@ ReplayResult Board<Units, W>::Result() const {
   r.levels = memory_.stats();
   r.fetches = r.levels[0].fetches;
   r.time = now_;
-  for (const Processor<Entry>& ps : processors_) {
+  for (const Processor<Item>& ps : processors_) {
     r.work = r.work + ps.work;
     r.stall = r.stall + ps.stall;
     r.idle = r.idle + (now_ - ps.work - ps.stall);
@@ -775,16 +746,9 @@ bool NeedsFuture(const ReplayConfig& config) {
   return false;
 }
 
-// A tree's work per node for the replays of frames seen (SeenReplayer), and its units' paths
-// (PathsOf) for the schedulers that watch: the same for every replay of the tree.
-struct SeenWork {
-  WorkGraph work;
-  UnitPaths paths;
-};
-SeenWork MakeSeenWork(const CellTree& tree, std::uint32_t cells);
-// ReplayFrame of a seen frame's work, without what only a frame's own result reports (its lower
-// bound on the time) and with the paths made once.
-ReplayResult SeenReplay(const SeenWork& work, const std::vector<std::uint64_t>& footprints,
+// ReplayFrame of a seen frame's work per node, without what only a frame's own result reports
+// (its lower bound on the time).
+ReplayResult SeenReplay(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                         const ReplayConfig& config, Scheduler& scheduler, const FrameTrees& frame,
                         MemoryState* memory, const MemoryUnits* units);
 
@@ -801,12 +765,13 @@ class SeenReplayer : public SeenFrameReplayer {
                      const CellTree* previous, const CellTree* before_previous) const override {
     const std::uint32_t cells = std::uint32_t(footprints_.size());
     // The frame's plan cache: what the scheduler makes from the earlier trees is shared with
-    // the replay's own frame, the other seen replays and the other configurations, and so are
-    // the tree's work per node and its units' paths (docs/design.md §5 "Sharing plans").
+    // the replay's own frame, the other seen replays and the other configurations, and so is
+    // the tree's work per node, as the walker's packed records (docs/design.md §5 "Sharing
+    // plans").
     const FrameTrees frame{frame_index, &tree, previous, cells, before_previous, plans_};
-    const std::shared_ptr<const SeenWork> work = Shared<SeenWork>(
+    const std::shared_ptr<const WorkGraph> work = Shared<WorkGraph>(
         plans_, PlanKey(kSeenWork, {TreeKey(tree), cells}),
-        [&] { return MakeSeenWork(tree, cells); }, /*begin_only=*/true);
+        [&] { return PackedNodeWork(tree, cells); }, /*begin_only=*/true);
     MemoryState memory = start_;
     const ReplayResult r = SeenReplay(*work, footprints_, config_, scheduler, frame,
                                       start_.empty() ? nullptr : &memory, units_);
@@ -876,80 +841,35 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
   }
 }
 
-// Replay with the board's W chosen by whether the scheduler watches. `given`: the units' paths
-// when made already (SeenWork), else made here for a scheduler that watches.
+// Replay with the board's W chosen by whether the scheduler watches.
 template <typename Units>
 ReplayResult Replay(const WorkGraph& work, Units graph_units,
                     const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
                     Scheduler& scheduler, const FrameTrees& frame, std::uint64_t bound,
                     ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units,
-                    bool seen, const UnitPaths* given = nullptr, bool time_bound = true) {
+                    bool seen, bool time_bound = true) {
   if (!scheduler.Watches()) {
     return Replay<Units, NoWatch>(
         work, graph_units, footprints, config, scheduler, frame, bound, observer, memory, units,
         seen, [] { return NoWatch{}; }, time_bound);
   }
-  // The paths of the frame's own work graph are the same for every configuration replayed on
-  // it: made once through the frame's plan cache. The graph (the runner's, alive as long as the
-  // cache) is named by its address and its size and totals, checked again on use.
-  struct FramePaths {
-    const WorkGraph* work;
-    std::size_t size;
-    UnitPaths paths;
-  };
-  // Made at the first Watch, after the scheduler's BeginFrame, so that what only BeginFrame
-  // reads (frame i-2's tree, the frames seen) may be freed before (issue 43).
-  std::shared_ptr<const FramePaths> shared;
-  UnitPaths made;
-  const auto paths = [&]() -> const UnitPaths& {
-    if (given == nullptr && frame.plans != nullptr) {
-      const WorkGraph::Totals& t = work.totals;
-      shared = Shared<FramePaths>(
-          frame.plans,
-          PlanKey(kFramePaths, {std::uint64_t(reinterpret_cast<std::uintptr_t>(&work)), work.size(),
-                                work.cells, t.rays, t.segments, t.samples}),
-          [&] {
-            return FramePaths{&work, work.size(), PathsOf(graph_units, work.size())};
-          });
-      RAYCELL_CHECK(shared->work == &work && shared->size == work.size());
-      given = &shared->paths;
-    }
-    if (given == nullptr) {
-      made = PathsOf(graph_units, work.size());
-      given = &made;
-    }
-    return *given;
-  };
   return Replay<Units, Watch>(
       work, graph_units, footprints, config, scheduler, frame, bound, observer, memory, units, seen,
-      [&] { return Watch(paths(), scheduler); }, time_bound);
+      [&] { return Watch(scheduler, work.per_node); }, time_bound);
 }
 
-SeenWork MakeSeenWork(const CellTree& tree, std::uint32_t cells) {
-  SeenWork s;
-  s.work = PackedNodeWork(tree, cells);  // records alone, as the walker's (issue 43)
-  if (!s.work.packed.empty()) {
-    s.paths =
-        PathsOf(PackedUnits{s.work.packed.data(), UnitId(s.work.roots.size())}, s.work.size());
-  } else {
-    s.paths = PathsOf(ColumnUnits{&s.work}, s.work.size());
-  }
-  return s;
-}
-
-ReplayResult SeenReplay(const SeenWork& seen, const std::vector<std::uint64_t>& footprints,
+ReplayResult SeenReplay(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                         const ReplayConfig& config, Scheduler& scheduler, const FrameTrees& frame,
                         MemoryState* memory, const MemoryUnits* units) {
-  const WorkGraph& work = seen.work;
   RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
   RAYCELL_CHECK(work.compact.units == 0);  // per node: packed records or columns
   if (!work.packed.empty()) {
     return Replay(work, PackedUnits{work.packed.data(), UnitId(work.roots.size())}, footprints,
-                  config, scheduler, frame, 0, nullptr, memory, units, /*seen=*/false, &seen.paths,
+                  config, scheduler, frame, 0, nullptr, memory, units, /*seen=*/false,
                   /*time_bound=*/false);
   }
   return Replay(work, ColumnUnits{&work}, footprints, config, scheduler, frame, 0, nullptr, memory,
-                units, /*seen=*/false, &seen.paths, /*time_bound=*/false);
+                units, /*seen=*/false, /*time_bound=*/false);
 }
 
 }  // namespace

@@ -228,6 +228,7 @@ WorkGraph NodeWork(const CellTree& tree, std::uint32_t cells) {
   BuildSuccessors(w, edges);
   Finish(w);
   w.shape = ShapeOf(w);
+  w.per_node = true;
   return w;
 }
 
@@ -263,6 +264,7 @@ WorkGraph PackedNodeWork(const CellTree& tree, std::uint32_t cells) {
   RAYCELL_CHECK_EQ(order.size(), tree.node_count());  // every node hangs from the root
   w.packed.back() = {kNoCell, 0, 0, std::uint32_t(order.size())};
   w.shape = ShapeOf(w);
+  w.per_node = true;
   return w;
 }
 

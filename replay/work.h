@@ -61,6 +61,9 @@ struct WorkGraph {
   std::vector<UnitId> succ_begin;           // successors of u: succ[succ_begin[u] ..
   std::vector<UnitId> succ;                 //   succ_begin[u + 1])
   std::vector<UnitId> roots;                // ready when the frame starts
+  // Each unit a Cell Tree node (NodeWork, PackedNodeWork): its successors are other nodes, in
+  // other cells than its own. A watching replay then names each unit's node by the unit alone.
+  bool per_node = false;
 
   // What the replay core reads of a unit, packed in 16 bytes and laid out breadth first from
   // the roots, so that a unit's successors are adjacent records: entry x's successors are

@@ -110,8 +110,7 @@ enum PlanKind : std::uint64_t {
   kTreeStats,
   kHeights,
   kStandIns,
-  kSeenWork,    // a tree's work per node and its paths, for the replays of frames seen (replay/)
-  kFramePaths,  // the paths of a frame's work graph's units, for the watching schedulers (replay/)
+  kSeenWork,  // a tree's work per node, for the replays of frames seen (replay/)
 };
 
 // Peel's schedule of `tree` (graph/peel.h), and the union of two trees (its shape, UnionShape:
