@@ -6,7 +6,6 @@
 
 #include "base/check.h"
 #include "base/checked.h"
-#include "base/random.h"
 #include "engine/slot_queue.h"
 #include "engine/watchdog.h"
 #include "replay/time_bound.h"
@@ -136,11 +135,10 @@ struct NoWatch {
 // Each queued unit carries its Cell Tree node, named by its path: a unit in its predecessor's
 // cell (a spawned ray's first visit) is in the predecessor's node, any other in the child of
 // that node for its cell (docs/design.md §1 "Cell Tree"). The path is found when the unit is
-// released, from its predecessor's (in hand then) and its cell: one lookup in an
-// open-addressing table of (parent path, cell) per unit entering another cell, after a memo
-// of the child last asked for, which neighbouring rays mostly hit. A path is numbered when it
-// is first met, 1, 2, ... (0 the root); only a unit entering another cell makes one, and it is
-// queued at once, so the numbers are the order in which paths are first queued, as a scheduler
+// released, from its predecessor's (in hand then) and its cell: the predecessor's path's child
+// for that cell, among its children kept most recently used first (ChildOf). A path is numbered
+// when it is first met, 1, 2, ... (0 the root); only a unit entering another cell makes one, and it
+// is queued at once, so the numbers are the order in which paths are first queued, as a scheduler
 // is told them (Scheduler::Arrival). Work per node (WorkGraph::per_node) needs no lookup: each
 // unit is a node of its own. Before (issue 43), a pass over the frame's units gave every unit
 // its path in a table of 4 bytes a unit, read back when the unit was queued: a cache miss per
@@ -159,12 +157,16 @@ class Watch {
 
   template <typename Entry>
   Item<Entry> Root(const Entry& e, CellId c) {
-    return {e, PathOf(0, c)};
+    if (per_node_) return {e, NewPath(0)};
+    if (c.value() >= root_child_.size()) root_child_.resize(std::size_t{c.value()} + 1, 0);
+    std::uint32_t& k = root_child_[c.value()];
+    if (k == 0) k = NewPath(0, c);
+    return {e, k};
   }
   // A successor `e`, in cell c, of `from`, worked in `cell`.
   template <typename Entry>
   Item<Entry> Child(const Item<Entry>& from, CellId cell, const Entry& e, CellId c) {
-    if (c != cell) return {e, PathOf(from.path, c)};
+    if (c != cell) return {e, per_node_ ? NewPath(from.path) : ChildOf(from.path, c)};
     RAYCELL_CHECK(!per_node_);  // a node's children lie in other cells than its own
     return {e, from.path};
   }
@@ -175,56 +177,57 @@ class Watch {
   void Taken(CellId c) { scheduler_->Taken(c); }
 
  private:
-  std::size_t Slot(std::uint32_t parent, std::uint32_t cell) const {
-    // Fibonacci hashing of the key: its high bits index the table.
-    const std::uint64_t key = std::uint64_t{parent} << 32 | cell;
-    std::size_t i = std::size_t((key * 0x9E3779B97F4A7C15ull) >> shift_);
-    while (table_[i] != 0 && (parent_[table_[i]] != parent || cell_[table_[i]] != cell)) {
-      i = (i + 1) & mask_;
-    }
-    return i;
+  // A path's cell and its children: `child` the child used last (0: none), whose `sibling` is
+  // the one used before it, and so on (most recently used first).
+  struct Links {
+    std::uint32_t cell = 0, child = 0, sibling = 0;
+  };
+
+  std::uint32_t NewPath(std::uint32_t parent) {
+    RAYCELL_CHECK_LT(parent_.size(), std::size_t{UINT32_MAX});
+    parent_.push_back(parent);
+    return std::uint32_t(parent_.size() - 1);
+  }
+  std::uint32_t NewPath(std::uint32_t parent, CellId c) {
+    const std::uint32_t id = NewPath(parent);
+    links_.push_back({c.value(), 0, 0});
+    return id;
   }
 
-  // The child of path `parent` for cell c, made if new.
-  std::uint32_t PathOf(std::uint32_t parent, CellId c) {
-    if (per_node_) {
-      RAYCELL_CHECK_LT(parent_.size(), std::size_t{UINT32_MAX});
-      parent_.push_back(parent);
-      return std::uint32_t(parent_.size() - 1);
+  // The child of path `parent` (not the root) for cell c, made if new. A new path's parent has
+  // no child yet, so most paths are made without a search (issue 43: the table of (parent,
+  // cell) this replaced missed the cache on every such lookup, 9% of a watching replay's CPU at
+  // 4096 cells); rays leaving a node mostly enter the cell its last ray entered.
+  std::uint32_t ChildOf(std::uint32_t parent, CellId c) {
+    std::uint32_t k = links_[parent].child;
+    if (k == 0 || links_[k].cell == c.value()) {
+      if (k != 0) return k;
+      k = NewPath(parent, c);
+      links_[parent].child = k;
+      return k;
     }
-    std::uint32_t& last = last_child_[parent];
-    if (last != 0 && cell_[last] == c.value()) return last;
-    std::size_t i = Slot(parent, c.value());
-    if (table_[i] != 0) return last = table_[i];
-    const std::uint32_t id = std::uint32_t(parent_.size());
-    RAYCELL_CHECK_LT(parent_.size(), std::size_t{UINT32_MAX});
-    last = id;  // before the push below moves last_child_
-    parent_.push_back(parent);
-    cell_.push_back(c.value());
-    last_child_.push_back(0);
-    if (2 * parent_.size() > table_.size()) {  // grow: at most half full
-      std::vector<std::uint32_t> old(2 * table_.size(), 0);
-      old.swap(table_);
-      mask_ = table_.size() - 1;
-      --shift_;
-      for (const std::uint32_t q : old) {
-        if (q != 0) table_[Slot(parent_[q], cell_[q])] = q;
+    for (std::uint32_t before = k;;) {  // the others, moved to the front when found
+      const std::uint32_t next = links_[before].sibling;
+      if (next == 0) break;
+      if (links_[next].cell == c.value()) {
+        links_[before].sibling = links_[next].sibling;
+        links_[next].sibling = links_[parent].child;
+        links_[parent].child = next;
+        return next;
       }
-      i = Slot(parent, c.value());
+      before = next;
     }
-    table_[i] = id;
+    const std::uint32_t id = NewPath(parent, c);
+    links_[id].sibling = links_[parent].child;
+    links_[parent].child = id;
     return id;
   }
 
   Scheduler* scheduler_;
   bool per_node_;
-  // Per path: its parent, its cell (the root's unused) and the child last asked for (0: none).
-  std::vector<std::uint32_t> parent_ = {0}, cell_ = {0}, last_child_ = {0};
-  // (parent, cell) -> path, 0 for none (the root is no path's child): 4 bytes a slot, the key
-  // read back from parent_ and cell_.
-  std::vector<std::uint32_t> table_ = std::vector<std::uint32_t>(1024, 0);
-  std::size_t mask_ = 1023;
-  int shift_ = 64 - 10;  // 64 - log2 of the table's size
+  std::vector<std::uint32_t> parent_ = {0};  // per path (the root's unused)
+  std::vector<Links> links_ = {Links{}};     // per path, unless per node
+  std::vector<std::uint32_t> root_child_;    // per cell, the root's child for it (0: none)
 };
 
 // ---- Pending events -------------------------------------------------------------------
