@@ -95,7 +95,15 @@ int main(int argc, char** argv) {
   try {
     const TraceReader reader = TraceReader::Open(argv[1]);
     std::size_t frames = reader.frames().size();
-    if (argc > 2) frames = std::min<std::size_t>(frames, std::strtoull(argv[2], nullptr, 10));
+    if (argc > 2 && std::string(argv[2]) != "all") {
+      char* end = nullptr;
+      const unsigned long long n = std::strtoull(argv[2], &end, 10);
+      if (end == argv[2] || *end != '\0' || n == 0) {
+        throw std::invalid_argument(std::string("FRAMES must be a positive count or 'all', not '") +
+                                    argv[2] + "'");
+      }
+      frames = std::min<std::size_t>(frames, n);
+    }
     const int reps = argc > 3 ? std::max(1, std::atoi(argv[3])) : 3;
     const int only = argc > 4 ? std::atoi(argv[4]) : -1;  // one configuration, by number
     const bool core_only = argc > 5 && std::string(argv[5]) == "--core-only";
