@@ -153,12 +153,12 @@ class Watch {
 
   // per_node: each unit is a node of its own (WorkGraph::per_node), so it makes a path, in the
   // order it is queued, without a lookup.
-  Watch(Scheduler& scheduler, bool per_node) : scheduler_(&scheduler), per_node_(per_node) {}
+  Watch(Scheduler& scheduler, bool per_node, std::uint32_t cells)
+      : scheduler_(&scheduler), per_node_(per_node), root_child_(per_node ? 0 : cells, 0) {}
 
   template <typename Entry>
   Item<Entry> Root(const Entry& e, CellId c) {
     if (per_node_) return {e, NewPath(0)};
-    if (c.value() >= root_child_.size()) root_child_.resize(std::size_t{c.value()} + 1, 0);
     std::uint32_t& k = root_child_[c.value()];
     if (k == 0) k = NewPath(0, c);
     return {e, k};
@@ -199,26 +199,21 @@ class Watch {
   // cell) this replaced missed the cache on every such lookup, 9% of a watching replay's CPU at
   // 4096 cells); rays leaving a node mostly enter the cell its last ray entered.
   std::uint32_t ChildOf(std::uint32_t parent, CellId c) {
-    std::uint32_t k = links_[parent].child;
-    if (k == 0 || links_[k].cell == c.value()) {
-      if (k != 0) return k;
-      k = NewPath(parent, c);
-      links_[parent].child = k;
-      return k;
-    }
-    for (std::uint32_t before = k;;) {  // the others, moved to the front when found
+    const std::uint32_t first = links_[parent].child;
+    if (first != 0 && links_[first].cell == c.value()) return first;
+    // The others, moved to the front when found.
+    for (std::uint32_t before = first; before != 0;) {
       const std::uint32_t next = links_[before].sibling;
-      if (next == 0) break;
-      if (links_[next].cell == c.value()) {
+      if (next != 0 && links_[next].cell == c.value()) {
         links_[before].sibling = links_[next].sibling;
-        links_[next].sibling = links_[parent].child;
+        links_[next].sibling = first;
         links_[parent].child = next;
         return next;
       }
       before = next;
     }
     const std::uint32_t id = NewPath(parent, c);
-    links_[id].sibling = links_[parent].child;
+    links_[id].sibling = first;
     links_[parent].child = id;
     return id;
   }
@@ -801,7 +796,7 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
                     const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
                     Scheduler& scheduler, const FrameTrees& frame, std::uint64_t bound,
                     ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units,
-                    bool seen, MakeWatch make_watch, bool time_bound = true) {
+                    bool seen, MakeWatch make_watch, bool time_bound) {
   static const MemoryState kEmpty;
   const MemoryState& start = memory ? *memory : kEmpty;
   const std::vector<double> fetch_samples = FetchSamples(config, footprints);
@@ -850,7 +845,7 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
                     const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
                     Scheduler& scheduler, const FrameTrees& frame, std::uint64_t bound,
                     ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units,
-                    bool seen, bool time_bound = true) {
+                    bool seen, bool time_bound) {
   if (!scheduler.Watches()) {
     return Replay<Units, NoWatch>(
         work, graph_units, footprints, config, scheduler, frame, bound, observer, memory, units,
@@ -858,21 +853,33 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
   }
   return Replay<Units, Watch>(
       work, graph_units, footprints, config, scheduler, frame, bound, observer, memory, units, seen,
-      [&] { return Watch(scheduler, work.per_node); }, time_bound);
+      [&] { return Watch(scheduler, work.per_node, work.cells); }, time_bound);
+}
+
+// The replay of `work` in its form: the compact stream, the packed records or the columns.
+ReplayResult ReplayWork(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
+                        const ReplayConfig& config, Scheduler& scheduler, const FrameTrees& frame,
+                        std::uint64_t bound, ReplayObserver* observer, MemoryState* memory,
+                        const MemoryUnits* units, bool seen, bool time_bound) {
+  RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
+  if (work.compact.units != 0) {
+    return Replay(work, CompactUnits{work.compact.stream.data(), &work.compact}, footprints, config,
+                  scheduler, frame, bound, observer, memory, units, seen, time_bound);
+  }
+  if (!work.packed.empty()) {
+    return Replay(work, PackedUnits{work.packed.data(), UnitId(work.roots.size())}, footprints,
+                  config, scheduler, frame, bound, observer, memory, units, seen, time_bound);
+  }
+  return Replay(work, ColumnUnits{&work}, footprints, config, scheduler, frame, bound, observer,
+                memory, units, seen, time_bound);
 }
 
 ReplayResult SeenReplay(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                         const ReplayConfig& config, Scheduler& scheduler, const FrameTrees& frame,
                         MemoryState* memory, const MemoryUnits* units) {
-  RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
   RAYCELL_CHECK(work.compact.units == 0);  // per node: packed records or columns
-  if (!work.packed.empty()) {
-    return Replay(work, PackedUnits{work.packed.data(), UnitId(work.roots.size())}, footprints,
-                  config, scheduler, frame, 0, nullptr, memory, units, /*seen=*/false,
-                  /*time_bound=*/false);
-  }
-  return Replay(work, ColumnUnits{&work}, footprints, config, scheduler, frame, 0, nullptr, memory,
-                units, /*seen=*/false, /*time_bound=*/false);
+  return ReplayWork(work, footprints, config, scheduler, frame, 0, nullptr, memory, units,
+                    /*seen=*/false, /*time_bound=*/false);
 }
 
 }  // namespace
@@ -950,19 +957,10 @@ ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>
                          const ReplayConfig& config, Scheduler& scheduler, const FrameTrees& frame,
                          std::uint64_t bound, ReplayObserver* observer, MemoryState* memory,
                          const MemoryUnits* units, bool seen) {
-  RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
   // The caller ran CheckReplay (its bound on the memory model's size, as an invariant here).
   RAYCELL_CHECK_LE(std::uint64_t{config.processors.count} * work.cells, kMaxProcessorCells);
-  if (work.compact.units != 0) {
-    return Replay(work, CompactUnits{work.compact.stream.data(), &work.compact}, footprints, config,
-                  scheduler, frame, bound, observer, memory, units, seen);
-  }
-  if (!work.packed.empty()) {
-    return Replay(work, PackedUnits{work.packed.data(), UnitId(work.roots.size())}, footprints,
-                  config, scheduler, frame, bound, observer, memory, units, seen);
-  }
-  return Replay(work, ColumnUnits{&work}, footprints, config, scheduler, frame, bound, observer,
-                memory, units, seen);
+  return ReplayWork(work, footprints, config, scheduler, frame, bound, observer, memory, units,
+                    seen, /*time_bound=*/true);
 }
 
 }  // namespace raycell
