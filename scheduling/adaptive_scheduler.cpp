@@ -14,7 +14,8 @@ constexpr SchedulerEntry kCellTreeAdaptiveEntry = [] {
   e.meaning =
       "celltree-union (one processor: celltree-best) followed node by node as the frame "
       "unfolds: work waits for the entry its predicted node is due at, work the plan is done "
-      "with is fetched at once, and the rest is planned again by Peel when the plan runs out";
+      "with is fetched at once (while such fetches are no more than the plan's), and the rest is "
+      "planned again by Peel when the plan runs out";
   e.label = "Cell Tree, adaptive";
   e.make = [](std::uint64_t seed) -> std::unique_ptr<Scheduler> {
     return std::make_unique<AdaptiveScheduler>(seed);
@@ -88,6 +89,7 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   touched_.clear();
   touched_at_.assign(cells_, 0);
   replans_ = 0;
+  plan_fetches_ = orphan_fetches_ = 0;
   last_how_ = 0;
   cost_ = {};
   stand_in_.reset();
@@ -369,10 +371,14 @@ std::optional<CellId> AdaptiveScheduler::Next(const QueueView& queues) {
     last_how_ = 5;
     return Shallowest(queues);
   }
-  // An orphan first: work in a cell that no entry left in the plan fetches.
-  if (const std::optional<CellId> orphan = Orphan(queues)) {
-    last_how_ = 4;
-    return orphan;
+  // An orphan first: work in a cell that no entry left in the plan fetches, while orphans have
+  // taken no more of the frame's fetches than the plan has (OrphansFirst).
+  if (OrphansFirst()) {
+    if (const std::optional<CellId> orphan = Orphan(queues)) {
+      last_how_ = 4;
+      ++orphan_fetches_;
+      return orphan;
+    }
   }
   last_how_ = 1;
   std::size_t found = Find(queues);
@@ -386,7 +392,10 @@ std::optional<CellId> AdaptiveScheduler::Next(const QueueView& queues) {
   }
   if (found < plan_.size()) Use(found);
   cursor_ = used_.From(cursor_);
-  if (found < plan_.size()) return plan_[found];
+  if (found < plan_.size()) {
+    ++plan_fetches_;
+    return plan_[found];
+  }
   last_how_ = 3;
   return MostQueuedCell(queues);
 }
@@ -466,7 +475,9 @@ std::optional<CellId> AdaptiveScheduler::ShallowestOrphan(const QueueView& queue
 
 std::optional<CellId> AdaptiveScheduler::Peek(const QueueView& queues) const {
   if (predicted_ == nullptr) return Shallowest(queues);
-  if (const std::optional<CellId> orphan = Orphan(queues)) return orphan;
+  if (OrphansFirst()) {
+    if (const std::optional<CellId> orphan = Orphan(queues)) return orphan;
+  }
   const std::size_t i = Find(queues);
   return i < plan_.size() ? std::optional<CellId>(plan_[i]) : MostQueuedCell(queues);
 }
