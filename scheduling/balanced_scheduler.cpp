@@ -148,7 +148,7 @@ void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
   cells_ = frame.cells;
   processors_ = std::max<std::uint32_t>(frame.processors, 1);
   fetch_samples_ = frame.fetch_samples;
-  reason_.clear();
+  why_ = Why::kNone;
   plan_.clear();
   if (options_.plan && frame.previous != nullptr) {
     plan_ = *SharedPlan(frame.plans, *frame.previous, seed_);
@@ -548,7 +548,7 @@ std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
   bool adaptive = false, critical = false;
   std::optional<CellId> c = Choose(queues, &follower, &adaptive, &critical);
   RAYCELL_CHECK(c.has_value());
-  reason_ = follower ? follower->Reason() : critical ? "critical path first" : "max work";
+  why_ = critical ? Why::kCritical : Why::kMaxWork;
   // Postpone only while every other processor is working (at most one waits by choice), and
   // only on boards of kPostponeMinProcessors or more, where one waiting processor is a small
   // part of the whole.
@@ -556,11 +556,11 @@ std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
       queues.working + 1 >= processors_ && TooSmall(queues, *c)) {
     const std::optional<CellId> largest = BestOfAll(queues, Queued(queues));
     if (largest && !TooSmall(queues, *largest)) {
-      reason_ = "largest (plan's batch too small)";
+      why_ = Why::kPlanSmall;
       Locked(*largest);
       return largest;  // the plan keeps its place
     }
-    reason_.clear();
+    why_ = Why::kNone;
     return std::nullopt;  // postponed: wait for released work
   }
   // A join (a busy cell: its holder takes released work when its worklist runs out) costs a
@@ -570,11 +570,11 @@ std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
     const std::optional<CellId> largest =
         Best(queues, Queued(queues), [&](std::uint32_t x) { return !TooSmall(queues, CellId(x)); });
     if (largest) {
-      reason_ = "largest (join too small)";
+      why_ = Why::kJoinSmall;
       Locked(*largest);
       return largest;
     }
-    reason_.clear();
+    why_ = Why::kNone;
     return std::nullopt;
   }
   if (options_.critical) ++cost_.decisions;
@@ -583,14 +583,35 @@ std::optional<CellId> BalancedScheduler::Next(const QueueView& queues) {
     // choose otherwise than it peeked): its choice is taken.
     c = adaptive_->Next(queues);
     RAYCELL_CHECK(c.has_value());
-    reason_ = adaptive_->Reason();
+    why_ = Why::kAdaptive;
   } else if (follower) {
     const std::optional<CellId> taken = follower->Next(Own(queues));
     RAYCELL_CHECK(taken == c);
-    reason_ = follower->Reason();
+    why_ = Why::kFollower;
+    why_follower_ = follower;
   }
   Locked(*c);
   return c;
+}
+
+std::string BalancedScheduler::Reason() const {
+  switch (why_) {
+    case Why::kFollower:
+      return why_follower_->Reason();
+    case Why::kAdaptive:
+      return adaptive_->Reason();
+    case Why::kCritical:
+      return "critical path first";
+    case Why::kMaxWork:
+      return "max work";
+    case Why::kPlanSmall:
+      return "largest (plan's batch too small)";
+    case Why::kJoinSmall:
+      return "largest (join too small)";
+    case Why::kNone:
+      break;
+  }
+  return {};
 }
 
 }  // namespace raycell

@@ -95,7 +95,7 @@ class BalancedScheduler : public Scheduler {
   void BeginFrame(const FrameInfo& frame) override;
   std::optional<CellId> Next(const QueueView& queues) override;
   std::optional<CellId> Peek(const QueueView& queues) const override;
-  std::string Reason() const override { return reason_; }
+  std::string Reason() const override;
   bool Watches() const override { return adaptive_ != nullptr || options_.critical; }
   void Arrived(const Arrival& arrival) override;
   void Taken(CellId cell) override;
@@ -169,8 +169,21 @@ class BalancedScheduler : public Scheduler {
   std::vector<std::uint32_t> owner_;
   std::vector<ScheduleFollower> followers_;
   mutable std::vector<std::uint64_t> own_;  // scratch for Own()
-  std::string reason_;
-  std::unique_ptr<AdaptiveScheduler> adaptive_;  // options_.adaptive
+  // Why the last Next chose its cell, kept as which rule chose (its words made only when Reason
+  // asks, for a timeline: with tens of processors Next runs millions of times a frame, and a
+  // string a decision was a heap allocation each, 30M in a replay at 4096 cells).
+  enum class Why : std::uint8_t {
+    kNone,
+    kFollower,
+    kAdaptive,
+    kCritical,
+    kMaxWork,
+    kPlanSmall,
+    kJoinSmall
+  };
+  Why why_ = Why::kNone;
+  const ScheduleFollower* why_follower_ = nullptr;  // Why::kFollower's
+  std::unique_ptr<AdaptiveScheduler> adaptive_;     // options_.adaptive
   // Critical (options_.critical): per node of frame i-1's tree its height; per (parent's cell,
   // cell) the first node with those cells (StandInKey); per queued node (Arrival::node) its
   // match (kNoNode: none) and cell; per cell the highest level of its queued nodes (0: none).
