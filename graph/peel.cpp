@@ -2,7 +2,7 @@
 
 #include <algorithm>
 #include <functional>
-#include <set>
+#include <optional>
 #include <sstream>
 #include <utility>
 
@@ -27,11 +27,17 @@ namespace {
 // The state of the tree being peeled, with the per-cell counts that make each step cheap.
 //
 // Cost. Every node becomes a leaf once and is removed once, each time with O(1) count
-// updates and O(1) updates of the two ordered sets (O(log cells) each). Each step removes at
-// least one node, so there are at most `nodes` steps, and choosing a cell is O(log cells).
-// top_[c] (maxGen of c over the remaining nodes) only decreases, by at most maxGen(c) in
-// total, and the sum of maxGen is at most `nodes`. Total: O(nodes log cells), O(nodes)
-// memory (the per-(cell, generation) counts have sum-of-maxGen <= nodes entries).
+// updates and O(1) pushes onto the two heaps (O(log) each). Each step removes at least one
+// node, so there are at most `nodes` steps, and choosing a cell pops the entries gone stale
+// since (each pushed once). top_[c] (maxGen of c over the remaining nodes) only decreases, by
+// at most maxGen(c) in total, and the sum of maxGen is at most `nodes`. Total: O(nodes log
+// nodes), O(nodes) memory (the per-(cell, generation) counts have sum-of-maxGen <= nodes
+// entries; the leaf heap is rebuilt from the cells when it holds more than twice them, the
+// ready heap holds each cell at most once).
+//
+// The two orders were std::sets (a tree node allocated and freed at every change of a cell's
+// leaf count: 26M allocations in a replay at 4096 cells); as heaps with lazy deletion each
+// change is a push onto an array, and the cell chosen is the same: the set's first.
 class Peeler {
  public:
   explicit Peeler(const CellTree& tree) : t_(tree), cells_(tree.cell_count()) {
@@ -44,24 +50,32 @@ class Peeler {
 
   PeelResult Run() {
     PeelResult out;
-    while (!by_leaves_.empty()) {
-      const bool completion = !ready_.empty();
-      const CellId c = completion ? *ready_.begin() : by_leaves_.begin()->second;
-      RemoveLeavesOf(c);
-      out.schedule.push_back(c);
+    for (;;) {
+      const std::optional<CellId> ready = FirstReady();
+      const std::optional<CellId> chosen = ready ? ready : MostLeaves();
+      if (!chosen) break;
+      const bool completion = ready.has_value();
+      RemoveLeavesOf(*chosen);
+      out.schedule.push_back(*chosen);
       out.kinds.push_back(completion ? PeelKind::kCompletion : PeelKind::kSplit);
       out.split_peels += completion ? 0 : 1;
     }
-    RAYCELL_CHECK(ready_.empty());
     std::reverse(out.schedule.begin(), out.schedule.end());
     std::reverse(out.kinds.begin(), out.kinds.end());
     return out;
   }
 
  private:
-  // (-leaf count, cell) ordering: most leaves first, lowest cell on ties.
-  using LeafKey = std::pair<std::size_t, CellId>;
-  LeafKey Key(CellId c) const { return {~leaves_[c.value()].size(), c}; }
+  // A cell's leaf count when pushed: most leaves first, lowest cell on ties (the heap's top is
+  // the greatest under LeafLess).
+  struct LeafKey {
+    std::uint32_t leaves;
+    std::uint32_t cell;
+  };
+  static bool LeafLess(const LeafKey& a, const LeafKey& b) {
+    return a.leaves != b.leaves ? a.leaves < b.leaves : a.cell > b.cell;
+  }
+  static bool CellAfter(std::uint32_t a, std::uint32_t b) { return a > b; }
   std::size_t Slot(NodeId n) const { return base_[t_.cell(n).value()] + t_.generation(n) - 1; }
 
   void InitCounts() {
@@ -81,33 +95,72 @@ class Peeler {
       non_leaf_top_[c] = top_[c] ? count_[base_[c] + top_[c] - 1] : 0;
     }
     leaves_.resize(cells_);
+    ready_.assign(cells_, 0);
+    in_heap_.assign(cells_, 0);
   }
 
   void AddLeaf(NodeId n) {
     const CellId c = t_.cell(n);
-    if (!leaves_[c.value()].empty()) by_leaves_.erase(Key(c));
     leaves_[c.value()].push_back(n);
-    by_leaves_.insert(Key(c));
+    PushLeaves(c.value());
     ++leaf_count_[Slot(n)];
     if (t_.generation(n) == top_[c.value()]) --non_leaf_top_[c.value()];
   }
 
-  void UpdateReady(CellId c) {
-    if (top_[c.value()] > 0 && non_leaf_top_[c.value()] == 0) {
-      ready_.insert(c);
-    } else {
-      ready_.erase(c);
+  // The cell with the most leaves now (lowest number on ties); none when no cell has a leaf.
+  // Entries whose count is no longer their cell's are dropped as met.
+  std::optional<CellId> MostLeaves() {
+    while (!by_leaves_.empty()) {
+      const LeafKey k = by_leaves_.front();
+      if (k.leaves != 0 && k.leaves == leaves_[k.cell].size()) return CellId(k.cell);
+      std::pop_heap(by_leaves_.begin(), by_leaves_.end(), LeafLess);
+      by_leaves_.pop_back();
     }
+    return std::nullopt;
+  }
+  void PushLeaves(std::uint32_t c) {
+    if (by_leaves_.size() >= 2 * std::size_t{cells_} + 64) {  // mostly stale: rebuilt
+      by_leaves_.clear();
+      for (std::uint32_t x = 0; x < cells_; ++x) {
+        if (!leaves_[x].empty()) by_leaves_.push_back({std::uint32_t(leaves_[x].size()), x});
+      }
+      std::make_heap(by_leaves_.begin(), by_leaves_.end(), LeafLess);
+      return;
+    }
+    by_leaves_.push_back({std::uint32_t(leaves_[c].size()), c});
+    std::push_heap(by_leaves_.begin(), by_leaves_.end(), LeafLess);
+  }
+
+  // The lowest ready cell; none when none is. Entries of cells no longer ready are dropped.
+  std::optional<CellId> FirstReady() {
+    while (!ready_heap_.empty()) {
+      const std::uint32_t c = ready_heap_.front();
+      if (ready_[c] != 0) return CellId(c);
+      std::pop_heap(ready_heap_.begin(), ready_heap_.end(), CellAfter);
+      ready_heap_.pop_back();
+      in_heap_[c] = 0;
+    }
+    return std::nullopt;
+  }
+
+  void UpdateReady(CellId c) {
+    const std::uint32_t x = c.value();
+    ready_[x] = top_[x] > 0 && non_leaf_top_[x] == 0 ? 1 : 0;
+    // A cell not ready keeps its entry, stale, until it is met; ready again meanwhile, it needs
+    // no other.
+    if (ready_[x] == 0 || in_heap_[x] != 0) return;
+    in_heap_[x] = 1;
+    ready_heap_.push_back(x);
+    std::push_heap(ready_heap_.begin(), ready_heap_.end(), CellAfter);
   }
 
   // Removes the leaves of c present now. Their parents are of other cells (a child never
   // has its parent's cell), so no leaf of c appears while they are removed.
   void RemoveLeavesOf(CellId c) {
-    by_leaves_.erase(Key(c));
-    std::vector<NodeId> leaves = std::move(leaves_[c.value()]);
-    leaves_[c.value()].clear();
-    RAYCELL_CHECK(!leaves.empty());  // progress: every step removes a node
-    for (NodeId n : leaves) RemoveLeaf(n);
+    scratch_.clear();
+    scratch_.swap(leaves_[c.value()]);  // c's list keeps the scratch's room
+    RAYCELL_CHECK(!scratch_.empty());   // progress: every step removes a node
+    for (NodeId n : scratch_) RemoveLeaf(n);
     RAYCELL_CHECK(leaves_[c.value()].empty());
     LowerTop(c);
     UpdateReady(c);
@@ -136,13 +189,17 @@ class Peeler {
   const std::uint32_t cells_;
   std::vector<std::uint32_t> top_;           // per cell: maxGen over the remaining nodes
   std::vector<std::size_t> base_;            // per cell: first slot of its generations
-  std::vector<std::size_t> count_;           // per (cell, gen): remaining nodes
-  std::vector<std::size_t> leaf_count_;      // per (cell, gen): remaining leaves
-  std::vector<std::size_t> non_leaf_top_;    // per cell: non-leaves at generation top_
+  std::vector<std::uint32_t> count_;         // per (cell, gen): remaining nodes
+  std::vector<std::uint32_t> leaf_count_;    // per (cell, gen): remaining leaves
+  std::vector<std::uint32_t> non_leaf_top_;  // per cell: non-leaves at generation top_
   std::vector<std::uint32_t> children_;      // per node: remaining children
   std::vector<std::vector<NodeId>> leaves_;  // per cell: current leaves
-  std::set<CellId> ready_;
-  std::set<LeafKey> by_leaves_;  // cells with at least one leaf
+  std::vector<NodeId> scratch_;              // RemoveLeavesOf's
+  // Per cell whether it is ready (completion: no non-leaf at its top generation), and a
+  // min-heap of cells, each at most once (in_heap_), holding every ready one.
+  std::vector<std::uint8_t> ready_, in_heap_;
+  std::vector<std::uint32_t> ready_heap_;
+  std::vector<LeafKey> by_leaves_;  // max-heap of (leaf count, cell) as pushed (LeafLess)
 };
 
 }  // namespace
