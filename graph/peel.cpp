@@ -27,13 +27,13 @@ namespace {
 // The state of the tree being peeled, with the per-cell counts that make each step cheap.
 //
 // Cost. Every node becomes a leaf once and is removed once, each time with O(1) count
-// updates and O(1) pushes onto the two heaps (O(log) each). Each step removes at least one
-// node, so there are at most `nodes` steps, and choosing a cell pops the entries gone stale
-// since (each pushed once). top_[c] (maxGen of c over the remaining nodes) only decreases, by
-// at most maxGen(c) in total, and the sum of maxGen is at most `nodes`. Total: O(nodes log
-// nodes), O(nodes) memory (the per-(cell, generation) counts have sum-of-maxGen <= nodes
-// entries; the leaf heap is rebuilt from the cells when it holds more than twice them, the
-// ready heap holds each cell at most once).
+// updates and O(1) pushes onto the two heaps (O(log cells) each: the leaf heap is rebuilt from
+// the cells, O(cells), when it holds more than twice them, the ready heap holds each cell at
+// most once). Each step removes at least one node, so there are at most `nodes` steps, and
+// choosing a cell pops the entries gone stale since (each pushed once). top_[c] (maxGen of c
+// over the remaining nodes) only decreases, by at most maxGen(c) in total, and the sum of
+// maxGen is at most `nodes`. Total: O(nodes log cells), O(nodes) memory (the per-(cell,
+// generation) counts have sum-of-maxGen <= nodes entries).
 //
 // The two orders were std::sets (a tree node allocated and freed at every change of a cell's
 // leaf count: 26M allocations in a replay at 4096 cells); as heaps with lazy deletion each
