@@ -243,15 +243,24 @@ std::vector<CellId> TwoLevelSchedule(const CellTree& tree, const std::vector<Cel
                                      const TreePlanner& coarse_plan, const TreePlanner& fine_plan) {
   std::vector<NodeId> image;
   const CellTree coarse = ContractTree(tree, coarse_of, &image);
-  // Per coarse node, the tree's nodes it stands for, in increasing order.
-  std::vector<std::vector<NodeId>> members(coarse.size());
-  for (NodeId n : tree.nodes()) members[image[n.index()].index()].push_back(n);
+  // Per coarse node m, the tree's nodes it stands for, in increasing order: members[first[m]]
+  // up to members[first[m + 1]] (one array, not a vector per coarse node: with the board's
+  // cells the replay's, the coarse tree is as large as the tree).
+  std::vector<std::uint32_t> first(coarse.size() + 1, 0);
+  for (NodeId n : tree.nodes()) ++first[image[n.index()].index() + 1];
+  for (std::size_t m = 0; m < coarse.size(); ++m) first[m + 1] += first[m];
+  std::vector<NodeId> members(first.back());
+  {
+    std::vector<std::uint32_t> next(first.begin(), first.end() - 1);
+    for (NodeId n : tree.nodes()) members[next[image[n.index()].index()]++] = n;
+  }
   std::vector<CellId> out;
   std::vector<NodeId> forest;
   RunGreedy(coarse, coarse_plan(coarse), [&](CellId, const std::vector<NodeId>& step) {
     forest.clear();
     for (const NodeId m : step) {
-      forest.insert(forest.end(), members[m.index()].begin(), members[m.index()].end());
+      forest.insert(forest.end(), members.begin() + first[m.index()],
+                    members.begin() + first[m.index() + 1]);
     }
     std::sort(forest.begin(), forest.end());
     // Entries that process nothing in the run (Peel builds backwards) are left out.
