@@ -95,7 +95,6 @@ class Peeler {
       non_leaf_top_[c] = top_[c] ? count_[base_[c] + top_[c] - 1] : 0;
     }
     leaves_.resize(cells_);
-    ready_.assign(cells_, 0);
     in_heap_.assign(cells_, 0);
   }
 
@@ -135,7 +134,7 @@ class Peeler {
   std::optional<CellId> FirstReady() {
     while (!ready_heap_.empty()) {
       const std::uint32_t c = ready_heap_.front();
-      if (ready_[c] != 0) return CellId(c);
+      if (Ready(c)) return CellId(c);
       std::pop_heap(ready_heap_.begin(), ready_heap_.end(), CellAfter);
       ready_heap_.pop_back();
       in_heap_[c] = 0;
@@ -143,12 +142,14 @@ class Peeler {
     return std::nullopt;
   }
 
+  // Completion: c has nodes left and no non-leaf at its top generation.
+  bool Ready(std::uint32_t c) const { return top_[c] > 0 && non_leaf_top_[c] == 0; }
+
+  // Called wherever c's counts may have made it ready. A cell not ready keeps its entry, stale,
+  // until it is met; ready again meanwhile, it needs no other.
   void UpdateReady(CellId c) {
     const std::uint32_t x = c.value();
-    ready_[x] = top_[x] > 0 && non_leaf_top_[x] == 0 ? 1 : 0;
-    // A cell not ready keeps its entry, stale, until it is met; ready again meanwhile, it needs
-    // no other.
-    if (ready_[x] == 0 || in_heap_[x] != 0) return;
+    if (!Ready(x) || in_heap_[x] != 0) return;
     in_heap_[x] = 1;
     ready_heap_.push_back(x);
     std::push_heap(ready_heap_.begin(), ready_heap_.end(), CellAfter);
@@ -195,9 +196,8 @@ class Peeler {
   std::vector<std::uint32_t> children_;      // per node: remaining children
   std::vector<std::vector<NodeId>> leaves_;  // per cell: current leaves
   std::vector<NodeId> scratch_;              // RemoveLeavesOf's
-  // Per cell whether it is ready (completion: no non-leaf at its top generation), and a
-  // min-heap of cells, each at most once (in_heap_), holding every ready one.
-  std::vector<std::uint8_t> ready_, in_heap_;
+  // A min-heap of cells, each at most once (in_heap_), holding every ready one.
+  std::vector<std::uint8_t> in_heap_;
   std::vector<std::uint32_t> ready_heap_;
   std::vector<LeafKey> by_leaves_;  // max-heap of (leaf count, cell) as pushed (LeafLess)
 };

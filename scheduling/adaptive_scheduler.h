@@ -198,11 +198,8 @@ class AdaptiveScheduler : public Scheduler {
   std::optional<CellId> TopOrphan(const QueueView& queues) const;
 
   std::uint64_t replans_ = 0;
-  // This frame's cells chosen from the plan (followed or re-planned) and as orphans. Orphans go
-  // first only while they have taken no more of the frame's fetches than the plan: past that
-  // the frame is not the one predicted (rays on paths the earlier frames lacked, each orphan
-  // fetch sending rays on to other cells the plan is done with), and fetching each batch as it
-  // arrives costs more than letting it wait for the plan's end, where it is planned again.
+  // This frame's cells chosen from the plan (followed or re-planned) and as orphans: orphans go
+  // first only while they are no more (the file's comment says why).
   std::uint64_t plan_fetches_ = 0, orphan_fetches_ = 0;
   bool OrphansFirst() const { return orphan_fetches_ <= plan_fetches_; }
   // 0 none, 1 followed, 2 re-planned, 3 max work, 4 orphan, 5 shallowest (no earlier frame)
