@@ -167,7 +167,7 @@ RecordSummary Record(const RecordOptions& o, std::ostream& log) {
   if (!out_dir.empty()) std::filesystem::create_directories(out_dir, ignored);
   if (o.trace_format < 5 || o.trace_format > kTraceFormatVersion) {
     throw InputError("trace format " + std::to_string(o.trace_format) +
-                     " cannot be written (5 or " + std::to_string(kTraceFormatVersion) + ")");
+                     " cannot be written (5 to " + std::to_string(kTraceFormatVersion) + ")");
   }
   TraceWriterOptions writer_options;
   writer_options.format_version = o.trace_format;

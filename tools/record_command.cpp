@@ -194,8 +194,10 @@ void AddRecordCommand(CLI::App& app) {
   cmd->add_option("--trace-format", o.trace_format,
                   "the trace's format version: 5 (the faster to read), 6 (each visit's samples "
                   "range coded: files about a sixth smaller, read with about a quarter more CPU) "
-                  "or 7 (6 with samples also predicted from earlier visits of the cell)")
-      ->check(CLI::IsMember({5, 6, 7}))
+                  "7 (6 with samples also predicted from earlier visits of the cell) or 8 (7 "
+                  "with paths also range coded, predicted from earlier rays through the cell: the "
+                  "smallest, the slowest to read)")
+      ->check(CLI::IsMember({5, 6, 7, 8}))
       ->capture_default_str();
   cmd->add_option("--out", o.out, "trace file to write")->capture_default_str();
   cmd->add_option("--images", o.images_dir, "folder for frame_NNNN.png")->capture_default_str();

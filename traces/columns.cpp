@@ -38,16 +38,32 @@ void ColumnBuilder::Fill(schema::Column::Builder column) const {
   for (unsigned i = 0; i < wide_.size(); ++i) wide.set(i, wide_[i]);
 }
 
+void ColumnBuilder::AppendTo(std::string& out) const {
+  out.append(reinterpret_cast<const char*>(narrow_.data()), narrow_.size());
+  for (const std::uint64_t w : wide_) {
+    for (int k = 0; k < 8; ++k) out.push_back(static_cast<char>(w >> (8 * k)));
+  }
+}
+
 void AddStep(ColumnBuilder& column, std::uint32_t from, std::uint32_t to, const CellGrid& grid) {
+  std::uint64_t escape[3];
+  const unsigned code = StepCode(from, to, grid, escape);
+  column.Add(code);
+  if (code == kStepEscape) {
+    for (const std::uint64_t z : escape) column.Add(z);
+  }
+}
+
+unsigned StepCode(std::uint32_t from, std::uint32_t to, const CellGrid& grid,
+                  std::uint64_t escape[3]) {
   const std::int64_t nx = grid[0], nxy = std::int64_t{grid[0]} * grid[1];
   const std::int64_t a = from, b = to;
   const std::int64_t dx = b % nx - a % nx, dy = b % nxy / nx - a % nxy / nx, dz = b / nxy - a / nxy;
   if (std::abs(dx) <= 2 && std::abs(dy) <= 2 && std::abs(dz) <= 2) {
-    column.Add(static_cast<std::uint64_t>((dx + 2) + 5 * (dy + 2) + 25 * (dz + 2)));
-    return;
+    return static_cast<unsigned>((dx + 2) + 5 * (dy + 2) + 25 * (dz + 2));
   }
-  column.Add(kStepEscape);
-  for (const std::int64_t d : {dx, dy, dz}) column.Add(ZigZag(d));
+  escape[0] = ZigZag(dx), escape[1] = ZigZag(dy), escape[2] = ZigZag(dz);
+  return kStepEscape;
 }
 
 void ZeroRunColumnBuilder::Add(std::uint64_t v) {
@@ -83,18 +99,27 @@ void ColumnReader::Fail(const char* what) const {
 }
 
 std::uint32_t ReadStep(ColumnReader& column, std::uint32_t from, const CellGrid& grid) {
+  const std::uint64_t code = column.Next();
+  std::uint64_t escape[3] = {0, 0, 0};
+  if (code == kStepEscape) {
+    for (std::uint64_t& z : escape) z = column.Next();
+  }
+  return StepTo(from, code, escape, grid);
+}
+
+std::uint32_t StepTo(std::uint32_t from, std::uint64_t code, const std::uint64_t escape[3],
+                     const CellGrid& grid) {
   const std::int64_t nx = grid[0], nxy = std::int64_t{grid[0]} * grid[1];
   const std::int64_t a = from;
   std::int64_t d[3];
-  const std::uint64_t code = column.Next();
   if (code < kStepEscape) {
     d[0] = static_cast<std::int64_t>(code % 5) - 2;
     d[1] = static_cast<std::int64_t>(code / 5 % 5) - 2;
     d[2] = static_cast<std::int64_t>(code / 25) - 2;
   } else if (code == kStepEscape) {
-    for (std::int64_t& v : d) {
-      const std::uint64_t z = column.Next();
-      v = z > (std::uint64_t{1} << 34) ? std::int64_t{1} << 34 : UnZigZag(z);
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::uint64_t z = escape[axis];
+      d[axis] = z > (std::uint64_t{1} << 34) ? std::int64_t{1} << 34 : UnZigZag(z);
     }
   } else {
     return kBadStep;

@@ -62,6 +62,8 @@ class ColumnBuilder {
   void Fill(schema::Column::Builder column) const;
   // Bytes of the column's lists (without Cap'n Proto's framing).
   std::size_t bytes() const { return narrow_.size() + 8 * wide_.size(); }
+  // Appends those bytes to `out` (the narrow bytes, then each wide value's 8, little-endian).
+  void AppendTo(std::string& out) const;
   // The order-0 entropy of the narrow bytes plus 64 bits per wide value: an estimate of
   // what zstd makes of the column.
   double EntropyBits() const;
@@ -94,6 +96,10 @@ class ZeroRunColumnBuilder {
 // Adds the step from cell `from` to cell `to` of `grid` to `column` (one value, or four with
 // the escape).
 void AddStep(ColumnBuilder& column, std::uint32_t from, std::uint32_t to, const CellGrid& grid);
+// The code of the step from cell `from` to cell `to` of `grid` (AddStep's first value) and,
+// for kStepEscape, the zigzag of each axis's difference in `escape`.
+unsigned StepCode(std::uint32_t from, std::uint32_t to, const CellGrid& grid,
+                  std::uint64_t escape[3]);
 
 // The order-0 entropy of `bytes`, in bits.
 double EntropyBits(const std::vector<std::uint8_t>& bytes);
@@ -163,5 +169,9 @@ class ZeroRunColumnReader {
 // fewer than 2^32 - 1), or kBadStep when it leaves the grid or its code is not one.
 inline constexpr std::uint32_t kBadStep = ~std::uint32_t{0};
 std::uint32_t ReadStep(ColumnReader& column, std::uint32_t from, const CellGrid& grid);
+// The cell the step of code `code` (0..kStepEscape; for kStepEscape, the zigzag of each axis's
+// difference in `escape`) leads to from cell `from` of `grid`, or kBadStep.
+std::uint32_t StepTo(std::uint32_t from, std::uint64_t code, const std::uint64_t escape[3],
+                     const CellGrid& grid);
 
 }  // namespace raycell

@@ -24,9 +24,10 @@ struct TraceHeader;
 // predicted from the corresponding ray of the previous group, paths as cell steps, shadow
 // rays' samples in their own column); version 6 the samples range coded under contexts
 // (Batch.sampleCode, traces/sample_coder.h); version 7 those samples also predicted from the
-// batch's last visit of the cell entered and left by the same steps (VisitTable); see
-// trace.capnp.
-inline constexpr std::uint32_t kTraceFormatVersion = 7;
+// batch's last visit of the cell entered and left by the same steps (VisitTable); version 8 new
+// paths range coded too, each step predicted from the reference ray and the batch's earlier rays
+// through the cell (Batch.pathCode, traces/path_coder.h); see trace.capnp.
+inline constexpr std::uint32_t kTraceFormatVersion = 8;
 // The version written unless another is asked for (TraceWriterOptions::format_version, `record
 // --trace-format`): 5. Format 6's files are about a sixth smaller, but reading them takes about
 // a quarter more CPU (a Max Work replay at 1920x1080, 512 cells: +22-27%; BENCHMARKS.md "Trace

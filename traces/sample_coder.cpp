@@ -92,15 +92,16 @@ void SampleEncoder::Finish() {
 
 // ---- Decoder -----------------------------------------------------------------------------
 
-SampleDecoder::SampleDecoder(const std::uint8_t* data, std::size_t size, unsigned contexts)
-    : models_(contexts), data_(data), size_(size) {
+SampleDecoder::SampleDecoder(const std::uint8_t* data, std::size_t size, unsigned contexts,
+                             const char* name)
+    : models_(contexts), data_(data), name_(name), size_(size) {
   for (; pos_ < 5; ++pos_) code_ = (code_ << 8) | (pos_ < size_ ? data_[pos_] : 0u);
 }
 
 void SampleDecoder::Finish() const {
   if (pos_ != size_) {
-    throw BadTraceData("sampleCode of " + std::to_string(size_) + " bytes ends at byte " +
-                       std::to_string(pos_));
+    throw BadTraceData(std::string(name_) + " of " + std::to_string(size_) +
+                       " bytes ends at byte " + std::to_string(pos_));
   }
 }
 

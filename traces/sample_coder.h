@@ -204,6 +204,9 @@ class SampleEncoder {
   explicit SampleEncoder(unsigned contexts = SampleContext::kCount)
       : models_(contexts), contexts_(contexts) {}
   void Add(unsigned context, std::uint64_t value);
+  // Codes one bit under the model `p` (a probability as SampleModels' are); for coders of other
+  // symbols on the same code (traces/path_coder.h).
+  void AddBit(std::uint16_t& p, unsigned bit) { Bit(p, bit); }
   // Ends the code; call once, before code().
   void Finish();
   const std::vector<std::uint8_t>& code() const { return out_; }
@@ -227,9 +230,10 @@ class SampleEncoder {
 // Decodes the values of one batch from its Batch.sampleCode.
 class SampleDecoder {
  public:
-  // `contexts` as the encoder's; every context Next() is given must be below it.
+  // `contexts` as the encoder's; every context Next() is given must be below it. `name` (a
+  // string literal) names the code in messages.
   SampleDecoder(const std::uint8_t* data, std::size_t size,
-                unsigned contexts = SampleContext::kCount);
+                unsigned contexts = SampleContext::kCount, const char* name = "sampleCode");
   std::uint64_t Next(unsigned context) {
     // The coder's state in locals (registers) while a value is decoded.
     State s{range_, code_, pos_};
@@ -244,6 +248,13 @@ class SampleDecoder {
     for (unsigned i = tree_bits; i < e; ++i) u = (u << 1) | Direct(s);
     range_ = s.range, code_ = s.code, pos_ = s.pos;
     return u - 1;
+  }
+  // The bit AddBit coded under the model `p`.
+  unsigned NextBit(std::uint16_t& p) {
+    State s{range_, code_, pos_};
+    const unsigned bit = Bit(s, p);
+    range_ = s.range, code_ = s.code, pos_ = s.pos;
+    return bit;
   }
   // Throws BadTraceData unless the code ended exactly at its last byte.
   void Finish() const;
@@ -284,6 +295,7 @@ class SampleDecoder {
 
   SampleModels models_;
   const std::uint8_t* data_;
+  const char* name_;
   std::size_t size_, pos_ = 0;  // pos_ > size_: read past the end
   std::uint32_t range_ = 0xFFFFFFFF, code_ = 0;
 };

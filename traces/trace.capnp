@@ -62,8 +62,8 @@
 #             0, 1 or 2 means spawn = p + code; 3 means the spawn is the next value of
 #             `spawns`. Primary rays have spawn 0 and code 0.
 #   bit 6     new path: set, the visit count and cells are the next values of primaryPaths
-#             (primary rays) or secondaryPaths (other rays); clear, they are those of the
-#             reference ray (which must exist).
+#             (primary rays) or secondaryPaths (other rays), or in version 8 the next path of
+#             pathCode; clear, they are those of the reference ray (which must exist).
 #   bit 7     new pixel: set, the next two values of `pixels` are zigzag(x - previous ray's x)
 #             and zigzag(y - previous ray's y), taking (0, 0) for the previous pixel of ray 0;
 #             clear, the pixel is the previous ray's ((0, 0) for ray 0).
@@ -79,6 +79,29 @@
 # value (dx+2) + 5*(dy+2) + 25*(dz+2) (0..124) when |dx|, |dy| and |dz| are at most 2, else
 # 125 followed by zigzag(dx), zigzag(dy), zigzag(dz); a step leaving the grid is invalid.
 # (Versions 1-4: the first visit's cell id, then zigzag(cell - previous visit's cell).)
+# Version 8: in a batch whose pathCode is not empty, new paths are not in primaryPaths and
+# secondaryPaths (empty) but range coded in Batch.pathCode, ray by ray in ray order, with version 6's coder (see "Samples"): a path is
+# its symbols, the step codes above (0..125) from the same predicted cell and then 126, the
+# end (so no visit count). A symbol is coded in its context: g the ray's group (as in
+# "Samples"), its place on the path (0 the first symbol, 1 the second, 2 later), h the ray's
+# hint (the class, as in version 7's table, of the step by which its parent entered the cell
+# it spawned the ray in: 27 at the parent's first visit, 28 for a primary ray, a parent outside
+# the batch or a spawn past its visits), the cell the step leaves and the classes i and j of
+# the steps into it and before that (i = 27 before the first step, j = h for the first two
+# symbols). Its prediction: from the second symbol on, when the reference ray visits the cell
+# (searched as samples are matched), the reference's symbol out of that visit (its step to its
+# next visit, or 126 at its last); else the batch's path table: 2^14 slots, key
+# k = (((cell * 3 + g) * 28 + i) * 29 + j) + 1 in slot (k * 0x9E3779B97F4A7C15 mod 2^64) >> 50,
+# holding the symbol last coded under k (a slot holding another key is a miss); every symbol
+# decoded replaces its slot's. Where there is a prediction, one bit (0: the symbol is the
+# prediction) under model ((g * 3 + place) * 4 + o) * 3 + src, with o the previous symbol's
+# outcome (0 none, 1 held, 2 failed, 3 no prediction) and src 0 for the table, 2 for the
+# reference agreeing with the table, 1 for it alone; where there is none or it failed, the
+# symbol's 7 bits, most significant first, in a bit tree (node 1, then 2*node + bit; a symbol
+# above 126 is invalid) of tree t = 0 (first symbol), 1 + h (second) or 30 (later), model set
+# (g * 31 + t) * 2 + f, f 1 when a prediction failed. After symbol 125 its zigzag(dx),
+# zigzag(dy), zigzag(dz) follow, each coded as a sample value (length, tree, plain bits) in
+# context 0, 1, 2 by axis. Every model starts at 1024 in every batch, the table empty.
 # Samples. Version 5: the samples of visit v of a ray are predicted from the reference ray's
 # visit of the same cell, searched from the reference visit after the last one matched (the
 # first, at the ray's first visit) among at most 4 visits (kSampleMatchWindow); the residual
@@ -438,6 +461,11 @@ struct Batch {
   # they are coded as version 6 codes them. The writer codes each batch both ways (with the
   # reference rule chosen with the table) and keeps the smaller sample code. False before
   # version 7.
+  pathCode @17 :Data;
+  # Version 8: the new paths of every ray of the batch, in ray order, range coded (see "Paths");
+  # primaryPaths and secondaryPaths are then empty. Empty before version 8, and in a version 8
+  # batch whose paths are in those columns: the writer keeps the path code where it is smaller
+  # than zstd's code (level 3) of the two columns' bytes alone.
 }
 
 # Totals of one frame, written after its last batch (and repeated in the index).

@@ -16,6 +16,7 @@
 #include "traces/columns.h"
 #include "traces/format.h"
 #include "traces/frame_checksum.h"
+#include "traces/path_coder.h"
 #include "traces/sample_coder.h"
 #include "traces/subdivision.h"
 #include "traces/trace.capnp.h"
@@ -323,10 +324,12 @@ struct BatchColumns {
   ColumnReader head_runs, parents, spawns, pixels, primary_paths, secondary_paths;
   ZeroRunColumnReader primary_samples, secondary_samples, shadow_samples;
   capnp::List<float>::Reader t_enter, t_exit;
-  std::optional<SampleDecoder> sample_code;  // version 6 and 7
+  std::optional<SampleDecoder> sample_code;  // version 6 and later
+  std::optional<PathDecoder> path_code;      // version 8
 
-  // `table`: a version 7 batch with Batch.visitTable (its contexts are SampleContext::kCount7).
-  BatchColumns(schema::Batch::Reader b, bool v6, bool table)
+  // `table`: a version 7 batch with Batch.visitTable (its contexts are SampleContext::kCount7);
+  // `v8`: a batch of version 8 (its new paths in Batch.pathCode, on `grid`, unless empty).
+  BatchColumns(schema::Batch::Reader b, bool v6, bool table, bool v8, const CellGrid& grid)
       : heads(b.getHeads()),
         head_runs(b.getHeadRuns(), heads.size(), "headRuns"),
         parents(b.getParents(), "parents"),
@@ -345,6 +348,12 @@ struct BatchColumns {
                           table ? SampleContext::kCount7 : SampleContext::kCount);
     } else if (code.size() != 0) {
       throw BadData("sampleCode in a batch of format version 5 or earlier");
+    }
+    const capnp::Data::Reader paths = b.getPathCode();
+    if (v8 && paths.size() != 0) {
+      path_code.emplace(paths.begin(), paths.size(), grid);
+    } else if (paths.size() != 0) {
+      throw BadData("pathCode in a batch of format version 7 or earlier");
     }
   }
 
@@ -371,6 +380,7 @@ struct BatchColumns {
     secondary_samples.Finish();
     shadow_samples.Finish();
     if (sample_code) sample_code->Finish();
+    if (path_code) path_code->Finish();
   }
 };
 
@@ -385,7 +395,8 @@ class FrameDecoder {
         expected_(expected),
         v5_(header.format_version >= 5),
         v6_(header.format_version >= 6),
-        v7_(header.format_version >= 7) {}
+        v7_(header.format_version >= 7),
+        v8_(header.format_version >= 8) {}
 
   void Decode(schema::Batch::Reader b, RayBatch& out) {
     if (b.getFrame() != frame_) throw BadData("batch of frame " + Str(b.getFrame()));
@@ -397,7 +408,7 @@ class FrameDecoder {
       throw BadData("visitTable in a batch of format version 6 or earlier");
     }
     use_table_ = v7_ && b.getVisitTable();
-    BatchColumns c(b, v6_, use_table_);
+    BatchColumns c(b, v6_, use_table_, v8_, header_.cells);
     if (use_table_) {
       if (!table_) table_ = std::make_unique<VisitTable>();
       table_->Clear();
@@ -557,8 +568,9 @@ class FrameDecoder {
     std::size_t ref_begin = 0, ref_count = 0;
     std::uint64_t count = 0;
   };
-  static PathHead ReadPathHead(ColumnReader& paths, std::uint8_t head, RayId id, std::size_t ref,
-                               const RayBatch& out) {
+  // `paths` is null in version 8, where a new path's count is its cells' (path_, read first).
+  PathHead ReadPathHead(ColumnReader* paths, std::uint8_t head, RayId id, std::size_t ref,
+                        const RayBatch& out) const {
     PathHead h;
     h.new_path = head & kHeadNewPath;
     if (!h.new_path && ref == kNone) {
@@ -566,7 +578,7 @@ class FrameDecoder {
     }
     h.ref_begin = ref == kNone ? 0 : out.visit_begin(ref);
     h.ref_count = ref == kNone ? 0 : out.visit_end(ref) - h.ref_begin;
-    h.count = h.new_path ? paths.Next() : h.ref_count;
+    h.count = !h.new_path ? h.ref_count : paths ? paths->Next() : path_.size();
     if (h.count > kTraceMaxRayVisits || h.count > kTraceMaxBatchVisits - out.visit_count()) {
       throw BadData("ray " + Str(id) + ": too many visits");
     }
@@ -578,7 +590,7 @@ class FrameDecoder {
                     RayBatch& out) {
     ColumnReader& paths = primary ? c.primary_paths : c.secondary_paths;
     ZeroRunColumnReader& samples = primary ? c.primary_samples : c.secondary_samples;
-    const PathHead h = ReadPathHead(paths, head, id, ref, out);
+    const PathHead h = ReadPathHead(&paths, head, id, ref, out);
     const bool new_path = h.new_path;
     const std::size_t ref_begin = h.ref_begin, ref_count = h.ref_count;
     const std::uint64_t count = h.count;
@@ -618,11 +630,13 @@ class FrameDecoder {
     ZeroRunColumnReader& samples = primary                    ? c.primary_samples
                                    : kind == RayKind::kShadow ? c.shadow_samples
                                                               : c.secondary_samples;
-    const PathHead h = ReadPathHead(paths, head, id, ref, out);
+    const CellGrid grid = header_.cells;
+    const bool coded_path = c.path_code && (head & kHeadNewPath);
+    if (coded_path) ReadCodedPath(c, id, ref, out);
+    const PathHead h = ReadPathHead(c.path_code ? nullptr : &paths, head, id, ref, out);
     const bool new_path = h.new_path;
     const std::size_t ref_begin = h.ref_begin, ref_count = h.ref_count;
     const std::uint64_t count = h.count;
-    const CellGrid grid = header_.cells;
     std::uint32_t cell = 0;
     if (new_path && count > 0) cell = PredictedFirstCell(out, ref, ref_begin, ref_count);
     const bool t = header_.settings.store_t;
@@ -633,7 +647,9 @@ class FrameDecoder {
       path_.resize(count);
       coordinates_.resize(count);
       for (std::uint64_t v = 0; v < count; ++v) {
-        cell = new_path ? ReadStep(paths, cell, grid) : out.cells()[ref_begin + v].value();
+        cell = coded_path ? path_[v]
+               : new_path ? ReadStep(paths, cell, grid)
+                          : out.cells()[ref_begin + v].value();
         if (cell == kBadStep) throw BadData("ray " + Str(id) + ": bad cell");
         path_[v] = cell;
         coordinates_[v] = VisitTable::CoordinatesOf(cell, grid);
@@ -674,7 +690,9 @@ class FrameDecoder {
                      t ? c.t_exit[at] : 0.f);
         continue;
       }
-      cell = new_path ? ReadStep(paths, cell, grid) : out.cells()[ref_begin + v].value();
+      cell = coded_path ? path_[v]
+             : new_path ? ReadStep(paths, cell, grid)
+                        : out.cells()[ref_begin + v].value();
       if (cell == kBadStep) throw BadData("ray " + Str(id) + ": bad cell");
       const std::size_t end = std::min(ref_count, next + kSampleMatchWindow);
       std::size_t k = next;
@@ -696,6 +714,22 @@ class FrameDecoder {
       if (t && at >= c.t_enter.size()) throw BadData("t columns have bad length");
       out.AddVisit(CellId(cell), static_cast<std::uint32_t>(n), t ? c.t_enter[at] : 0.f,
                    t ? c.t_exit[at] : 0.f);
+    }
+  }
+
+  // Version 8: reads the new path of ray `id` (the last ray of `out`, its visits not yet
+  // added; `ref` its reference ray) from the batch's pathCode into path_.
+  void ReadCodedPath(BatchColumns& c, RayId id, std::size_t ref, RayBatch& out) {
+    const std::size_t i = out.size() - 1;
+    const std::size_t ref_begin = ref == kNone ? 0 : out.visit_begin(ref);
+    const std::size_t ref_count = ref == kNone ? 0 : out.visit_end(ref) - ref_begin;
+    const std::uint32_t from = PredictedFirstCell(out, ref, ref_begin, ref_count);
+    const unsigned hint = ParentHint(out, out.parents()[i], out.spawns()[i], header_.cells);
+    const std::size_t most = std::min(kTraceMaxRayVisits, kTraceMaxBatchVisits - out.visit_count());
+    const unsigned group = SampleGroup(static_cast<unsigned>(out.kinds()[i]));
+    if (!c.path_code->Next(group, from, hint, out.cells().data() + ref_begin, ref_count, most,
+                           path_)) {
+      throw BadData("ray " + Str(id) + ": bad path");
     }
   }
 
@@ -749,6 +783,7 @@ class FrameDecoder {
   bool v5_;
   bool v6_;                            // samples in Batch.sampleCode
   bool v7_;                            // ... predicted from the visit table too
+  bool v8_;                            // new paths in Batch.pathCode
   bool use_table_ = false;             // in this batch (Batch.visitTable)
   std::unique_ptr<VisitTable> table_;  // version 7, cleared for every batch
   std::vector<std::uint32_t> path_;    // version 7: the cells of the ray being decoded

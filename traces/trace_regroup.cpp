@@ -27,7 +27,7 @@ RegroupSummary RegroupTrace(const std::string& in, const std::string& spec,
   const TraceReader reader = TraceReader::Open(in, spec.empty() ? std::string() : spec);
   TraceWriterOptions options;
   options.name_at_finish = true;
-  // The input's format where it can be written (5 or 6), else the default.
+  // The input's format where it can be written (5 and later), else the default.
   if (reader.header().format_version >= 5) options.format_version = reader.header().format_version;
   TraceWriter writer = TraceWriter::Create(out, reader.header(), options);
   RegroupSummary sum;

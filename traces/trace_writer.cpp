@@ -22,6 +22,7 @@
 #include "base/file.h"
 #include "base/hash.h"
 #include "traces/columns.h"
+#include "traces/path_coder.h"
 #include "traces/sample_coder.h"
 #include "traces/trace.capnp.h"
 
@@ -212,6 +213,7 @@ struct BatchColumns {
   ColumnBuilder parents, spawns, pixels, primary_paths, secondary_paths;
   ZeroRunColumnBuilder primary_samples, secondary_samples, shadow_samples;
   SampleEncoder samples;                             // version 6 and 7: Batch.sampleCode
+  std::optional<PathEncoder> path_code;              // version 8: Batch.pathCode
   std::unique_ptr<VisitTable> table;                 // version 7
   std::vector<VisitTable::Coordinates> coordinates;  // version 7: of the ray's cells
   static constexpr std::size_t kNone = ~std::size_t{0};
@@ -219,6 +221,7 @@ struct BatchColumns {
   unsigned rule;
   std::uint32_t version;             // 6 for a version 7 batch without the visit table
   bool uses_table;                   // Batch.visitTable
+  bool code_paths;                   // version 8: new paths in path_code (else in the columns)
   std::size_t last_primary = kNone;  // index in the batch of the last primary ray
   // Sibling rule: index of the last group start by [kind][kind of its parent].
   std::size_t group_start[kRayKindCount][kRayKindCount];
@@ -238,8 +241,10 @@ struct BatchColumns {
         grid(g),
         rule(reference_rule),
         version(format_version >= 7 && !visit_table ? 6 : format_version),
-        uses_table(format_version >= 7 && visit_table) {
+        uses_table(format_version >= 7 && visit_table),
+        code_paths(format_version >= 8) {
     if (uses_table) table = std::make_unique<VisitTable>();
+    if (code_paths) path_code.emplace(g);
     for (auto& starts : group_start) std::fill(std::begin(starts), std::end(starts), kNone);
     ordinals.reserve(b.size());
     for (std::size_t i = 0; i < b.size(); ++i) AddRay(b, i);
@@ -248,6 +253,20 @@ struct BatchColumns {
     secondary_samples.Finish();
     shadow_samples.Finish();
     if (version >= 6) samples.Finish();
+    if (code_paths) {
+      // Version 8: the path code where it is smaller than zstd's code of the path columns
+      // alone (in the frame's stream, mixed with the other columns, zstd does about as well).
+      path_code->Finish();
+      std::string columns;
+      primary_paths.AppendTo(columns);
+      secondary_paths.AppendTo(columns);
+      std::string packed(ZSTD_compressBound(columns.size()), '\0');
+      const std::size_t n =
+          ZSTD_compress(packed.data(), packed.size(), columns.data(), columns.size(), 3);
+      RAYCELL_CHECK(!ZSTD_isError(n));
+      code_paths = path_code->bytes() < n;
+      if (code_paths) primary_paths = secondary_paths = ColumnBuilder();
+    }
   }
 
   void AddRay(const RayBatch& b, std::size_t i) {
@@ -271,6 +290,11 @@ struct BatchColumns {
     if (new_path) {
       head |= kHeadNewPath;
       const std::uint32_t first = PredictedFirstCell(b, r, ref, reference);
+      if (code_paths) {  // both ways in version 8; the constructor keeps the smaller
+        path_code->Add(SampleGroup(static_cast<unsigned>(r.kind)), first, r.cells, r.visit_count,
+                       ParentHint(b, r.parent, r.spawn, grid), reference.cells,
+                       reference.visit_count);
+      }
       ColumnBuilder& paths = r.is_primary() ? primary_paths : secondary_paths;
       paths.Add(r.visit_count);
       AddSteps(r, first, paths);
@@ -393,6 +417,7 @@ struct BatchColumns {
       n += c->bytes();
     }
     n += samples.bytes();
+    if (code_paths) n += path_code->bytes();
     return n;
   }
 
@@ -404,6 +429,7 @@ struct BatchColumns {
       n += c->EntropyBits();
     }
     n += 8.0 * static_cast<double>(samples.bytes());
+    if (code_paths) n += 8.0 * static_cast<double>(path_code->bytes());
     return n;
   }
 };
@@ -430,6 +456,10 @@ void FillBatch(schema::Batch::Builder out, const RayBatch& b, const BatchColumns
   if (c.version >= 6) {
     const std::vector<std::uint8_t>& code = c.samples.code();
     out.setSampleCode(capnp::Data::Reader(code.data(), code.size()));
+  }
+  if (c.code_paths) {
+    const std::vector<std::uint8_t>& code = c.path_code->code();
+    out.setPathCode(capnp::Data::Reader(code.data(), code.size()));
   }
   if (!store_t) return;
   FillFloats(out.initTEnter(static_cast<unsigned>(b.visit_count())), b.t_enters());
@@ -811,7 +841,7 @@ void TraceWriter::BeginFrame(std::int32_t frame) {
 void TraceWriter::Append(const RayBatch& rays) {
   Impl& w = *impl_;
   RAYCELL_CHECK(w.in_frame);
-  RAYCELL_CHECK_LE(5u, w.options.format_version);  // encodes only versions 5 to 7
+  RAYCELL_CHECK_LE(5u, w.options.format_version);  // encodes only versions 5 and later
   RAYCELL_CHECK_EQ(rays.first_id(), w.frame.rays());
   for (std::size_t i = 0; i < rays.size(); ++i) w.AddRay(rays.ray(i));
 }

@@ -25,6 +25,7 @@
 #include "tests/test_util.h"
 #include "tests/traces/trace_format.h"
 #include "tests/traces/trace_test_util.h"
+#include "traces/path_coder.h"
 #include "traces/sample_coder.h"
 #include "traces/trace.capnp.h"
 #include "traces/trace_reader.h"
@@ -260,6 +261,7 @@ struct RawBatch {
   std::uint8_t reference_rule = 0;
   std::vector<std::uint8_t> sample_code;  // format 6
   bool visit_table = false;               // format 7
+  std::vector<std::uint8_t> path_code;    // format 8
   std::size_t t_values = 3;               // entries of tEnter and tExit
   bool drop_wide_pixels = false;          // leave the pixels' escaped values out
 };
@@ -300,6 +302,7 @@ std::string BatchMessage(const RawBatch& b) {
   out.setReferenceRule(b.reference_rule);
   out.setSampleCode(capnp::Data::Reader(b.sample_code.data(), b.sample_code.size()));
   out.setVisitTable(b.visit_table);
+  out.setPathCode(capnp::Data::Reader(b.path_code.data(), b.path_code.size()));
   out.initTEnter(static_cast<unsigned>(b.t_values));
   out.initTExit(static_cast<unsigned>(b.t_values));
   return Flat(message);
@@ -688,6 +691,73 @@ TEST_F(InvalidContentV7Test, CraftedGoodFrameReads) {
   }
 }
 
+class InvalidContentV8Test : public InvalidContentTest {
+ protected:
+  InvalidContentV8Test() : InvalidContentTest(8) {}
+};
+
+// The same rays coded as format version 8: version 6's batch (no visit table) with the paths
+// range coded in pathCode (see "Paths" in trace.capnp): ray 0 (primary, no reference, its
+// parent's step unknown) from cell 0 through cells 3 and 2; ray 1 (shadow) from its parent's
+// cell at the spawn, 2, through cell 2, its parent having entered cell 2 from cell 3 by the step
+// (-1, 0, 0), class 0 + 3 * 1 + 9 * 1 = 12.
+RawBatch GoodBatchV8() {
+  RawBatch b = GoodBatchV6();
+  b.primary_paths = {};
+  b.secondary_paths = {};
+  PathEncoder paths({2, 2, 2});
+  const CellId primary[] = {CellId(3), CellId(2)}, shadow[] = {CellId(2)};
+  paths.Add(0, 0, primary, 2, PathTable::kFromSpawn + 1, nullptr, 0);
+  paths.Add(2, 2, shadow, 1, 12, nullptr, 0);
+  paths.Finish();
+  b.path_code = paths.code();
+  return b;
+}
+
+// Either way: the paths range coded, or (pathCode empty) in the columns as version 7's.
+TEST_F(InvalidContentV8Test, CraftedGoodFrameReads) {
+  for (const bool coded : {true, false}) {
+    SCOPED_TRACE(coded);
+    const TraceReader reader = Read({coded ? GoodBatchV8() : GoodBatchV6()}, GoodSummary());
+    EXPECT_EQ(reader.header().format_version, 8u);
+    ASSERT_EQ(reader.frames().size(), 1u) << reader.warning();
+    const RayBatch frame = reader.LoadFrame(0);
+    EXPECT_EQ(frame.cells(), (testing::CellList{3, 2, 2}));
+    EXPECT_EQ(frame.samples(), (std::vector<std::uint32_t>{5, 6, 7}));
+  }
+}
+
+TEST_F(InvalidContentV8Test, PathsAreInThePathCodeOnly) {
+  RawBatch b = GoodBatchV8();
+  b.primary_paths = {2, 68, 61};
+  ExpectRejected({b}, "column primaryPaths: extra values");
+  b = GoodBatchV8();
+  b.path_code.push_back(0);
+  ExpectRejected({b}, "pathCode of " + std::to_string(b.path_code.size()) + " bytes ends at byte");
+  b = GoodBatchV8();
+  b.path_code = {};  // no path code: the paths are in the columns, which are empty
+  ExpectRejected({b}, "column primaryPaths: too few values");
+  b.path_code = {0};  // read as zeros: symbol 0, the step (-2,-2,-2), leaves the grid
+  ExpectRejected({b}, "ray 0: bad path");
+  // Ray 0's steps coded from cell 1 = (1,0,0): (0,+1,0) to cell 3, then (-1,0,0) to cell 2.
+  // The reader starts from cell 0: (0,+1,0) to cell 2 = (0,1,0), then (-1,0,0) leaves the grid.
+  b = GoodBatchV8();
+  PathEncoder out_of_grid({2, 2, 2});
+  const CellId cells[] = {CellId(3), CellId(2)};
+  out_of_grid.Add(0, 1, cells, 2, PathTable::kFromSpawn + 1, nullptr, 0);
+  out_of_grid.Finish();
+  b.path_code = out_of_grid.code();
+  ExpectRejected({b}, "ray 0: bad path");
+  b.path_code = std::vector<std::uint8_t>(8, 0xFF);  // no symbol of a path
+  ExpectRejected({b}, "ray 0: bad path");
+}
+
+TEST_F(InvalidContentV7Test, PathCodeIsRefused) {
+  RawBatch b = GoodBatchV6();
+  b.path_code = GoodBatchV8().path_code;
+  ExpectRejected({b}, "pathCode in a batch of format version 7 or earlier");
+}
+
 TEST_F(InvalidContentV6Test, VisitTableIsRefused) {
   RawBatch b = GoodBatchV6();
   b.visit_table = true;
@@ -808,12 +878,12 @@ TEST_F(InvalidHeaderTest, VersionsAndLimitsAreChecked) {
   ExpectRejected(HeaderMessage(1, {2, 1, 1}, {5, 6}) + FootprintsMessage(0, {5}, {1}),
                  "more than one message in the header frame");
   ExpectRejected(HeaderMessage(1, {2, 1, 1}, {5}), "1 footprints for 2 cells");
-  ExpectRejected(HeaderMessage(8, {2, 1, 1}),
-                 "format version 8 is not supported (this reader "
-                 "reads 1..7)");
+  ExpectRejected(HeaderMessage(9, {2, 1, 1}),
+                 "format version 9 is not supported (this reader "
+                 "reads 1..8)");
   ExpectRejected(HeaderMessage(0, {2, 1, 1}),
                  "format version 0 is not supported (this reader "
-                 "reads 1..7)");
+                 "reads 1..8)");
   // A grid beyond the limit is refused before anything is allocated for its cells.
   ExpectRejected(HeaderMessage(2, {4096, 4096, 4096}) + FootprintsMessage(0, {5}, {0}),
                  "cell grid 4096x4096x4096 = 68719476736 cells exceeds the trace format's limit "

@@ -108,7 +108,7 @@ void ExpectSummaryOf(const FrameSummary& s, const Frame& f) {
   EXPECT_EQ(s.samples, samples);
 }
 
-// With and without t; in the current format (7) and in formats 6 and 5, which the writer
+// With and without t; in the current format (8) and in formats 7, 6 and 5, which the writer
 // still writes when asked (options.format_version), so that files of the previous writers
 // are known to read.
 class RoundTripTest : public ::testing::TestWithParam<std::tuple<bool, std::uint32_t>> {};
@@ -145,7 +145,7 @@ TEST_P(RoundTripTest, WhatIsReadEqualsWhatWasWritten) {
 }
 
 INSTANTIATE_TEST_SUITE_P(WithAndWithoutT, RoundTripTest,
-                         ::testing::Combine(::testing::Bool(), ::testing::Values(7u, 6u, 5u)));
+                         ::testing::Combine(::testing::Bool(), ::testing::Values(8u, 7u, 6u, 5u)));
 
 TEST(TraceIoTest, ForEachBatchStreamsBatchesOfBoundedSize) {
   const std::string path = TempPath("batches.rct");
@@ -738,6 +738,81 @@ TEST(TraceIoTest, Format7PredictsSamplesFromTheVisitTable) {
   // bytes); format 7 only the first ray of each path's (about 10 bytes) and 998 zeros.
   EXPECT_GT(code_bytes[0], 600u);
   EXPECT_LT(code_bytes[1], 60u);
+}
+
+// Primary rays alternating between two paths that share no cell: each ray's reference (the
+// previous primary ray) took the other path, so every ray has a new path. Format 7 writes each
+// in primaryPaths (its visit count and a step code per visit); format 8 predicts each step and
+// each end from the path table (the last ray that left the same cell entered the same way)
+// and codes nearly every prediction's "held" in a small fraction of a bit.
+TEST(TraceIoTest, Format8PredictsPathsFromThePathTable) {
+  RayBatch frame(false);
+  const std::vector<std::vector<std::uint32_t>> paths = {{0, 1, 2, 6}, {16, 20, 21}};
+  for (std::uint32_t x = 0; x < 400; ++x) {
+    frame.BeginRay(RayKind::kPrimary, kNoParent, 0, x, 0);
+    for (const std::uint32_t cell : paths[x % 2]) frame.AddVisit(CellId(cell), 5, 0, 0);
+  }
+  std::size_t path_bytes[2] = {0, 0};
+  for (const std::uint32_t version : {7u, 8u}) {
+    SCOPED_TRACE(version);
+    const kj::Array<capnp::word> words = WrittenIn(frame, {4, 4, 4}, version, "paths");
+    capnp::FlatArrayMessageReader message(words);
+    const auto batch = message.getRoot<schema::Record>().getBatch();
+    EXPECT_EQ(batch.getSecondaryPaths().getNarrow().size(), 0u);
+    if (version == 7) {
+      path_bytes[0] = batch.getPrimaryPaths().getNarrow().size();
+      EXPECT_EQ(batch.getPathCode().size(), 0u);
+    } else {
+      EXPECT_EQ(batch.getPrimaryPaths().getNarrow().size(), 0u);
+      path_bytes[1] = batch.getPathCode().size();
+    }
+  }
+  // 400 new paths: format 7 (1 + 3.5) x 400 = 1800 bytes before zstd; format 8 about 2,000
+  // predictions that hold and a few dozen symbols while its table fills.
+  EXPECT_EQ(path_bytes[0], 1800u);
+  EXPECT_LT(path_bytes[1], 60u);
+}
+
+// Random rays in a grid large enough that steps escape (more than 2 cells along an axis),
+// secondary rays spawned anywhere along their parents, and paths of every length: what format 8
+// reads is what was written, in batches small and large (a new table and models per batch).
+TEST(TraceIoTest, Format8ReadsBackRandomPathsWithEscapes) {
+  std::mt19937_64 rng(42);
+  RayBatch frame(false);
+  const std::uint32_t cells = 16 * 4 * 8;
+  std::vector<std::uint32_t> counts;
+  for (std::uint32_t i = 0; i < 3000; ++i) {
+    // A secondary ray's parent is one of the 40 rays before it with a visit to spawn it from.
+    const RayId back = i == 0 ? 0 : i - 1 - rng() % std::min<std::uint32_t>(i, 40);
+    const bool primary = i == 0 || rng() % 3 == 0 || counts[back] == 0;
+    const RayId parent = primary ? kNoParent : back;
+    const std::uint32_t spawn = primary ? 0 : static_cast<std::uint32_t>(rng() % counts[back]);
+    const auto kind = primary ? RayKind::kPrimary : static_cast<RayKind>(1 + rng() % 3);
+    frame.BeginRay(kind, parent, spawn, i % 64, i / 64);
+    const std::uint32_t n = static_cast<std::uint32_t>(rng() % 7);
+    std::uint32_t cell = static_cast<std::uint32_t>(rng() % cells);
+    for (std::uint32_t v = 0; v < n; ++v) {
+      // Mostly neighbours, sometimes a jump anywhere (an escaped step).
+      cell = rng() % 4 == 0 ? static_cast<std::uint32_t>(rng() % cells)
+                            : (cell + (rng() % 2 ? 1 : 16)) % cells;
+      frame.AddVisit(CellId(cell), static_cast<std::uint32_t>(rng() % 50), 0, 0);
+    }
+    counts.push_back(n);
+  }
+  for (const std::size_t batch_rays : {std::size_t{1}, std::size_t{7}, std::size_t{5000}}) {
+    SCOPED_TRACE(batch_rays);
+    const std::string path = TempPath("escapes8.rct");
+    TraceWriterOptions options;
+    options.format_version = 8;
+    options.max_batch_rays = batch_rays;
+    WriteTrace(path, TestHeader({16, 4, 8}, false), {{0, frame}}, options);
+    const TraceReader reader = TraceReader::Open(path);
+    EXPECT_EQ(reader.header().format_version, 8u);
+    const RayBatch loaded = reader.LoadFrame(0);
+    EXPECT_TRUE(loaded == frame);
+    EXPECT_EQ(loaded.cells(), frame.cells());
+    std::remove(path.c_str());
+  }
 }
 
 }  // namespace

@@ -243,6 +243,8 @@ int Columns(const std::string& path) {
       AddColumn(columns["shadowSamples"], b.getShadowSamples());
       const auto code = b.getSampleCode();
       columns["sampleCode"].append(reinterpret_cast<const char*>(code.begin()), code.size());
+      const auto paths = b.getPathCode();
+      columns["pathCode"].append(reinterpret_cast<const char*>(paths.begin()), paths.size());
       std::string& t = columns["tEnter+tExit"];
       for (const float x : b.getTEnter()) t.append(reinterpret_cast<const char*>(&x), 4);
       for (const float x : b.getTExit()) t.append(reinterpret_cast<const char*>(&x), 4);
