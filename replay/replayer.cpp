@@ -338,6 +338,7 @@ class Board {
  private:
   // How far ahead in a worklist the units' successors are prefetched.
   static constexpr std::size_t kPrefetch = 16;
+  static constexpr std::size_t kPrefetchItems = 64;  // WorkNext: items read ahead
   // Worked units at the front of a worklist before they may be dropped; longer empty
   // queues are freed.
   static constexpr std::size_t kDropWorked = std::size_t{1} << 16;
@@ -542,6 +543,11 @@ class Board {
     // The units a few places ahead are known: load their successors while this one is
     // worked (the records are scattered over the frame, so each would be a cache miss).
     if (ps.head + kPrefetch < ps.worklist.size()) u_.Prefetch(ps.worklist[ps.head + kPrefetch].e);
+    // And the worklist's own items further on: a queue taken whole was written while its
+    // units were released, long before, and is read one item per unit worked.
+    if (ps.head + kPrefetchItems < ps.worklist.size()) {
+      __builtin_prefetch(ps.worklist.data() + ps.head + kPrefetchItems);
+    }
     ps.unit = ps.worklist[ps.head++];
     const SimTime dt = tps_ * u_.samples(ps.unit.e);
     ps.work = ps.work + dt;
