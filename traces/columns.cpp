@@ -107,30 +107,6 @@ std::uint32_t ReadStep(ColumnReader& column, std::uint32_t from, const CellGrid&
   return StepTo(from, code, escape, grid);
 }
 
-std::uint32_t StepTo(std::uint32_t from, std::uint64_t code, const std::uint64_t escape[3],
-                     const CellGrid& grid) {
-  const std::int64_t nx = grid[0], nxy = std::int64_t{grid[0]} * grid[1];
-  const std::int64_t a = from;
-  std::int64_t d[3];
-  if (code < kStepEscape) {
-    d[0] = static_cast<std::int64_t>(code % 5) - 2;
-    d[1] = static_cast<std::int64_t>(code / 5 % 5) - 2;
-    d[2] = static_cast<std::int64_t>(code / 25) - 2;
-  } else if (code == kStepEscape) {
-    for (int axis = 0; axis < 3; ++axis) {
-      const std::uint64_t z = escape[axis];
-      d[axis] = z > (std::uint64_t{1} << 34) ? std::int64_t{1} << 34 : UnZigZag(z);
-    }
-  } else {
-    return kBadStep;
-  }
-  const std::int64_t at[3] = {a % nx + d[0], a % nxy / nx + d[1], a / nxy + d[2]};
-  for (int axis = 0; axis < 3; ++axis) {
-    if (at[axis] < 0 || at[axis] >= std::int64_t{grid[axis]}) return kBadStep;
-  }
-  return static_cast<std::uint32_t>(at[0] + nx * at[1] + nxy * at[2]);
-}
-
 std::uint64_t ZeroRunColumnReader::StartRun(std::uint64_t v) {
   // Bijective base-2 digits, least significant first, up to a value >= 2 or the end.
   std::uint64_t run = 0;

@@ -170,8 +170,30 @@ class ZeroRunColumnReader {
 inline constexpr std::uint32_t kBadStep = ~std::uint32_t{0};
 std::uint32_t ReadStep(ColumnReader& column, std::uint32_t from, const CellGrid& grid);
 // The cell the step of code `code` (0..kStepEscape; for kStepEscape, the zigzag of each axis's
-// difference in `escape`) leads to from cell `from` of `grid`, or kBadStep.
-std::uint32_t StepTo(std::uint32_t from, std::uint64_t code, const std::uint64_t escape[3],
-                     const CellGrid& grid);
+// difference in `escape`) leads to from cell `from` of `grid`, or kBadStep. Inline: every
+// reader of a path calls it once a visit.
+inline std::uint32_t StepTo(std::uint32_t from, std::uint64_t code, const std::uint64_t escape[3],
+                            const CellGrid& grid) {
+  const std::int64_t nx = grid[0], nxy = std::int64_t{grid[0]} * grid[1];
+  const std::int64_t a = from;
+  std::int64_t d[3];
+  if (code < kStepEscape) {
+    d[0] = static_cast<std::int64_t>(code % 5) - 2;
+    d[1] = static_cast<std::int64_t>(code / 5 % 5) - 2;
+    d[2] = static_cast<std::int64_t>(code / 25) - 2;
+  } else if (code == kStepEscape) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const std::uint64_t z = escape[axis];
+      d[axis] = z > (std::uint64_t{1} << 34) ? std::int64_t{1} << 34 : UnZigZag(z);
+    }
+  } else {
+    return kBadStep;
+  }
+  const std::int64_t at[3] = {a % nx + d[0], a % nxy / nx + d[1], a / nxy + d[2]};
+  for (int axis = 0; axis < 3; ++axis) {
+    if (at[axis] < 0 || at[axis] >= std::int64_t{grid[axis]}) return kBadStep;
+  }
+  return static_cast<std::uint32_t>(at[0] + nx * at[1] + nxy * at[2]);
+}
 
 }  // namespace raycell
