@@ -193,7 +193,7 @@ void AddRecordCommand(CLI::App& app) {
                 "--cells 12x12x12 --regroupable");
   cmd->add_option("--trace-format", o.trace_format,
                   "the trace's format version: 5 (the faster to read), 6 (each visit's samples "
-                  "range coded: files about a sixth smaller, read with about a quarter more CPU) "
+                  "range coded: files about a sixth smaller, read with about a quarter more CPU), "
                   "7 (6 with samples also predicted from earlier visits of the cell) or 8 (7 "
                   "with paths also range coded, predicted from earlier rays through the cell: the "
                   "smallest, the slowest to read)")
