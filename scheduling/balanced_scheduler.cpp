@@ -384,19 +384,15 @@ std::optional<CellId> BalancedScheduler::Critical(const QueueView& queues,
   }
   // No plan entry: the follower found no cell in view with work (then no cell has a level in
   // view either; with several processors most calls find only busy cells with work, and a scan
-  // of the cells each time was the cost of this rule at thousands of cells).
+  // of the cells each time was the cost of this rule at thousands of cells). Else what a scan
+  // of the cells by level, then queued rays, then number would give.
   if (queues.empty()) return std::nullopt;
-  std::optional<CellId> best;
-  for (std::uint32_t c = 0; c < queues.cells; ++c) {
-    const std::uint64_t q = queues.queued_rays[c];
-    if (q == 0) continue;
-    if (!best || level_[c] > level_[best->value()] ||
-        (level_[c] == level_[best->value()] && q > queues.queued_rays[best->value()])) {
-      best = CellId(c);
-    }
+  // The highest level with a cell in view, the most queued rays there (lowest number on ties),
+  // from the top level down as above; with none above level 0, the most queued cell in view.
+  for (std::uint32_t l = top_level_; l > 0; --l) {
+    if (const std::optional<CellId> best = LevelBest(l, queues)) return best;
   }
-  if (best && plan && level_[best->value()] <= level_[plan->value()]) return std::nullopt;
-  return best;
+  return MostQueuedCell(queues);
 }
 
 const std::uint64_t* BalancedScheduler::Queued(const QueueView& queues) const {
