@@ -370,29 +370,20 @@ std::optional<CellId> BalancedScheduler::Critical(const QueueView& queues,
                                                   std::optional<CellId> plan) const {
   // Counted as the hardware's pass over the cells (docs/design.md §5 "Load balancing").
   cost_.steps += queues.cells;
-  if (plan) {
-    // The highest level above the plan's entry's with a cell in view, the most queued rays
-    // there (lowest number on ties): the scan below's answer, found from the top level down.
-    // A cell of a level has queued nodes; only the busy ones (at most the other processors)
-    // have none in view.
-    for (std::uint32_t l = top_level_; l > level_[plan->value()]; --l) {
-      if (const std::optional<CellId> best = LevelBest(l, queues)) {
-        return best;
-      }
-    }
-    return std::nullopt;
-  }
   // No plan entry: the follower found no cell in view with work (then no cell has a level in
-  // view either; with several processors most calls find only busy cells with work, and a scan
-  // of the cells each time was the cost of this rule at thousands of cells). Else what a scan
-  // of the cells by level, then queued rays, then number would give.
-  if (queues.empty()) return std::nullopt;
-  // The highest level with a cell in view, the most queued rays there (lowest number on ties),
-  // from the top level down as above; with none above level 0, the most queued cell in view.
-  for (std::uint32_t l = top_level_; l > 0; --l) {
+  // view either; with several processors most calls find only busy cells with work).
+  if (!plan && queues.empty()) return std::nullopt;
+  // The highest level above the plan entry's (above 0 without one) with a cell in view, the
+  // most queued rays there (lowest number on ties): what a scan of the cells by level, then
+  // queued rays, then number gives, found from the top level down (a scan of the cells each
+  // time was the cost of this rule at thousands of cells). A cell of a level has queued nodes;
+  // only the busy ones (at most the other processors) have none in view.
+  const std::uint32_t lowest = plan ? level_[plan->value()] : 0;
+  for (std::uint32_t l = top_level_; l > lowest; --l) {
     if (const std::optional<CellId> best = LevelBest(l, queues)) return best;
   }
-  return MostQueuedCell(queues);
+  // Without a plan entry and no level in view, the most queued cell in view.
+  return plan ? std::nullopt : MostQueuedCell(queues);
 }
 
 const std::uint64_t* BalancedScheduler::Queued(const QueueView& queues) const {
