@@ -97,17 +97,15 @@ void PathEncoder::Symbol(PathPredictor& state, unsigned symbol) {
 void PathEncoder::Add(unsigned group, std::uint32_t from, const CellId* cells, std::size_t count,
                       unsigned hint, const CellId* ref, std::size_t ref_count) {
   PathPredictor state(group, from, hint, ref, ref_count);
-  std::uint32_t at = from;
   for (std::size_t i = 0; i < count; ++i) {
     const std::uint32_t to = cells[i].value();
     std::uint64_t escape[3];
-    const unsigned step = StepCode(at, to, grid_, escape);
+    const unsigned step = StepCode(state.at(), to, grid_, escape);
     Symbol(state, step);
     if (step == kStepEscape) {
       for (unsigned axis = 0; axis < 3; ++axis) code_.Add(axis, escape[axis]);
     }
     state.Step(to, grid_);
-    at = to;
   }
   Symbol(state, PathTable::kEnd);
 }
@@ -133,7 +131,6 @@ bool PathDecoder::Next(unsigned group, std::uint32_t from, unsigned hint, const 
                        std::vector<std::uint32_t>& cells) {
   cells.clear();
   PathPredictor state(group, from, hint, ref, ref_count);
-  std::uint32_t at = from;
   for (;;) {
     const unsigned step = Symbol(state);
     if (step == PathTable::kEnd) return true;
@@ -142,10 +139,9 @@ bool PathDecoder::Next(unsigned group, std::uint32_t from, unsigned hint, const 
     if (step == kStepEscape) {
       for (unsigned axis = 0; axis < 3; ++axis) escape[axis] = code_.Next(axis);
     }
-    const std::uint32_t to = StepTo(at, step, escape, grid_);
+    const std::uint32_t to = StepTo(state.at(), step, escape, grid_);
     if (to == kBadStep) return false;
     state.Step(to, grid_);
-    at = to;
     cells.push_back(to);
   }
 }

@@ -118,6 +118,8 @@ class PathPredictor {
   void After(const Prediction& p, unsigned symbol, PathTable& table);
   // After the step to cell `to`.
   void Step(std::uint32_t to, const CellGrid& grid);
+  // The cell the next step leaves (the path's last cell so far).
+  std::uint32_t at() const { return at_; }
 
  private:
   unsigned group_;
