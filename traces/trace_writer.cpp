@@ -233,16 +233,19 @@ struct BatchColumns {
   std::uint32_t last_first_cell = 0;    // first cell of the last ray with a visit
 
   // `visit_table` (version 7): the samples predicted from the visit table too (Batch.visitTable);
-  // else a version 7 batch's samples are coded as version 6's.
+  // else a version 7 batch's samples are coded as version 6's. `paths_from` (version 8): the
+  // columns of the same rule, whose path code (it does not depend on the visit table) is taken
+  // instead of coding the paths again.
   BatchColumns(const RayBatch& b, const CellGrid& g, unsigned reference_rule,
-               std::uint32_t format_version, bool visit_table = true)
+               std::uint32_t format_version, bool visit_table = true,
+               const BatchColumns* paths_from = nullptr)
       : samples(format_version >= 7 && visit_table ? SampleContext::kCount7
                                                    : SampleContext::kCount),
         grid(g),
         rule(reference_rule),
         version(format_version >= 7 && !visit_table ? 6 : format_version),
         uses_table(format_version >= 7 && visit_table),
-        code_paths(format_version >= 8) {
+        code_paths(format_version >= 8 && paths_from == nullptr) {
     if (uses_table) table = std::make_unique<VisitTable>();
     if (code_paths) path_code.emplace(g);
     for (auto& starts : group_start) std::fill(std::begin(starts), std::end(starts), kNone);
@@ -265,8 +268,13 @@ struct BatchColumns {
           ZSTD_compress(packed.data(), packed.size(), columns.data(), columns.size(), 3);
       RAYCELL_CHECK(!ZSTD_isError(n));
       code_paths = path_code->bytes() < n;
-      if (code_paths) primary_paths = secondary_paths = ColumnBuilder();
     }
+    if (paths_from != nullptr) {
+      RAYCELL_CHECK_EQ(paths_from->rule, rule);
+      code_paths = paths_from->code_paths;
+      if (code_paths) path_code = paths_from->path_code;
+    }
+    if (code_paths) primary_paths = secondary_paths = ColumnBuilder();
   }
 
   void AddRay(const RayBatch& b, std::size_t i) {
@@ -741,7 +749,7 @@ struct TraceWriter::Impl {
     // the smaller sample code (the table on a tie).
     std::optional<BatchColumns> without_table;
     if (version >= 7) {
-      without_table.emplace(pending, header.cells, chosen.rule, version, false);
+      without_table.emplace(pending, header.cells, chosen.rule, version, false, &chosen);
       if (without_table->samples.bytes() >= chosen.samples.bytes()) without_table.reset();
     }
     const BatchColumns& columns = without_table ? *without_table : chosen;
