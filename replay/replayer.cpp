@@ -6,6 +6,7 @@
 
 #include "base/check.h"
 #include "base/checked.h"
+#include "base/kept_room.h"
 #include "engine/slot_queue.h"
 #include "engine/watchdog.h"
 #include "replay/time_bound.h"
@@ -267,6 +268,7 @@ class Board {
         scheduler_(scheduler),
         memory_(config, footprints, futures, start, units),
         queues_(w.cells),
+        kept_room_(KeptRoom(kKeptRoomBytes, sizeof(Item), w.cells, 64, kDropWorked)),
         queued_rays_(w.cells, 0),
         view_(w.cells, 0),
         open_(w.cells, kOpen),
@@ -339,8 +341,7 @@ class Board {
   // How far ahead in a worklist the units' successors are prefetched.
   static constexpr std::size_t kPrefetch = 16;
   static constexpr std::size_t kPrefetchItems = 64;  // WorkNext: items read ahead
-  // Worked units at the front of a worklist before they may be dropped; longer empty
-  // queues are freed.
+  // Worked units at the front of a worklist before they may be dropped.
   static constexpr std::size_t kDropWorked = std::size_t{1} << 16;
 
   // Schedules processor p's next event. p has none pending: it is the processor being
@@ -473,13 +474,14 @@ class Board {
       ps.worklist.swap(q);
       // The cell's queue now has the old worklist's room; a long one is freed, else the
       // rooms of long worklists would pile up in the queues of every cell.
-      if (q.capacity() > kDropWorked) std::vector<Item>().swap(q);
+      ReleaseRoomAbove(q, kept_room_);
       // WorkNext prefetches kPrefetch units ahead: start the first ones here.
       const std::size_t n = std::min(kPrefetch, ps.worklist.size());
       for (std::size_t i = 0; i < n; ++i) u_.Prefetch(ps.worklist[i].e);
     } else {
       ps.worklist.insert(ps.worklist.end(), q.begin(), q.end());
       q.clear();
+      ReleaseRoomAbove(q, kept_room_);
     }
   }
 
@@ -668,6 +670,9 @@ class Board {
   Scheduler& scheduler_;
   MemoryHierarchy memory_;
   std::vector<std::vector<Item>> queues_;
+  // The room in items an emptied queue may keep (base/kept_room.h): a queue taken leaves its cell
+  // the old worklist's room, or its own when appended to a worklist.
+  std::size_t kept_room_;
   // view_[c] = queued_rays_[c] & open_[c], kept so (the queues in a scheduler's view).
   std::vector<std::uint64_t> queued_rays_, view_;
   // The cell with the most queued rays in view_, lowest number on ties (kNoCell: none), when

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "base/check.h"
+#include "base/kept_room.h"
 #include "graph/peel.h"
 #include "scheduling/best_scheduler.h"
 
@@ -78,6 +79,7 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   guess_.assign(1, false);
   node_cell_.assign(1, kNoCell);
   queued_.assign(cells_, {});
+  kept_room_ = KeptRoom(kKeptRoomBytes, sizeof(std::uint32_t), cells_, 16, std::size_t{1} << 16);
   min_due_.assign(cells_, kNever);
   depth_.assign(1, 0);
   min_depth_.assign(cells_, kNever);
@@ -283,6 +285,7 @@ void AdaptiveScheduler::Arrived(const Arrival& a) {
 
 void AdaptiveScheduler::Taken(CellId cell) {
   queued_[cell.value()].clear();
+  ReleaseRoomAbove(queued_[cell.value()], kept_room_);
   told_[cell.value()] = 0;
   min_due_[cell.value()] = kNever;
   SetMinDepth(cell, kNever);

@@ -151,7 +151,8 @@ class AdaptiveScheduler : public Scheduler {
   std::vector<bool> guess_;        // per queued node: matched through a stand-in
   std::vector<CellId> node_cell_;  // per queued node: its cell
   std::vector<std::vector<std::uint32_t>> queued_;  // per cell: nodes queued, not yet taken
-  std::vector<std::uint32_t> min_due_;              // per cell: the least due entry of queued_
+  std::size_t kept_room_ = 0;           // the room an emptied queued_ list keeps (base/kept_room.h)
+  std::vector<std::uint32_t> min_due_;  // per cell: the least due entry of queued_
   // Per queued node: its depth (the root's children 1); kept only where it is read (KeepsDepths:
   // Shallowest with no prediction, ShallowestOrphan with one processor).
   std::vector<std::uint32_t> depth_;
