@@ -802,23 +802,24 @@ class SeenReplayer : public SeenFrameReplayer {
 
 // `make_watch()` gives each run's W (NoWatch, or Watch for a scheduler that watches).
 // `time_bound`: false within a replay of a frame seen, which reports no lower bound (0).
+// `begun`: a FrameStart whose Begin told the scheduler the frame's start; null: made here.
 template <typename Units, typename W, typename MakeWatch>
 ReplayResult Replay(const WorkGraph& work, Units graph_units,
                     const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
                     Scheduler& scheduler, const FrameTrees& frame, std::uint64_t bound,
                     ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units,
-                    bool seen, MakeWatch make_watch, bool time_bound) {
+                    bool seen, MakeWatch make_watch, bool time_bound, FrameStart* begun) {
   static const MemoryState kEmpty;
   const MemoryState& start = memory ? *memory : kEmpty;
-  const std::vector<double> fetch_samples = FetchSamples(config, footprints);
-  FrameInfo info = MakeFrameInfo(frame, config, fetch_samples, units, scheduler);
-  const SeenReplayer seen_replayer(footprints, config, start, units, frame.plans);
-  if (seen) info.seen = &seen_replayer;
+  std::optional<FrameStart> own;
+  FrameStart& frame_start =
+      begun != nullptr ? *begun
+                       : own.emplace(footprints, config, scheduler, frame, memory, units, seen);
   const bool min = NeedsFuture(config);
   const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
   MemoryHierarchy::Requests futures;
   for (std::uint32_t pass = 1;; ++pass) {
-    scheduler.BeginFrame(info);
+    if (pass > 1 || !frame_start.begun()) frame_start.Begin(scheduler);
     Board<Units, W> board(work, graph_units, footprints, config, scheduler, futures, start,
                           observer, units, make_watch());
     board.Run(frame.frame_index);
@@ -856,33 +857,35 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
                     const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
                     Scheduler& scheduler, const FrameTrees& frame, std::uint64_t bound,
                     ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units,
-                    bool seen, bool time_bound) {
+                    bool seen, bool time_bound, FrameStart* begun) {
   if (!scheduler.Watches()) {
     return Replay<Units, NoWatch>(
         work, graph_units, footprints, config, scheduler, frame, bound, observer, memory, units,
-        seen, [] { return NoWatch{}; }, time_bound);
+        seen, [] { return NoWatch{}; }, time_bound, begun);
   }
   return Replay<Units, Watch>(
       work, graph_units, footprints, config, scheduler, frame, bound, observer, memory, units, seen,
-      [&] { return Watch(scheduler, work.per_node, work.cells); }, time_bound);
+      [&] { return Watch(scheduler, work.per_node, work.cells); }, time_bound, begun);
 }
 
 // The replay of `work` in its form: the compact stream, the packed records or the columns.
 ReplayResult ReplayWork(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                         const ReplayConfig& config, Scheduler& scheduler, const FrameTrees& frame,
                         std::uint64_t bound, ReplayObserver* observer, MemoryState* memory,
-                        const MemoryUnits* units, bool seen, bool time_bound) {
+                        const MemoryUnits* units, bool seen, bool time_bound,
+                        FrameStart* begun = nullptr) {
   RAYCELL_CHECK_EQ(footprints.size(), std::size_t(work.cells));
   if (work.compact.units != 0) {
     return Replay(work, CompactUnits{work.compact.stream.data(), &work.compact}, footprints, config,
-                  scheduler, frame, bound, observer, memory, units, seen, time_bound);
+                  scheduler, frame, bound, observer, memory, units, seen, time_bound, begun);
   }
   if (!work.packed.empty()) {
     return Replay(work, PackedUnits{work.packed.data(), UnitId(work.roots.size())}, footprints,
-                  config, scheduler, frame, bound, observer, memory, units, seen, time_bound);
+                  config, scheduler, frame, bound, observer, memory, units, seen, time_bound,
+                  begun);
   }
   return Replay(work, ColumnUnits{&work}, footprints, config, scheduler, frame, bound, observer,
-                memory, units, seen, time_bound);
+                memory, units, seen, time_bound, begun);
 }
 
 ReplayResult SeenReplay(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
@@ -895,14 +898,34 @@ ReplayResult SeenReplay(const WorkGraph& work, const std::vector<std::uint64_t>&
 
 }  // namespace
 
+FrameStart::FrameStart(const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
+                       const Scheduler& scheduler, const FrameTrees& frame,
+                       const MemoryState* memory, const MemoryUnits* units, bool seen)
+    : fetch_samples_(FetchSamples(config, footprints)) {
+  static const MemoryState kEmpty;
+  info_ = MakeFrameInfo(frame, config, fetch_samples_, units, scheduler);
+  if (seen) {
+    seen_ = std::make_unique<SeenReplayer>(footprints, config, memory ? *memory : kEmpty, units,
+                                           frame.plans);
+    info_.seen = seen_.get();
+  }
+}
+
+FrameStart::~FrameStart() = default;
+
+void FrameStart::Begin(Scheduler& scheduler) {
+  scheduler.BeginFrame(info_);
+  begun_ = true;
+}
+
 FrameInfo MakeFrameInfo(const FrameTrees& frame, const ReplayConfig& config,
                         const std::vector<double>& fetch_samples, const MemoryUnits* units,
                         const Scheduler& scheduler) {
   FrameInfo info;
   info.frame_index = frame.frame_index;
-  // A scheduler that watches the frame unfold learns it only from what is queued (an oracle
-  // that watches, celltree-dag-oracle, is given it).
-  info.current = scheduler.Watches() && !scheduler.entry().oracle ? nullptr : frame.current;
+  // Only an oracle is given the frame's own tree: every other scheduler learns the frame from
+  // what is queued, and begins it before its tree is built (FrameStart).
+  info.current = scheduler.entry().oracle ? frame.current : nullptr;
   info.previous = frame.previous;
   info.cells = frame.cells;
   info.before_previous = frame.before_previous;
@@ -967,11 +990,11 @@ void CheckReplay(const ReplayConfig& config, std::uint64_t cells) {
 ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>& footprints,
                          const ReplayConfig& config, Scheduler& scheduler, const FrameTrees& frame,
                          std::uint64_t bound, ReplayObserver* observer, MemoryState* memory,
-                         const MemoryUnits* units, bool seen) {
+                         const MemoryUnits* units, bool seen, FrameStart* start) {
   // The caller ran CheckReplay (its bound on the memory model's size, as an invariant here).
   RAYCELL_CHECK_LE(std::uint64_t{config.processors.count} * work.cells, kMaxProcessorCells);
   return ReplayWork(work, footprints, config, scheduler, frame, bound, observer, memory, units,
-                    seen, /*time_bound=*/true);
+                    seen, /*time_bound=*/true, start);
 }
 
 }  // namespace raycell

@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -63,14 +64,42 @@ struct FrameTrees {
 
 // The FrameInfo a replay tells `scheduler` (BeginFrame), made here and nowhere else: `frame`'s
 // index and trees, `fetch_samples` (FetchSamples; must outlive the result), the processor
-// count, no current tree for a scheduler that watches the frame unfold (it learns the frame
-// only from what is queued), and the board's cells from the nearest level of `units` that
-// holds coarser cells (null: none).
+// count, the current tree only for an oracle (any other scheduler learns the frame only from
+// what is queued, and may begin it before its tree is built: FrameStart), and the board's cells
+// from the nearest level of `units` that holds coarser cells (null: none).
 FrameInfo MakeFrameInfo(const FrameTrees& frame, const ReplayConfig& config,
                         const std::vector<double>& fetch_samples, const MemoryUnits* units,
                         const Scheduler& scheduler);
 
-// Replays one frame; calls scheduler.BeginFrame(MakeFrameInfo(frame, ...)) itself. `config` has
+// What a replay tells its scheduler at the frame's start, made before the frame's work so that
+// it may begin first (issue 43): BeginFrame reads only earlier frames (an oracle excepted), so
+// the runner begins every replay of a frame, frees frame i-2's tree, and only then builds the
+// frame's tree and work (runner/driver.cpp ReplayFrames; docs/design.md §2 "What a replay
+// holds"). It keeps what the scheduler may point into (the fetch costs, the replayer of frames
+// seen) until the replay ends. `memory` (null: empty) must not change until then.
+class FrameStart {
+ public:
+  FrameStart(const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
+             const Scheduler& scheduler, const FrameTrees& frame, const MemoryState* memory,
+             const MemoryUnits* units, bool seen = true);
+  ~FrameStart();
+  FrameStart(const FrameStart&) = delete;
+  FrameStart& operator=(const FrameStart&) = delete;
+  // scheduler.BeginFrame(info()); the replay given this start then tells it nothing more before
+  // its board runs (only MIN's later passes begin the frame again).
+  void Begin(Scheduler& scheduler);
+  bool begun() const { return begun_; }
+  const FrameInfo& info() const { return info_; }
+
+ private:
+  std::vector<double> fetch_samples_;
+  std::unique_ptr<SeenFrameReplayer> seen_;
+  FrameInfo info_;
+  bool begun_ = false;
+};
+
+// Replays one frame; calls scheduler.BeginFrame(MakeFrameInfo(frame, ...)) itself, unless
+// `start` (made for the same frame, configuration, memory and units) has begun it. `config` has
 // passed CheckReplay for `work.cells` cells. `bound` is the frame's maxGen bound (reported only
 // where it holds).
 //
@@ -98,7 +127,7 @@ ReplayResult ReplayFrame(const WorkGraph& work, const std::vector<std::uint64_t>
                          const ReplayConfig& config, Scheduler& scheduler, const FrameTrees& frame,
                          std::uint64_t bound, ReplayObserver* observer = nullptr,
                          MemoryState* memory = nullptr, const MemoryUnits* units = nullptr,
-                         bool seen = true);
+                         bool seen = true, FrameStart* start = nullptr);
 
 // Per cell, what the schedulers are told a fetch costs (FrameInfo::fetch_samples): the first
 // link's latency + footprint / bandwidth, in units of one sample's work.

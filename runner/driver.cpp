@@ -146,14 +146,20 @@ FrameWalker::FrameWalker(const TraceReader& reader, std::vector<std::size_t> fra
 }
 
 const LoadedFrame* FrameWalker::Next() {
+  if (Advance() == nullptr) return nullptr;
+  Build();
+  return &frame_;
+}
+
+LoadedFrame* FrameWalker::Advance() {
   if (position_ == indices_.size()) return nullptr;
   const std::size_t i = indices_[position_];
-  const std::uint32_t cells = reader_.header().cell_count();
   LoadedFrame& f = frame_;
   const bool follows = position_ > 0 && indices_[position_ - 1] == i - 1;
   // What the frame before needed and this one does not, released before this one is built.
   f.segments.reset();
   f.nodes.reset();
+  f.bound = 0;
   if (history_ == 0) f.tree.reset();
   // Frame i - 2's tree, for schedulers that plan from the last two frames.
   if (history_ < 2 || i < 2) {
@@ -170,6 +176,20 @@ const LoadedFrame* FrameWalker::Next() {
   } else {
     f.previous = LoadTree(reader_, i - 1, k_);
   }
+  f.tree.reset();  // moved to previous, or not kept
+  f.warm_up = !asked_for_[position_];
+  f.position = reported_;
+  f.index = i;
+  f.number = reader_.frames()[i].frame;
+  f.footprints = &reader_.FrameFootprints(i);
+  return &f;
+}
+
+void FrameWalker::Build() {
+  RAYCELL_CHECK_LT(position_, indices_.size());  // after Advance
+  const std::size_t i = indices_[position_];
+  const std::uint32_t cells = reader_.header().cell_count();
+  LoadedFrame& f = frame_;
   // What the frame before held, before this one's arrays are made; only where trees are kept
   // across frames (the holes' cause; Max Work per segment ran ~10% longer with it).
   if (history_ > 0) ReturnFreedMemory();
@@ -197,25 +217,16 @@ const LoadedFrame* FrameWalker::Next() {
   if (need_nodes_) f.nodes = std::make_unique<WorkGraph>(PackedNodeWork(*f.tree, cells));
   f.bound = f.tree ? Bound(*f.tree) : 0;
   if (!keep_tree_) f.tree.reset();  // its work and bound made, no replay reads it
-  f.warm_up = !asked_for_[position_];
-  f.position = reported_;
   if (!f.warm_up) ++reported_;
   ++position_;
-  f.index = i;
-  f.number = reader_.frames()[i].frame;
-  f.footprints = &reader_.FrameFootprints(i);
-  return &f;
 }
 
-ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& header,
-                               const ReplayConfig& config, Scheduler& scheduler,
-                               std::uint32_t sample_every, ReplayObserver* observer,
-                               MemoryState* memory, const MemoryUnits* units, PlanCache* plans) {
-  const bool per_ray = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay;
-  const WorkGraph* work = per_ray ? frame.segments.get() : frame.nodes.get();
-  RAYCELL_CHECK(work != nullptr);  // the walker was asked for this granularity
-  // An earlier frame's tree in other cells (a dynamic subdivision whose boxes changed) says
-  // nothing about this frame's cells: the schedulers get none, as in frame 0 (design §5).
+namespace {
+
+// The trees a replay of `frame` is told (FrameInfo): an earlier frame's tree in other cells (a
+// dynamic subdivision whose boxes changed) says nothing about this frame's cells, so the
+// schedulers get none, as in frame 0 (design §5).
+FrameTrees TreesOf(const LoadedFrame& frame, const TraceHeader& header, PlanCache* plans) {
   const std::uint32_t cells = header.cell_count();
   const SubdivisionInfo& sub = header.subdivision;
   const CellTree* previous = frame.previous && sub.SameCells(frame.index, frame.index - 1, cells)
@@ -225,9 +236,38 @@ ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& head
       previous && frame.before_previous && sub.SameCells(frame.index, frame.index - 2, cells)
           ? frame.before_previous.get()
           : nullptr;
-  const FrameTrees info{frame.index, frame.tree.get(), previous, cells, before, plans};
-  ReplayResult r = ReplayFrame(*work, frame.footprints ? *frame.footprints : header.footprints,
-                               config, scheduler, info, frame.bound, observer, memory, units);
+  return FrameTrees{frame.index, frame.tree.get(), previous, cells, before, plans};
+}
+
+const std::vector<std::uint64_t>& FootprintsOf(const LoadedFrame& frame,
+                                               const TraceHeader& header) {
+  return frame.footprints ? *frame.footprints : header.footprints;
+}
+
+}  // namespace
+
+std::unique_ptr<FrameStart> StartLoadedFrame(const LoadedFrame& frame, const TraceHeader& header,
+                                             const ReplayConfig& config, const Scheduler& scheduler,
+                                             MemoryState* memory, const MemoryUnits* units,
+                                             PlanCache* plans) {
+  RAYCELL_CHECK(!scheduler.entry().oracle);  // an oracle begins with the frame's own tree
+  FrameTrees trees = TreesOf(frame, header, plans);
+  trees.current = nullptr;
+  return std::make_unique<FrameStart>(FootprintsOf(frame, header), config, scheduler, trees, memory,
+                                      units);
+}
+
+ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& header,
+                               const ReplayConfig& config, Scheduler& scheduler,
+                               std::uint32_t sample_every, ReplayObserver* observer,
+                               MemoryState* memory, const MemoryUnits* units, PlanCache* plans,
+                               FrameStart* start) {
+  const bool per_ray = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay;
+  const WorkGraph* work = per_ray ? frame.segments.get() : frame.nodes.get();
+  RAYCELL_CHECK(work != nullptr);  // the walker was asked for this granularity
+  ReplayResult r = ReplayFrame(*work, FootprintsOf(frame, header), config, scheduler,
+                               TreesOf(frame, header, plans), frame.bound, observer, memory, units,
+                               /*seen=*/true, start);
   ScaleBack(r, sample_every, config.processors.count);
   r.frame = frame.number;
   return r;
@@ -312,7 +352,12 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
   const bool carry = header.cells_change() && !warm.empty();
   std::vector<CellId> of_fine_before, of_fine;
   const std::vector<std::uint64_t>* footprints_before = nullptr;
-  while (const LoadedFrame* frame = walker.Next()) {
+  // Whether the replays begin each frame before its tree and work are built (FrameStart): when
+  // no scheduler is an oracle (which begins with the frame's own tree) and no policy begins the
+  // frame again (MIN), so that frame i-2's tree is freed before frame i's tree is built.
+  bool start_early = !again;
+  for (const auto& s : schedulers) start_early = start_early && !s->entry().oracle;
+  while (LoadedFrame* frame = walker.Advance()) {
     ++walked;
     if (carry) {  // the walker walks every frame from 0 when some memory is warm
       of_fine = header.subdivision.CellOfFine(frame->index, header.cell_count());
@@ -339,21 +384,39 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
     // every replay of the frame began (issue 43), unless a policy that needs its future
     // requests (MIN) begins the frame again.
     const bool release = frame->before_previous != nullptr && !again;
-    std::atomic<std::size_t> to_begin{run.size()};
-    const std::function<void()> begun = [&] {
-      if (to_begin.fetch_sub(1, std::memory_order_acq_rel) != 1) return;
+    const auto release_begin_only = [&] {
       walker.ReleaseBeforePrevious();
       shared.ReleaseBeginOnly();
       for (const auto& p : own) p->ReleaseBeginOnly();
       ReturnFreedMemory();
     };
+    const auto plans_of = [&](std::size_t d) {
+      return options.share_plans ? &shared : own[d].get();
+    };
+    std::vector<std::unique_ptr<FrameStart>> starts(distinct.size());
+    if (start_early) {
+      pool.ParallelFor(run.size(), [&](std::size_t n) {
+        const std::size_t d = run[n];
+        starts[d] = StartLoadedFrame(*frame, header, distinct[d], *schedulers[d], memory[d].get(),
+                                     &units[d], plans_of(d));
+        starts[d]->Begin(*schedulers[d]);
+      });
+      if (release) release_begin_only();
+    }
+    walker.Build();
+    std::atomic<std::size_t> to_begin{run.size()};
+    const std::function<void()> begun = [&] {
+      if (to_begin.fetch_sub(1, std::memory_order_acq_rel) == 1) release_begin_only();
+    };
+    const bool signal_begun = release && !start_early;
     pool.ParallelFor(run.size(), [&](std::size_t n) {
       const std::size_t d = run[n];
-      BeginSignal signal(*schedulers[d], release ? begun : nullptr);
-      Scheduler& scheduler = release ? static_cast<Scheduler&>(signal) : *schedulers[d];
-      distinct_results[d] = ReplayLoadedFrame(
-          *frame, header, distinct[d], scheduler, options.sample_every, observer, memory[d].get(),
-          &units[d], options.share_plans ? &shared : own[d].get());
+      BeginSignal signal(*schedulers[d], signal_begun ? begun : nullptr);
+      Scheduler& scheduler = signal_begun ? static_cast<Scheduler&>(signal) : *schedulers[d];
+      distinct_results[d] =
+          ReplayLoadedFrame(*frame, header, distinct[d], scheduler, options.sample_every, observer,
+                            memory[d].get(), &units[d], plans_of(d), starts[d].get());
+      starts[d].reset();
     });
     stats.plans += shared.made();
     for (const auto& p : own) stats.plans += p->made();

@@ -75,8 +75,14 @@ class FrameWalker {
               bool need_nodes, std::uint32_t sample_every = 1, std::uint32_t history = 1,
               std::uint64_t compact_above_visits = kCompactAboveVisits, bool warm_up = false,
               bool keep_tree = true);
-  // The next frame, or nullptr after the last. Valid until the next call.
+  // The next frame, or nullptr after the last. Valid until the next call. Advance then Build.
   const LoadedFrame* Next();
+  // The next frame with its earlier trees (previous, before_previous) but not yet its own
+  // tree, work and bound, or nullptr after the last: the replays may begin it (FrameStart)
+  // and frame i-2's tree be released before Build makes the rest (issue 43).
+  LoadedFrame* Advance();
+  // Builds the frame Advance returned: its tree (where kept), work graphs and bound.
+  void Build();
   // Frees the current frame's before_previous (frame i-2's tree) once no replay of the frame
   // will read it again: schedulers read it only in BeginFrame (ReplayFrames calls this after
   // the last replay of the frame began; issue 43). The next frame loads it again if it needs it.
@@ -105,11 +111,19 @@ class FrameWalker {
 // `units`: the levels' units (LevelUnitsOf; null: every level holds the cells).
 // `plans`: where the scheduler's plans for this frame are shared with other configurations
 // (FrameInfo::plans; null: none).
+// `start`: made by StartLoadedFrame for this frame, configuration, scheduler, memory, units and
+// plans, and begun (FrameStart::Begin); null: the replay begins the frame itself.
 ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& header,
                                const ReplayConfig& config, Scheduler& scheduler,
                                std::uint32_t sample_every = 1, ReplayObserver* observer = nullptr,
                                MemoryState* memory = nullptr, const MemoryUnits* units = nullptr,
-                               PlanCache* plans = nullptr);
+                               PlanCache* plans = nullptr, FrameStart* start = nullptr);
+// The start of `frame` (its earlier trees; not its own, which an oracle needs: not for one) as
+// ReplayLoadedFrame would tell `scheduler` it, for the same arguments.
+std::unique_ptr<FrameStart> StartLoadedFrame(const LoadedFrame& frame, const TraceHeader& header,
+                                             const ReplayConfig& config, const Scheduler& scheduler,
+                                             MemoryState* memory, const MemoryUnits* units,
+                                             PlanCache* plans);
 
 // What a frame's result cannot depend on, removed: granularity resolved (EffectiveGranularity),
 // the seed unless the scheduler uses it (SchedulerEntry::seeded: random and the planners),

@@ -239,6 +239,38 @@ TEST_F(DriverTest, FrameBeforePreviousGoesOnceEveryReplayBegan) {
   }
 }
 
+// The walker's two steps (issue 43): Advance gives the frame with its earlier trees only, so
+// that its replays begin (FrameStart) and frame i-2's tree goes before Build makes the frame's
+// own tree, work and bound; Next is both. The trees are the frames' own, counted by hand.
+TEST_F(DriverTest, AdvanceGivesTheEarlierTreesAndBuildTheFramesOwn) {
+  const std::uint32_t cells = reader_->header().cell_count();
+  const auto nodes_of = [&](std::size_t i) {
+    return testing::TreeOf(reader_->LoadFrame(i)).size();
+  };
+  FrameWalker walker(*reader_, {0, 1, 2, 4}, /*need_segments=*/true, /*need_nodes=*/false,
+                     /*sample_every=*/1, /*history=*/2);
+  for (const std::size_t i : {0, 1, 2, 4}) {
+    LoadedFrame* f = walker.Advance();
+    ASSERT_NE(f, nullptr);
+    EXPECT_EQ(f->index, i);
+    EXPECT_EQ(f->tree, nullptr);
+    EXPECT_EQ(f->segments, nullptr);
+    EXPECT_EQ(f->bound, 0u);
+    ASSERT_EQ(f->previous != nullptr, i >= 1);
+    if (i >= 1) EXPECT_EQ(f->previous->size(), nodes_of(i - 1));
+    ASSERT_EQ(f->before_previous != nullptr, i >= 2);
+    if (i >= 2) EXPECT_EQ(f->before_previous->size(), nodes_of(i - 2));
+    walker.ReleaseBeforePrevious();
+    walker.Build();
+    ASSERT_NE(f->tree, nullptr);
+    EXPECT_EQ(f->tree->size(), nodes_of(i));
+    EXPECT_EQ(f->bound, Bound(*f->tree));
+    ASSERT_NE(f->segments, nullptr);
+    EXPECT_EQ(f->segments->size(), RaySegmentWork(reader_->LoadFrame(i), cells).size());
+  }
+  EXPECT_EQ(walker.Advance(), nullptr);
+}
+
 TEST_F(DriverTest, StopsWhenTold) {
   std::size_t seen = 0;
   const ReplayFramesStats stats = ReplayFrames(
