@@ -23,6 +23,13 @@ inline std::size_t KeptRoom(std::size_t budget_bytes, std::size_t item_bytes, st
   return std::clamp(per_list, floor, std::max(floor, ceiling));
 }
 
+// Empties `v` and frees its room. (`v = {}` does not: it is the initializer-list assignment,
+// which clears and keeps the capacity.)
+template <typename T, typename A>
+void FreeRoom(std::vector<T, A>& v) {
+  std::vector<T, A>().swap(v);
+}
+
 // Frees the room of `v` (empty or not) when it exceeds `kept` items.
 template <typename T, typename A>
 void ReleaseRoomAbove(std::vector<T, A>& v, std::size_t kept) {

@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "base/check.h"
+#include "base/kept_room.h"
 #include "traces/format.h"
 
 namespace raycell {
@@ -193,7 +194,7 @@ CellTree SubTree(const CellTree& tree, const std::vector<NodeId>& nodes) {
 }
 
 void CellTree::Finish() {
-  last_child_ = {};
+  FreeRoom(last_child_);
   FitTo(cell_);
   FitTo(parent_);
   FitTo(enter_);
@@ -201,6 +202,33 @@ void CellTree::Finish() {
   FitTo(samples_);
   FitTo(first_child_);
   FitTo(next_sibling_);
+  ComputeGenerations();
+}
+
+void CellTree::Park() {
+  RAYCELL_CHECK(!parked() && last_child_.empty());  // finished
+  FreeRoom(first_child_);
+  FreeRoom(next_sibling_);
+  FreeRoom(generation_);
+}
+
+void CellTree::Unpark() {
+  RAYCELL_CHECK(parked());
+  const std::size_t n = size();
+  first_child_.assign(n, kNoNode);
+  next_sibling_.assign(n, kNoNode);
+  // Nodes in creation order, each linked after its parent's last child so far (`last`).
+  std::vector<NodeId> last(n, kNoNode);
+  for (std::size_t i = 1; i < n; ++i) {
+    const NodeId id(static_cast<std::uint32_t>(i));
+    const std::uint32_t p = parent_[i].index();
+    if (last[p] == kNoNode) {
+      first_child_[p] = id;
+    } else {
+      next_sibling_[last[p].index()] = id;
+    }
+    last[p] = id;
+  }
   ComputeGenerations();
 }
 

@@ -80,6 +80,15 @@ class CellTree {
   // One line per node, depth-first, indented: "cell 3 gen 1 enter 2 samples 40".
   std::string ToString() const;
 
+  // A finished tree kept for a later frame while nothing reads it (the frame's own tree during
+  // its replays, runner/driver.cpp) drops its children links and generations, 12 of its 36
+  // bytes a node; Unpark makes them again from the parents (children in creation order, as
+  // AddNode links them) before it is read. Only size(), cell(), parent() and the counts may be
+  // read while parked.
+  void Park();
+  void Unpark();
+  bool parked() const { return first_child_.size() != cell_.size(); }
+
  private:
   friend class CellTreeBuilder;
   friend CellTree Union(const std::vector<const CellTree*>& trees, bool counted);

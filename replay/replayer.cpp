@@ -7,12 +7,17 @@
 #include "base/check.h"
 #include "base/checked.h"
 #include "base/kept_room.h"
+#include "base/mapped_allocator.h"
 #include "engine/slot_queue.h"
 #include "engine/watchdog.h"
 #include "replay/time_bound.h"
 #include "scheduling/plan_cache.h"
 
 namespace raycell {
+
+// The queues' and worklists' arrays (base/mapped_allocator.h).
+template <typename T>
+using ItemVector = std::vector<T, MappedAllocator<T>>;
 namespace {
 
 // ---- Units ----------------------------------------------------------------------------
@@ -240,7 +245,7 @@ enum class Kind : std::uint8_t { kNone, kIdle, kFetched, kUnitDone };
 template <typename Item>
 struct Processor {
   std::optional<CellId> cell;  // locked and loaded while working; the last one after
-  std::vector<Item> worklist;  // units of `cell` to work in this fetch, from `head` on
+  ItemVector<Item> worklist;   // units of `cell` to work in this fetch, from `head` on
   std::size_t head = 0;
   Item unit{};           // the unit being worked
   bool holding = false;  // `cell` is locked by this processor (fetching or working it)
@@ -455,7 +460,7 @@ class Board {
   void TakeQueue(std::uint32_t p) {
     Processor<Item>& ps = processors_[p];
     const CellId c = *ps.cell;
-    std::vector<Item>& q = queues_[c.value()];
+    ItemVector<Item>& q = queues_[c.value()];
     if (q.empty()) return;
     if (obs_) obs_->QueueTaken(p, c, queued_rays_[c.value()], now_);
     watch_.Taken(c);
@@ -524,7 +529,7 @@ class Board {
       if (left > most) victim = q, most = left;
     }
     if (victim == p) return;
-    std::vector<Item>& from = processors_[victim].worklist;
+    ItemVector<Item>& from = processors_[victim].worklist;
     const std::size_t n = most / 2;
     ps.worklist.clear();
     ps.head = 0;
@@ -669,7 +674,7 @@ class Board {
   SimTime tps_;
   Scheduler& scheduler_;
   MemoryHierarchy memory_;
-  std::vector<std::vector<Item>> queues_;
+  std::vector<ItemVector<Item>> queues_;
   // The room in items an emptied queue may keep (base/kept_room.h): a queue taken leaves its cell
   // the old worklist's room, or its own when appended to a worklist.
   std::size_t kept_room_;

@@ -58,11 +58,11 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   own_.reset();
   own_start_.reset();
   due_ = nullptr;
-  own_due_ = {};
-  match_ = {};
-  guess_ = {};
-  node_cell_ = {};
-  depth_ = {};
+  FreeRoom(own_due_);
+  FreeRoom(match_);
+  FreeRoom(guess_);
+  FreeRoom(node_cell_);
+  FreeRoom(depth_);
   predicted_ = frame.previous;
   one_processor_ = frame.processors <= 1;
   // Several processors predict by the union of frames i-2 and i-1, one by frame i-1 alone
@@ -153,7 +153,7 @@ std::vector<std::uint32_t> AdaptiveScheduler::DueOf(const std::vector<CellId>& p
 
 void AdaptiveScheduler::SetPlan(std::vector<CellId> plan, const CellTree* planned,
                                 const std::vector<NodeId>* nodes) {
-  own_due_ = {};  // the last re-plan's, freed first
+  FreeRoom(own_due_);  // the last re-plan's, freed first
   own_due_ = DueOf(plan, planned, nodes, predicted_->size(), cells_, &cost_.steps);
   Install(std::move(plan), &own_due_);
 }

@@ -275,5 +275,28 @@ TEST(UnionTreeTest, EqualsTheTreeOfAllRaysAndItsSchedulesServeEach) {
   EXPECT_EQ(UnionShape({}).node_count(), 0u);
 }
 
+// A parked tree (kept for a later frame while nothing reads it, issue 43) holds no children
+// links nor generations; unparked, it is the tree it was, link for link, for the builder's
+// trees and the unions of two.
+TEST(CellTreeTest, UnparkedTreesAreTheTreesParked) {
+  std::mt19937 rng(5);
+  for (int round = 0; round < 100; ++round) {
+    const std::uint32_t cells = 2 + rng() % 6;
+    const CellTree ta =
+        testing::TreeOf(testing::RaysOf(RandomRays(rng, cells, 1 + int(rng() % 12)), 2));
+    const CellTree tb =
+        testing::TreeOf(testing::RaysOf(RandomRays(rng, cells, 1 + int(rng() % 12)), 2));
+    for (const CellTree& original : {ta, UnionTree({&ta, &tb}), UnionShape({&tb, &ta})}) {
+      CellTree t = original;
+      t.Park();
+      EXPECT_TRUE(t.parked());
+      EXPECT_EQ(t.size(), original.size());
+      t.Unpark();
+      EXPECT_FALSE(t.parked());
+      ExpectSameTree(t, original, /*shape_only=*/!original.counted());
+    }
+  }
+}
+
 }  // namespace
 }  // namespace raycell

@@ -257,9 +257,13 @@ TEST_F(DriverTest, AdvanceGivesTheEarlierTreesAndBuildTheFramesOwn) {
     EXPECT_EQ(f->segments, nullptr);
     EXPECT_EQ(f->bound, 0u);
     ASSERT_EQ(f->previous != nullptr, i >= 1);
-    if (i >= 1) EXPECT_EQ(f->previous->size(), nodes_of(i - 1));
+    if (i >= 1) {
+      EXPECT_EQ(f->previous->size(), nodes_of(i - 1));
+    }
     ASSERT_EQ(f->before_previous != nullptr, i >= 2);
-    if (i >= 2) EXPECT_EQ(f->before_previous->size(), nodes_of(i - 2));
+    if (i >= 2) {
+      EXPECT_EQ(f->before_previous->size(), nodes_of(i - 2));
+    }
     walker.ReleaseBeforePrevious();
     walker.Build();
     ASSERT_NE(f->tree, nullptr);
