@@ -231,10 +231,21 @@ BalancedScheduler::TreeStats BalancedScheduler::StatsOf(const CellTree* previous
     if (visits[c] > 0) s.samples_per_visit[c] = s.work[c] / visits[c];
   }
   // Each (from, to) summed in node order, each row's total over increasing `to`: the sums a
-  // dense cells x cells table would hold, so the shares are the same doubles.
-  std::stable_sort(enters.begin(), enters.end(), [](const Enter& a, const Enter& b) {
-    return a.from != b.from ? a.from < b.from : a.to < b.to;
-  });
+  // dense cells x cells table would hold, so the shares are the same doubles. Ordered by
+  // (from, to), ties in node order, as a stable sort would, in linear time: a stable counting
+  // sort by `to`, then one by `from` (least significant key first).
+  {
+    std::vector<Enter> by_to(enters.size());
+    const auto counting_sort = [cells](const std::vector<Enter>& in, std::vector<Enter>& out,
+                                       std::uint32_t Enter::*key) {
+      std::vector<std::size_t> at(std::size_t{cells} + 1, 0);
+      for (const Enter& e : in) ++at[e.*key + 1];
+      for (std::uint32_t c = 0; c < cells; ++c) at[c + 1] += at[c];
+      for (const Enter& e : in) out[at[e.*key]++] = e;
+    };
+    counting_sort(enters, by_to, &Enter::to);
+    counting_sort(by_to, enters, &Enter::from);
+  }
   for (std::size_t k = 0; k < enters.size();) {
     const Enter& e = enters[k];
     double sum = 0.0;
