@@ -1,9 +1,6 @@
 #include "replay/work.h"
 
-#include <sys/mman.h>
-
 #include <algorithm>
-#include <cstdlib>
 #include <numeric>
 #include <string>
 
@@ -39,16 +36,6 @@ void Resize(WorkGraph& w, std::size_t n) {
 }
 
 }  // namespace
-
-void* AllocateHugePages(std::size_t bytes) {
-  const std::size_t rounded = (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
-  void* p = std::aligned_alloc(kHugePageBytes, rounded);
-  if (p == nullptr) throw std::bad_alloc();
-  madvise(p, rounded, MADV_HUGEPAGE);  // a hint: without huge pages, 4 KiB pages as before
-  return p;
-}
-
-void FreeHugePages(void* p, std::size_t) { std::free(p); }
 
 // The totals and the packed units, once the columns are complete.
 void Finish(WorkGraph& w) {

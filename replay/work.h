@@ -9,10 +9,10 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <new>
 #include <optional>
 #include <vector>
 
+#include "base/mapped_allocator.h"
 #include "graph/cell_tree.h"
 #include "traces/ray_batch.h"
 #include "traces/trace_header.h"
@@ -20,36 +20,6 @@
 namespace raycell {
 
 using UnitId = std::uint32_t;
-
-// Blocks of 2 MiB and more come from AllocateHugePages (2 MiB aligned, whole 2 MiB pages,
-// marked for transparent huge pages with madvise, which this kernel setting needs), smaller
-// ones from operator new. For the packed unit records, read at random by the replay: on
-// 4 KiB pages nearly every such read also misses the TLB.
-inline constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
-void* AllocateHugePages(std::size_t bytes);
-void FreeHugePages(void* p, std::size_t bytes);
-template <typename T>
-struct HugePageAllocator {
-  using value_type = T;
-  HugePageAllocator() = default;
-  template <typename U>
-  HugePageAllocator(const HugePageAllocator<U>&) {}
-  T* allocate(std::size_t n) {
-    const std::size_t bytes = n * sizeof(T);
-    if (bytes < kHugePageBytes) return static_cast<T*>(::operator new(bytes));
-    return static_cast<T*>(AllocateHugePages(bytes));
-  }
-  void deallocate(T* p, std::size_t n) {
-    const std::size_t bytes = n * sizeof(T);
-    if (bytes < kHugePageBytes) {
-      ::operator delete(p);
-    } else {
-      FreeHugePages(p, bytes);
-    }
-  }
-  friend bool operator==(const HugePageAllocator&, const HugePageAllocator&) { return true; }
-  friend bool operator!=(const HugePageAllocator&, const HugePageAllocator&) { return false; }
-};
 
 struct WorkGraph {
   std::uint32_t cells = 0;                  // of the grid
