@@ -164,7 +164,7 @@ class Watch {
 
   template <typename Entry>
   Item<Entry> Root(const Entry& e, CellId c) {
-    if (per_node_) return {e, NewPath(0)};
+    if (per_node_) return {e, NewNodePath(0, c)};
     std::uint32_t& k = root_child_[c.value()];
     if (k == 0) k = NewPath(0, c);
     return {e, k};
@@ -172,13 +172,14 @@ class Watch {
   // A successor `e`, in cell c, of `from`, worked in `cell`.
   template <typename Entry>
   Item<Entry> Child(const Item<Entry>& from, CellId cell, const Entry& e, CellId c) {
-    if (c != cell) return {e, per_node_ ? NewPath(from.path) : ChildOf(from.path, c)};
+    if (c != cell) return {e, per_node_ ? NewNodePath(from.path, c) : ChildOf(from.path, c)};
     RAYCELL_CHECK(!per_node_);  // a node's children lie in other cells than its own
     return {e, from.path};
   }
   template <typename I>
   void Queued(const I& item, CellId c, std::uint64_t q) {
-    scheduler_->Arrived({item.path, parent_[item.path], c, q});
+    const std::uint32_t parent = parent_[item.path];
+    scheduler_->Arrived({item.path, parent, c, q, CellOf(parent)});
   }
   void Taken(CellId c) { scheduler_->Taken(c); }
 
@@ -198,6 +199,16 @@ class Watch {
     const std::uint32_t id = NewPath(parent);
     links_.push_back({c.value(), 0, 0});
     return id;
+  }
+  // Per node: a path and its cell.
+  std::uint32_t NewNodePath(std::uint32_t parent, CellId c) {
+    node_cell_.push_back(c);
+    return NewPath(parent);
+  }
+  // The cell of `path` (kNoCell: the root), as the scheduler is told its arrivals' parents'.
+  CellId CellOf(std::uint32_t path) const {
+    if (path == 0) return kNoCell;
+    return per_node_ ? node_cell_[path] : CellId(links_[path].cell);
   }
 
   // The child of path `parent` (not the root) for cell c, made if new. A new path's parent has
@@ -226,9 +237,10 @@ class Watch {
 
   Scheduler* scheduler_;
   bool per_node_;
-  std::vector<std::uint32_t> parent_ = {0};  // per path (the root's unused)
-  std::vector<Links> links_ = {Links{}};     // per path, unless per node
-  std::vector<std::uint32_t> root_child_;    // per cell, the root's child for it (0: none)
+  std::vector<std::uint32_t> parent_ = {0};    // per path (the root's unused)
+  std::vector<Links> links_ = {Links{}};       // per path, unless per node
+  std::vector<CellId> node_cell_ = {kNoCell};  // per path, per node only
+  std::vector<std::uint32_t> root_child_;      // per cell, the root's child for it (0: none)
 };
 
 // ---- Pending events -------------------------------------------------------------------

@@ -61,7 +61,6 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   FreeRoom(own_due_);
   FreeRoom(match_);
   FreeRoom(guess_);
-  FreeRoom(node_cell_);
   FreeRoom(depth_);
   predicted_ = frame.previous;
   one_processor_ = frame.processors <= 1;
@@ -77,7 +76,6 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   }
   match_.assign(1, predicted_ != nullptr ? kRootNode : kNoNode);
   guess_.assign(1, false);
-  node_cell_.assign(1, kNoCell);
   queued_.assign(cells_, {});
   kept_room_ = KeptRoom(kKeptRoomBytes, sizeof(std::uint32_t), cells_, 16, std::size_t{1} << 16);
   min_due_.assign(cells_, kNever);
@@ -260,15 +258,13 @@ void AdaptiveScheduler::Arrived(const Arrival& a) {
     bool guess = guess_[a.parent];  // a match below a stand-in is a guess too
     if (predicted_ != nullptr) {
       bool stand_in = false;
-      m = MatchNode(*predicted_, *stand_in_, match_[a.parent], node_cell_[a.parent], a.cell,
-                    &stand_in);
+      m = MatchNode(*predicted_, *stand_in_, match_[a.parent], a.parent_cell, a.cell, &stand_in);
       guess = guess || stand_in;
     }
     guess_.push_back(guess);
     // Depths for Shallowest (no prediction) and the one-processor orphans (ShallowestOrphan).
     if (KeepsDepths()) depth_.push_back(depth_[a.parent] + 1);
     match_.push_back(m);
-    node_cell_.push_back(a.cell);
   }
   RAYCELL_CHECK_LT(a.node, match_.size());
   queued_[a.cell.value()].push_back(a.node);

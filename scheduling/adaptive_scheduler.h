@@ -147,9 +147,8 @@ class AdaptiveScheduler : public Scheduler {
   std::vector<std::uint32_t> own_due_;
   std::shared_ptr<const void> own_start_;  // the start plan and its due, without a plan cache
 
-  std::vector<NodeId> match_;      // per queued node (Arrival::node): its prediction
-  std::vector<bool> guess_;        // per queued node: matched through a stand-in
-  std::vector<CellId> node_cell_;  // per queued node: its cell
+  std::vector<NodeId> match_;  // per queued node (Arrival::node): its prediction
+  std::vector<bool> guess_;    // per queued node: matched through a stand-in
   std::vector<std::vector<std::uint32_t>> queued_;  // per cell: nodes queued, not yet taken
   std::size_t kept_room_ = 0;           // the room an emptied queued_ list keeps (base/kept_room.h)
   std::vector<std::uint32_t> min_due_;  // per cell: the least due entry of queued_

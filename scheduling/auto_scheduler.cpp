@@ -122,7 +122,11 @@ class BoardModel {
     queued_[c.value()] += rays;
     changed_ = true;
     ++result_.steps;
-    if (watch_) s_.Arrived({number_[n.index()], number_[tree_.parent(n).index()], c, rays});
+    if (watch_) {
+      const NodeId parent = tree_.parent(n);
+      s_.Arrived({number_[n.index()], number_[parent.index()], c, rays,
+                  parent == kRootNode ? kNoCell : tree_.cell(parent)});
+    }
   }
 
   // Takes `c`'s queue whole as p's batch.

@@ -190,7 +190,6 @@ void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
   if (options_.critical) {
     previous_ = frame.previous;
     match_.assign(1, previous_ != nullptr ? kRootNode : kNoNode);
-    node_cell_.assign(1, kNoCell);
     level_.assign(cells_, 0);
     at_level_.Reset(cells_);
     top_level_ = 0;
@@ -295,11 +294,10 @@ void BalancedScheduler::Arrived(const Arrival& a) {
     NodeId m = kNoNode;
     if (previous_ != nullptr) {
       bool stand_in = false;
-      m = MatchNode(*previous_, *heights_->stand_in, match_[a.parent], node_cell_[a.parent], a.cell,
+      m = MatchNode(*previous_, *heights_->stand_in, match_[a.parent], a.parent_cell, a.cell,
                     &stand_in);
     }
     match_.push_back(m);
-    node_cell_.push_back(a.cell);
     cost_.peak_bytes = std::max(cost_.peak_bytes, Bytes());
   }
   RAYCELL_CHECK_LT(a.node, match_.size());

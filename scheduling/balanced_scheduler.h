@@ -186,11 +186,10 @@ class BalancedScheduler : public Scheduler {
   std::unique_ptr<AdaptiveScheduler> adaptive_;     // options_.adaptive
   // Critical (options_.critical): per node of frame i-1's tree its height; per (parent's cell,
   // cell) the first node with those cells (StandInKey); per queued node (Arrival::node) its
-  // match (kNoNode: none) and cell; per cell the highest level of its queued nodes (0: none).
+  // match (kNoNode: none); per cell the highest level of its queued nodes (0: none).
   const CellTree* previous_ = nullptr;
   std::shared_ptr<const Heights> heights_;
   std::vector<NodeId> match_;
-  std::vector<CellId> node_cell_;
   std::vector<std::uint32_t> level_;
   // Per level >= 1 the cells of that level, and the highest level that may have cells. Critical
   // looks at the levels above the plan's entry's, from the top, not at every cell.

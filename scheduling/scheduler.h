@@ -188,10 +188,11 @@ class Scheduler {
   // it): what it knows of the frame is what was queued so far.
   // Nodes are numbered in the order they are first queued, from 1; 0 is the root.
   struct Arrival {
-    std::uint32_t node = 0;    // the node the unit's rays enter
-    std::uint32_t parent = 0;  // its parent, queued before it (0: the root)
-    CellId cell{0};            // the node's cell, where the unit is queued
-    std::uint64_t rays = 0;    // rays the unit adds to the cell's queue
+    std::uint32_t node = 0;        // the node the unit's rays enter
+    std::uint32_t parent = 0;      // its parent, queued before it (0: the root)
+    CellId cell{0};                // the node's cell, where the unit is queued
+    std::uint64_t rays = 0;        // rays the unit adds to the cell's queue
+    CellId parent_cell = kNoCell;  // the parent's cell (kNoCell: the root)
   };
   virtual bool Watches() const { return false; }
   virtual void Arrived(const Arrival& /*arrival*/) {}

@@ -103,7 +103,8 @@ class Board : public Component {
       const auto it = known_.try_emplace(path, std::uint32_t(known_.size())).first;
       const std::vector<CellId> parent(path.begin(), path.end() - 1);
       RAYCELL_CHECK(known_.count(parent) == 1);
-      scheduler_.Arrived({it->second, known_.at(parent), c, w_.queued_rays[u]});
+      scheduler_.Arrived({it->second, known_.at(parent), c, w_.queued_rays[u],
+                          parent.empty() ? kNoCell : parent.back()});
     }
     queues_[c.value()].push_back(u);
     queued_rays_[c.value()] += w_.queued_rays[u];

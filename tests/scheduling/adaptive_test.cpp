@@ -170,7 +170,7 @@ TEST(Adaptive, FrameZeroTakesTheShallowestWorkFirstHandWorked) {
     s->BeginFrame(info);
     s->Arrived({1, 0, C, 1});
     s->Taken(C);
-    s->Arrived({2, 1, A, 100});
+    s->Arrived({2, 1, A, 100, C});
     s->Arrived({3, 0, B, 5});
     s->Arrived({4, 0, D, 9});
     std::vector<std::uint64_t> queued = {100, 5, 0, 9};
@@ -179,7 +179,7 @@ TEST(Adaptive, FrameZeroTakesTheShallowestWorkFirstHandWorked) {
     EXPECT_EQ(s->Peek(v), D) << p;
     EXPECT_EQ(s->Next(v), D) << p;
     s->Taken(D);
-    s->Arrived({5, 2, D, 50});  // a ray of A's node sent to D: depth 3
+    s->Arrived({5, 2, D, 50, A});  // a ray of A's node sent to D: depth 3
     queued[D.value()] = 50;
     EXPECT_EQ(s->Next(v), B) << p;
     s->Taken(B);
@@ -302,8 +302,8 @@ TEST(Adaptive, OneProcessorTakesTheShallowestOrphanFirst) {
     EXPECT_EQ(s.Next(QueueView::Of(queued)), A) << p;
     EXPECT_EQ(s.Reason(), "followed");
     s.Taken(A);
-    s.Arrived({2, 1, B, 1});
-    s.Arrived({3, 1, C, 50});
+    s.Arrived({2, 1, B, 1, A});
+    s.Arrived({3, 1, C, 50, A});
     s.Arrived({4, 0, D, 5});
     queued = {0, 1, 50, 5};
     if (p > 1) {
@@ -343,7 +343,7 @@ TEST(Adaptive, OrphansGoFirstOnlyWhileTheyTookNoMoreFetchesThanThePlan) {
     EXPECT_EQ(s.Next(QueueView::Of(queued)), A) << p;
     EXPECT_EQ(s.Reason(), "followed");
     s.Taken(A);
-    s.Arrived({2, 1, B, 1});
+    s.Arrived({2, 1, B, 1, A});
     s.Arrived({3, 0, C, 5});
     s.Arrived({4, 0, D, 4});
     s.Arrived({5, 0, E, 3});
@@ -444,7 +444,8 @@ TEST(Adaptive, TheBoardsViewChoosesAsAScan) {
       const CellId c = known ? node_cell[node] : CellId(std::uint32_t(rng() % cells));
       if (!known) node_cell.push_back(c);
       const std::uint64_t rays = 1 + rng() % 5;
-      const Scheduler::Arrival a{node, known ? 0 : parent, c, rays};
+      const Scheduler::Arrival a{node, known ? 0 : parent, c, rays,
+                                 known ? kNoCell : node_cell[parent]};
       fast.Arrived(a);
       scan.Arrived(a);
       queued[c.value()] += rays;

@@ -246,7 +246,7 @@ TEST(Balance, CriticalStartsTheLongestPredictedChainHandWorked) {
         // B's queue taken, then a ray of A's node enters B: frame i-1's node A B, height 1,
         // below A's 2.
         s->Taken(B);
-        s->Arrived({3, 1, B, 1});
+        s->Arrived({3, 1, B, 1, A});
         std::vector<std::uint64_t> left = {10, 1, 0, 0};
         QueueView w = QueueView::Of(left);
         EXPECT_EQ(s->Next(w), A);
