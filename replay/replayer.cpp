@@ -98,8 +98,8 @@ struct CompactUnits {
     const WorkGraph::Spawned* s = c->spawned.data();
     const std::uint32_t n = std::uint32_t(c->spawned.size());
     std::uint32_t end = e.spawned;
-    while (end < n && s[end].at == e.visit) ++end;
-    if (!last) f(Entry{at, e.visit + 1, end}, CellAt(at), std::uint64_t{1});
+    while (end < n && s[end].at == e.offset) ++end;
+    if (!last) f(Entry{at, end}, CellAt(at), std::uint64_t{1});
     for (std::uint32_t k = e.spawned; k < end; ++k) {
       f(s[k].unit, CellAt(s[k].unit.offset), std::uint64_t{0});
     }

@@ -87,14 +87,15 @@ std::uint64_t LongestCompactChain(const WorkGraph& w, std::vector<std::uint8_t>*
       const auto [first, before] = stack.back();
       stack.pop_back();
       std::uint64_t done = before;
-      std::uint32_t at = first.offset, visit = first.visit;
+      std::uint32_t at = first.offset;
       std::size_t k = first.spawned;
-      for (bool last = false; !last; ++visit) {
+      for (bool last = false; !last;) {
+        const std::uint32_t record = at;
         const std::uint32_t cell_last = ReadVarint(stream, &at);
         (*used)[cell_last >> 1] = 1;
         last = (cell_last & 1) != 0;
         done += ReadVarint(stream, &at);
-        for (; k < spawned && c.spawned[k].at == visit; ++k) {
+        for (; k < spawned && c.spawned[k].at == record; ++k) {
           stack.push_back({c.spawned[k].unit, done});
         }
       }

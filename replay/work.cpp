@@ -142,7 +142,7 @@ void RaySegmentWorkBuilder::AddBatch(const RayBatch& batch) {
     if (visits_ + n >= UINT32_MAX || c.stream.size() >= UINT32_MAX - 20 * n) {
       throw InputError("per-segment work: frame of more than 2^32 visits or stream bytes");
     }
-    const WorkGraph::CompactUnit first{std::uint32_t(c.stream.size()), std::uint32_t(visits_), 0};
+    const WorkGraph::CompactUnit first{std::uint32_t(c.stream.size()), 0};
     if (ray.is_primary()) {
       c.roots.push_back(first);
     } else {
@@ -151,6 +151,7 @@ void RaySegmentWorkBuilder::AddBatch(const RayBatch& batch) {
         throw InputError("per-segment work: ray " + std::to_string(ray.id) +
                          " has an unknown parent or spawn visit");
       }
+      // `at` the parent visit's number until Finish makes it its record's offset.
       c.spawned.push_back({visit_begin_[parent] + ray.spawn, first});
     }
     for (std::size_t v = 0; v < n; ++v) {
@@ -168,20 +169,32 @@ WorkGraph RaySegmentWorkBuilder::Finish() {
   std::vector<std::uint32_t>().swap(visit_begin_);
   WorkGraph::Compact& c = w_.compact;
   c.units = visits_;
-  // The rays spawned at one visit together, in ray order (their first visits' numbers
+  // The rays spawned at one visit together, in ray order (their first records' offsets
   // increase with the ray id).
   std::sort(c.spawned.begin(), c.spawned.end(),
             [](const WorkGraph::Spawned& a, const WorkGraph::Spawned& b) {
-              return a.at != b.at ? a.at < b.at : a.unit.visit < b.unit.visit;
+              return a.at != b.at ? a.at < b.at : a.unit.offset < b.unit.offset;
             });
-  const auto first_spawned = [&c](std::uint32_t visit) {
+  // Each `at` from the visit's number to its record's offset, in one pass over the stream (both
+  // increase together, so the order stays).
+  {
+    std::uint32_t offset = 0, visit = 0;
+    for (WorkGraph::Spawned& s : c.spawned) {
+      for (; visit < s.at; ++visit) {
+        ReadVarint(c.stream.data(), &offset);
+        ReadVarint(c.stream.data(), &offset);
+      }
+      s.at = offset;
+    }
+  }
+  const auto first_spawned = [&c](std::uint32_t offset) {
     return std::uint32_t(
-        std::lower_bound(c.spawned.begin(), c.spawned.end(), visit,
-                         [](const WorkGraph::Spawned& s, std::uint32_t v) { return s.at < v; }) -
+        std::lower_bound(c.spawned.begin(), c.spawned.end(), offset,
+                         [](const WorkGraph::Spawned& s, std::uint32_t o) { return s.at < o; }) -
         c.spawned.begin());
   };
-  for (WorkGraph::CompactUnit& u : c.roots) u.spawned = first_spawned(u.visit);
-  for (WorkGraph::Spawned& s : c.spawned) s.unit.spawned = first_spawned(s.unit.visit);
+  for (WorkGraph::CompactUnit& u : c.roots) u.spawned = first_spawned(u.offset);
+  for (WorkGraph::Spawned& s : c.spawned) s.unit.spawned = first_spawned(s.unit.offset);
   WorkGraph out = std::move(w_);
   out.shape = ShapeOf(out);
   w_ = WorkGraph{};

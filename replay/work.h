@@ -51,19 +51,22 @@ struct WorkGraph {
   std::vector<Packed, HugePageAllocator<Packed>> packed;
 
   // Per ray segment for large frames (RaySegmentWorkBuilder): the visits as a byte stream
-  // instead of columns, about 3 bytes a visit and 12-16 bytes a ray, so that a frame of tens
+  // instead of columns, about 3 bytes a visit and 8-12 bytes a ray, so that a frame of tens
   // of millions of visits fits (BENCHMARKS.md "Capture at scale"). When `compact.units` is
   // not zero it is the only form: the columns and `packed` are empty.
   //  - stream: each visit of each ray with visits, in ray order, as a record of two LEB128
   //    varints: cell * 2 + (1 on the ray's last visit), then samples. Visits are numbered
-  //    0, 1, ... in that order, so a ray's visits have consecutive numbers.
-  //  - A unit is named by a CompactUnit: its record's offset, its visit's number, and where
-  //    the rays spawned at it (or at the ray's later visits) begin in `spawned`.
+  //    0, 1, ... in that order, so a ray's visits have consecutive numbers, and a record's
+  //    offset increases with its visit's number.
+  //  - A unit is named by a CompactUnit: its record's offset and where the rays spawned at it
+  //    (or at the ray's later visits) begin in `spawned` (8 bytes a queued unit, not 12 with
+  //    the visit's number beside: issue 43).
   //  - roots: the primary rays' first units, in ray order. spawned: the other rays' first
-  //    units, ordered by (`at`, the parent's visit they are spawned at; ray order), so that
-  //    the rays spawned at one visit are one run, in ray order, as in RaySegmentWork.
+  //    units, ordered by (`at`, the offset of the parent's visit they are spawned at; ray
+  //    order), so that the rays spawned at one visit are one run, in ray order, as in
+  //    RaySegmentWork.
   struct CompactUnit {
-    std::uint32_t offset, visit, spawned;
+    std::uint32_t offset, spawned;
   };
   struct Spawned {
     std::uint32_t at;
