@@ -33,7 +33,7 @@ void FreeRoom(std::vector<T, A>& v) {
 // Frees the room of `v` (empty or not) when it exceeds `kept` items.
 template <typename T, typename A>
 void ReleaseRoomAbove(std::vector<T, A>& v, std::size_t kept) {
-  if (v.capacity() > kept) std::vector<T, A>().swap(v);
+  if (v.capacity() > kept) FreeRoom(v);
 }
 
 }  // namespace raycell

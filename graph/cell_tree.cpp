@@ -84,12 +84,7 @@ NodeId CellTree::AddNode(NodeId parent, CellId cell) {
   first_child_.push_back(kNoNode);
   next_sibling_.push_back(kNoNode);
   last_child_.push_back(kNoNode);
-  if (last_child_[parent.index()] == kNoNode) {
-    first_child_[parent.index()] = id;
-  } else {
-    next_sibling_[last_child_[parent.index()].index()] = id;
-  }
-  last_child_[parent.index()] = id;
+  Link(parent, id);
   cell_count_ = std::max(cell_count_, cell.value() + 1);
   return id;
 }
@@ -217,18 +212,9 @@ void CellTree::Unpark() {
   const std::size_t n = size();
   first_child_.assign(n, kNoNode);
   next_sibling_.assign(n, kNoNode);
-  // Nodes in creation order, each linked after its parent's last child so far (`last`).
-  std::vector<NodeId> last(n, kNoNode);
-  for (std::size_t i = 1; i < n; ++i) {
-    const NodeId id(static_cast<std::uint32_t>(i));
-    const std::uint32_t p = parent_[i].index();
-    if (last[p] == kNoNode) {
-      first_child_[p] = id;
-    } else {
-      next_sibling_[last[p].index()] = id;
-    }
-    last[p] = id;
-  }
+  last_child_.assign(n, kNoNode);
+  for (NodeId id : nodes()) Link(parent_[id.index()], id);  // in creation order, as AddNode
+  FreeRoom(last_child_);
   ComputeGenerations();
 }
 

@@ -97,6 +97,15 @@ class CellTree {
   friend CellTree SubTree(const CellTree& tree, const std::vector<NodeId>& nodes);
   CellTree();
   NodeId AddNode(NodeId parent, CellId cell);
+  // Links `child` after the last child of `parent` so far (last_child_).
+  void Link(NodeId parent, NodeId child) {
+    if (last_child_[parent.index()] == kNoNode) {
+      first_child_[parent.index()] = child;
+    } else {
+      next_sibling_[last_child_[parent.index()].index()] = child;
+    }
+    last_child_[parent.index()] = child;
+  }
   // Room for `nodes` nodes (root included) in every array, exactly.
   void Reserve(std::size_t nodes);
   // Done adding nodes: last_child_ freed, every array shrunk to its nodes, generations computed.

@@ -6,6 +6,7 @@
 
 #include "base/check.h"
 #include "base/checked.h"
+#include "base/kept_room.h"
 #include "replay/time_bound.h"
 
 namespace raycell {
@@ -166,7 +167,7 @@ void RaySegmentWorkBuilder::AddBatch(const RayBatch& batch) {
 }
 
 WorkGraph RaySegmentWorkBuilder::Finish() {
-  std::vector<std::uint32_t>().swap(visit_begin_);
+  FreeRoom(visit_begin_);
   WorkGraph::Compact& c = w_.compact;
   c.units = visits_;
   // The rays spawned at one visit together, in ray order (their first records' offsets

@@ -145,12 +145,6 @@ FrameWalker::FrameWalker(const TraceReader& reader, std::vector<std::size_t> fra
   }
 }
 
-const LoadedFrame* FrameWalker::Next() {
-  if (Advance() == nullptr) return nullptr;
-  Build();
-  return &frame_;
-}
-
 LoadedFrame* FrameWalker::Advance() {
   if (position_ == indices_.size()) return nullptr;
   const std::size_t i = indices_[position_];

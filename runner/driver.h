@@ -75,11 +75,10 @@ class FrameWalker {
               bool need_nodes, std::uint32_t sample_every = 1, std::uint32_t history = 1,
               std::uint64_t compact_above_visits = kCompactAboveVisits, bool warm_up = false,
               bool keep_tree = true);
-  // The next frame, or nullptr after the last. Valid until the next call. Advance then Build.
-  const LoadedFrame* Next();
   // The next frame with its earlier trees (previous, before_previous) but not yet its own
-  // tree, work and bound, or nullptr after the last: the replays may begin it (FrameStart)
-  // and frame i-2's tree be released before Build makes the rest (issue 43).
+  // tree, work and bound, or nullptr after the last; valid until the next call. The replays
+  // may begin it (FrameStart) and frame i-2's tree be released before Build makes the rest
+  // (issue 43).
   LoadedFrame* Advance();
   // Builds the frame Advance returned: its tree (where kept), work graphs and bound.
   void Build();
