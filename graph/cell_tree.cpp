@@ -12,6 +12,23 @@ namespace raycell {
 
 namespace {
 
+// A parked tree's LEB128 varints (CellTree::Park).
+void PutVarint(std::vector<std::uint8_t>& out, std::uint64_t x) {
+  while (x >= 0x80) {
+    out.push_back(std::uint8_t(x | 0x80));
+    x >>= 7;
+  }
+  out.push_back(std::uint8_t(x));
+}
+std::uint64_t GetVarint(const std::uint8_t** at) {
+  std::uint64_t x = 0;
+  for (int shift = 0;; shift += 7) {
+    const std::uint8_t b = *(*at)++;
+    x |= std::uint64_t(b & 0x7f) << shift;
+    if (b < 0x80) return x;
+  }
+}
+
 template <typename T>
 void FitTo(std::vector<T>& v) {
   v.shrink_to_fit();  // a no-op when the capacity is already the size
@@ -202,20 +219,84 @@ void CellTree::Finish() {
 
 void CellTree::Park() {
   RAYCELL_CHECK(!parked() && last_child_.empty());  // finished
+  const std::size_t n = cell_.size();
+  const bool counted = this->counted();
+  std::vector<std::uint8_t> out;
+  out.reserve(n * (counted ? 8 : 3));  // pages never written are not resident
+  for (std::size_t i = 0; i < n; ++i) {
+    const NodeId p = parent_[i];
+    // A parent comes before its node (parent(n) < n): its distance, at least 1; 0 for none.
+    if (p == kNoNode) {
+      PutVarint(out, 0);
+      PutVarint(out, std::uint32_t(cell_[i].value() + 1));  // kNoCell as 0
+    } else {
+      PutVarint(out, i - p.index());
+      const std::uint32_t step = cell_[i].value() - cell_[p.index()].value();  // mod 2^32
+      PutVarint(out, (step << 1) ^ (0u - (step >> 31)));  // zigzag of the signed step
+    }
+    PutVarint(out, generation_[i]);  // kept: a byte a node, against a walk of the tree again
+    if (counted) {
+      PutVarint(out, enter_[i]);
+      PutVarint(out, visits_[i]);
+      PutVarint(out, samples_[i]);
+    }
+  }
+  out.shrink_to_fit();
+  parked_size_ = n;
+  parked_counted_ = counted;
+  FreeRoom(cell_);
+  FreeRoom(parent_);
   FreeRoom(first_child_);
   FreeRoom(next_sibling_);
+  FreeRoom(enter_);
+  FreeRoom(visits_);
+  FreeRoom(samples_);
   FreeRoom(generation_);
+  parked_ = std::move(out);
 }
 
 void CellTree::Unpark() {
   RAYCELL_CHECK(parked());
-  const std::size_t n = size();
+  const std::size_t n = parked_size_;
+  cell_.resize(n);
+  parent_.resize(n);
+  generation_.resize(n);
+  if (parked_counted_) {
+    enter_.resize(n);
+    visits_.resize(n);
+    samples_.resize(n);
+  }
+  const std::uint8_t* at = parked_.data();
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint64_t back = GetVarint(&at);
+    const std::uint32_t code = std::uint32_t(GetVarint(&at));
+    if (back == 0) {
+      parent_[i] = kNoNode;
+      cell_[i] = CellId(code - 1);
+    } else {
+      const std::uint32_t p = std::uint32_t(i - back);
+      parent_[i] = NodeId(p);
+      const std::uint32_t step = (code >> 1) ^ (0u - (code & 1));
+      cell_[i] = CellId(cell_[p].value() + step);
+    }
+    generation_[i] = std::uint32_t(GetVarint(&at));
+    if (parked_counted_) {
+      enter_[i] = std::uint32_t(GetVarint(&at));
+      visits_[i] = std::uint32_t(GetVarint(&at));
+      samples_[i] = GetVarint(&at);
+    }
+  }
+  RAYCELL_CHECK(at == parked_.data() + parked_.size());
+  FreeRoom(parked_);
+  // Every tree links a node's children in creation order, which is the order of their ids
+  // (AddNode): prepended from the last node back, they come out in that order.
   first_child_.assign(n, kNoNode);
   next_sibling_.assign(n, kNoNode);
-  last_child_.assign(n, kNoNode);
-  for (NodeId id : nodes()) Link(parent_[id.index()], id);  // in creation order, as AddNode
-  FreeRoom(last_child_);
-  ComputeGenerations();
+  for (std::size_t i = n; i-- > 1;) {
+    NodeId& first = first_child_[parent_[i].index()];
+    next_sibling_[i] = first;
+    first = NodeId(std::uint32_t(i));
+  }
 }
 
 void CellTree::ComputeGenerations() {

@@ -41,13 +41,13 @@ inline constexpr NodeId kNoNode{std::numeric_limits<std::uint32_t>::max()};
 class CellTree {
  public:
   // Nodes including the root; node ids are 0 .. size()-1.
-  std::size_t size() const { return cell_.size(); }
+  std::size_t size() const { return parked_.empty() ? cell_.size() : parked_size_; }
   // The nodes without the root, in creation order (parents before children):
   // for (NodeId n : tree.nodes()).
   class NodeRange;
   NodeRange nodes() const;
   // Nodes without the root.
-  std::size_t node_count() const { return cell_.size() - 1; }
+  std::size_t node_count() const { return size() - 1; }
   // One more than the largest cell of any node (0 for an empty tree).
   std::uint32_t cell_count() const { return cell_count_; }
   // Rays the tree was built from (rays with no visit included).
@@ -81,13 +81,15 @@ class CellTree {
   std::string ToString() const;
 
   // A finished tree kept for a later frame while nothing reads it (the frame's own tree during
-  // its replays, runner/driver.cpp) drops its children links and generations, 12 of its 36
-  // bytes a node; Unpark makes them again from the parents (children in creation order, as
-  // AddNode links them) before it is read. Only size(), cell(), parent() and the counts may be
-  // read while parked.
+  // its replays, and the previous frame's where no replay reads it then: runner/driver.cpp)
+  // keeps its cells, parents, generations and counts as a stream of varints (each node's parent
+  // and cell as steps back from the node and from the parent's cell: about 6 of its 36 bytes a
+  // node) and drops its arrays; Unpark reads them back and makes the children links again (in
+  // creation order, as AddNode links them), before the tree is read. Only size(), node_count(),
+  // cell_count(), rays() and parked() may be read while parked.
   void Park();
   void Unpark();
-  bool parked() const { return first_child_.size() != cell_.size(); }
+  bool parked() const { return !parked_.empty(); }
 
  private:
   friend class CellTreeBuilder;
@@ -121,6 +123,10 @@ class CellTree {
   std::vector<NodeId> last_child_;  // for appending in creation order; freed by Finish
   std::uint32_t cell_count_ = 0;
   std::uint64_t rays_ = 0;
+  // Parked (Park): the nodes as varints, their number, and whether the tree is counted.
+  std::vector<std::uint8_t> parked_;
+  std::size_t parked_size_ = 0;
+  bool parked_counted_ = false;
 };
 
 // The nodes 1 .. size()-1 (the root left out), in creation order.

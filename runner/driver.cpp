@@ -75,6 +75,7 @@ class BeginSignal final : public Scheduler {
   void Arrived(const Arrival& arrival) override { inner_.Arrived(arrival); }
   void Taken(CellId cell) override { inner_.Taken(cell); }
   DecisionCost Cost() const override { return inner_.Cost(); }
+  bool ReadsEarlierTrees() const override { return inner_.ReadsEarlierTrees(); }
 
  private:
   Scheduler& inner_;
@@ -171,6 +172,11 @@ LoadedFrame* FrameWalker::Advance() {
     f.previous = LoadTree(reader_, i - 1, k_);
   }
   f.tree.reset();  // moved to previous, or not kept
+  // Trees parked while the frames before were replayed (ReplayFrames), read again from here:
+  // made whole once the frame before's work is freed.
+  for (CellTree* t : {f.previous.get(), f.before_previous.get()}) {
+    if (t != nullptr && t->parked()) t->Unpark();
+  }
   f.warm_up = !asked_for_[position_];
   f.position = reported_;
   f.index = i;
@@ -401,11 +407,20 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
       });
       if (release) release_begin_only();
     }
+    // Nor, where no replay reads it once begun (Scheduler::ReadsEarlierTrees), the previous
+    // frame's tree: it waits parked, as the frame's own below, until the next frame begins.
+    bool park_previous = start_early && frame->previous != nullptr;
+    for (std::size_t d : run) park_previous = park_previous && !schedulers[d]->ReadsEarlierTrees();
+    if (park_previous) frame->previous->Park();
     walker.Build();
     // Begun early, no replay reads the frame's own tree while it runs (no oracle; the work and
-    // bound are made): it waits parked for the next frame (CellTree::Park).
+    // bound are made): it waits parked until the next frame begins (CellTree::Park; the
+    // walker's Advance makes it whole again, once this frame's work is freed).
     const bool park = start_early && frame->tree != nullptr;
-    if (park) frame->tree->Park();
+    if (park) {
+      frame->tree->Park();
+      ReturnFreedMemory();
+    }
     std::atomic<std::size_t> to_begin{run.size()};
     const std::function<void()> begun = [&] {
       if (to_begin.fetch_sub(1, std::memory_order_acq_rel) == 1) release_begin_only();
@@ -420,7 +435,6 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
                             memory[d].get(), &units[d], plans_of(d), starts[d].get());
       starts[d].reset();
     });
-    if (park) frame->tree->Unpark();
     stats.plans += shared.made();
     for (const auto& p : own) stats.plans += p->made();
     if (frame->warm_up) {

@@ -42,10 +42,15 @@ struct LoadedFrame {
   // A frame replayed only for the memory state it leaves (FrameWalker's warm_up), not
   // reported.
   bool warm_up = false;
-  std::size_t index = 0;               // into reader.frames()
-  std::int32_t number = 0;             // the frame number
-  std::unique_ptr<CellTree> tree;      // null when no replay reads it (FrameWalker's keep_tree)
-  std::unique_ptr<CellTree> previous;  // frame index - 1's; null for index 0 or history 0
+  std::size_t index = 0;    // into reader.frames()
+  std::int32_t number = 0;  // the frame number
+  // Null when no replay reads it (FrameWalker's keep_tree). Parked (CellTree::parked) once the
+  // frame's replays ran where they began before it was built (ReplayFrames): a caller that
+  // reads it then unparks a copy.
+  std::unique_ptr<CellTree> tree;
+  // Frame index - 1's; null for index 0 or history 0. Parked as `tree` where no replay of the
+  // frame reads it once begun (Scheduler::ReadsEarlierTrees).
+  std::unique_ptr<CellTree> previous;
   // Frame index - 2's, when a scheduler reads two earlier frames (SchedulerHistory); else null.
   std::unique_ptr<CellTree> before_previous;
   std::uint64_t bound = 0;  // of the frame's tree (0 when it was not built)

@@ -74,6 +74,7 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
     // one, so that it goes with the cache at the frame's end, not at the next frame's start.
     if (frame.plans == nullptr) own_ = std::move(both);
   }
+  reads_previous_ = predicted_ != nullptr && predicted_ == frame.previous;
   match_.assign(1, predicted_ != nullptr ? kRootNode : kNoNode);
   guess_.assign(1, false);
   queued_.assign(cells_, {});

@@ -82,6 +82,9 @@ class AdaptiveScheduler : public Scheduler {
   void Arrived(const Arrival& arrival) override;
   void Taken(CellId cell) override;
   DecisionCost Cost() const override;
+  // Arrivals are matched in the predicted tree: the previous frame's itself, or the union of
+  // the last two, which the frame's plan cache (or the scheduler) holds.
+  bool ReadsEarlierTrees() const override { return reads_previous_; }
 
   // Plans made this frame after the first (re-plans), for tests and benchmarks.
   std::uint64_t replans() const { return replans_; }
@@ -134,6 +137,7 @@ class AdaptiveScheduler : public Scheduler {
   // predicted_ points into the cache's, which outlives the frame's replay).
   std::shared_ptr<const CellTree> own_;
   const CellTree* predicted_ = nullptr;  // null: no earlier frame (Max Work)
+  bool reads_previous_ = false;          // predicted_ is FrameInfo::previous
   // Stand-ins of the predicted tree (shared, FrameInfo::plans).
   std::shared_ptr<const StandIns> stand_in_;
 

@@ -89,6 +89,10 @@ class AutoScheduler : public Scheduler {
   void Arrived(const Arrival& arrival) override;
   void Taken(CellId cell) override;
   DecisionCost Cost() const override;
+  // The check reads the earlier trees in BeginFrame; the frame then runs one candidate.
+  bool ReadsEarlierTrees() const override {
+    return active_ == nullptr || active_->ReadsEarlierTrees();
+  }
 
   // The candidates' registry entries for a board of `processors`, in order of preference.
   static std::vector<const SchedulerEntry*> CandidatesFor(std::uint32_t processors);

@@ -100,6 +100,10 @@ class BalancedScheduler : public Scheduler {
   void Arrived(const Arrival& arrival) override;
   void Taken(CellId cell) override;
   DecisionCost Cost() const override;
+  // `critical` matches arrivals in the previous tree; the adaptive one as it says.
+  bool ReadsEarlierTrees() const override {
+    return previous_ != nullptr || (adaptive_ != nullptr && adaptive_->ReadsEarlierTrees());
+  }
 
  private:
   // The choice for `queues` without the postponing rule, and the follower it came from (null:

@@ -51,6 +51,7 @@ class DagScheduler : public Scheduler {
   std::optional<CellId> Peek(const QueueView& queues) const override;
   std::string Reason() const override;
   DecisionCost Cost() const override { return cost_; }
+  bool ReadsEarlierTrees() const override { return tree_ != nullptr; }
   bool Watches() const override { return true; }
   void Arrived(const Arrival& arrival) override;
   void Taken(CellId cell) override;

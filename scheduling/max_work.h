@@ -13,6 +13,7 @@ class MaxWorkScheduler : public Scheduler {
  public:
   MaxWorkScheduler() : Scheduler(kMaxWorkEntry) {}
   void BeginFrame(const FrameInfo&) override {}
+  bool ReadsEarlierTrees() const override { return false; }
   std::optional<CellId> Next(const QueueView& queues) override;
 };
 

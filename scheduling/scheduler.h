@@ -208,6 +208,13 @@ class Scheduler {
   };
   virtual DecisionCost Cost() const { return {}; }
 
+  // Whether, once BeginFrame returned, the frame may still read an earlier frame's tree it was
+  // given (FrameInfo::previous, before_previous) through a pointer kept: true, the default,
+  // unless the scheduler says otherwise. Where no replay of a frame does, the previous frame's
+  // tree waits parked (CellTree::Park) while the frame is built and replayed
+  // (runner/driver.cpp; docs/design.md §2 "What a replay holds").
+  virtual bool ReadsEarlierTrees() const { return true; }
+
  private:
   const SchedulerEntry* entry_;
 };
@@ -364,6 +371,8 @@ class FollowingScheduler : public Scheduler {
     return follower_.Peek(queues);
   }
   std::string Reason() const override { return follower_.Reason(); }
+  // The schedule is copied in BeginFrame: no tree is read after it.
+  bool ReadsEarlierTrees() const override { return false; }
   const ScheduleFollower& follower() const { return follower_; }
 
  protected:

@@ -194,6 +194,7 @@ GridStudy StudyTrace(const TraceReader& reader, GridStudy g, const StudyOptions&
                                        std::to_string(frame.position + 1) + "/" +
                                        std::to_string(n));
                    trees.push_back(*frame.tree);
+                   if (trees.back().parked()) trees.back().Unpark();
                    numbers.push_back(frame.number);
                    for (std::size_t k = 0; k < results.size(); ++k) {
                      Accumulate(results[k], &replays[k].total);

@@ -275,8 +275,8 @@ TEST(UnionTreeTest, EqualsTheTreeOfAllRaysAndItsSchedulesServeEach) {
   EXPECT_EQ(UnionShape({}).node_count(), 0u);
 }
 
-// A parked tree (kept for a later frame while nothing reads it, issue 43) holds no children
-// links nor generations; unparked, it is the tree it was, link for link, for the builder's
+// A parked tree (kept for a later frame while nothing reads it, issue 43) holds its nodes as
+// varints only; unparked, it is the tree it was, link for link, for the builder's
 // trees and the unions of two.
 TEST(CellTreeTest, UnparkedTreesAreTheTreesParked) {
   std::mt19937 rng(5);
