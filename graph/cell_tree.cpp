@@ -88,7 +88,8 @@ void CellTree::Reserve(std::size_t nodes) {
 NodeId CellTree::AddNode(NodeId parent, CellId cell) {
   RAYCELL_CHECK_LT(cell_.size(), std::size_t{kNoNode.index()});
   // Growing by a quarter, not push_back's doubling: a tree being built holds at most 1.25 times
-  // its nodes (plus one array's copy while it grows), not twice (issue 43).
+  // its nodes (plus one array's copy while it grows), not twice (issue 43). A builder told its
+  // frame's size (CellTreeBuilder::Reserve) does not grow at all.
   if (cell_.size() == cell_.capacity()) Reserve(cell_.size() + cell_.size() / 4 + 64);
   const NodeId id(static_cast<std::uint32_t>(cell_.size()));
   cell_.push_back(cell);
@@ -363,6 +364,15 @@ namespace {
 }  // namespace
 
 CellTreeBuilder::CellTreeBuilder() = default;
+
+void CellTreeBuilder::Reserve(std::uint64_t nodes) {
+  // A frame's summary is checked against the frame only once it is read: capped here (2^28
+  // nodes, 10 GB of address space), beyond which the arrays grow as nodes come.
+  const std::size_t n = std::size_t(std::min<std::uint64_t>(nodes, std::uint64_t{1} << 28)) + 1;
+  if (n <= tree_.cell_.capacity()) return;
+  tree_.Reserve(n);
+  child_counts_.reserve(n);
+}
 
 void CellTreeBuilder::AddBatch(const RayBatch& batch) {
   for (std::size_t i = 0; i < batch.size(); ++i) AddRay(batch.ray(i));

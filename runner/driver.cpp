@@ -200,6 +200,7 @@ void FrameWalker::Build() {
   } else if (k_ == 1 && reader_.frames()[i].visits > compact_above_) {
     // A large frame: the tree and the compact per-segment work from one stream of batches.
     CellTreeBuilder trees;
+    if (need_tree) trees.Reserve(reader_.frames()[i].visits);
     RaySegmentWorkBuilder work(cells);
     work.Reserve(reader_.frames()[i]);
     reader_.ForEachBatch(i, [&](const RayBatch& b) {
