@@ -6,28 +6,12 @@
 
 #include "base/check.h"
 #include "base/kept_room.h"
+#include "base/varint.h"
 #include "traces/format.h"
 
 namespace raycell {
 
 namespace {
-
-// A parked tree's LEB128 varints (CellTree::Park).
-void PutVarint(std::vector<std::uint8_t>& out, std::uint64_t x) {
-  while (x >= 0x80) {
-    out.push_back(std::uint8_t(x | 0x80));
-    x >>= 7;
-  }
-  out.push_back(std::uint8_t(x));
-}
-std::uint64_t GetVarint(const std::uint8_t** at) {
-  std::uint64_t x = 0;
-  for (int shift = 0;; shift += 7) {
-    const std::uint8_t b = *(*at)++;
-    x |= std::uint64_t(b & 0x7f) << shift;
-    if (b < 0x80) return x;
-  }
-}
 
 template <typename T>
 void FitTo(std::vector<T>& v) {
@@ -228,18 +212,18 @@ void CellTree::Park() {
     const NodeId p = parent_[i];
     // A parent comes before its node (parent(n) < n): its distance, at least 1; 0 for none.
     if (p == kNoNode) {
-      PutVarint(out, 0);
-      PutVarint(out, std::uint32_t(cell_[i].value() + 1));  // kNoCell as 0
+      AppendVarint(out, 0);
+      AppendVarint(out, std::uint32_t(cell_[i].value() + 1));  // kNoCell as 0
     } else {
-      PutVarint(out, i - p.index());
+      AppendVarint(out, i - p.index());
       const std::uint32_t step = cell_[i].value() - cell_[p.index()].value();  // mod 2^32
-      PutVarint(out, (step << 1) ^ (0u - (step >> 31)));  // zigzag of the signed step
+      AppendVarint(out, (step << 1) ^ (0u - (step >> 31)));  // zigzag of the signed step
     }
-    PutVarint(out, generation_[i]);  // kept: a byte a node, against a walk of the tree again
+    AppendVarint(out, generation_[i]);  // kept: a byte a node, against a walk of the tree again
     if (counted) {
-      PutVarint(out, enter_[i]);
-      PutVarint(out, visits_[i]);
-      PutVarint(out, samples_[i]);
+      AppendVarint(out, enter_[i]);
+      AppendVarint(out, visits_[i]);
+      AppendVarint(out, samples_[i]);
     }
   }
   out.shrink_to_fit();
@@ -267,10 +251,11 @@ void CellTree::Unpark() {
     visits_.resize(n);
     samples_.resize(n);
   }
-  const std::uint8_t* at = parked_.data();
+  const std::uint8_t* stream = parked_.data();
+  std::size_t at = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const std::uint64_t back = GetVarint(&at);
-    const std::uint32_t code = std::uint32_t(GetVarint(&at));
+    const std::uint32_t back = ReadVarint(stream, &at);
+    const std::uint32_t code = ReadVarint(stream, &at);
     if (back == 0) {
       parent_[i] = kNoNode;
       cell_[i] = CellId(code - 1);
@@ -280,14 +265,14 @@ void CellTree::Unpark() {
       const std::uint32_t step = (code >> 1) ^ (0u - (code & 1));
       cell_[i] = CellId(cell_[p].value() + step);
     }
-    generation_[i] = std::uint32_t(GetVarint(&at));
+    generation_[i] = ReadVarint(stream, &at);
     if (parked_counted_) {
-      enter_[i] = std::uint32_t(GetVarint(&at));
-      visits_[i] = std::uint32_t(GetVarint(&at));
-      samples_[i] = GetVarint(&at);
+      enter_[i] = ReadVarint(stream, &at);
+      visits_[i] = ReadVarint(stream, &at);
+      samples_[i] = ReadVarint<std::uint64_t>(stream, &at);
     }
   }
-  RAYCELL_CHECK(at == parked_.data() + parked_.size());
+  RAYCELL_CHECK(at == parked_.size());
   FreeRoom(parked_);
   // Every tree links a node's children in creation order, which is the order of their ids
   // (AddNode): prepended from the last node back, they come out in that order.

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "base/mapped_allocator.h"
+#include "base/varint.h"  // the Compact stream's records
 #include "graph/cell_tree.h"
 #include "traces/ray_batch.h"
 #include "traces/trace_header.h"
@@ -100,26 +101,6 @@ struct WorkGraph {
   std::uint64_t total_segments() const { return totals.segments; }
   std::uint64_t total_rays() const { return totals.rays; }
 };
-
-// The Compact stream's LEB128 varints: AppendVarint writes x; ReadVarint reads the one at
-// stream[*at] and moves *at past it.
-inline void AppendVarint(std::vector<std::uint8_t>& out, std::uint32_t x) {
-  while (x >= 0x80) {
-    out.push_back(std::uint8_t(x | 0x80));
-    x >>= 7;
-  }
-  out.push_back(std::uint8_t(x));
-}
-inline std::uint32_t ReadVarint(const std::uint8_t* stream, std::uint32_t* at) {
-  std::uint32_t x = stream[(*at)++];
-  if (x < 0x80) return x;
-  x &= 0x7f;
-  for (int shift = 7;; shift += 7) {
-    const std::uint32_t b = stream[(*at)++];
-    x |= (b & 0x7f) << shift;
-    if (b < 0x80) return x;
-  }
-}
 
 // Per ray segment, built from a frame's batches as TraceReader::ForEachBatch delivers them
 // (frame-local ray ids, in order, parents in earlier batches or the same), without holding
