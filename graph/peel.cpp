@@ -27,13 +27,15 @@ namespace {
 // The state of the tree being peeled, with the per-cell counts that make each step cheap.
 //
 // Cost. Every node becomes a leaf once and is removed once, each time with O(1) count
-// updates and O(1) pushes onto the two heaps (O(log cells) each: the leaf heap is rebuilt from
-// the cells, O(cells), when it holds more than twice them, the ready heap holds each cell at
-// most once). Each step removes at least one node, so there are at most `nodes` steps, and
-// choosing a cell pops the entries gone stale since (each pushed once). top_[c] (maxGen of c
-// over the remaining nodes) only decreases, by at most maxGen(c) in total, and the sum of
-// maxGen is at most `nodes`. Total: O(nodes log cells), O(nodes) memory (the per-(cell,
-// generation) counts have sum-of-maxGen <= nodes entries).
+// updates and at most one push onto each of the two heaps (O(log cells) each: the leaf heap is
+// rebuilt from the cells, O(cells), when it holds more than twice them, the ready heap holds
+// each cell at most once); the leaf heap gets its pushes only when a split step asks it, one
+// per cell whose count changed since, so completions (most steps) push nothing there. Each step
+// removes at least one node, so there are at most `nodes` steps, and choosing a cell pops the
+// entries gone stale since (each pushed once). top_[c] (maxGen of c over the remaining nodes) only
+// decreases, by at most maxGen(c) in total, and the sum of maxGen is at most `nodes`. Total:
+// O(nodes log cells), O(nodes) memory (the per-(cell, generation) counts have sum-of-maxGen <=
+// nodes entries).
 //
 // The two orders were std::sets (a tree node allocated and freed at every change of a cell's
 // leaf count: 26M allocations in a replay at 4096 cells); as heaps with lazy deletion each
@@ -96,12 +98,18 @@ class Peeler {
     }
     leaves_.resize(cells_);
     in_heap_.assign(cells_, 0);
+    dirty_.assign(cells_, 0);
   }
 
   void AddLeaf(NodeId n) {
     const CellId c = t_.cell(n);
     leaves_[c.value()].push_back(n);
-    PushLeaves(c.value());
+    // Its count changed: pushed onto the leaf heap when a split asks for it (MostLeaves), not
+    // at every leaf (most steps are completions, which never read that heap).
+    if (dirty_[c.value()] == 0) {
+      dirty_[c.value()] = 1;
+      dirty_list_.push_back(c.value());
+    }
     ++leaf_count_[Slot(n)];
     if (t_.generation(n) == top_[c.value()]) --non_leaf_top_[c.value()];
   }
@@ -109,6 +117,13 @@ class Peeler {
   // The cell with the most leaves now (lowest number on ties); none when no cell has a leaf.
   // Entries whose count is no longer their cell's are dropped as met.
   std::optional<CellId> MostLeaves() {
+    // Every cell whose count changed since it was last pushed gets an entry with its count, so
+    // that every cell with leaves has one up to date, as if each change had been pushed.
+    for (const std::uint32_t c : dirty_list_) {
+      dirty_[c] = 0;
+      if (!leaves_[c].empty()) PushLeaves(c);
+    }
+    dirty_list_.clear();
     while (!by_leaves_.empty()) {
       const LeafKey k = by_leaves_.front();
       if (k.leaves != 0 && k.leaves == leaves_[k.cell].size()) return CellId(k.cell);
@@ -200,6 +215,9 @@ class Peeler {
   std::vector<std::uint8_t> in_heap_;
   std::vector<std::uint32_t> ready_heap_;
   std::vector<LeafKey> by_leaves_;  // max-heap of (leaf count, cell) as pushed (LeafLess)
+  // The cells whose leaf count grew since they were last pushed onto by_leaves_ (dirty_: 1).
+  std::vector<std::uint8_t> dirty_;
+  std::vector<std::uint32_t> dirty_list_;
 };
 
 }  // namespace
