@@ -7,7 +7,7 @@
 #include "base/check.h"
 #include "base/checked.h"
 #include "base/kept_room.h"
-#include "base/mapped_allocator.h"
+#include "base/mapped_array.h"
 #include "engine/slot_queue.h"
 #include "engine/watchdog.h"
 #include "replay/time_bound.h"
@@ -15,9 +15,9 @@
 
 namespace raycell {
 
-// The queues' and worklists' arrays (base/mapped_allocator.h).
+// The queues' and worklists' arrays (base/mapped_array.h).
 template <typename T>
-using ItemVector = std::vector<T, MappedAllocator<T>>;
+using ItemVector = MappedArray<T>;
 namespace {
 
 // ---- Units ----------------------------------------------------------------------------
@@ -496,7 +496,7 @@ class Board {
       const std::size_t n = std::min(kPrefetch, ps.worklist.size());
       for (std::size_t i = 0; i < n; ++i) u_.Prefetch(ps.worklist[i].e);
     } else {
-      ps.worklist.insert(ps.worklist.end(), q.begin(), q.end());
+      ps.worklist.append(q.begin(), q.end());
       q.clear();
       ReleaseRoomAbove(q, kept_room_);
     }
@@ -545,8 +545,8 @@ class Board {
     const std::size_t n = most / 2;
     ps.worklist.clear();
     ps.head = 0;
-    ps.worklist.insert(ps.worklist.end(), from.end() - std::ptrdiff_t(n), from.end());
-    from.resize(from.size() - n);
+    ps.worklist.append(from.end() - n, from.end());
+    from.truncate(from.size() - n);
   }
 
   // Starts working the unit at the head of p's worklist.
@@ -556,7 +556,7 @@ class Board {
     // that a batch that keeps spawning units in its cell (millions in a large frame) holds
     // those still to work, not every unit of the batch; the order is unchanged.
     if (ps.head >= kDropWorked && 2 * ps.head >= ps.worklist.size()) {
-      ps.worklist.erase(ps.worklist.begin(), ps.worklist.begin() + std::ptrdiff_t(ps.head));
+      ps.worklist.erase_front(ps.head);
       ps.head = 0;
     }
     // The units a few places ahead are known: load their successors while this one is
