@@ -157,11 +157,11 @@ class BalancedScheduler : public Scheduler {
   };
   // Critical: sets `cell`'s level, keeping the cells of each level (at_level_).
   void SetLevel(CellId cell, std::uint32_t level);
-  // Critical: the most queued cell in view of level l (lowest number on ties), as MostQueuedOf
-  // over its list gives it, from the level's last answer and the cells that had arrivals there
-  // since (level_best_, touched_), when `queues` is the board's own view: it changes only by
-  // arrivals (told), takes (told) and the locks of the cells this scheduler returns.
-  std::optional<CellId> LevelBest(std::uint32_t l, const QueueView& queues) const;
+  // Critical: the most queued cell in view of level l (kNoBest: none; lowest number on ties), as
+  // MostQueuedOf over its list gives it, from the level's last answer and the cells that had
+  // arrivals there since (level_best_, touched_), when `queues` is the board's own view: it changes
+  // only by arrivals (told), takes (told) and the locks of the cells this scheduler returns.
+  std::uint32_t LevelBest(std::uint32_t l, const QueueView& queues) const;
   // Critical: `cell` leaves its level's answer (moved, taken or locked).
   void Forget(CellId cell);
   // Critical: `cell` was returned by Next, so its queue leaves the view.
