@@ -130,6 +130,7 @@ FrameWalker::FrameWalker(const TraceReader& reader, std::vector<std::size_t> fra
       need_nodes_(need_nodes),
       k_(sample_every),
       history_(history),
+      own_tree_(keep_tree),
       keep_tree_(keep_tree || history > 0),
       compact_above_(compact_above_visits) {
   if (k_ < 1) throw InputError("sampling: 1 in k ray trees needs k >= 1");
@@ -194,7 +195,9 @@ void FrameWalker::Build() {
   // across frames (the holes' cause; Max Work per segment ran ~10% longer with it).
   if (history_ > 0) ReturnFreedMemory();
   // The tree: for the work per node, the bound, the oracles, and the next frame's previous.
-  const bool need_tree = need_nodes_ || keep_tree_;
+  const bool keep =
+      keep_tree_ && (own_tree_ || !skip_last_tree_ || position_ + 1 < indices_.size());
+  const bool need_tree = need_nodes_ || keep;
   if (!need_segments_ && k_ == 1) {  // per node the tree is all the replay needs: stream it
     f.tree = LoadTree(reader_, i, 1);
   } else if (k_ == 1 && reader_.frames()[i].visits > compact_above_) {
@@ -217,7 +220,7 @@ void FrameWalker::Build() {
   }
   if (need_nodes_) f.nodes = std::make_unique<WorkGraph>(PackedNodeWork(*f.tree, cells));
   f.bound = f.tree ? Bound(*f.tree) : 0;
-  if (!keep_tree_) f.tree.reset();  // its work and bound made, no replay reads it
+  if (!keep) f.tree.reset();  // its work and bound made, no replay reads it
   // And what building them left (the builder's arrays, grown and freed): holes in the heap
   // otherwise resident beside the replays' own arrays (b4096, `celltree-adaptive`, 8
   // processors: 44 MB of the peak).
@@ -347,6 +350,7 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
   const TraceHeader& header = reader.header();
   FrameWalker walker(reader, frame_indices, need_segments, need_nodes, options.sample_every,
                      history, options.compact_above_visits, !warm.empty(), own_tree);
+  if (!options.caller_reads_trees) walker.SkipLastTree();
   WorkerPool pool(unsigned(
       std::clamp<std::size_t>(options.jobs, 1, std::max<std::size_t>(distinct.size(), 1))));
   std::vector<ReplayResult> distinct_results(distinct.size()), results(configs.size());
@@ -461,6 +465,7 @@ TraceReplay ReplayTrace(const TraceReader& reader, const std::vector<std::size_t
   options.sample_every = sample_every;
   options.progress = progress;
   options.observer = observer;
+  options.caller_reads_trees = false;
   TraceReplay out;
   ReplayFrames(reader, frame_indices, {config}, options,
                [&](const LoadedFrame&, const std::vector<ReplayResult>& results) {

@@ -87,6 +87,10 @@ class FrameWalker {
   LoadedFrame* Advance();
   // Builds the frame Advance returned: its tree (where kept), work graphs and bound.
   void Build();
+  // The last frame walked keeps no tree for a next frame (none follows, and the caller reads
+  // no LoadedFrame::tree): it is built only where a replay reads it (keep_tree) or the work per
+  // node is made from it.
+  void SkipLastTree() { skip_last_tree_ = true; }
   // Frees the current frame's before_previous (frame i-2's tree) once no replay of the frame
   // will read it again: schedulers read it only in BeginFrame (ReplayFrames calls this after
   // the last replay of the frame began; issue 43). The next frame loads it again if it needs it.
@@ -102,7 +106,8 @@ class FrameWalker {
   std::size_t asked_ = 0, reported_ = 0;
   bool need_segments_, need_nodes_;
   std::uint32_t k_, history_;
-  bool keep_tree_;
+  bool own_tree_, keep_tree_;  // a replay reads the frame's own tree; it is kept (own or history)
+  bool skip_last_tree_ = false;
   std::uint64_t compact_above_;
   std::size_t position_ = 0;
   LoadedFrame frame_;
@@ -150,6 +155,9 @@ struct ReplayFramesOptions {
   // The caller ran CheckReplay on every configuration for this trace (a sweep, for all its
   // combinations before its first block); else ReplayFrames runs it, once per configuration.
   bool checked = false;
+  // Whether on_frame reads LoadedFrame::tree (the study's counts of nodes); false: the last
+  // frame's tree is not built where no replay reads it, as no next frame plans from it.
+  bool caller_reads_trees = true;
   // Plans shared across the configurations (docs/design.md §5 "Sharing plans"): one PlanCache
   // per frame for all of them, planning through the process-wide memo; false: one per
   // configuration and frame, each plan searched again (the results are the same: a test).

@@ -192,6 +192,7 @@ class Run {
     o.jobs = options_.jobs;
     o.checked = true;  // RunSweep checked every combination
     o.share_plans = options_.share_plans;
+    o.caller_reads_trees = false;
     last_checkpoint_ = std::chrono::steady_clock::now();
     const ReplayFramesStats stats = ReplayFrames(
         reader_, frames, b.configs, o,

@@ -200,6 +200,7 @@ std::vector<SuiteRow> Replay(const TraceReader& reader, const std::vector<Replay
   std::iota(frames.begin(), frames.end(), std::size_t{0});
   ReplayFramesOptions opt;
   opt.jobs = std::max(1u, std::min(HardwareThreads(), unsigned(configs.size())));
+  opt.caller_reads_trees = false;
   ReplayFrames(reader, frames, configs, opt,
                [&](const LoadedFrame& f, const std::vector<ReplayResult>& results) {
                  for (std::size_t i = 0; i < results.size(); ++i) {

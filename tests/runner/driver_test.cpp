@@ -322,6 +322,33 @@ TEST_F(DriverTest, EarlierTreesParkedWhereNoReplayReadsThem) {
   }
 }
 
+// A caller that reads no tree (a replay, a sweep): the last frame's tree is built only where a
+// replay reads it (an oracle), as no next frame plans from it; the results are the same.
+TEST_F(DriverTest, TheLastFramesTreeIsBuiltOnlyWhereSomethingReadsIt) {
+  const std::vector<std::size_t> frames{0, 1, 2, 3};
+  for (const char* name : {"celltree", "balanced-critical", "auto", "best"}) {
+    const bool oracle = SchedulerByName(name, "test").oracle;
+    for (const bool caller_reads : {true, false}) {
+      ReplayFramesOptions options;
+      options.caller_reads_trees = caller_reads;
+      std::vector<bool> has_tree;
+      std::size_t i = 0;
+      ReplayFrames(*reader_, frames, {Config(name, 3)}, options,
+                   [&](const LoadedFrame& f, const std::vector<ReplayResult>& results) {
+                     has_tree.push_back(f.tree != nullptr);
+                     EXPECT_EQ(Describe(results[0]), Describe(ByHand(i++, Config(name, 3))))
+                         << name;
+                     return true;
+                   });
+      ASSERT_EQ(has_tree.size(), frames.size());
+      for (std::size_t k = 0; k < frames.size(); ++k) {
+        const bool last = k + 1 == frames.size();
+        EXPECT_EQ(has_tree[k], oracle || caller_reads || !last) << name << " frame " << k;
+      }
+    }
+  }
+}
+
 TEST_F(DriverTest, StopsWhenTold) {
   std::size_t seen = 0;
   const ReplayFramesStats stats = ReplayFrames(
