@@ -8,7 +8,8 @@
 
 namespace raycell {
 
-inline void AppendVarint(std::vector<std::uint8_t>& out, std::uint64_t x) {
+template <typename Alloc>
+inline void AppendVarint(std::vector<std::uint8_t, Alloc>& out, std::uint64_t x) {
   while (x >= 0x80) {
     out.push_back(std::uint8_t(x | 0x80));
     x >>= 7;

@@ -74,9 +74,9 @@ struct WorkGraph {
     CompactUnit unit;
   };
   struct Compact {
-    std::vector<std::uint8_t> stream;
+    std::vector<std::uint8_t, HugePageAllocator<std::uint8_t>> stream;  // read at random
     std::vector<CompactUnit> roots;
-    std::vector<Spawned> spawned;
+    std::vector<Spawned, HugePageAllocator<Spawned>> spawned;
     std::size_t units = 0;  // visits
   } compact;
 
