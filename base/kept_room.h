@@ -30,9 +30,10 @@ void FreeRoom(std::vector<T, A>& v) {
   std::vector<T, A>().swap(v);
 }
 
-// Frees the room of `v` (empty or not) when it exceeds `kept` items.
-template <typename T, typename A>
-void ReleaseRoomAbove(std::vector<T, A>& v, std::size_t kept) {
+// Frees the room of `v` (empty or not) when it exceeds `kept` items: a std::vector, or any list
+// with a FreeRoom of its own (base/mapped_array.h).
+template <typename V>
+void ReleaseRoomAbove(V& v, std::size_t kept) {
   if (v.capacity() > kept) FreeRoom(v);
 }
 

@@ -20,6 +20,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "base/kept_room.h"
 #include "base/mapped_allocator.h"
 
 namespace raycell {
@@ -121,8 +122,7 @@ class MappedArray {
         p = mremap(data_, old_bytes, bytes, MREMAP_MAYMOVE);
         if (p == MAP_FAILED) throw std::bad_alloc();
       } else {
-        p = mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-        if (p == MAP_FAILED) throw std::bad_alloc();
+        p = MappedBlocks::Allocate(bytes);
         if (size_ != 0) std::memcpy(p, static_cast<const void*>(data_), size_ * sizeof(T));
         std::free(data_);
       }
@@ -138,7 +138,7 @@ class MappedArray {
   void Release() {
     if (data_ == nullptr) return;
     if (Mapped(bytes_)) {
-      munmap(data_, bytes_);
+      MappedBlocks::Free(data_, bytes_);
     } else {
       std::free(data_);
     }
@@ -149,16 +149,11 @@ class MappedArray {
   std::size_t bytes_ = 0;  // the block's bytes: mapped (whole pages) from MappedBlocks::kFrom on
 };
 
-// Empties `v` and frees its room (kept_room.h's FreeRoom for std::vector).
+// Empties `v` and frees its room (kept_room.h's FreeRoom for std::vector; its
+// ReleaseRoomAbove calls either).
 template <typename T>
 void FreeRoom(MappedArray<T>& v) {
   v.free_room();
-}
-
-// Frees the room of `v` (empty or not) when it exceeds `kept` items.
-template <typename T>
-void ReleaseRoomAbove(MappedArray<T>& v, std::size_t kept) {
-  if (v.capacity() > kept) v.free_room();
 }
 
 }  // namespace raycell

@@ -131,7 +131,6 @@ FrameWalker::FrameWalker(const TraceReader& reader, std::vector<std::size_t> fra
       k_(sample_every),
       history_(history),
       own_tree_(keep_tree),
-      keep_tree_(keep_tree || history > 0),
       compact_above_(compact_above_visits) {
   if (k_ < 1) throw InputError("sampling: 1 in k ray trees needs k >= 1");
   for (std::size_t p = 1; p < indices_.size(); ++p) RAYCELL_CHECK_LT(indices_[p - 1], indices_[p]);
@@ -195,8 +194,10 @@ void FrameWalker::Build() {
   // across frames (the holes' cause; Max Work per segment ran ~10% longer with it).
   if (history_ > 0) ReturnFreedMemory();
   // The tree: for the work per node, the bound, the oracles, and the next frame's previous.
-  const bool keep =
-      keep_tree_ && (own_tree_ || !skip_last_tree_ || position_ + 1 < indices_.size());
+  // Kept where a replay reads it, or for the next frame's previous (none after the last one
+  // walked where the caller reads no tree).
+  const bool last = position_ + 1 == indices_.size();
+  const bool keep = own_tree_ || (history_ > 0 && !(skip_last_tree_ && last));
   const bool need_tree = need_nodes_ || keep;
   if (!need_segments_ && k_ == 1) {  // per node the tree is all the replay needs: stream it
     f.tree = LoadTree(reader_, i, 1);

@@ -106,7 +106,7 @@ class FrameWalker {
   std::size_t asked_ = 0, reported_ = 0;
   bool need_segments_, need_nodes_;
   std::uint32_t k_, history_;
-  bool own_tree_, keep_tree_;  // a replay reads the frame's own tree; it is kept (own or history)
+  bool own_tree_;  // a replay reads the frame's own tree (keep_tree)
   bool skip_last_tree_ = false;
   std::uint64_t compact_above_;
   std::size_t position_ = 0;
