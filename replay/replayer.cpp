@@ -783,8 +783,14 @@ ReplayResult SeenReplay(const WorkGraph& work, const std::vector<std::uint64_t>&
 class SeenReplayer : public SeenFrameReplayer {
  public:
   SeenReplayer(const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
-               const MemoryState& start, const MemoryUnits* units, PlanCache* plans)
-      : footprints_(footprints), config_(config), start_(start), units_(units), plans_(plans) {
+               const MemoryState& start, const MemoryUnits* units, PlanCache* plans,
+               unsigned threads)
+      : footprints_(footprints),
+        config_(config),
+        start_(start),
+        units_(units),
+        plans_(plans),
+        threads_(std::max(1u, threads)) {
     config_.granularity = ReplayConfig::Granularity::kNode;
   }
   SeenOutcome Replay(const CellTree& tree, Scheduler& scheduler, std::size_t frame_index,
@@ -808,6 +814,7 @@ class SeenReplayer : public SeenFrameReplayer {
     o.steps = r.events;
     return o;
   }
+  unsigned threads() const override { return threads_; }
 
  private:
   const std::vector<std::uint64_t>& footprints_;
@@ -815,6 +822,7 @@ class SeenReplayer : public SeenFrameReplayer {
   const MemoryState& start_;
   const MemoryUnits* units_;
   PlanCache* plans_;
+  unsigned threads_;
 };
 
 // `make_watch()` gives each run's W (NoWatch, or Watch for a scheduler that watches).
@@ -923,7 +931,7 @@ FrameStart::FrameStart(const std::vector<std::uint64_t>& footprints, const Repla
   info_ = MakeFrameInfo(frame, config, fetch_samples_, units, scheduler);
   if (seen) {
     seen_ = std::make_unique<SeenReplayer>(footprints, config, memory ? *memory : kEmpty, units,
-                                           frame.plans);
+                                           frame.plans, frame.threads);
     info_.seen = seen_.get();
   }
 }

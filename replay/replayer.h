@@ -60,6 +60,9 @@ struct FrameTrees {
   std::uint32_t cells = 0;             // cells of the grid; every tree's cell_count() <= cells
   const CellTree* before_previous = nullptr;  // frame i-2's tree, for history 2; else null
   PlanCache* plans = nullptr;                 // FrameInfo::plans (null: none shared)
+  // Threads the replays of frames seen (FrameInfo::seen) may run on at once, >= 1: work of
+  // this configuration's own (auto's check) that no result depends on (SeenFrameReplayer).
+  unsigned threads = 1;
 };
 
 // The FrameInfo a replay tells `scheduler` (BeginFrame), made here and nowhere else: `frame`'s

@@ -4,7 +4,6 @@
 #include <atomic>
 #include <functional>
 #include <map>
-#include <optional>
 #include <string>
 #include <utility>
 
@@ -235,7 +234,9 @@ namespace {
 // The trees a replay of `frame` is told (FrameInfo): an earlier frame's tree in other cells (a
 // dynamic subdivision whose boxes changed) says nothing about this frame's cells, so the
 // schedulers get none, as in frame 0 (design §5).
-FrameTrees TreesOf(const LoadedFrame& frame, const TraceHeader& header, PlanCache* plans) {
+// own_tree: false leaves FrameTrees::current null (a start, which never reads it).
+FrameTrees TreesOf(const LoadedFrame& frame, const TraceHeader& header, PlanCache* plans,
+                   unsigned threads, bool own_tree = true) {
   const std::uint32_t cells = header.cell_count();
   const SubdivisionInfo& sub = header.subdivision;
   const CellTree* previous = frame.previous && sub.SameCells(frame.index, frame.index - 1, cells)
@@ -245,7 +246,8 @@ FrameTrees TreesOf(const LoadedFrame& frame, const TraceHeader& header, PlanCach
       previous && frame.before_previous && sub.SameCells(frame.index, frame.index - 2, cells)
           ? frame.before_previous.get()
           : nullptr;
-  return FrameTrees{frame.index, frame.tree.get(), previous, cells, before, plans};
+  return FrameTrees{
+      frame.index, own_tree ? frame.tree.get() : nullptr, previous, cells, before, plans, threads};
 }
 
 const std::vector<std::uint64_t>& FootprintsOf(const LoadedFrame& frame,
@@ -258,10 +260,10 @@ const std::vector<std::uint64_t>& FootprintsOf(const LoadedFrame& frame,
 std::unique_ptr<FrameStart> StartLoadedFrame(const LoadedFrame& frame, const TraceHeader& header,
                                              const ReplayConfig& config, const Scheduler& scheduler,
                                              MemoryState* memory, const MemoryUnits* units,
-                                             PlanCache* plans) {
+                                             PlanCache* plans, unsigned threads) {
   RAYCELL_CHECK(!scheduler.entry().oracle);  // an oracle begins with the frame's own tree
-  FrameTrees trees = TreesOf(frame, header, plans);
-  trees.current = nullptr;
+  // Not the frame's own tree, which the walker may be building meanwhile (ReplayFrames).
+  const FrameTrees trees = TreesOf(frame, header, plans, threads, /*own_tree=*/false);
   return std::make_unique<FrameStart>(FootprintsOf(frame, header), config, scheduler, trees, memory,
                                       units);
 }
@@ -270,13 +272,14 @@ ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& head
                                const ReplayConfig& config, Scheduler& scheduler,
                                std::uint32_t sample_every, ReplayObserver* observer,
                                MemoryState* memory, const MemoryUnits* units, PlanCache* plans,
-                               FrameStart* start) {
+                               FrameStart* start, unsigned threads) {
   const bool per_ray = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay;
   const WorkGraph* work = per_ray ? frame.segments.get() : frame.nodes.get();
   RAYCELL_CHECK(work != nullptr);  // the walker was asked for this granularity
-  ReplayResult r = ReplayFrame(*work, FootprintsOf(frame, header), config, scheduler,
-                               TreesOf(frame, header, plans), frame.bound, observer, memory, units,
-                               /*seen=*/true, start);
+  ReplayResult r =
+      ReplayFrame(*work, FootprintsOf(frame, header), config, scheduler,
+                  TreesOf(frame, header, plans, threads), frame.bound, observer, memory, units,
+                  /*seen=*/true, start);
   ScaleBack(r, sample_every, config.processors.count);
   r.frame = frame.number;
   return r;
@@ -354,8 +357,11 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
   if (!options.caller_reads_trees) walker.SkipLastTree();
   WorkerPool pool(unsigned(
       std::clamp<std::size_t>(options.jobs, 1, std::max<std::size_t>(distinct.size(), 1))));
+  // What each replay may run its own work on (auto's check): the threads no configuration takes.
+  const unsigned own_threads = std::max(1u, options.jobs / pool.threads());
   std::vector<ReplayResult> distinct_results(distinct.size()), results(configs.size());
   ReplayFramesStats stats;
+  stats.own_threads = own_threads;
   stats.distinct = distinct.size();
   std::size_t walked = 0;
   // A dynamic subdivision's cells per fine cell, in the frame walked before and in this one.
@@ -408,7 +414,7 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
       pool.ParallelFor(run.size(), [&](std::size_t n) {
         const std::size_t d = run[n];
         starts[d] = StartLoadedFrame(*frame, header, distinct[d], *schedulers[d], memory[d].get(),
-                                     &units[d], plans_of(d));
+                                     &units[d], plans_of(d), own_threads);
         starts[d]->Begin(*schedulers[d]);
       });
       if (release) release_begin_only();
@@ -438,7 +444,7 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
       Scheduler& scheduler = signal_begun ? static_cast<Scheduler&>(signal) : *schedulers[d];
       distinct_results[d] =
           ReplayLoadedFrame(*frame, header, distinct[d], scheduler, options.sample_every, observer,
-                            memory[d].get(), &units[d], plans_of(d), starts[d].get());
+                            memory[d].get(), &units[d], plans_of(d), starts[d].get(), own_threads);
       starts[d].reset();
     });
     stats.plans += shared.made();
@@ -461,8 +467,9 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
 
 TraceReplay ReplayTrace(const TraceReader& reader, const std::vector<std::size_t>& frame_indices,
                         const ReplayConfig& config, const std::function<void(double)>& progress,
-                        std::uint32_t sample_every, ReplayObserver* observer) {
+                        std::uint32_t sample_every, ReplayObserver* observer, unsigned jobs) {
   ReplayFramesOptions options;
+  options.jobs = jobs;
   options.sample_every = sample_every;
   options.progress = progress;
   options.observer = observer;

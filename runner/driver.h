@@ -122,17 +122,19 @@ class FrameWalker {
 // (FrameInfo::plans; null: none).
 // `start`: made by StartLoadedFrame for this frame, configuration, scheduler, memory, units and
 // plans, and begun (FrameStart::Begin); null: the replay begins the frame itself.
+// `threads`: what the replays of frames seen may run on at once (FrameTrees::threads).
 ReplayResult ReplayLoadedFrame(const LoadedFrame& frame, const TraceHeader& header,
                                const ReplayConfig& config, Scheduler& scheduler,
                                std::uint32_t sample_every = 1, ReplayObserver* observer = nullptr,
                                MemoryState* memory = nullptr, const MemoryUnits* units = nullptr,
-                               PlanCache* plans = nullptr, FrameStart* start = nullptr);
+                               PlanCache* plans = nullptr, FrameStart* start = nullptr,
+                               unsigned threads = 1);
 // The start of `frame` (its earlier trees; not its own, which an oracle needs: not for one) as
 // ReplayLoadedFrame would tell `scheduler` it, for the same arguments.
 std::unique_ptr<FrameStart> StartLoadedFrame(const LoadedFrame& frame, const TraceHeader& header,
                                              const ReplayConfig& config, const Scheduler& scheduler,
                                              MemoryState* memory, const MemoryUnits* units,
-                                             PlanCache* plans);
+                                             PlanCache* plans, unsigned threads = 1);
 
 // What a frame's result cannot depend on, removed: granularity resolved (EffectiveGranularity),
 // the seed unless the scheduler uses it (SchedulerEntry::seeded: random and the planners),
@@ -144,7 +146,10 @@ std::unique_ptr<FrameStart> StartLoadedFrame(const LoadedFrame& frame, const Tra
 ReplayConfig CanonicalConfig(const ReplayConfig& config);
 
 struct ReplayFramesOptions {
-  unsigned jobs = 1;               // threads replaying configurations of a frame, >= 1
+  // Threads, >= 1: the configurations of a frame replay on up to `jobs` of them at once, and
+  // each replay is given jobs / (those threads) for work of its own whose results do not
+  // depend on it (FrameTrees::threads: auto's check, its replays of frames seen).
+  unsigned jobs = 1;
   std::uint32_t sample_every = 1;  // 1 in k ray trees (see ReplayTrace)
   // Told the fraction of frames done, after each frame (may be empty).
   std::function<void(double)> progress;
@@ -168,6 +173,7 @@ struct ReplayFramesStats {
   std::size_t frames = 0;    // frames walked
   std::size_t distinct = 0;  // canonical configurations replayed per frame
   std::size_t plans = 0;     // values the schedulers' PlanCaches made, over the frames
+  unsigned own_threads = 1;  // threads each replay was given for its own work (FrameTrees::threads)
 };
 
 // Replays every configuration on every frame of `frame_indices`, each frame loaded once (see
@@ -200,9 +206,11 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
 //
 // `observer` (may be null) watches every frame's replay (ReplayFrame); it needs
 // sample_every = 1, since it would see the sample's times, not the scaled ones.
+// `jobs`: threads the replay may use (ReplayFramesOptions::jobs); the results do not depend on it.
 TraceReplay ReplayTrace(const TraceReader& reader, const std::vector<std::size_t>& frame_indices,
                         const ReplayConfig& config,
                         const std::function<void(double)>& progress = {},
-                        std::uint32_t sample_every = 1, ReplayObserver* observer = nullptr);
+                        std::uint32_t sample_every = 1, ReplayObserver* observer = nullptr,
+                        unsigned jobs = 1);
 
 }  // namespace raycell

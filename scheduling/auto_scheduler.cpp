@@ -6,6 +6,7 @@
 
 #include "base/check.h"
 #include "base/format.h"
+#include "base/parallel.h"
 #include "scheduling/adaptive_scheduler.h"
 #include "scheduling/balanced_scheduler.h"
 #include "scheduling/best_scheduler.h"
@@ -231,25 +232,37 @@ void AutoScheduler::BeginFrame(const FrameInfo& frame) {
       m.steps = o.steps;
       return m;
     };
-    const auto run = [&](Scheduler& s) {
-      ModelResult m = one(*frame.previous, s, seen);
-      check_cost_.steps += m.steps + s.Cost().steps;
-      check_cost_.peak_bytes = std::max(check_cost_.peak_bytes, s.Cost().peak_bytes);
-      const ModelResult r = one(*frame.before_previous, s, back);
-      check_cost_.steps += r.steps + s.Cost().steps;
-      check_cost_.peak_bytes = std::max(check_cost_.peak_bytes, s.Cost().peak_bytes);
-      m.fetches += r.fetches;
-      m.time += r.time;
-      m.steps += r.steps;
+    // The 2 (1 + candidates) replays, each on a scheduler of its own, run on the threads the
+    // replay gives (FrameInfo::seen's threads()); their outcomes do not depend on the order.
+    const std::size_t runs = 1 + candidates_.size();
+    std::vector<ModelResult> outcome(2 * runs);
+    std::vector<DecisionCost> cost(2 * runs);
+    const auto replay = [&](std::size_t t) {
+      const SchedulerEntry& e = t < 2 ? kMaxWorkEntry : candidates_[t / 2 - 1]->entry();
+      const std::unique_ptr<Scheduler> s = MakeScheduler(e, seed_);
+      outcome[t] =
+          t % 2 == 0 ? one(*frame.previous, *s, seen) : one(*frame.before_previous, *s, back);
+      cost[t] = s->Cost();
+    };
+    ParallelFor(outcome.size(), frame.seen != nullptr ? frame.seen->threads() : 1, replay);
+    const auto run = [&](std::size_t r) {
+      ModelResult m;
+      for (std::size_t t = 2 * r; t < 2 * r + 2; ++t) {
+        check_cost_.steps += outcome[t].steps + cost[t].steps;
+        check_cost_.peak_bytes = std::max(check_cost_.peak_bytes, cost[t].peak_bytes);
+        m.fetches += outcome[t].fetches;
+        m.time += outcome[t].time;
+        m.steps += outcome[t].steps;
+      }
       return m;
     };
-    max_work_model_ = run(*max_work_);
+    max_work_model_ = run(0);
     // With several processors a frame's choices serve the next only roughly: a candidate must
     // save kMarginPerProcessor fetches per processor over the two frames.
     const std::uint64_t margin = frame.processors > 1 ? kMarginPerProcessor * frame.processors : 0;
     chosen_ = kNone;
     for (std::size_t k = 0; k < candidates_.size(); ++k) {
-      models_[k] = run(*candidates_[k]);
+      models_[k] = run(k + 1);
       // Fewer fetches than Max Work by the margin; the fewest, then the least time, then the
       // first listed.
       const ModelResult& m = models_[k];
@@ -281,9 +294,10 @@ void AutoScheduler::BeginFrame(const FrameInfo& frame) {
         8 * std::uint64_t{std::max(frame.previous->size(), frame.before_previous->size())} +
         16 * std::uint64_t{frame.cells};
   }
-  // What the check left in the candidates (each one's state of the frames seen, per node) is
-  // not kept through the frame: they begin afresh, as a scheduler keeps no state across frames
-  // (issue 43: on the orbit's largest frames at 4096 cells, 8 processors, 1037 -> 952 MB).
+  // What a candidate kept of the frame it last ran (a watching one's state, per node) is not
+  // kept through this frame: they begin afresh, as a scheduler keeps no state across frames
+  // (issue 43: on the orbit's largest frames at 4096 cells, 8 processors, 1037 -> 952 MB, when
+  // the check still ran on them).
   if (checked_) {
     for (auto& c : candidates_) c = MakeScheduler(c->entry(), seed_);
   }

@@ -17,7 +17,9 @@
 //    under Max Work. Frame i runs the candidate that fetched fewest over the two (then took
 //    least time, then the first listed) among those that fetched fewer than Max Work by a
 //    margin, kMarginPerProcessor per processor, and that took no longer than Max Work unless
-//    they saved kTimeWaiverPercent of its fetches; when none did, Max Work.
+//    they saved kTimeWaiverPercent of its fetches; when none did, Max Work. Its replays run at
+//    once on the threads the replay gives (SeenFrameReplayer::threads), each on a scheduler of
+//    its own; the choice is the same for any number.
 //  - Frames 0 and 1 have no frame seen to judge by: Max Work with several processors (there the
 //    candidates fetch 29-58% more in frame 0 on the development set).
 // The decision is a function of the frame's FrameInfo (frames i-1 and i-2's trees, the

@@ -76,8 +76,12 @@ class SeenFrameReplayer {
   // Replays `tree` as frame `frame_index` with `previous` and `before_previous` as its earlier
   // frames, under `scheduler` (told BeginFrame by the replay), per Cell Tree node, on the board
   // of the replay asking (configuration, footprints, what its levels hold at the frame's start).
+  // Calls on different schedulers may run at once, on different threads.
   virtual SeenOutcome Replay(const CellTree& tree, Scheduler& scheduler, std::size_t frame_index,
                              const CellTree* previous, const CellTree* before_previous) const = 0;
+  // How many Replay calls the asker may run at once (threads it is given for them, >= 1: the
+  // caller's among them); the outcomes are the same for any number.
+  virtual unsigned threads() const { return 1; }
 };
 
 // What a scheduler is told at the start of each frame.

@@ -9,6 +9,7 @@
 
 #include "base/check.h"
 #include "base/file.h"
+#include "base/parallel.h"
 #include "base/progress.h"
 #include "base/table.h"
 #include "replay/config.h"
@@ -27,6 +28,7 @@ struct ReplayArgs {
   std::string trace, config, scheduler, granularity, frames, format = "table", out, timeline, cells;
   std::vector<std::string> sets;
   std::uint32_t sample = 1;
+  unsigned jobs = HardwareThreads();
   std::uint64_t timeline_limit = kTimelineLimitBytes;  // hidden option, for the tests
   bool print_config = false, quiet = false;
 };
@@ -138,6 +140,7 @@ void Run(const ReplayArgs& a) {
     throw InputError("--format '" + a.format + "': expected table, json or csv");
   }
   if (a.sample < 1) throw InputError("--sample: must be at least 1");
+  if (a.jobs < 1) throw InputError("--jobs: must be at least 1");
   const TraceReader reader = TraceReader::Open(a.trace, a.cells);
   if (!reader.warning().empty()) std::cerr << "raycell: warning: " << reader.warning() << "\n";
   Progress progress(!a.quiet);
@@ -149,7 +152,7 @@ void Run(const ReplayArgs& a) {
   const auto replay = [&](ReplayObserver* observer) {
     return ReplayTrace(
         reader, frames, config, [&](double f) { progress.Update(f, "replaying"); }, a.sample,
-        observer);
+        observer, a.jobs);
   };
   TraceReplay t;
   if (a.timeline.empty()) {
@@ -232,6 +235,9 @@ void AddReplayCommand(CLI::App& app) {
                   "scale rays, segments, samples and work back by K: faster, approximate")
       ->capture_default_str();
   cmd->add_option("--format", args->format, "table, json or csv")->capture_default_str();
+  cmd->add_option("--jobs", args->jobs,
+                  "threads (default: the hardware threads); `auto` runs its check's replays of "
+                  "the frames seen on them at once; the results are the same for any number");
   cmd->add_option("--out", args->out, "write the results to FILE instead of standard output");
   cmd->add_option("--timeline", args->timeline,
                   "also write the replay as a Chrome trace-event JSON FILE, for ui.perfetto.dev or "

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <random>
 #include <sstream>
+#include <tuple>
 
 #include "replay/replacement.h"
 #include "scheduling/scheduler.h"
@@ -346,6 +347,54 @@ TEST_F(DriverTest, TheLastFramesTreeIsBuiltOnlyWhereSomethingReadsIt) {
         EXPECT_EQ(has_tree[k], oracle || caller_reads || !last) << name << " frame " << k;
       }
     }
+  }
+}
+
+// `auto`'s check runs its replays of the frames seen on the threads a replay is given
+// (ReplayFramesOptions::jobs over the configurations running at once): every result, its
+// decision steps and bytes among them, is the same for any number of threads, and equals the
+// replay built by hand (on one thread).
+TEST_F(DriverTest, AutosCheckGivesTheSameResultsOnAnyNumberOfThreads) {
+  const std::vector<std::size_t> frames{0, 1, 2, 3, 4};
+  for (const std::uint32_t processors : {1u, 2u, 8u}) {
+    const ReplayConfig config = Config("auto", processors);
+    std::vector<std::string> one;
+    for (const unsigned jobs : {1u, 2u, 3u}) {
+      const TraceReplay t = ReplayTrace(*reader_, frames, config, {}, 1, nullptr, jobs);
+      ASSERT_EQ(t.frames.size(), frames.size());
+      std::vector<std::string> got;
+      for (std::size_t n = 0; n < frames.size(); ++n) {
+        const ReplayResult& r = t.frames[n];
+        got.push_back(Describe(r) + " " + std::to_string(r.decisions) + " " +
+                      std::to_string(r.decision_steps) + " " + std::to_string(r.scheduler_bytes));
+        EXPECT_EQ(Describe(r), Describe(ByHand(frames[n], config)))
+            << "P" << processors << " jobs " << jobs << " frame " << n;
+      }
+      if (jobs == 1) one = got;
+      EXPECT_EQ(got, one) << "P" << processors << " jobs " << jobs;
+    }
+  }
+  // What each replay is given: the jobs over the configurations running at once.
+  for (const auto& [jobs, configs, own] : std::vector<std::tuple<unsigned, std::size_t, unsigned>>{
+           {1, 1, 1}, {2, 1, 2}, {3, 1, 3}, {3, 2, 1}, {4, 2, 2}, {2, 5, 1}}) {
+    ReplayFramesOptions options;
+    options.jobs = jobs;
+    std::vector<ReplayConfig> list;
+    for (std::size_t c = 0; c < configs; ++c) list.push_back(Config("auto", 1 + unsigned(c)));
+    const ReplayFramesStats stats = ReplayFrames(
+        *reader_, {0}, list, options, [](const LoadedFrame&, const auto&) { return true; });
+    EXPECT_EQ(stats.own_threads, own) << jobs << " jobs, " << configs << " configurations";
+  }
+  // And a replay's start hands its threads to the replayer of frames seen.
+  const CellTree tree = testing::TreeOf(reader_->LoadFrame(0));
+  for (const unsigned threads : {1u, 4u}) {
+    FrameTrees trees{2, nullptr, &tree, reader_->header().cell_count(), &tree};
+    trees.threads = threads;
+    const ReplayConfig config = Config("auto", 2);
+    const auto s = MakeScheduler(*config.scheduler, config.seed);
+    const FrameStart start(reader_->header().footprints, config, *s, trees, nullptr, nullptr);
+    ASSERT_NE(start.info().seen, nullptr);
+    EXPECT_EQ(start.info().seen->threads(), threads);
   }
 }
 
