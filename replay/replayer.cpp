@@ -836,10 +836,8 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
                     bool seen, MakeWatch make_watch, bool time_bound, FrameStart* begun) {
   static const MemoryState kEmpty;
   const MemoryState& start = memory ? *memory : kEmpty;
-  std::optional<FrameStart> own;
-  FrameStart& frame_start =
-      begun != nullptr ? *begun
-                       : own.emplace(footprints, config, scheduler, frame, memory, units, seen);
+  RAYCELL_CHECK(begun != nullptr && begun->begun());  // by the Replay below
+  FrameStart& frame_start = *begun;
   const bool min = NeedsFuture(config);
   const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
   MemoryHierarchy::Requests futures;
@@ -883,14 +881,21 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
                     Scheduler& scheduler, const FrameTrees& frame, std::uint64_t bound,
                     ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units,
                     bool seen, bool time_bound, FrameStart* begun) {
+  // The scheduler begins the frame first: whether it watches may depend on the frame (auto
+  // watches where the candidate it runs does).
+  std::optional<FrameStart> own;
+  FrameStart& start = begun != nullptr
+                          ? *begun
+                          : own.emplace(footprints, config, scheduler, frame, memory, units, seen);
+  if (!start.begun()) start.Begin(scheduler);
   if (!scheduler.Watches()) {
     return Replay<Units, NoWatch>(
         work, graph_units, footprints, config, scheduler, frame, bound, observer, memory, units,
-        seen, [] { return NoWatch{}; }, time_bound, begun);
+        seen, [] { return NoWatch{}; }, time_bound, &start);
   }
   return Replay<Units, Watch>(
       work, graph_units, footprints, config, scheduler, frame, bound, observer, memory, units, seen,
-      [&] { return Watch(scheduler, work.per_node, work.cells); }, time_bound, begun);
+      [&] { return Watch(scheduler, work.per_node, work.cells); }, time_bound, &start);
 }
 
 // The replay of `work` in its form: the compact stream, the packed records or the columns.

@@ -87,7 +87,8 @@ class AutoScheduler : public Scheduler {
     return active_->Peek(queues);
   }
   std::string Reason() const override;
-  bool Watches() const override { return true; }
+  // As the candidate it runs this frame (Max Work does not): asked once the frame began.
+  bool Watches() const override { return active_ == nullptr || active_->Watches(); }
   void Arrived(const Arrival& arrival) override;
   void Taken(CellId cell) override;
   DecisionCost Cost() const override;

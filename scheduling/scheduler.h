@@ -189,7 +189,8 @@ class Scheduler {
   // Cell Tree node it belongs to, as a ray packet carrying its node would tell the board; and
   // each time a processor takes a cell's queue. Unless its entry is an oracle
   // (celltree-dag-oracle), it is not given the frame's own tree (FrameInfo::current is null for
-  // it): what it knows of the frame is what was queued so far.
+  // it): what it knows of the frame is what was queued so far. The replay asks Watches() once
+  // the scheduler began the frame (BeginFrame), so the answer may differ from frame to frame.
   // Nodes are numbered in the order they are first queued, from 1; 0 is the root.
   struct Arrival {
     std::uint32_t node = 0;        // the node the unit's rays enter

@@ -83,8 +83,9 @@ RayBatch WithOneMoreVisit(const RayBatch& rays, std::size_t r, std::uint32_t cel
   return b;
 }
 
+// The log of a replay of `rays`; *watched: whether the scheduler watched the frame.
 std::vector<std::string> RunLogged(const RayBatch& rays, const ReplayConfig& config,
-                                   const FrameTrees& base, std::uint32_t cells) {
+                                   const FrameTrees& base, std::uint32_t cells, bool* watched) {
   const CellTree tree = testing::TreeOf(rays);
   const WorkGraph w = EffectiveGranularity(config) == ReplayConfig::Granularity::kRay
                           ? RaySegmentWork(rays, cells)
@@ -94,6 +95,7 @@ std::vector<std::string> RunLogged(const RayBatch& rays, const ReplayConfig& con
   info.current = &tree;  // offered, as to every scheduler; a watching one must not get it
   const std::vector<std::uint64_t> footprints(cells, 50'000);
   ReplayFrame(w, footprints, config, s, info, Bound(tree));
+  *watched = s.Watches();
   return s.log;
 }
 
@@ -104,7 +106,7 @@ std::vector<std::string> RunLogged(const RayBatch& rays, const ReplayConfig& con
 template <typename Pick>
 void ExpectNoFutureInformation(std::uint32_t seed, int trials, Pick pick) {
   std::mt19937 rng(seed);
-  int compared = 0, decisions_before = 0;
+  int compared = 0, decisions_before = 0, unwatched_alike = 0;
   for (int trial = 0; trial < trials; ++trial) {
     const std::uint32_t cells = 2 + rng() % 8;
     const RayBatch a = testing::RandomReplayFrame(rng, cells, 60);
@@ -119,12 +121,20 @@ void ExpectNoFutureInformation(std::uint32_t seed, int trials, Pick pick) {
     FrameTrees info{2, nullptr, &previous, cells};
     if (trial % 3 != 0) info.before_previous = &before;
     if (trial % 8 == 4) info = FrameTrees{0, nullptr, nullptr, cells};  // frame 0: no history
-    const std::vector<std::string> la = RunLogged(a, config, info, cells),
-                                   lb = RunLogged(b, config, info, cells);
+    bool watched_a = false, watched_b = false;
+    const std::vector<std::string> la = RunLogged(a, config, info, cells, &watched_a),
+                                   lb = RunLogged(b, config, info, cells, &watched_b);
+    ASSERT_EQ(watched_a, watched_b) << "trial " << trial;
     std::size_t i = 0;
     while (i < la.size() && i < lb.size() && la[i] == lb[i]) {
       decisions_before += la[i].rfind("out ", 0) == 0;
       ++i;
+    }
+    // A scheduler that watched was told the frames differ (the extra visit's arrival); one that
+    // did not (auto running Max Work) may see no difference in its views at all.
+    if (!watched_a && la == lb) {
+      ++unwatched_alike;
+      continue;
     }
     ASSERT_TRUE(i < la.size() || i < lb.size()) << "trial " << trial << ": same logs";
     const bool a_out = i < la.size() && la[i].rfind("out ", 0) == 0;
@@ -133,7 +143,8 @@ void ExpectNoFutureInformation(std::uint32_t seed, int trials, Pick pick) {
                                  << " and " << lb[i] << " on the same information";
     ++compared;
   }
-  EXPECT_EQ(compared, trials);
+  EXPECT_EQ(compared + unwatched_alike, trials);
+  EXPECT_GE(compared, trials * 3 / 4);      // most trials tell the frames apart
   EXPECT_GT(decisions_before, trials * 3);  // the frames share many decisions before they differ
 }
 

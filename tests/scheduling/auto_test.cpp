@@ -326,6 +326,47 @@ TEST(Auto, SeveralProcessorsJudgeOnTheReplaysOwnBoard) {
               refused_for_time);
 }
 
+// A scheduler that watches only once it began a frame, counting what it is told.
+class WatchesOnceBegun : public Scheduler {
+ public:
+  WatchesOnceBegun() : Scheduler(kMaxWorkEntry) {}
+  void BeginFrame(const FrameInfo&) override { begun_ = true; }
+  std::optional<CellId> Next(const QueueView& q) override { return max_work_.Next(q); }
+  bool Watches() const override { return begun_; }
+  void Arrived(const Arrival&) override { ++arrivals; }
+  std::size_t arrivals = 0;
+
+ private:
+  bool begun_ = false;
+  MaxWorkScheduler max_work_;
+};
+
+// Whether a scheduler watches may depend on the frame (auto watches as the candidate it runs):
+// the replay asks once the scheduler began the frame, so one that watches from then on is told
+// every unit queued, and auto, running Max Work in frames 0 and 1 with several processors,
+// watches nothing there, while with one processor it watches as celltree-adaptive does.
+TEST(Auto, TheReplayAsksWhetherItWatchesOnceTheFrameBegan) {
+  std::mt19937 rng(47);
+  const std::uint32_t cells = 5;
+  const RayBatch f = testing::RandomReplayFrame(rng, cells, 60);
+  const CellTree tree = testing::TreeOf(f);
+  const std::vector<std::uint64_t> footprints(cells, 50'000);
+  for (const ReplayConfig::Granularity g :
+       {ReplayConfig::Granularity::kNode, ReplayConfig::Granularity::kRay}) {
+    ReplayConfig config = Config(kMaxWorkEntry, 2);
+    config.granularity = g;
+    WatchesOnceBegun w;
+    ReplayOn(f, config, w, FrameTrees{0, nullptr, nullptr, cells}, footprints);
+    EXPECT_GE(w.arrivals, tree.size() - 1);  // every node queued, at least once
+  }
+  for (const std::uint32_t processors : {1u, 8u}) {
+    auto a = MakeScheduler(kAutoEntry, 1);
+    ReplayOn(f, Config(kAutoEntry, processors), *a, FrameTrees{0, nullptr, nullptr, cells},
+             footprints);
+    EXPECT_EQ(a->Watches(), processors == 1) << processors << " processors";
+  }
+}
+
 // With several processors, frames 0 and 1 (nothing seen to judge by) run Max Work.
 TEST(Auto, SeveralProcessorsRunMaxWorkInFramesZeroAndOne) {
   std::mt19937 rng(46);
