@@ -160,7 +160,14 @@ class Watch {
   // per_node: each unit is a node of its own (WorkGraph::per_node), so it makes a path, in the
   // order it is queued, without a lookup.
   Watch(Scheduler& scheduler, bool per_node, std::uint32_t cells)
-      : scheduler_(&scheduler), per_node_(per_node), root_child_(per_node ? 0 : cells, 0) {}
+      : scheduler_(&scheduler), per_node_(per_node), root_child_(per_node ? 0 : cells, 0) {
+    parent_.push_back(0);
+    if (per_node_) {
+      node_cell_.push_back(kNoCell);
+    } else {
+      links_.push_back(Links{});
+    }
+  }
 
   template <typename Entry>
   Item<Entry> Root(const Entry& e, CellId c) {
@@ -237,10 +244,12 @@ class Watch {
 
   Scheduler* scheduler_;
   bool per_node_;
-  std::vector<std::uint32_t> parent_ = {0};    // per path (the root's unused)
-  std::vector<Links> links_ = {Links{}};       // per path, unless per node
-  std::vector<CellId> node_cell_ = {kNoCell};  // per path, per node only
-  std::vector<std::uint32_t> root_child_;      // per cell, the root's child for it (0: none)
+  // Per path, growing in place (MappedArray: a frame's millions of paths are never copied into
+  // a larger array beside the old one).
+  MappedArray<std::uint32_t> parent_;      // per path (the root's unused)
+  MappedArray<Links> links_;               // per path, unless per node
+  MappedArray<CellId> node_cell_;          // per path, per node only
+  std::vector<std::uint32_t> root_child_;  // per cell, the root's child for it (0: none)
 };
 
 // ---- Pending events -------------------------------------------------------------------
