@@ -836,17 +836,16 @@ class SeenReplayer : public SeenFrameReplayer {
 
 // `make_watch()` gives each run's W (NoWatch, or Watch for a scheduler that watches).
 // `time_bound`: false within a replay of a frame seen, which reports no lower bound (0).
-// `begun`: a FrameStart whose Begin told the scheduler the frame's start; null: made here.
+// `frame_start`: begun (by the Replay below, which asks whether the scheduler watches only
+// then); MIN's later passes begin it again.
 template <typename Units, typename W, typename MakeWatch>
 ReplayResult Replay(const WorkGraph& work, Units graph_units,
                     const std::vector<std::uint64_t>& footprints, const ReplayConfig& config,
                     Scheduler& scheduler, const FrameTrees& frame, std::uint64_t bound,
                     ReplayObserver* observer, MemoryState* memory, const MemoryUnits* units,
-                    bool seen, MakeWatch make_watch, bool time_bound, FrameStart* begun) {
+                    MakeWatch make_watch, bool time_bound, FrameStart& frame_start) {
   static const MemoryState kEmpty;
   const MemoryState& start = memory ? *memory : kEmpty;
-  RAYCELL_CHECK(begun != nullptr && begun->begun());  // by the Replay below
-  FrameStart& frame_start = *begun;
   const bool min = NeedsFuture(config);
   const std::uint32_t max_passes = min ? std::uint32_t(config.levels.size()) + 1 : 1;
   MemoryHierarchy::Requests futures;
@@ -900,11 +899,11 @@ ReplayResult Replay(const WorkGraph& work, Units graph_units,
   if (!scheduler.Watches()) {
     return Replay<Units, NoWatch>(
         work, graph_units, footprints, config, scheduler, frame, bound, observer, memory, units,
-        seen, [] { return NoWatch{}; }, time_bound, &start);
+        [] { return NoWatch{}; }, time_bound, start);
   }
   return Replay<Units, Watch>(
-      work, graph_units, footprints, config, scheduler, frame, bound, observer, memory, units, seen,
-      [&] { return Watch(scheduler, work.per_node, work.cells); }, time_bound, &start);
+      work, graph_units, footprints, config, scheduler, frame, bound, observer, memory, units,
+      [&] { return Watch(scheduler, work.per_node, work.cells); }, time_bound, start);
 }
 
 // The replay of `work` in its form: the compact stream, the packed records or the columns.

@@ -234,9 +234,8 @@ namespace {
 // The trees a replay of `frame` is told (FrameInfo): an earlier frame's tree in other cells (a
 // dynamic subdivision whose boxes changed) says nothing about this frame's cells, so the
 // schedulers get none, as in frame 0 (design §5).
-// own_tree: false leaves FrameTrees::current null (a start, which never reads it).
 FrameTrees TreesOf(const LoadedFrame& frame, const TraceHeader& header, PlanCache* plans,
-                   unsigned threads, bool own_tree = true) {
+                   unsigned threads) {
   const std::uint32_t cells = header.cell_count();
   const SubdivisionInfo& sub = header.subdivision;
   const CellTree* previous = frame.previous && sub.SameCells(frame.index, frame.index - 1, cells)
@@ -246,8 +245,7 @@ FrameTrees TreesOf(const LoadedFrame& frame, const TraceHeader& header, PlanCach
       previous && frame.before_previous && sub.SameCells(frame.index, frame.index - 2, cells)
           ? frame.before_previous.get()
           : nullptr;
-  return FrameTrees{
-      frame.index, own_tree ? frame.tree.get() : nullptr, previous, cells, before, plans, threads};
+  return FrameTrees{frame.index, frame.tree.get(), previous, cells, before, plans, threads};
 }
 
 const std::vector<std::uint64_t>& FootprintsOf(const LoadedFrame& frame,
@@ -262,8 +260,8 @@ std::unique_ptr<FrameStart> StartLoadedFrame(const LoadedFrame& frame, const Tra
                                              MemoryState* memory, const MemoryUnits* units,
                                              PlanCache* plans, unsigned threads) {
   RAYCELL_CHECK(!scheduler.entry().oracle);  // an oracle begins with the frame's own tree
-  // Not the frame's own tree, which the walker may be building meanwhile (ReplayFrames).
-  const FrameTrees trees = TreesOf(frame, header, plans, threads, /*own_tree=*/false);
+  FrameTrees trees = TreesOf(frame, header, plans, threads);
+  trees.current = nullptr;
   return std::make_unique<FrameStart>(FootprintsOf(frame, header), config, scheduler, trees, memory,
                                       units);
 }
