@@ -78,6 +78,17 @@ class MappedArray {
     std::memcpy(static_cast<void*>(data_ + size_), first, n * sizeof(T));
     size_ += n;
   }
+  // n copies of `value` (the room is kept, and grows if n needs more).
+  void assign(std::size_t n, const T& value) {
+    size_ = 0;
+    resize(n, value);
+  }
+  // n items: the first min(n, size()) kept, the others copies of `value`.
+  void resize(std::size_t n, const T& value) {
+    if (n > capacity_) Grow(n);
+    for (std::size_t i = size_; i < n; ++i) data_[i] = value;
+    size_ = n;
+  }
   // Drops the first n items, keeping the others in order.
   void erase_front(std::size_t n) {
     n = std::min(n, size_);

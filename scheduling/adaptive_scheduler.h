@@ -46,6 +46,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "base/mapped_array.h"
 #include "scheduling/plan_cache.h"
 #include "scheduling/scheduler.h"
 
@@ -151,14 +152,14 @@ class AdaptiveScheduler : public Scheduler {
   std::vector<std::uint32_t> own_due_;
   std::shared_ptr<const void> own_start_;  // the start plan and its due, without a plan cache
 
-  std::vector<NodeId> match_;  // per queued node (Arrival::node): its prediction
+  MappedArray<NodeId> match_;  // per queued node (Arrival::node): its prediction
   std::vector<bool> guess_;    // per queued node: matched through a stand-in
   std::vector<std::vector<std::uint32_t>> queued_;  // per cell: nodes queued, not yet taken
   std::size_t kept_room_ = 0;           // the room an emptied queued_ list keeps (base/kept_room.h)
   std::vector<std::uint32_t> min_due_;  // per cell: the least due entry of queued_
   // Per queued node: its depth (the root's children 1); kept only where it is read (KeepsDepths:
   // Shallowest with no prediction, ShallowestOrphan with one processor).
-  std::vector<std::uint32_t> depth_;
+  MappedArray<std::uint32_t> depth_;
   std::vector<std::uint32_t> min_depth_;  // per cell: the least depth of queued_
   // Per depth the cells whose min_depth_ it is, and the least depth whose list may have cells:
   // Shallowest looks at the shallowest lists, not at every cell (issue 43).

@@ -55,6 +55,7 @@
 #include <utility>
 #include <vector>
 
+#include "base/mapped_array.h"
 #include "scheduling/adaptive_scheduler.h"
 #include "scheduling/scheduler.h"
 
@@ -105,6 +106,18 @@ class BalancedScheduler : public Scheduler {
     return previous_ != nullptr || (adaptive_ != nullptr && adaptive_->ReadsEarlierTrees());
   }
 
+  // What frame i-1's tree says of each cell (shared by the configurations of a frame,
+  // FrameInfo::plans): per cell its samples and samples per visit (0: unknown); for affinity,
+  // per cell `from` the cells `to` its rays enter, with the share of what leaves `from` that
+  // enters nodes of `to` (a sparse row, increasing `to`: at most one entry per node).
+  struct TreeStats {
+    std::vector<double> work, samples_per_visit;
+    std::vector<std::uint32_t> flow_begin;  // row `from`: flow[flow_begin[from] .. [from + 1])
+    std::vector<std::pair<std::uint32_t, double>> flow;
+  };
+  // (public for its test)
+  static TreeStats StatsOf(const CellTree* previous, std::uint32_t cells, bool affinity);
+
  private:
   // The choice for `queues` without the postponing rule, and the follower it came from (null:
   // not a plan entry) or whether the adaptive rule or the critical rule chose it.
@@ -139,17 +152,7 @@ class BalancedScheduler : public Scheduler {
   std::uint32_t processors_ = 1;  // FrameInfo::processors
   std::vector<CellId> plan_;
   const std::vector<double>* fetch_samples_ = nullptr;
-  // What frame i-1's tree says of each cell (shared by the configurations of a frame,
-  // FrameInfo::plans): per cell its samples and samples per visit (0: unknown); for affinity,
-  // per cell `from` the cells `to` its rays enter, with the share of what leaves `from` that
-  // enters nodes of `to` (a sparse row, increasing `to`: at most one entry per node).
-  struct TreeStats {
-    std::vector<double> work, samples_per_visit;
-    std::vector<std::uint32_t> flow_begin;  // row `from`: flow[flow_begin[from] .. [from + 1])
-    std::vector<std::pair<std::uint32_t, double>> flow;
-  };
-  static TreeStats StatsOf(const CellTree* previous, std::uint32_t cells, bool affinity);
-  std::shared_ptr<const TreeStats> stats_;
+  std::shared_ptr<const TreeStats> stats_;  // frame i-1's (StatsOf), shared
   // Critical: per node of frame i-1's tree its height, and the tree's stand-ins (shared).
   struct Heights {
     std::vector<std::uint32_t> height;
@@ -193,7 +196,7 @@ class BalancedScheduler : public Scheduler {
   // match (kNoNode: none); per cell the highest level of its queued nodes (0: none).
   const CellTree* previous_ = nullptr;
   std::shared_ptr<const Heights> heights_;
-  std::vector<NodeId> match_;
+  MappedArray<NodeId> match_;
   std::vector<std::uint32_t> level_;
   // Per level >= 1 the cells of that level, and the highest level that may have cells. Critical
   // looks at the levels above the plan's entry's, from the top, not at every cell.

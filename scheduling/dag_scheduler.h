@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "base/mapped_array.h"
 #include "scheduling/scheduler.h"
 
 namespace raycell {
@@ -75,7 +76,7 @@ class DagScheduler : public Scheduler {
   // Per tree node: 0 idle (no work queued or being worked), 1 queued, 2 being worked; finished.
   std::vector<std::uint8_t> work_;
   std::vector<std::uint8_t> finished_;
-  std::vector<NodeId> node_of_;  // per arrival number: its tree node (kNoNode: unmatched)
+  MappedArray<NodeId> node_of_;  // per arrival number: its tree node (kNoNode: unmatched)
   std::vector<std::vector<NodeId>> queued_, worked_;  // per cell: nodes queued, being worked
   std::vector<std::uint32_t> working_cells_;          // cells with worked_ not empty
   std::vector<NodeId> stack_;

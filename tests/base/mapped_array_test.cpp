@@ -1,4 +1,4 @@
-// base/mapped_array.h: the replay's queues. Every operation keeps the items and their order as
+// base/mapped_array.h: the replay's queues and the schedulers' per-node arrays. Every operation keeps the items and their order as
 // std::vector would, below and across the size where blocks are mapped and grown with mremap.
 #include "base/mapped_array.h"
 
@@ -42,23 +42,33 @@ TEST(MappedArray, EveryOperationMatchesStdVector) {
   std::uint32_t next = 0;
   for (int step = 0; step < 4000; ++step) {
     const std::uint64_t op = rng.Next() % 100;
-    if (op < 60) {  // a run of pushes, sometimes long enough to cross the mapped size
+    if (op < 58) {  // a run of pushes, sometimes long enough to cross the mapped size
       const std::uint64_t n = rng.Next() % (op < 5 ? 40000 : 300);
       for (std::uint64_t k = 0; k < n; ++k, ++next) {
         a.push_back({next, next ^ 0x5555u, std::uint32_t(step)});
         wa.push_back({next, next ^ 0x5555u, std::uint32_t(step)});
       }
-    } else if (op < 70) {  // b's items appended to a (a queue taken into a worklist)
+    } else if (op < 66) {  // b's items appended to a (a queue taken into a worklist)
       a.append(b.begin(), b.end());
       wa.insert(wa.end(), wb.begin(), wb.end());
-    } else if (op < 78) {  // worked units dropped from the front
+    } else if (op < 74) {  // worked units dropped from the front
       const std::size_t n = wa.empty() ? 0 : rng.Next() % (wa.size() + 1);
       a.erase_front(n);
       wa.erase(wa.begin(), wa.begin() + std::ptrdiff_t(n));
-    } else if (op < 84) {  // the later part split off
+    } else if (op < 80) {  // the later part split off
       const std::size_t n = wa.empty() ? 0 : rng.Next() % (wa.size() + 1);
       a.truncate(n);
       wa.resize(n);
+    } else if (op < 84) {  // resized, shorter or longer (a per-node array as nodes arrive)
+      const std::size_t n = rng.Next() % (wa.size() + 40000);
+      const Item fill{std::uint32_t(step), 7, next++};
+      a.resize(n, fill);
+      wa.resize(n, fill);
+    } else if (op < 86) {  // refilled (a per-node array as a frame begins)
+      const std::size_t n = rng.Next() % 40000;
+      const Item fill{std::uint32_t(step), 9, next++};
+      a.assign(n, fill);
+      wa.assign(n, fill);
     } else if (op < 92) {
       a.swap(b);
       wa.swap(wb);

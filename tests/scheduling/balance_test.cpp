@@ -11,6 +11,7 @@
 
 #include "replay/replayer.h"
 #include "replay/work.h"
+#include "scheduling/balanced_scheduler.h"
 #include "scheduling/scheduler.h"
 #include "tests/graph/test_trees.h"
 #include "tests/replay/random_frame.h"
@@ -35,6 +36,60 @@ std::string Describe(const ReplayResult& r) {
     << r.events << " " << r.peak_queued_rays;
   for (const LevelStats& l : r.levels) s << " " << l.fetches;
   return s.str();
+}
+
+// What balanced reads of frame i-1's tree (StatsOf) against a dense cells x cells table made
+// here: per cell its samples and samples per visit, and per cell `from` the share of the rays
+// leaving it (into nodes whose parent lies in `from`) that enter each cell `to`, each pair
+// summed in node order and each row's total over increasing `to`, so equal as doubles.
+TEST(Balance, TreeStatsAreTheDenseTablesSums) {
+  std::mt19937 rng(43);
+  std::size_t entries = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const std::uint32_t cells = 2 + rng() % 23;  // RandomTree needs two
+    const CellTree t = testing::RandomTree(rng, cells, 1 + int(rng() % 300), 8);
+    std::vector<double> work(cells, 0.0), visits(cells, 0.0);
+    std::vector<std::vector<double>> table(cells, std::vector<double>(cells, 0.0));
+    std::vector<std::vector<bool>> present(cells, std::vector<bool>(cells, false));
+    for (std::size_t i = 1; i < t.size(); ++i) {
+      const NodeId n(static_cast<std::uint32_t>(i));
+      work[t.cell(n).value()] += double(t.samples(n));
+      visits[t.cell(n).value()] += double(t.visits(n));
+      if (t.parent(n) == kRootNode) continue;
+      const std::uint32_t from = t.cell(t.parent(n)).value(), to = t.cell(n).value();
+      table[from][to] += double(t.enter(n));
+      present[from][to] = true;
+    }
+    for (const bool affinity : {false, true}) {
+      const BalancedScheduler::TreeStats s = BalancedScheduler::StatsOf(&t, cells, affinity);
+      ASSERT_EQ(s.work, work);
+      ASSERT_EQ(s.samples_per_visit.size(), cells);
+      for (std::uint32_t c = 0; c < cells; ++c) {
+        EXPECT_EQ(s.samples_per_visit[c], visits[c] > 0 ? work[c] / visits[c] : 0.0);
+      }
+      ASSERT_EQ(s.flow_begin.size(), cells + 1);
+      std::size_t k = 0;
+      for (std::uint32_t from = 0; from < cells; ++from) {
+        ASSERT_EQ(s.flow_begin[from], k) << "row " << from;
+        double out = 0.0;
+        for (std::uint32_t to = 0; to < cells; ++to) {
+          if (present[from][to]) out += table[from][to];
+        }
+        for (std::uint32_t to = 0; to < cells && affinity; ++to) {
+          if (!present[from][to]) continue;
+          ASSERT_LT(k, s.flow.size());
+          EXPECT_EQ(s.flow[k].first, to) << "row " << from;
+          EXPECT_EQ(s.flow[k].second, out > 0 ? table[from][to] / out : table[from][to])
+              << "row " << from << " to " << to;
+          ++k;
+        }
+      }
+      EXPECT_EQ(s.flow_begin[cells], k);
+      EXPECT_EQ(s.flow.size(), k);
+      if (affinity) entries += k;
+    }
+  }
+  EXPECT_GT(entries, 200u);  // the rows are not all empty
 }
 
 TEST(Balance, EveryRaySegmentAndSampleOnceForOneToSixteenProcessors) {
