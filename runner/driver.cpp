@@ -444,6 +444,12 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
           ReplayLoadedFrame(*frame, header, distinct[d], scheduler, options.sample_every, observer,
                             memory[d].get(), &units[d], plans_of(d), starts[d].get(), own_threads);
       starts[d].reset();
+      // What the scheduler kept of this frame (per node of its tree: matches, depths, levels;
+      // its plans) is read by no later frame (design §5 "No state across frames"): freed now, by
+      // a fresh scheduler, not held while the other configurations replay the frame and the
+      // next frame's tree is built (issue 43: a sweep of 4 planning configurations at 4096 cells
+      // held each one's beside the one replaying).
+      schedulers[d] = MakeScheduler(*distinct[d].scheduler, distinct[d].seed);
     });
     stats.plans += shared.made();
     for (const auto& p : own) stats.plans += p->made();

@@ -12,6 +12,7 @@
 #include <tuple>
 
 #include "replay/replacement.h"
+#include "scheduling/max_work.h"
 #include "scheduling/scheduler.h"
 #include "tests/graph/test_trees.h"
 #include "tests/replay/random_frame.h"
@@ -395,6 +396,66 @@ TEST_F(DriverTest, AutosCheckGivesTheSameResultsOnAnyNumberOfThreads) {
     const FrameStart start(reader_->header().footprints, config, *s, trees, nullptr, nullptr);
     ASSERT_NE(start.info().seen, nullptr);
     EXPECT_EQ(start.info().seen->threads(), threads);
+  }
+}
+
+// A scheduler that counts how often one object began a frame: Max Work's choices.
+struct Begins {
+  static inline int again = 0;  // BeginFrame on an object that had begun a frame
+  static inline int made = 0;
+};
+class CountingScheduler : public Scheduler {
+ public:
+  explicit CountingScheduler(const SchedulerEntry& entry) : Scheduler(entry) { ++Begins::made; }
+  void BeginFrame(const FrameInfo& frame) override {
+    Begins::again += begun_;
+    begun_ = true;
+    max_work_.BeginFrame(frame);
+  }
+  std::optional<CellId> Next(const QueueView& queues) override { return max_work_.Next(queues); }
+
+ private:
+  bool begun_ = false;
+  MaxWorkScheduler max_work_;
+};
+const SchedulerEntry kCountingEntry = [] {
+  SchedulerEntry e;
+  e.name = "counting";
+  e.meaning = "Max Work, counting the frames each object begins (a test's)";
+  e.label = "counting";
+  e.make = [](std::uint64_t) -> std::unique_ptr<Scheduler> {
+    return std::make_unique<CountingScheduler>(kCountingEntry);
+  };
+  e.seeded = true;  // so that two seeds are two configurations
+  return e;
+}();
+
+// What a scheduler kept of a frame is read by no later frame (design §5 "No state across
+// frames"), so the replay frees it with the scheduler once the frame's replay ended (issue 43):
+// every frame of every configuration begins on a scheduler that began no frame before, for
+// any number of threads, and the results are the reused ones' (Max Work's).
+TEST_F(DriverTest, EachFrameBeginsOnAFreshScheduler) {
+  for (const std::size_t jobs : {1u, 2u}) {
+    std::vector<ReplayConfig> configs = {Config("maxwork", 2), Config("maxwork", 2)};
+    configs[0].scheduler = configs[1].scheduler = &kCountingEntry;
+    configs[1].seed = configs[0].seed + 1;
+    ReplayFramesOptions options;
+    options.jobs = jobs;
+    Begins::again = Begins::made = 0;
+    const std::vector<std::size_t> frames = {0, 1, 2, 4};
+    std::vector<std::string> got;
+    ReplayFrames(*reader_, frames, configs, options,
+                 [&](const LoadedFrame&, const std::vector<ReplayResult>& results) {
+                   for (const ReplayResult& r : results) got.push_back(Describe(r));
+                   return true;
+                 });
+    EXPECT_EQ(Begins::again, 0) << jobs << " jobs";
+    EXPECT_GE(Begins::made, int(configs.size() * frames.size())) << jobs << " jobs";
+    const TraceReplay alone = ReplayTrace(*reader_, frames, Config("maxwork", 2));
+    ASSERT_EQ(got.size(), 2 * frames.size());
+    for (std::size_t n = 0; n < got.size(); ++n) {
+      EXPECT_EQ(got[n], Describe(alone.frames[n / 2])) << "result " << n;
+    }
   }
 }
 
