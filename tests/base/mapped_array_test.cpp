@@ -1,5 +1,6 @@
-// base/mapped_array.h: the replay's queues and the schedulers' per-node arrays. Every operation keeps the items and their order as
-// std::vector would, below and across the size where blocks are mapped and grown with mremap.
+// base/mapped_array.h: the replay's queues and the schedulers' per-node arrays. Every operation
+// keeps the items and their order as std::vector would, below and across the size where blocks
+// are mapped and grown with mremap.
 #include "base/mapped_array.h"
 
 #include <gtest/gtest.h>
