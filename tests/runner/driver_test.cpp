@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cstdio>
 #include <random>
 #include <sstream>
@@ -400,15 +401,15 @@ TEST_F(DriverTest, AutosCheckGivesTheSameResultsOnAnyNumberOfThreads) {
 }
 
 // A scheduler that counts how often one object began a frame: Max Work's choices.
-struct Begins {
-  static inline int again = 0;  // BeginFrame on an object that had begun a frame
-  static inline int made = 0;
+struct Begins {  // atomic: the configurations of a frame are replayed on several threads
+  static inline std::atomic<int> again{0};  // BeginFrame on an object that had begun a frame
+  static inline std::atomic<int> made{0};
 };
 class CountingScheduler : public Scheduler {
  public:
   explicit CountingScheduler(const SchedulerEntry& entry) : Scheduler(entry) { ++Begins::made; }
   void BeginFrame(const FrameInfo& frame) override {
-    Begins::again += begun_;
+    Begins::again += int(begun_);
     begun_ = true;
     max_work_.BeginFrame(frame);
   }
@@ -441,7 +442,8 @@ TEST_F(DriverTest, EachFrameBeginsOnAFreshScheduler) {
     configs[1].seed = configs[0].seed + 1;
     ReplayFramesOptions options;
     options.jobs = jobs;
-    Begins::again = Begins::made = 0;
+    Begins::again = 0;
+    Begins::made = 0;
     const std::vector<std::size_t> frames = {0, 1, 2, 4};
     std::vector<std::string> got;
     ReplayFrames(*reader_, frames, configs, options,
@@ -449,8 +451,8 @@ TEST_F(DriverTest, EachFrameBeginsOnAFreshScheduler) {
                    for (const ReplayResult& r : results) got.push_back(Describe(r));
                    return true;
                  });
-    EXPECT_EQ(Begins::again, 0) << jobs << " jobs";
-    EXPECT_GE(Begins::made, int(configs.size() * frames.size())) << jobs << " jobs";
+    EXPECT_EQ(Begins::again.load(), 0) << jobs << " jobs";
+    EXPECT_GE(Begins::made.load(), int(configs.size() * frames.size())) << jobs << " jobs";
     const TraceReplay alone = ReplayTrace(*reader_, frames, Config("maxwork", 2));
     ASSERT_EQ(got.size(), 2 * frames.size());
     for (std::size_t n = 0; n < got.size(); ++n) {
