@@ -438,11 +438,13 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
     const bool signal_begun = release && !start_early;
     pool.ParallelFor(run.size(), [&](std::size_t n) {
       const std::size_t d = run[n];
-      BeginSignal signal(*schedulers[d], signal_begun ? begun : nullptr);
-      Scheduler& scheduler = signal_begun ? static_cast<Scheduler&>(signal) : *schedulers[d];
-      distinct_results[d] =
-          ReplayLoadedFrame(*frame, header, distinct[d], scheduler, options.sample_every, observer,
-                            memory[d].get(), &units[d], plans_of(d), starts[d].get(), own_threads);
+      {
+        BeginSignal signal(*schedulers[d], signal_begun ? begun : nullptr);
+        Scheduler& scheduler = signal_begun ? static_cast<Scheduler&>(signal) : *schedulers[d];
+        distinct_results[d] = ReplayLoadedFrame(
+            *frame, header, distinct[d], scheduler, options.sample_every, observer, memory[d].get(),
+            &units[d], plans_of(d), starts[d].get(), own_threads);
+      }  // the signal, which refers to the scheduler, goes before it
       starts[d].reset();
       // What the scheduler kept of this frame (per node of its tree: matches, depths, levels;
       // its plans) is read by no later frame (design §5 "No state across frames"): freed now, by
