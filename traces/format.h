@@ -52,6 +52,13 @@ inline constexpr int kTraceMaxWindowLog = 25;
 inline constexpr std::size_t kTraceMaxBatchRays = std::size_t{1} << 22;
 inline constexpr std::size_t kTraceMaxBatchVisits = std::size_t{1} << 25;
 inline constexpr std::size_t kTraceMaxRayVisits = std::size_t{1} << 20;
+// Rays per batch the writer writes by default (TraceWriterOptions::max_batch_rays): 65536 in
+// formats 5 and earlier; 2^18 in the range-coded formats (6 to 8), whose models start anew in
+// every batch, so that they learn over more values (docs/design.md §3; at 1920x1080 and 512
+// cells perforated's format 8 0.259 -> 0.249 bytes per visit). Either way a batch also ends at
+// 2^20 visits, which bounds a batch's memory as before.
+inline constexpr std::size_t kTraceBatchRays = 65536;
+inline constexpr std::size_t kTraceCodedBatchRays = std::size_t{1} << 18;
 
 // The largest cell grid: nx*ny*nz at most 2^24 cells (256x256x256; any shape, e.g.
 // 4096x4096x1). Its footprints take 128 MiB in memory (8 bytes per cell) in every program

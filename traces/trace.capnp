@@ -7,8 +7,9 @@
 #      each, so a grid of 2^24 cells fits however its footprints vary). Version 1 files have
 #      the footprints in Header.footprints and no `footprints` records;
 #   2. per captured frame, one zstd frame holding one or more Record messages whose union
-#      is `batch` (by default at most 65536 rays and about 2^20 visits each, so every message
-#      stays far below Cap'n Proto's 64 MiB traversal limit), then exactly one Record
+#      is `batch` (by default at most 65536 rays, 2^18 in versions 6 to 8, and about 2^20
+#      visits each, so every message stays far below Cap'n Proto's 64 MiB traversal limit),
+#      then exactly one Record
 #      `frameEnd`; a frame without rays has only the `frameEnd`;
 #   3. a zstd skippable frame (magic 0x184D2A5B) holding the index: one Index message
 #      (unpacked, standard framing) followed by a 24-byte trailer:

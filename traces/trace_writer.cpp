@@ -653,6 +653,7 @@ struct TraceWriter::Impl {
   std::string path;
   TraceHeader header;
   TraceWriterOptions options;
+  std::size_t batch_rays;  // options.max_batch_rays, or the format's default
   FileOut file;
   ZstdSink sink;
   std::uint64_t header_length = 0;
@@ -667,6 +668,9 @@ struct TraceWriter::Impl {
       : path(p),
         header(h),
         options(o),
+        batch_rays(o.max_batch_rays != 0   ? o.max_batch_rays
+                   : o.format_version >= 6 ? kTraceCodedBatchRays
+                                           : kTraceBatchRays),
         file(p + ".tmp"),
         sink(file, h.settings.zstd_level),
         pending(h.settings.store_t) {}
@@ -763,8 +767,7 @@ struct TraceWriter::Impl {
   }
 
   bool PendingFull() const {
-    return pending.size() >= options.max_batch_rays ||
-           pending.visit_count() >= options.max_batch_visits;
+    return pending.size() >= batch_rays || pending.visit_count() >= options.max_batch_visits;
   }
 
   void CheckRay(const RayView& r) const {
@@ -803,7 +806,7 @@ TraceWriter TraceWriter::Create(const std::string& path, const TraceHeader& head
   }
   const std::string problem = TraceHeaderProblem(header);
   if (!problem.empty()) throw InputError(path + ": " + problem);
-  RAYCELL_CHECK(options.max_batch_rays > 0 && options.max_batch_visits > 0);
+  RAYCELL_CHECK(options.max_batch_visits > 0);
   RAYCELL_CHECK(options.footprint_runs_per_record > 0 &&
                 options.footprint_runs_per_record <= kTraceFootprintRunsPerRecord);
   RAYCELL_CHECK_LE(options.max_frames, kTraceMaxFrames);

@@ -21,9 +21,10 @@ namespace raycell {
 // ---- Writer ------------------------------------------------------------------------------
 
 struct TraceWriterOptions {
-  // Rays per batch message (at most kTraceMaxBatchRays). Every message stays far below
-  // Cap'n Proto's 64 MiB limit.
-  std::size_t max_batch_rays = 65536;
+  // Rays per batch message (at most kTraceMaxBatchRays); 0: the format's default
+  // (kTraceBatchRays, or kTraceCodedBatchRays for the range-coded formats 6 and later). Every
+  // message stays far below Cap'n Proto's 64 MiB limit.
+  std::size_t max_batch_rays = 0;
   // A batch also ends once it holds this many visits (at most kTraceMaxBatchVisits -
   // kTraceMaxRayVisits).
   std::size_t max_batch_visits = std::size_t{1} << 20;

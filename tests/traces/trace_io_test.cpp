@@ -172,6 +172,47 @@ TEST(TraceIoTest, ForEachBatchStreamsBatchesOfBoundedSize) {
   std::remove(path.c_str());
 }
 
+// By default a batch holds 65536 rays in format 5 and 2^18 in the range-coded formats, whose
+// models start anew in every batch (traces/format.h); the 2^20 visits end a batch in both.
+TEST(TraceIoTest, RangeCodedFormatsWriteLargerBatchesByDefault) {
+  RayBatch frame(false);
+  const std::uint32_t rays = 300000;
+  for (std::uint32_t i = 0; i < rays; ++i) {
+    frame.BeginRay(RayKind::kPrimary, kNoParent, 0, i % 640, i / 640);
+    frame.AddVisit(CellId(i % 27), 1 + i % 5, 0, 0);
+  }
+  for (const std::uint32_t version : {5u, 6u, 8u}) {
+    SCOPED_TRACE(version);
+    const std::string path = TempPath("default_batches.rct");
+    TraceWriterOptions options;
+    options.format_version = version;
+    WriteTrace(path, TestHeader({3, 3, 3}, false), {{0, frame}}, options);
+    const TraceReader reader = TraceReader::Open(path);
+    std::vector<std::size_t> sizes;
+    reader.ForEachBatch(0, [&](const RayBatch& b) { sizes.push_back(b.size()); });
+    const std::vector<std::size_t> expected =
+        version == 5 ? std::vector<std::size_t>{65536, 65536, 65536, 65536, 37856}
+                     : std::vector<std::size_t>{262144, 37856};
+    EXPECT_EQ(sizes, expected);
+    EXPECT_TRUE(reader.LoadFrame(0) == frame);
+    std::remove(path.c_str());
+  }
+  // Ended by visits first: 2^20 visits of rays of 8 visits each, in format 8 too.
+  RayBatch long_rays(false);
+  for (std::uint32_t i = 0; i < 200000; ++i) {
+    long_rays.BeginRay(RayKind::kPrimary, kNoParent, 0, i % 640, i / 640);
+    for (std::uint32_t v = 0; v < 8; ++v) long_rays.AddVisit(CellId((i + v) % 27), 1, 0, 0);
+  }
+  const std::string path = TempPath("visit_batches.rct");
+  TraceWriterOptions options;
+  options.format_version = 8;
+  WriteTrace(path, TestHeader({3, 3, 3}, false), {{0, long_rays}}, options);
+  std::vector<std::size_t> sizes;
+  TraceReader::Open(path).ForEachBatch(0, [&](const RayBatch& b) { sizes.push_back(b.size()); });
+  EXPECT_EQ(sizes, (std::vector<std::size_t>{131072, 68928}));
+  std::remove(path.c_str());
+}
+
 TEST(TraceIoTest, OpensAFrameThroughTheIndexWithoutDecodingOthers) {
   const std::string path = TempPath("direct.rct");
   const std::vector<Frame> frames = RandomFrames(false, 3);
