@@ -136,6 +136,14 @@ CellTree Union(const std::vector<const CellTree*>& trees, bool counted) {
 
 CellTree UnionTree(const std::vector<const CellTree*>& trees) { return Union(trees, true); }
 
+std::uint64_t CellTree::Bytes() const {
+  const auto of = [](const auto& v) {
+    return std::uint64_t{v.capacity()} * sizeof(typename std::decay_t<decltype(v)>::value_type);
+  };
+  return of(cell_) + of(parent_) + of(enter_) + of(visits_) + of(samples_) + of(generation_) +
+         of(first_child_) + of(next_sibling_) + of(last_child_) + of(parked_);
+}
+
 CellTree UnionShape(const std::vector<const CellTree*>& trees) { return Union(trees, false); }
 
 CellTree ContractTree(const CellTree& tree, const std::vector<CellId>& coarse_of,

@@ -90,6 +90,8 @@ class CellTree {
   void Park();
   void Unpark();
   bool parked() const { return !parked_.empty(); }
+  // The bytes its arrays take (their capacity).
+  std::uint64_t Bytes() const;
 
  private:
   friend class CellTreeBuilder;

@@ -394,14 +394,15 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
     PlanCache shared(true);
     std::vector<std::unique_ptr<PlanCache>> own(options.share_plans ? 0 : distinct.size());
     for (auto& p : own) p = std::make_unique<PlanCache>(false);
-    // Frame i-2's tree and the replays of frames seen are read only in BeginFrame: freed once
-    // every replay of the frame began (issue 43), unless a policy that needs its future
-    // requests (MIN) begins the frame again.
-    const bool release = frame->before_previous != nullptr && !again;
-    const auto release_begin_only = [&] {
-      walker.ReleaseBeforePrevious();
-      shared.ReleaseBeginOnly();
-      for (const auto& p : own) p->ReleaseBeginOnly();
+    // Frame i-2's tree and the plan caches are read only in BeginFrame (a scheduler holds what
+    // it reads of the cache afterwards): freed once every replay of the frame began (issue 43),
+    // unless a policy that needs its future requests (MIN) begins the frame again. So a value
+    // one configuration holds (a union of trees and its plan) goes when its replay ends.
+    const bool release = !again;
+    const auto release_begun = [&] {
+      if (frame->before_previous != nullptr) walker.ReleaseBeforePrevious();
+      shared.ReleaseAll();
+      for (const auto& p : own) p->ReleaseAll();
       ReturnFreedMemory();
     };
     const auto plans_of = [&](std::size_t d) {
@@ -415,7 +416,7 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
                                      &units[d], plans_of(d), own_threads);
         starts[d]->Begin(*schedulers[d]);
       });
-      if (release) release_begin_only();
+      if (release) release_begun();
     }
     // Nor, where no replay reads it once begun (Scheduler::ReadsEarlierTrees), the previous
     // frame's tree: it waits parked, as the frame's own below, until the next frame begins.
@@ -433,11 +434,25 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
     }
     std::atomic<std::size_t> to_begin{run.size()};
     const std::function<void()> begun = [&] {
-      if (to_begin.fetch_sub(1, std::memory_order_acq_rel) == 1) release_begin_only();
+      if (to_begin.fetch_sub(1, std::memory_order_acq_rel) == 1) release_begun();
     };
     const bool signal_begun = release && !start_early;
-    pool.ParallelFor(run.size(), [&](std::size_t n) {
-      const std::size_t d = run[n];
+    // Begun early, the replays holding the most of what they began with go first (after the
+    // per-segment ones, the long ones, as `order`): on one thread each such state then goes
+    // before the next replay, instead of sitting beside it (issue 43: a sweep of `auto` and
+    // `balanced-adaptive` at 4096 cells held the latter's union of two trees through the
+    // former's replay). The results do not depend on the order.
+    std::vector<std::size_t> replays = run;
+    if (start_early) {
+      std::stable_sort(replays.begin(), replays.end(), [&](std::size_t a, std::size_t b) {
+        const bool ra = distinct[a].granularity == ReplayConfig::Granularity::kRay;
+        const bool rb = distinct[b].granularity == ReplayConfig::Granularity::kRay;
+        if (ra != rb) return ra;
+        return schedulers[a]->HeldBytes() > schedulers[b]->HeldBytes();
+      });
+    }
+    pool.ParallelFor(replays.size(), [&](std::size_t n) {
+      const std::size_t d = replays[n];
       {
         BeginSignal signal(*schedulers[d], signal_begun ? begun : nullptr);
         Scheduler& scheduler = signal_begun ? static_cast<Scheduler&>(signal) : *schedulers[d];

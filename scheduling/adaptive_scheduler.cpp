@@ -57,6 +57,7 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   // 43; assign would keep its capacity).
   own_.reset();
   own_start_.reset();
+  start_bytes_ = 0;
   due_ = nullptr;
   FreeRoom(own_due_);
   FreeRoom(match_);
@@ -70,9 +71,10 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
     std::shared_ptr<const CellTree> both =
         SharedUnion(frame.plans, *frame.before_previous, *frame.previous);
     predicted_ = both.get();
-    // The frame's plan cache keeps the union while the frame is replayed: held here only without
-    // one, so that it goes with the cache at the frame's end, not at the next frame's start.
-    if (frame.plans == nullptr) own_ = std::move(both);
+    // Held here, not by the frame's plan cache, which the runner frees once every
+    // configuration of the frame began: it goes with this scheduler (the runner makes a fresh
+    // one after each frame's replay) or at the next BeginFrame.
+    own_ = std::move(both);
   }
   reads_previous_ = predicted_ != nullptr && predicted_ == frame.previous;
   match_.assign(1, predicted_ != nullptr ? kRootNode : kNoNode);
@@ -117,7 +119,8 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
         return s;
       });
   cost_.steps += start->steps;
-  if (frame.plans == nullptr) own_start_ = start;  // else the cache keeps it for the frame
+  own_start_ = start;  // held as the union is
+  start_bytes_ = 4 * (start->due.capacity() + start->plan->capacity());
   Install(*start->plan, &start->due);
 }
 
@@ -250,6 +253,10 @@ void AdaptiveScheduler::RecomputeDue(CellId c) {
   }
   min_due_[c.value()] = d;
   cost_.steps += queued_[c.value()].size();
+}
+
+std::uint64_t AdaptiveScheduler::HeldBytes() const {
+  return (own_ ? own_->Bytes() : 0) + start_bytes_;
 }
 
 void AdaptiveScheduler::Arrived(const Arrival& a) {

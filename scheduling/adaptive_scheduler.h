@@ -86,6 +86,7 @@ class AdaptiveScheduler : public Scheduler {
   // Arrivals are matched in the predicted tree: the previous frame's itself, or the union of
   // the last two, which the frame's plan cache (or the scheduler) holds.
   bool ReadsEarlierTrees() const override { return reads_previous_; }
+  std::uint64_t HeldBytes() const override;
 
   // Plans made this frame after the first (re-plans), for tests and benchmarks.
   std::uint64_t replans() const { return replans_; }
@@ -134,8 +135,8 @@ class AdaptiveScheduler : public Scheduler {
   // Whether queued nodes' depths are kept: for Shallowest (no prediction) and, with one
   // processor, the shallowest orphan.
   bool KeepsDepths() const { return predicted_ == nullptr || one_processor_; }
-  // The union of the last two trees, when planned from it without a plan cache (with one,
-  // predicted_ points into the cache's, which outlives the frame's replay).
+  // The union of the last two trees, when planned from it (predicted_ points into it): held
+  // here, since the runner frees the frame's plan cache once every configuration began.
   std::shared_ptr<const CellTree> own_;
   const CellTree* predicted_ = nullptr;  // null: no earlier frame (Max Work)
   bool reads_previous_ = false;          // predicted_ is FrameInfo::previous
@@ -150,7 +151,8 @@ class AdaptiveScheduler : public Scheduler {
   // or own_due_ (a re-plan's). null: no prediction.
   const std::vector<std::uint32_t>* due_ = nullptr;
   std::vector<std::uint32_t> own_due_;
-  std::shared_ptr<const void> own_start_;  // the start plan and its due, without a plan cache
+  std::shared_ptr<const void> own_start_;  // the start plan and its due (due_ points into it)
+  std::uint64_t start_bytes_ = 0;          // the start's bytes (HeldBytes)
 
   MappedArray<NodeId> match_;  // per queued node (Arrival::node): its prediction
   std::vector<bool> guess_;    // per queued node: matched through a stand-in

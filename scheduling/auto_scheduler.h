@@ -96,6 +96,7 @@ class AutoScheduler : public Scheduler {
   bool ReadsEarlierTrees() const override {
     return active_ == nullptr || active_->ReadsEarlierTrees();
   }
+  std::uint64_t HeldBytes() const override { return active_ ? active_->HeldBytes() : 0; }
 
   // The candidates' registry entries for a board of `processors`, in order of preference.
   static std::vector<const SchedulerEntry*> CandidatesFor(std::uint32_t processors);

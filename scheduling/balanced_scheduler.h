@@ -105,6 +105,11 @@ class BalancedScheduler : public Scheduler {
   bool ReadsEarlierTrees() const override {
     return previous_ != nullptr || (adaptive_ != nullptr && adaptive_->ReadsEarlierTrees());
   }
+  // The adaptive rule's, and `critical`'s heights of frame i-1's nodes.
+  std::uint64_t HeldBytes() const override {
+    return (adaptive_ ? adaptive_->HeldBytes() : 0) +
+           (heights_ ? 4 * std::uint64_t{heights_->height.capacity()} : 0);
+  }
 
   // What frame i-1's tree says of each cell (shared by the configurations of a frame,
   // FrameInfo::plans): per cell its samples and samples per visit (0: unknown); for affinity,

@@ -31,10 +31,11 @@ class PlanCache {
   PlanCache& operator=(const PlanCache&) = delete;
 
   // The value of `key`, made by make() (a T) the first time it is asked for; callers asking
-  // for it meanwhile on other threads wait for that one. The cache keeps it until it is
-  // destroyed (the runner's, when the frame's replays are done), so a scheduler may point into
-  // it for the frame and need not hold it past (issue 43). Every caller of a key must ask for
-  // the same T and make the same value (the key names all it depends on).
+  // for it meanwhile on other threads wait for that one. The cache keeps it until released
+  // (the runner releases all once every configuration of the frame began, ReleaseAll): a
+  // scheduler holds the shared_ptr of what it reads after BeginFrame, so that the value goes
+  // with the last configuration holding it (issue 43). Every caller of a key must ask for the
+  // same T and make the same value (the key names all it depends on).
   // begin_only: a value only BeginFrame reads (the replays of frames seen, replay/), which
   // ReleaseBeginOnly frees before the frame's end.
   template <typename T, typename Make>
@@ -62,6 +63,13 @@ class PlanCache {
     for (auto it = slots_.begin(); it != slots_.end();) {
       it = it->second->begin_only ? slots_.erase(it) : std::next(it);
     }
+  }
+  // Forgets every value (the runner, once every configuration of the frame began): each goes
+  // when its last holder drops it, so a scheduler holds (shared_ptr) what it reads after
+  // BeginFrame; asked for again, a value is made again.
+  void ReleaseAll() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    slots_.clear();
   }
 
   bool memo() const { return memo_; }

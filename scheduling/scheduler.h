@@ -220,6 +220,13 @@ class Scheduler {
   // (runner/driver.cpp; docs/design.md §2 "What a replay holds").
   virtual bool ReadsEarlierTrees() const { return true; }
 
+  // The bytes of what BeginFrame made or took from the frame's plan cache and the scheduler
+  // holds until its replay of the frame ends (a union of trees, a plan's due entry per node,
+  // per-node heights); 0 where that is small. A sweep's runner frees the cache once every
+  // configuration of the frame began and replays those holding most first, so that each such
+  // state goes before the others replay (runner/driver.cpp; docs/design.md §5 "Sharing plans").
+  virtual std::uint64_t HeldBytes() const { return 0; }
+
  private:
   const SchedulerEntry* entry_;
 };

@@ -593,5 +593,23 @@ TEST(PlanCache, ReleaseBeginOnlyForgetsOnlyThoseValues) {
   EXPECT_EQ(made, 3);
 }
 
+// ReleaseAll (the runner's, once every configuration of a frame began) forgets every value:
+// one a holder keeps lives on, one no one holds goes at once, and either is made again when
+// asked for again (issue 43).
+TEST(PlanCache, ReleaseAllForgetsEveryValueWhileHoldersKeepTheirs) {
+  PlanCache cache;
+  int made = 0;
+  const auto make = [&] { return ++made; };
+  const std::shared_ptr<const int> held = cache.Get<int>(1, make);
+  std::weak_ptr<const int> dropped = cache.Get<int>(2, make, /*begin_only=*/true);
+  EXPECT_FALSE(dropped.expired());  // the cache keeps it
+  cache.ReleaseAll();
+  EXPECT_TRUE(dropped.expired());
+  EXPECT_EQ(*held, 1);
+  EXPECT_EQ(*cache.Get<int>(1, make), 3);  // made again
+  EXPECT_EQ(*cache.Get<int>(2, make), 4);
+  EXPECT_EQ(cache.made(), 4u);
+}
+
 }  // namespace
 }  // namespace raycell
