@@ -810,9 +810,9 @@ class SeenReplayer : public SeenFrameReplayer {
     // the tree's work per node, as the walker's packed records (docs/design.md §5 "Sharing
     // plans").
     const FrameTrees frame{frame_index, &tree, previous, cells, before_previous, plans_};
-    const std::shared_ptr<const WorkGraph> work = Shared<WorkGraph>(
-        plans_, PlanKey(kSeenWork, {TreeKey(tree), cells}),
-        [&] { return PackedNodeWork(tree, cells); }, /*begin_only=*/true);
+    const std::shared_ptr<const WorkGraph> work =
+        Shared<WorkGraph>(plans_, PlanKey(kSeenWork, {TreeKey(tree), cells}),
+                          [&] { return PackedNodeWork(tree, cells); });
     MemoryState memory = start_;
     const ReplayResult r = SeenReplay(*work, footprints_, config_, scheduler, frame,
                                       start_.empty() ? nullptr : &memory, units_);

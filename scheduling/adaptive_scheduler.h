@@ -84,7 +84,7 @@ class AdaptiveScheduler : public Scheduler {
   void Taken(CellId cell) override;
   DecisionCost Cost() const override;
   // Arrivals are matched in the predicted tree: the previous frame's itself, or the union of
-  // the last two, which the frame's plan cache (or the scheduler) holds.
+  // the last two, which the scheduler holds.
   bool ReadsEarlierTrees() const override { return reads_previous_; }
   std::uint64_t HeldBytes() const override;
 

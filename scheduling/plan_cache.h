@@ -36,16 +36,13 @@ class PlanCache {
   // scheduler holds the shared_ptr of what it reads after BeginFrame, so that the value goes
   // with the last configuration holding it (issue 43). Every caller of a key must ask for the
   // same T and make the same value (the key names all it depends on).
-  // begin_only: a value only BeginFrame reads (the replays of frames seen, replay/), which
-  // ReleaseBeginOnly frees before the frame's end.
   template <typename T, typename Make>
-  std::shared_ptr<const T> Get(std::uint64_t key, Make make, bool begin_only = false) {
+  std::shared_ptr<const T> Get(std::uint64_t key, Make make) {
     std::shared_ptr<Slot> slot;
     {
       std::lock_guard<std::mutex> lock(mutex_);
       std::shared_ptr<Slot>& s = slots_[key];
       if (!s) s = std::make_shared<Slot>();
-      if (begin_only) s->begin_only = true;
       slot = s;
     }
     std::call_once(slot->once, [&] {
@@ -56,14 +53,6 @@ class PlanCache {
     return std::static_pointer_cast<const T>(slot->value);
   }
 
-  // Forgets the values asked for as begin_only (the runner, once every replay of the frame
-  // began, issue 43): each goes when its last holder drops it; asked for again, it is made again.
-  void ReleaseBeginOnly() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    for (auto it = slots_.begin(); it != slots_.end();) {
-      it = it->second->begin_only ? slots_.erase(it) : std::next(it);
-    }
-  }
   // Forgets every value (the runner, once every configuration of the frame began): each goes
   // when its last holder drops it, so a scheduler holds (shared_ptr) what it reads after
   // BeginFrame; asked for again, a value is made again.
@@ -83,7 +72,6 @@ class PlanCache {
   struct Slot {
     std::once_flag once;
     std::shared_ptr<const void> value;
-    bool begin_only = false;
   };
   bool memo_;
   mutable std::mutex mutex_;
@@ -101,10 +89,9 @@ std::uint64_t PlanKey(std::uint64_t kind, std::initializer_list<std::uint64_t> p
 // `cache`'s value for `key` (made once), or, without a cache (a scheduler asked outside a
 // runner), make()'s own.
 template <typename T, typename Make>
-std::shared_ptr<const T> Shared(PlanCache* cache, std::uint64_t key, Make make,
-                                bool begin_only = false) {
+std::shared_ptr<const T> Shared(PlanCache* cache, std::uint64_t key, Make make) {
   if (cache == nullptr) return std::make_shared<const T>(make());
-  return cache->Get<T>(key, std::move(make), begin_only);
+  return cache->Get<T>(key, std::move(make));
 }
 
 // Kinds of shared values (PlanKey's first argument), one per kind of value.

@@ -572,36 +572,17 @@ TEST(SchedulerPeek, ForetellsNextAndChangesNothing) {
   EXPECT_EQ(random->Peek(QueueView::Of(Queues{1, 1, 1})), std::nullopt);
 }
 
-// A plan cache makes each value once; ReleaseBeginOnly forgets only the values asked for as
-// begin_only (the replays of frames seen), which a holder keeps while it holds them and which
-// are made again when asked for again (issue 43).
-TEST(PlanCache, ReleaseBeginOnlyForgetsOnlyThoseValues) {
-  PlanCache cache;
-  int made = 0;
-  const auto make = [&] { return ++made; };
-  const std::shared_ptr<const int> seen = cache.Get<int>(1, make, /*begin_only=*/true);
-  const std::shared_ptr<const int> plan = cache.Get<int>(2, make);
-  EXPECT_EQ(*cache.Get<int>(1, make, true), 1);
-  EXPECT_EQ(*cache.Get<int>(2, make), 2);
-  EXPECT_EQ(cache.made(), 2u);
-  cache.ReleaseBeginOnly();
-  EXPECT_EQ(*seen, 1);  // still held here
-  EXPECT_EQ(*cache.Get<int>(2, make), 2);
-  EXPECT_EQ(cache.made(), 2u);
-  EXPECT_EQ(*cache.Get<int>(1, make, true), 3);  // made again
-  EXPECT_EQ(cache.made(), 3u);
-  EXPECT_EQ(made, 3);
-}
-
-// ReleaseAll (the runner's, once every configuration of a frame began) forgets every value:
-// one a holder keeps lives on, one no one holds goes at once, and either is made again when
-// asked for again (issue 43).
+// A plan cache makes each value once; ReleaseAll (the runner's, once every configuration of a
+// frame began) forgets every value: one a holder keeps lives on, one no one holds goes at once,
+// and either is made again when asked for again (issue 43).
 TEST(PlanCache, ReleaseAllForgetsEveryValueWhileHoldersKeepTheirs) {
   PlanCache cache;
   int made = 0;
   const auto make = [&] { return ++made; };
   const std::shared_ptr<const int> held = cache.Get<int>(1, make);
-  std::weak_ptr<const int> dropped = cache.Get<int>(2, make, /*begin_only=*/true);
+  std::weak_ptr<const int> dropped = cache.Get<int>(2, make);
+  EXPECT_EQ(*cache.Get<int>(1, make), 1);
+  EXPECT_EQ(cache.made(), 2u);
   EXPECT_FALSE(dropped.expired());  // the cache keeps it
   cache.ReleaseAll();
   EXPECT_TRUE(dropped.expired());
