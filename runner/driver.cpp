@@ -318,17 +318,17 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
   bool own_tree = false;
   std::vector<std::unique_ptr<Scheduler>> schedulers;
   std::vector<std::size_t> order;  // per-segment replays (the long ones) first
+  const auto per_segment = [&](std::size_t d) {
+    return distinct[d].granularity == ReplayConfig::Granularity::kRay;
+  };
   for (std::size_t d = 0; d < distinct.size(); ++d) {
-    const bool per_ray = distinct[d].granularity == ReplayConfig::Granularity::kRay;
-    (per_ray ? need_segments : need_nodes) = true;
+    (per_segment(d) ? need_segments : need_nodes) = true;
     schedulers.push_back(MakeScheduler(*distinct[d].scheduler, distinct[d].seed));
     history = std::max(history, distinct[d].scheduler->history);
     own_tree = own_tree || distinct[d].scheduler->oracle || BoundHolds(distinct[d]);
     order.push_back(d);
   }
-  std::stable_partition(order.begin(), order.end(), [&](std::size_t d) {
-    return distinct[d].granularity == ReplayConfig::Granularity::kRay;
-  });
+  std::stable_partition(order.begin(), order.end(), per_segment);
   // Per distinct configuration with warm memory, what its levels hold between frames.
   // A volume that changes every frame keeps nothing: warm is cold there. Cells that are other
   // boxes every frame (a dynamic subdivision) keep what the fine cells say they still hold
@@ -400,10 +400,15 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
     // one configuration holds (a union of trees and its plan) goes when its replay ends.
     const bool release = !again;
     const auto release_begun = [&] {
-      if (frame->before_previous != nullptr) walker.ReleaseBeforePrevious();
       shared.ReleaseAll();
       for (const auto& p : own) p->ReleaseAll();
-      ReturnFreedMemory();
+      // The heap's free pages go back where frame i-2's tree goes (and what was made of it: the
+      // replays of frames seen), as before the whole cache was released; not every frame of a
+      // replay that keeps no tree (Max Work), which ran longer with it.
+      if (frame->before_previous != nullptr) {
+        walker.ReleaseBeforePrevious();
+        ReturnFreedMemory();
+      }
     };
     const auto plans_of = [&](std::size_t d) {
       return options.share_plans ? &shared : own[d].get();
@@ -445,9 +450,7 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
     std::vector<std::size_t> replays = run;
     if (start_early) {
       std::stable_sort(replays.begin(), replays.end(), [&](std::size_t a, std::size_t b) {
-        const bool ra = distinct[a].granularity == ReplayConfig::Granularity::kRay;
-        const bool rb = distinct[b].granularity == ReplayConfig::Granularity::kRay;
-        if (ra != rb) return ra;
+        if (per_segment(a) != per_segment(b)) return per_segment(a);
         return schedulers[a]->HeldBytes() > schedulers[b]->HeldBytes();
       });
     }
