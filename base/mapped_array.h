@@ -5,8 +5,9 @@
 // copying them into a fresh mapping, so a growing queue neither copies its items nor holds its
 // old and new arrays at once, and its written pages are not faulted in and zeroed again
 // (std::vector's copies into fresh mappings were 2-3% of a watching replay's CPU at 1920x1080
-// and 4096 cells, BENCHMARKS.md "The cost of deciding"). Smaller blocks come from malloc.
-// Growth doubles the room, as std::vector's does.
+// and 4096 cells, BENCHMARKS.md "The cost of deciding"), and shrink in place too (a Cell
+// Tree's arrays, reserved for its frame's visits and fitted to its nodes once built). Smaller
+// blocks come from malloc. Growth doubles the room, as std::vector's does.
 #pragma once
 
 #include <sys/mman.h>
@@ -50,8 +51,15 @@ class MappedArray {
     }
     return *this;
   }
-  MappedArray(const MappedArray&) = delete;
-  MappedArray& operator=(const MappedArray&) = delete;
+  // A copy holds the items alone (its room is their size).
+  MappedArray(const MappedArray& o) { append(o.begin(), o.end()); }
+  MappedArray& operator=(const MappedArray& o) {
+    if (this != &o) {
+      clear();
+      append(o.begin(), o.end());
+    }
+    return *this;
+  }
   ~MappedArray() { Release(); }
 
   std::size_t size() const { return size_; }
@@ -83,6 +91,12 @@ class MappedArray {
     size_ = 0;
     resize(n, value);
   }
+  // Room for at least n items (never less than the room it has).
+  void reserve(std::size_t n) {
+    if (n > capacity_) Grow(n);
+  }
+  // n items: the first min(n, size()) kept, the others value-initialised.
+  void resize(std::size_t n) { resize(n, T{}); }
   // n items: the first min(n, size()) kept, the others copies of `value`.
   void resize(std::size_t n, const T& value) {
     if (n > capacity_) Grow(n);
@@ -104,6 +118,29 @@ class MappedArray {
     std::swap(size_, o.size_);
     std::swap(capacity_, o.capacity_);
     std::swap(bytes_, o.bytes_);
+  }
+  // Room for its items alone: a mapped block shrinks in place (its pages past the items go back
+  // to the kernel; nothing is copied), a smaller one by realloc.
+  void shrink_to_fit() {
+    if (size_ == capacity_ || data_ == nullptr) return;
+    if (size_ == 0) {
+      free_room();
+      return;
+    }
+    const std::size_t need = size_ * sizeof(T);
+    if (Mapped(bytes_)) {
+      const std::size_t page = PageBytes();
+      const std::size_t bytes = std::max((need + page - 1) / page * page, MappedBlocks::kFrom);
+      if (bytes >= bytes_) return;
+      if (mremap(data_, bytes_, bytes, 0) == MAP_FAILED) return;  // kept as it was
+      bytes_ = bytes;
+    } else {
+      void* p = std::realloc(data_, need);
+      if (p == nullptr) return;
+      data_ = static_cast<T*>(p);
+      bytes_ = need;
+    }
+    capacity_ = bytes_ / sizeof(T);
   }
   // Empties the array and frees its room.
   void free_room() {

@@ -8,8 +8,9 @@
 
 namespace raycell {
 
-template <typename Alloc>
-inline void AppendVarint(std::vector<std::uint8_t, Alloc>& out, std::uint64_t x) {
+// Appends x to `out`, a std::vector<std::uint8_t> or a MappedArray<std::uint8_t>.
+template <typename Bytes>
+inline void AppendVarint(Bytes& out, std::uint64_t x) {
   while (x >= 0x80) {
     out.push_back(std::uint8_t(x | 0x80));
     x >>= 7;

@@ -13,8 +13,11 @@ namespace raycell {
 
 namespace {
 
+// In place: a large array's pages past its items go back to the kernel, nothing is copied (a
+// std::vector's shrink_to_fit copied a frame's tree, reserved for its visits, into new arrays
+// beside the old: `raycell analyze` of b4096 355 -> 243 MB, BENCHMARKS.md "Memory").
 template <typename T>
-void FitTo(std::vector<T>& v) {
+void FitTo(MappedArray<T>& v) {
   v.shrink_to_fit();  // a no-op when the capacity is already the size
 }
 
@@ -31,16 +34,17 @@ void AddCount(std::uint32_t& to, std::uint64_t add) {
 
 // ---------------------------------------------------------------------------- CellTree
 
-CellTree::CellTree()
-    : cell_{kNoCell},
-      parent_{kNoNode},
-      enter_{0},
-      visits_{0},
-      samples_{0},
-      generation_{0},
-      first_child_{kNoNode},
-      next_sibling_{kNoNode},
-      last_child_{kNoNode} {}
+CellTree::CellTree() {
+  cell_.push_back(kNoCell);
+  parent_.push_back(kNoNode);
+  enter_.push_back(0);
+  visits_.push_back(0);
+  samples_.push_back(0);
+  generation_.push_back(0);
+  first_child_.push_back(kNoNode);
+  next_sibling_.push_back(kNoNode);
+  last_child_.push_back(kNoNode);
+}
 
 std::vector<NodeId> CellTree::children(NodeId n) const {
   std::vector<NodeId> out;
@@ -71,9 +75,10 @@ void CellTree::Reserve(std::size_t nodes) {
 
 NodeId CellTree::AddNode(NodeId parent, CellId cell) {
   RAYCELL_CHECK_LT(cell_.size(), std::size_t{kNoNode.index()});
-  // Growing by a quarter, not push_back's doubling: a tree being built holds at most 1.25 times
-  // its nodes (plus one array's copy while it grows), not twice (issue 43). A builder told its
-  // frame's size (CellTreeBuilder::Reserve) does not grow at all.
+  // The arrays grow in place (MappedArray: a large one's pages are moved by mremap, never
+  // copied), so a growing tree never holds an old array beside the new one, and only the pages
+  // written are resident (issue 43). A builder told its frame's size (CellTreeBuilder::Reserve)
+  // does not grow at all.
   if (cell_.size() == cell_.capacity()) Reserve(cell_.size() + cell_.size() / 4 + 64);
   const NodeId id(static_cast<std::uint32_t>(cell_.size()));
   cell_.push_back(cell);
@@ -97,7 +102,7 @@ NodeId CellTree::AddNode(NodeId parent, CellId cell) {
 // children of one cell under one parent, which no builder makes (then Finish shrinks).
 CellTree Union(const std::vector<const CellTree*>& trees, bool counted) {
   CellTree u;
-  if (!counted) u.enter_ = u.visits_ = {}, u.samples_ = {};
+  if (!counted) u.enter_.free_room(), u.visits_.free_room(), u.samples_.free_room();
   std::uint64_t rays = 0;
   for (const CellTree* t : trees) rays += t->rays();
   if (counted && rays > CellTree::kMaxRays) {
@@ -214,8 +219,10 @@ void CellTree::Park() {
   RAYCELL_CHECK(!parked() && last_child_.empty());  // finished
   const std::size_t n = cell_.size();
   const bool counted = this->counted();
-  std::vector<std::uint8_t> out;
-  out.reserve(n * (counted ? 8 : 3));  // pages never written are not resident
+  // Pages never written are not resident, and the fit below gives the others past the stream
+  // back in place (MappedArray): the stream is never copied.
+  MappedArray<std::uint8_t> out;
+  out.reserve(n * (counted ? 8 : 3));
   for (std::size_t i = 0; i < n; ++i) {
     const NodeId p = parent_[i];
     // A parent comes before its node (parent(n) < n): its distance, at least 1; 0 for none.

@@ -20,6 +20,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "base/mapped_array.h"
 #include "base/typed_id.h"
 #include "traces/ray_batch.h"
 
@@ -116,17 +117,17 @@ class CellTree {
   void Finish();
   void ComputeGenerations();
 
-  std::vector<CellId> cell_;
-  std::vector<NodeId> parent_;
-  std::vector<std::uint32_t> enter_, visits_;  // at most kMaxRays
-  std::vector<std::uint64_t> samples_;
-  std::vector<std::uint32_t> generation_;
-  std::vector<NodeId> first_child_, next_sibling_;
-  std::vector<NodeId> last_child_;  // for appending in creation order; freed by Finish
+  MappedArray<CellId> cell_;
+  MappedArray<NodeId> parent_;
+  MappedArray<std::uint32_t> enter_, visits_;  // at most kMaxRays
+  MappedArray<std::uint64_t> samples_;
+  MappedArray<std::uint32_t> generation_;
+  MappedArray<NodeId> first_child_, next_sibling_;
+  MappedArray<NodeId> last_child_;  // for appending in creation order; freed by Finish
   std::uint32_t cell_count_ = 0;
   std::uint64_t rays_ = 0;
   // Parked (Park): the nodes as varints, their number, and whether the tree is counted.
-  std::vector<std::uint8_t> parked_;
+  MappedArray<std::uint8_t> parked_;
   std::size_t parked_size_ = 0;
   bool parked_counted_ = false;
 };

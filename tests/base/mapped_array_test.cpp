@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -76,10 +77,28 @@ TEST(MappedArray, EveryOperationMatchesStdVector) {
     } else if (op < 96) {
       a.clear();
       wa.clear();
-    } else if (op < 98) {
+    } else if (op < 97) {
       FreeRoom(a);
       wa.clear();
       EXPECT_EQ(a.capacity(), 0u);
+    } else if (op < 98) {  // fitted to its items (a Cell Tree once built), then copied
+      a.shrink_to_fit();
+      ExpectSame(a, wa);
+      // The room left is the items' (a mapped block's rounded up to whole pages, and never
+      // under the mapped size).
+      EXPECT_LE(a.capacity() * sizeof(Item),
+                std::max<std::size_t>(wa.size() * sizeof(Item), MappedBlocks::kFrom) + 4096);
+      MappedArray<Item> copy(a);
+      ExpectSame(copy, wa);
+      b = copy;
+      wb = wa;
+    } else if (op < 99) {  // room reserved, then value-initialised items (a tree's counts)
+      const std::size_t n = wa.size() + rng.Next() % 60000;
+      a.reserve(n);
+      EXPECT_GE(a.capacity(), n);
+      ExpectSame(a, wa);
+      a.resize(n);
+      wa.resize(n, Item{0, 0, 0});
     } else {  // moved out and back
       MappedArray<Item> moved(std::move(a));
       EXPECT_TRUE(a.empty());
@@ -87,6 +106,28 @@ TEST(MappedArray, EveryOperationMatchesStdVector) {
     }
     ExpectSame(a, wa);
     ExpectSame(b, wb);
+  }
+}
+
+// A Cell Tree's arrays are reserved for a frame's visits and fitted to its nodes once built:
+// the fit keeps every item and gives the room past them back, from a mapped block or a small one.
+TEST(MappedArray, ShrinkToFitKeepsTheItemsAndGivesTheRoomBack) {
+  for (const std::size_t n :
+       {std::size_t{0}, std::size_t{10}, std::size_t{5000}, std::size_t{1} << 20}) {
+    MappedArray<Item> a;
+    std::vector<Item> want;
+    a.reserve(std::size_t{4} << 20);  // 48 MiB reserved, mapped
+    for (std::uint32_t i = 0; i < n; ++i) {
+      a.push_back({i, 3 * i, ~i});
+      want.push_back({i, 3 * i, ~i});
+    }
+    a.shrink_to_fit();
+    ExpectSame(a, want);
+    const std::size_t bytes = n * sizeof(Item);
+    EXPECT_LE(a.capacity() * sizeof(Item), std::max(bytes, MappedBlocks::kFrom) + 4096) << n;
+    a.push_back({1, 2, 3});  // and it grows again from there
+    want.push_back({1, 2, 3});
+    ExpectSame(a, want);
   }
 }
 
