@@ -4,6 +4,7 @@
 #include <atomic>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -234,8 +235,10 @@ namespace {
 // The trees a replay of `frame` is told (FrameInfo): an earlier frame's tree in other cells (a
 // dynamic subdivision whose boxes changed) says nothing about this frame's cells, so the
 // schedulers get none, as in frame 0 (design §5).
+// `current`: whether the frame's own tree is given (not when the replay begins before or while
+// the frame is built: the walker's Build writes it then).
 FrameTrees TreesOf(const LoadedFrame& frame, const TraceHeader& header, PlanCache* plans,
-                   unsigned threads) {
+                   unsigned threads, bool current = true) {
   const std::uint32_t cells = header.cell_count();
   const SubdivisionInfo& sub = header.subdivision;
   const CellTree* previous = frame.previous && sub.SameCells(frame.index, frame.index - 1, cells)
@@ -245,7 +248,8 @@ FrameTrees TreesOf(const LoadedFrame& frame, const TraceHeader& header, PlanCach
       previous && frame.before_previous && sub.SameCells(frame.index, frame.index - 2, cells)
           ? frame.before_previous.get()
           : nullptr;
-  return FrameTrees{frame.index, frame.tree.get(), previous, cells, before, plans, threads};
+  return FrameTrees{
+      frame.index, current ? frame.tree.get() : nullptr, previous, cells, before, plans, threads};
 }
 
 const std::vector<std::uint64_t>& FootprintsOf(const LoadedFrame& frame,
@@ -260,8 +264,7 @@ std::unique_ptr<FrameStart> StartLoadedFrame(const LoadedFrame& frame, const Tra
                                              MemoryState* memory, const MemoryUnits* units,
                                              PlanCache* plans, unsigned threads) {
   RAYCELL_CHECK(!scheduler.entry().oracle);  // an oracle begins with the frame's own tree
-  FrameTrees trees = TreesOf(frame, header, plans, threads);
-  trees.current = nullptr;
+  const FrameTrees trees = TreesOf(frame, header, plans, threads, /*current=*/false);
   return std::make_unique<FrameStart>(FootprintsOf(frame, header), config, scheduler, trees, memory,
                                       units);
 }
@@ -414,7 +417,7 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
       return options.share_plans ? &shared : own[d].get();
     };
     std::vector<std::unique_ptr<FrameStart>> starts(distinct.size());
-    if (start_early) {
+    const auto begin_and_free = [&] {
       pool.ParallelFor(run.size(), [&](std::size_t n) {
         const std::size_t d = run[n];
         starts[d] = StartLoadedFrame(*frame, header, distinct[d], *schedulers[d], memory[d].get(),
@@ -422,13 +425,30 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
         starts[d]->Begin(*schedulers[d]);
       });
       if (release) release_begun();
+      // Nor, where no replay reads it once begun (Scheduler::ReadsEarlierTrees), the previous
+      // frame's tree: it waits parked, as the frame's own below, until the next frame begins.
+      bool park_previous = frame->previous != nullptr;
+      for (std::size_t d : run) {
+        park_previous = park_previous && !schedulers[d]->ReadsEarlierTrees();
+      }
+      if (park_previous) frame->previous->Park();
+    };
+    // With a thread to spare (a replay given more threads than it has configurations), the
+    // replays begin on it while the frame's tree and work are built, which BeginFrame never
+    // reads (issue 43: the plans' time beside the build's, on 2 cores), where no configuration
+    // reads frame i-2's tree (every scheduler's history at most 1): their plans are of one tree,
+    // whose working memory beside the build's is small, where a union of two trees made beside
+    // it was not (docs/design.md §2 "What a replay holds"). The results are the same either way.
+    const bool overlap = start_early && own_threads > 1 && history <= 1;
+    std::optional<Background> beginning;
+    if (overlap) {
+      ++stats.begun_while_built;
+      beginning.emplace(begin_and_free);
+    } else if (start_early) {
+      begin_and_free();
     }
-    // Nor, where no replay reads it once begun (Scheduler::ReadsEarlierTrees), the previous
-    // frame's tree: it waits parked, as the frame's own below, until the next frame begins.
-    bool park_previous = start_early && frame->previous != nullptr;
-    for (std::size_t d : run) park_previous = park_previous && !schedulers[d]->ReadsEarlierTrees();
-    if (park_previous) frame->previous->Park();
     walker.Build();
+    if (overlap) beginning->Join();
     // Begun early, no replay reads the frame's own tree while it runs (no oracle; the work and
     // bound are made): it waits parked until the next frame begins (CellTree::Park; the
     // walker's Advance makes it whole again, once this frame's work is freed).

@@ -174,6 +174,7 @@ struct ReplayFramesStats {
   std::size_t distinct = 0;  // canonical configurations replayed per frame
   std::size_t plans = 0;     // values the schedulers' PlanCaches made, over the frames
   unsigned own_threads = 1;  // threads each replay was given for its own work (FrameTrees::threads)
+  std::size_t begun_while_built = 0;  // frames whose replays began while the frame was built
 };
 
 // Replays every configuration on every frame of `frame_indices`, each frame loaded once (see

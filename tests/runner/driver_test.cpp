@@ -356,6 +356,38 @@ TEST_F(DriverTest, TheLastFramesTreeIsBuiltOnlyWhereSomethingReadsIt) {
 // (ReplayFramesOptions::jobs over the configurations running at once): every result, its
 // decision steps and bytes among them, is the same for any number of threads, and equals the
 // replay built by hand (on one thread).
+// With a thread to spare (a replay given more threads than configurations), the replays begin a
+// frame (their plans from frame i-1's tree) while its tree and work are built, where no
+// configuration reads frame i-2's tree: every scheduler's results equal the replay built by
+// hand, frame by frame, as on one thread; those of history 2 (unions of two trees, auto's check)
+// and the oracles begin as before.
+TEST_F(DriverTest, BeginningWhileTheFrameIsBuiltGivesTheSameResults) {
+  const std::vector<std::size_t> frames{0, 1, 2, 3, 4};
+  for (const std::string& name : SchedulerNames()) {
+    const SchedulerEntry& entry = SchedulerByName(name, "test");
+    for (const std::uint32_t processors : {1u, 3u}) {
+      const ReplayConfig config = Config(name.c_str(), processors);
+      for (const unsigned jobs : {1u, 2u}) {
+        ReplayFramesOptions options;
+        options.jobs = jobs;
+        std::size_t n = 0;
+        const ReplayFramesStats stats =
+            ReplayFrames(*reader_, frames, {config}, options,
+                         [&](const LoadedFrame&, const std::vector<ReplayResult>& results) {
+                           EXPECT_EQ(Describe(results[0]), Describe(ByHand(frames[n], config)))
+                               << name << " P" << processors << " jobs " << jobs << " frame " << n;
+                           ++n;
+                           return true;
+                         });
+        EXPECT_EQ(n, frames.size());
+        const bool overlaps = jobs > 1 && !entry.oracle && entry.history <= 1;
+        EXPECT_EQ(stats.begun_while_built, overlaps ? frames.size() : 0u)
+            << name << " P" << processors << " jobs " << jobs;
+      }
+    }
+  }
+}
+
 TEST_F(DriverTest, AutosCheckGivesTheSameResultsOnAnyNumberOfThreads) {
   const std::vector<std::size_t> frames{0, 1, 2, 3, 4};
   for (const std::uint32_t processors : {1u, 2u, 8u}) {
