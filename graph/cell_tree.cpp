@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "base/check.h"
+#include "base/hash.h"
 #include "base/kept_room.h"
 #include "base/varint.h"
 #include "traces/format.h"
@@ -213,6 +214,18 @@ void CellTree::Finish() {
   FitTo(first_child_);
   FitTo(next_sibling_);
   ComputeGenerations();
+  key_ = ComputeKey();
+  has_key_ = true;
+}
+
+std::uint64_t CellTree::ComputeKey() const {
+  RAYCELL_CHECK(!parked());
+  Hash64 h;
+  h.Add(size());
+  for (std::size_t i = 1; i < cell_.size(); ++i) {
+    h.Add(std::uint64_t{cell_[i].value()} << 32 | parent_[i].index());
+  }
+  return h.Finish();
 }
 
 void CellTree::Park() {

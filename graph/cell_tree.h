@@ -93,6 +93,10 @@ class CellTree {
   bool parked() const { return !parked_.empty(); }
   // The bytes its arrays take (their capacity).
   std::uint64_t Bytes() const;
+  // A hash of its size and every node's cell and parent, made when the tree is finished and kept
+  // while it is parked: what the plan caches key a tree by (scheduling/plan_cache.h TreeKey),
+  // read without reading the nodes again, so a parked tree has it too.
+  std::uint64_t ContentKey() const { return has_key_ ? key_ : ComputeKey(); }
 
  private:
   friend class CellTreeBuilder;
@@ -116,6 +120,7 @@ class CellTree {
   // Done adding nodes: last_child_ freed, every array shrunk to its nodes, generations computed.
   void Finish();
   void ComputeGenerations();
+  std::uint64_t ComputeKey() const;
 
   MappedArray<CellId> cell_;
   MappedArray<NodeId> parent_;
@@ -126,6 +131,8 @@ class CellTree {
   MappedArray<NodeId> last_child_;  // for appending in creation order; freed by Finish
   std::uint32_t cell_count_ = 0;
   std::uint64_t rays_ = 0;
+  std::uint64_t key_ = 0;  // ContentKey, once finished
+  bool has_key_ = false;
   // Parked (Park): the nodes as varints, their number, and whether the tree is counted.
   MappedArray<std::uint8_t> parked_;
   std::size_t parked_size_ = 0;

@@ -76,6 +76,7 @@ class BeginSignal final : public Scheduler {
   void Taken(CellId cell) override { inner_.Taken(cell); }
   DecisionCost Cost() const override { return inner_.Cost(); }
   bool ReadsEarlierTrees() const override { return inner_.ReadsEarlierTrees(); }
+  bool Prepare(const FrameInfo& frame) override { return inner_.Prepare(frame); }
 
  private:
   Scheduler& inner_;
@@ -417,11 +418,16 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
       return options.share_plans ? &shared : own[d].get();
     };
     std::vector<std::unique_ptr<FrameStart>> starts(distinct.size());
+    const auto start = [&](std::size_t d) {
+      if (starts[d] == nullptr) {
+        starts[d] = StartLoadedFrame(*frame, header, distinct[d], *schedulers[d], memory[d].get(),
+                                     &units[d], plans_of(d), own_threads);
+      }
+    };
     const auto begin_and_free = [&] {
       pool.ParallelFor(run.size(), [&](std::size_t n) {
         const std::size_t d = run[n];
-        starts[d] = StartLoadedFrame(*frame, header, distinct[d], *schedulers[d], memory[d].get(),
-                                     &units[d], plans_of(d), own_threads);
+        start(d);
         starts[d]->Begin(*schedulers[d]);
       });
       if (release) release_begun();
@@ -431,7 +437,7 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
       for (std::size_t d : run) {
         park_previous = park_previous && !schedulers[d]->ReadsEarlierTrees();
       }
-      if (park_previous) frame->previous->Park();
+      if (park_previous && !frame->previous->parked()) frame->previous->Park();
     };
     // With a thread to spare (a replay given more threads than it has configurations), the
     // replays begin on it while the frame's tree and work are built, which BeginFrame never
@@ -439,7 +445,25 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
     // reads frame i-2's tree (every scheduler's history at most 1): their plans are of one tree,
     // whose working memory beside the build's is small, where a union of two trees made beside
     // it was not (docs/design.md §2 "What a replay holds"). The results are the same either way.
-    const bool overlap = start_early && own_threads > 1 && history <= 1;
+    // Where some configuration reads frame i-2's tree, each makes first what it would make of
+    // the two trees (Scheduler::Prepare: a union); where every one then reads nothing more of
+    // them, they wait parked and the replays begin while the frame is built as above (the
+    // union is held through the replay anyway; only its plan's working memory is beside the
+    // build's).
+    bool prepared = start_early && own_threads > 1 && history == 2;
+    if (prepared) {
+      for (std::size_t d : run) {
+        start(d);
+        prepared = schedulers[d]->Prepare(starts[d]->info()) && prepared;
+      }
+      if (prepared) {
+        for (CellTree* t : {frame->previous.get(), frame->before_previous.get()}) {
+          if (t != nullptr && !t->parked()) t->Park();
+        }
+        ReturnFreedMemory();
+      }
+    }
+    const bool overlap = start_early && own_threads > 1 && (history <= 1 || prepared);
     std::optional<Background> beginning;
     if (overlap) {
       ++stats.begun_while_built;

@@ -51,6 +51,14 @@ NodeId MatchNode(const CellTree& tree, const StandIns& stand_ins, NodeId parent,
   return it == stand_ins.end() ? kNoNode : it->second;
 }
 
+bool AdaptiveScheduler::Prepare(const FrameInfo& frame) {
+  if (frame.processors <= 1 || frame.previous == nullptr || frame.before_previous == nullptr) {
+    return false;  // one processor plans from frame i-1's tree itself
+  }
+  SharedUnion(frame.plans, *frame.before_previous, *frame.previous);
+  return true;
+}
+
 void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   cells_ = frame.cells;
   // The last frame's per-node state freed before this frame's union and plan are made (issue

@@ -86,6 +86,8 @@ class AdaptiveScheduler : public Scheduler {
   // Arrivals are matched in the predicted tree: the previous frame's itself, or the union of
   // the last two, which the scheduler holds.
   bool ReadsEarlierTrees() const override { return reads_previous_; }
+  // Several processors with frames i-2 and i-1: their union, from which alone it then plans.
+  bool Prepare(const FrameInfo& frame) override;
   std::uint64_t HeldBytes() const override;
 
   // Plans made this frame after the first (re-plans), for tests and benchmarks.

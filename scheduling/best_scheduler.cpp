@@ -185,6 +185,12 @@ void BestOracleScheduler::BeginFrame(const FrameInfo& frame) {
   follower_.Reset(*SharedPlan(frame.plans, *frame.current, seed_), frame.cells);
 }
 
+bool CellTreeBestScheduler::Prepare(const FrameInfo& frame) {
+  if (!union_frames_ || frame.previous == nullptr || frame.before_previous == nullptr) return false;
+  SharedUnion(frame.plans, *frame.before_previous, *frame.previous);
+  return true;
+}
+
 void CellTreeBestScheduler::BeginFrame(const FrameInfo& frame) {
   std::vector<CellId> plan;
   if (frame.previous != nullptr) {

@@ -74,6 +74,8 @@ class CellTreeBestScheduler : public FollowingScheduler {
         seed_(seed),
         union_frames_(union_frames) {}
   void BeginFrame(const FrameInfo& frame) override;
+  // celltree-union with frames i-2 and i-1: their union, from which alone it then plans.
+  bool Prepare(const FrameInfo& frame) override;
 
  private:
   std::uint64_t seed_;

@@ -5,13 +5,7 @@
 
 namespace raycell {
 
-std::uint64_t TreeKey(const CellTree& tree) {
-  Hash64 h;
-  h.Add(tree.size());
-  for (NodeId n : tree.nodes())
-    h.Add(std::uint64_t{tree.cell(n).value()} << 32 | tree.parent(n).index());
-  return h.Finish();
-}
+std::uint64_t TreeKey(const CellTree& tree) { return tree.ContentKey(); }
 
 std::uint64_t BoardKey(const std::vector<CellId>& board_cell_of) {
   Hash64 h;

@@ -220,6 +220,17 @@ class Scheduler {
   // (runner/driver.cpp; docs/design.md §2 "What a replay holds").
   virtual bool ReadsEarlierTrees() const { return true; }
 
+  // Makes in frame.plans, before BeginFrame(frame), what BeginFrame would make of the earlier
+  // frames' trees (a union of frames i-2 and i-1), and says whether BeginFrame and the replay
+  // then read nothing of those trees but their size and ContentKey: where every configuration
+  // of a frame says so, the runner parks them and begins the frame while it is built (a spare
+  // thread; runner/driver.cpp, docs/design.md §2 "What a replay holds"). false, the default
+  // (nothing made), is always safe.
+  virtual bool Prepare(const FrameInfo& frame) {
+    (void)frame;
+    return false;
+  }
+
   // The bytes of what BeginFrame made or took from the frame's plan cache and the scheduler
   // holds until its replay of the frame ends (a union of trees, a plan's due entry per node,
   // per-node heights); 0 where that is small. A sweep's runner frees the cache once every

@@ -237,9 +237,9 @@ void AddReplayCommand(CLI::App& app) {
   cmd->add_option("--format", args->format, "table, json or csv")->capture_default_str();
   cmd->add_option("--jobs", args->jobs,
                   "threads (default: the hardware threads); `auto` runs its check's replays of "
-                  "the frames seen on them at once, and a scheduler that plans from frame i-1 "
-                  "alone makes frame i's plan on a spare one while frame i is read; the results "
-                  "are the same for any number");
+                  "the frames seen on them at once, and most planners (not "
+                  "balanced-adaptive) make frame i's plan on a spare one while frame i is read; "
+                  "the results are the same for any number");
   cmd->add_option("--out", args->out, "write the results to FILE instead of standard output");
   cmd->add_option("--timeline", args->timeline,
                   "also write the replay as a Chrome trace-event JSON FILE, for ui.perfetto.dev or "
