@@ -144,6 +144,23 @@ BalancedScheduler::BalancedScheduler(const SchedulerEntry& entry, BalanceOptions
   if (options_.adaptive) adaptive_ = std::make_unique<AdaptiveScheduler>(seed);
 }
 
+std::shared_ptr<const BalancedScheduler::TreeStats> BalancedScheduler::SharedStats(
+    const FrameInfo& frame) const {
+  const bool affinity = options_.affinity;
+  const std::uint32_t cells = frame.cells;
+  return Shared<TreeStats>(frame.plans,
+                           PlanKey(kTreeStats, {frame.previous ? TreeKey(*frame.previous) : 0,
+                                                frame.previous != nullptr, cells, affinity}),
+                           [&] { return StatsOf(frame.previous, cells, affinity); });
+}
+
+bool BalancedScheduler::Prepare(const FrameInfo& frame) {
+  if (adaptive_ == nullptr || options_.plan || options_.critical) return false;
+  if (!adaptive_->Prepare(frame)) return false;
+  SharedStats(frame);  // kept in the frame's plan cache until every configuration began
+  return true;
+}
+
 void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
   cells_ = frame.cells;
   processors_ = std::max<std::uint32_t>(frame.processors, 1);
@@ -155,12 +172,7 @@ void BalancedScheduler::BeginFrame(const FrameInfo& frame) {
   }
   if (adaptive_) adaptive_->BeginFrame(frame);
   // What frame i-1's tree says of each cell: its work, samples per visit, where rays go next.
-  const bool affinity = options_.affinity;
-  const std::uint32_t cells = cells_;
-  stats_ = Shared<TreeStats>(frame.plans,
-                             PlanKey(kTreeStats, {frame.previous ? TreeKey(*frame.previous) : 0,
-                                                  frame.previous != nullptr, cells, affinity}),
-                             [&] { return StatsOf(frame.previous, cells, affinity); });
+  stats_ = SharedStats(frame);
   const std::vector<double>& work = stats_->work;
   // The cells over the processors: list scheduling, largest work first, each to the
   // processor with the least work so far (then the fewest cells, then the lowest number).

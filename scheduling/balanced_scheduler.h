@@ -105,6 +105,9 @@ class BalancedScheduler : public Scheduler {
   bool ReadsEarlierTrees() const override {
     return previous_ != nullptr || (adaptive_ != nullptr && adaptive_->ReadsEarlierTrees());
   }
+  // The adaptive rule's union, and frame i-1's statistics (StatsOf), where it neither plans from
+  // frame i-1's tree nor matches arrivals in it (balanced-adaptive with several processors).
+  bool Prepare(const FrameInfo& frame) override;
   // The adaptive rule's, and `critical`'s heights of frame i-1's nodes.
   std::uint64_t HeldBytes() const override {
     return (adaptive_ ? adaptive_->HeldBytes() : 0) +
@@ -122,6 +125,8 @@ class BalancedScheduler : public Scheduler {
   };
   // (public for its test)
   static TreeStats StatsOf(const CellTree* previous, std::uint32_t cells, bool affinity);
+  // StatsOf(frame.previous), through the frame's plan cache.
+  std::shared_ptr<const TreeStats> SharedStats(const FrameInfo& frame) const;
 
  private:
   // The choice for `queues` without the postponing rule, and the follower it came from (null:
