@@ -447,9 +447,9 @@ ReplayFramesStats ReplayFrames(const TraceReader& reader,
     // it was not (docs/design.md §2 "What a replay holds"). The results are the same either way.
     // Where some configuration reads frame i-2's tree, each makes first what it would make of
     // the two trees (Scheduler::Prepare: a union); where every one then reads nothing more of
-    // them, they wait parked and the replays begin while the frame is built as above (the
-    // union is held through the replay anyway; only its plan's working memory is beside the
-    // build's).
+    // them, they wait parked and the replays begin while the frame is built, as those of
+    // history 1 do (the union is held through the replay anyway; only its plan's working
+    // memory is beside the build's).
     bool prepared = start_early && own_threads > 1 && history == 2;
     if (prepared) {
       for (std::size_t d : run) {

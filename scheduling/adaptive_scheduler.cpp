@@ -51,10 +51,12 @@ NodeId MatchNode(const CellTree& tree, const StandIns& stand_ins, NodeId parent,
   return it == stand_ins.end() ? kNoNode : it->second;
 }
 
+bool AdaptiveScheduler::PredictsByUnion(const FrameInfo& frame) {
+  return frame.processors > 1 && frame.previous != nullptr && frame.before_previous != nullptr;
+}
+
 bool AdaptiveScheduler::Prepare(const FrameInfo& frame) {
-  if (frame.processors <= 1 || frame.previous == nullptr || frame.before_previous == nullptr) {
-    return false;  // one processor plans from frame i-1's tree itself
-  }
+  if (!PredictsByUnion(frame)) return false;  // one processor plans from frame i-1's tree itself
   SharedUnion(frame.plans, *frame.before_previous, *frame.previous);
   return true;
 }
@@ -75,7 +77,7 @@ void AdaptiveScheduler::BeginFrame(const FrameInfo& frame) {
   one_processor_ = frame.processors <= 1;
   // Several processors predict by the union of frames i-2 and i-1, one by frame i-1 alone
   // (docs/design.md §5 "Adaptive scheduling" has the measurements).
-  if (!one_processor_ && frame.previous != nullptr && frame.before_previous != nullptr) {
+  if (PredictsByUnion(frame)) {
     std::shared_ptr<const CellTree> both =
         SharedUnion(frame.plans, *frame.before_previous, *frame.previous);
     predicted_ = both.get();

@@ -94,6 +94,10 @@ class AdaptiveScheduler : public Scheduler {
   std::uint64_t replans() const { return replans_; }
 
  private:
+  // Whether the frame is predicted by the union of frames i-2 and i-1 (several processors, both
+  // trees given): what Prepare makes and BeginFrame reads.
+  static bool PredictsByUnion(const FrameInfo& frame);
+
   static constexpr std::uint32_t kNever = ~std::uint32_t{0};
 
   // The due entry of every predicted node (of `predicted` nodes) that `plan` processes when run

@@ -185,8 +185,12 @@ void BestOracleScheduler::BeginFrame(const FrameInfo& frame) {
   follower_.Reset(*SharedPlan(frame.plans, *frame.current, seed_), frame.cells);
 }
 
+bool CellTreeBestScheduler::PlansUnion(const FrameInfo& frame) const {
+  return union_frames_ && frame.previous != nullptr && frame.before_previous != nullptr;
+}
+
 bool CellTreeBestScheduler::Prepare(const FrameInfo& frame) {
-  if (!union_frames_ || frame.previous == nullptr || frame.before_previous == nullptr) return false;
+  if (!PlansUnion(frame)) return false;
   SharedUnion(frame.plans, *frame.before_previous, *frame.previous);
   return true;
 }
@@ -194,7 +198,7 @@ bool CellTreeBestScheduler::Prepare(const FrameInfo& frame) {
 void CellTreeBestScheduler::BeginFrame(const FrameInfo& frame) {
   std::vector<CellId> plan;
   if (frame.previous != nullptr) {
-    if (union_frames_ && frame.before_previous != nullptr) {
+    if (PlansUnion(frame)) {
       const std::shared_ptr<const CellTree> both =
           SharedUnion(frame.plans, *frame.before_previous, *frame.previous);
       plan = *SharedPlan(frame.plans, *both, seed_);

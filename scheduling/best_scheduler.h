@@ -78,6 +78,10 @@ class CellTreeBestScheduler : public FollowingScheduler {
   bool Prepare(const FrameInfo& frame) override;
 
  private:
+  // Whether it plans from the union of frames i-2 and i-1 (celltree-union, both trees given):
+  // what Prepare makes and BeginFrame reads.
+  bool PlansUnion(const FrameInfo& frame) const;
+
   std::uint64_t seed_;
   bool union_frames_;
 };
